@@ -1,0 +1,48 @@
+#pragma once
+// The six-photodiode polarization sensor of Wang et al. 2019 (spec §1, §2, §4): six film
+// channels on a ring, paired (1,2), (3,4), (5,6) into three log amplifiers.
+#include <array>
+#include <cmath>
+
+#include "polrig/calib/params.h"
+#include "polrig/device/electronics.h"
+#include "polrig/rig/geometry.h"
+
+namespace polrig {
+
+struct SensorSpec {
+  PhotodiodeRing ring;
+  std::array<double, 6> film_axis_deg = kWang2019FilmAxesDeg;  // sensor frame, degrees
+  double d = 0.55;  // degree of linear polarization of the light reaching the sensor, in (0, 1)
+  CalibrationParams truth = CalibrationParams::wang2019_indoor();
+
+  CalibrationParams theory() const { return CalibrationParams::theory(film_axis_deg); }
+};
+
+// Channel indices of pair i (0-based): j = 2i, h = 2i + 1 (the paper's j = 2i − 1, h = 2i).
+constexpr int pair_j(int i) { return 2 * i; }
+constexpr int pair_h(int i) { return 2 * i + 1; }
+
+// Relative response of channel m to light (d, θ), Eq. 15's bracket:
+// 1 + (1+kd_m)·d·cos(2θ + α_m) for a j channel, 1 − (1+kd_m)·d·cos(2θ + α_m) for an h channel.
+// It is the film's transmission normalised by its unpolarized gain g_up (spec §4).
+double channel_response(const CalibrationParams& p, int m, double theta_deg, double d);
+
+// Voltage of pair i whose channels receive irradiances E_j and E_h (any common unit), Eq. 15
+// with Eq. 5's unequal-irradiance term, both through the amplifier:
+//   V_i = kv_i·v_dec·log10[(E_j·R_j) / (E_h·R_h)] + k_i,      v_dec = 0.5 V/decade.
+// Responsivity and area are equal in every channel and cancel in the ratio.
+double pair_voltage(const CalibrationParams& p, const Electronics& e, int i, double E_j,
+                    double E_h, double theta_deg, double d);
+
+std::array<double, 3> pair_voltages(const CalibrationParams& p, const Electronics& e,
+                                    const std::array<double, 6>& E, double theta_deg, double d);
+
+// Eq. 5: the part of V_i due to unequal irradiance alone, kv_i·v_dec·log10(E_j/E_h).
+// Inline: it is the inner loop of the CS study and of sweeps.
+inline double eccentricity_bias(const CalibrationParams& p, const Electronics& e, int i,
+                                double E_j, double E_h) {
+  return p.kv[i] * e.volts_per_decade * std::log10(E_j / E_h);
+}
+
+}  // namespace polrig

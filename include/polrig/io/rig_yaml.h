@@ -1,0 +1,47 @@
+#pragma once
+// Reading and writing rig files (YAML). Every key is described in polrig/rig/keys.h and in
+// docs/formats.md. Errors name the file, the line, the key and what was expected.
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "polrig/rig/rig.h"
+
+namespace polrig {
+
+// Any problem with a rig file or an override. what() is the complete message for the user.
+class RigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// One `--set key.path=value`; the value is read as YAML ("3", "[1, 2, 3]", "cos4").
+struct RigOverride {
+  std::string path;
+  std::string value;
+  static RigOverride parse(std::string_view arg);  // throws RigError without '='
+  std::string text() const { return "--set " + path + "=" + value; }
+};
+
+struct LoadedRig {
+  Rig rig;
+  std::string origin;  // file path, as given
+  std::string text;    // the file's full text, before overrides
+  std::vector<RigOverride> overrides;
+};
+
+// Parses rig text; `origin` names it in error messages.
+LoadedRig parse_rig(std::string_view text, std::string_view origin,
+                    const std::vector<RigOverride>& overrides = {});
+LoadedRig load_rig(const std::filesystem::path& file,
+                   const std::vector<RigOverride>& overrides = {});
+
+// The complete effective rig, every key written: a file that loads back to the same Rig.
+std::string rig_to_yaml(const Rig& rig);
+
+// Number parsing shared with --grid: a finite double, or an error naming `what`.
+double parse_finite_number(std::string_view text, std::string_view what);
+
+}  // namespace polrig

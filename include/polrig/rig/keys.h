@@ -1,0 +1,47 @@
+#pragma once
+// The rig's keys: one table that names every setting, its unit, its default (the value in a
+// default-constructed Rig), what it accepts and where it lives in the Rig. Parsing, --set,
+// sweeps, the resolved-rig dump and docs/formats.md all read this one table.
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "polrig/rig/rig.h"
+
+namespace polrig {
+
+struct RigKey {
+  enum class Kind { Real, Integer, Seed, Text, RealArray, RealList };
+  std::string_view path;     // "eccentricity.L_IS"
+  Kind kind;
+  std::string_view unit;     // "mm", "deg", "V", "" …
+  std::string_view expects;  // what a valid value is, for error messages: "a length ≥ 0"
+  std::string_view doc;
+
+  // Accessors; the one matching `kind` is set.
+  double& (*real)(Rig&) = nullptr;
+  int& (*integer)(Rig&) = nullptr;
+  std::uint64_t& (*seed)(Rig&) = nullptr;
+  std::string& (*text)(Rig&) = nullptr;
+  std::span<double> (*array)(Rig&) = nullptr;          // fixed length
+  std::vector<double>& (*list)(Rig&) = nullptr;        // any length
+  // Value check; returns false when the value is outside what `expects` says.
+  bool (*valid_real)(double) = nullptr;
+  bool (*valid_integer)(long long) = nullptr;
+  bool (*valid_text)(std::string_view) = nullptr;
+};
+
+const std::vector<RigKey>& rig_keys();
+const RigKey* find_rig_key(std::string_view path);
+
+// Checks that involve several keys at once. Returns the offending key's path and what is
+// expected, or nothing when the rig is consistent.
+struct RigProblem {
+  std::string path;
+  std::string message;
+};
+std::optional<RigProblem> check_rig(const Rig& rig);
+
+}  // namespace polrig

@@ -1,0 +1,52 @@
+#pragma once
+// The central-symmetry (CS) study (spec §3; Wang et al. 2019 §3.2, Figs. 8–12).
+//
+// Over a full turn of the table, ΔV_br(θ_R) = V − V_ideal is the voltage deviation that the
+// rig's eccentricity causes (Eq. 5, through the rig's amplifiers), and the CS average is
+// ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2. BSD and ASD are the population standard
+// deviations of ΔV_br and ΔV_mr over the turn; the expectations are their means.
+// Noise and the ADC do not enter: this is the deterministic bias the calibration must absorb.
+#include <array>
+#include <vector>
+
+#include "polrig/rig/rig.h"
+
+namespace polrig {
+
+struct CsPairSummary {
+  double bsd_mV = 0, asd_mV = 0;
+  double mean_br_mV = 0, mean_mr_mV = 0;
+  double eq6_mV = 0;  // Eq. 6's CS constant, through the pair's amplifier gain kv_i
+};
+using CsSummary = std::array<CsPairSummary, 3>;
+
+// The table angles of one full turn, k·360°/steps, and their rotations: computed once and
+// shared by every rig of a sweep.
+class CsTurn {
+ public:
+  explicit CsTurn(int steps_per_turn = 360);  // steps must be even: θ_R + 180° is a step
+  int steps() const { return static_cast<int>(rotation_.size()); }
+  double theta_R_deg(int k) const { return 360.0 * k / steps(); }
+  const TableRotation& rotation(int k) const { return rotation_[static_cast<std::size_t>(k)]; }
+
+ private:
+  std::vector<TableRotation> rotation_;
+};
+
+struct CsStudy {
+  std::vector<double> theta_R_deg;
+  std::array<std::vector<double>, 3> dv_br_V, dv_mr_V;  // per pair, per table angle
+  CsSummary summary;
+};
+
+CsStudy cs_study(const Rig& rig, const CsTurn& turn);
+
+// The summary alone, for sweeps. `scratch` is reused between calls to avoid allocation.
+CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch);
+
+// Eq. 6: ΔV_mr ≈ 2·kv_i·v_dec·log10[(L_o² + L_Rh² + L_IS²)/(L_o² + L_Rj² + L_IS²)], with
+// L_Rm = |O_R P_m| (fixed during the turn). For kv = 1 and v_dec = 0.5 V this is the paper's
+// log10[(L_o² + L_R2² + L_IS²)/(L_o² + L_R1² + L_IS²)] for pair 1.
+double eq6_constant_V(const Rig& rig, int pair);
+
+}  // namespace polrig

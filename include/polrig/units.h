@@ -1,0 +1,27 @@
+#pragma once
+// Units: millimetres, degrees at every interface (radians inside), volts.
+#include <cmath>
+#include <numbers>
+
+namespace polrig {
+
+constexpr double deg2rad(double deg) { return deg * (std::numbers::pi / 180.0); }
+constexpr double rad2deg(double rad) { return rad * (180.0 / std::numbers::pi); }
+
+// Wraps an axial angle (a polarization angle, defined modulo 180°) into [0°, 180°).
+inline double wrap_axis_deg(double deg) {
+  double w = std::fmod(deg, 180.0);
+  if (w < 0.0) w += 180.0;
+  if (w >= 180.0) w -= 180.0;
+  return w;
+}
+
+// Difference a − b of two axial angles, wrapped into [−90°, 90°).
+inline double axis_difference_deg(double a, double b) {
+  double d = std::fmod(a - b, 180.0);
+  if (d < -90.0) d += 180.0;
+  if (d >= 90.0) d -= 180.0;
+  return d;
+}
+
+}  // namespace polrig

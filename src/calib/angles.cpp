@@ -1,0 +1,80 @@
+#include "polrig/calib/angles.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+
+#include "polrig/device/sensor.h"
+#include "polrig/units.h"
+
+namespace polrig {
+namespace {
+
+// One row of the linear system in (X, Y) = (d·cos2θ, d·sin2θ) from pair i (Eqs. 16–19).
+struct PairRow {
+  Eigen::RowVector2d coeff;
+  double rhs;
+};
+PairRow pair_row(const CalibrationParams& p, const Electronics& e, const std::array<double, 3>& V,
+                 int i) {
+  const double A = std::pow(10.0, (V[i] - p.k_mV[i] * 1e-3) / (p.kv[i] * e.volts_per_decade));
+  const int j = pair_j(i), h = pair_h(i);
+  const double aj = deg2rad(p.alpha_deg[j]), ah = deg2rad(p.alpha_deg[h]);
+  const double cj = 1.0 + p.kd[j], ch = 1.0 + p.kd[h];
+  return {{cj * std::cos(aj) + A * ch * std::cos(ah), -(cj * std::sin(aj) + A * ch * std::sin(ah))},
+          A - 1.0};
+}
+
+}  // namespace
+
+PairAngle pair_angle(const CalibrationParams& p, const Electronics& e,
+                     const std::array<double, 3>& V, int a, int b, PairInversion method) {
+  if (a == b || a < 0 || b < 0 || a > 2 || b > 2)
+    throw std::invalid_argument("pair_angle needs two distinct voltages 0..2");
+  const PairRow ra = pair_row(p, e, V, a), rb = pair_row(p, e, V, b);
+  Eigen::Matrix2d M;
+  M << ra.coeff, rb.coeff;
+  const Eigen::Vector2d rhs(ra.rhs, rb.rhs);
+  const Eigen::Vector2d XY = M.partialPivLu().solve(rhs);
+  const double X = XY(0), Y = XY(1);
+
+  if (method == PairInversion::Atan2)
+    return {wrap_axis_deg(rad2deg(0.5 * std::atan2(Y, X))), std::hypot(X, Y)};
+
+  // Paper §2.2: arctan gives θ in (−45°, 45°); the sign of the implied d extends it to 180°.
+  double theta = 0.5 * std::atan(Y / X);
+  double d = X * std::cos(2.0 * theta) + Y * std::sin(2.0 * theta);
+  if (d < 0.0) {
+    theta += 0.5 * std::numbers::pi;
+    d = -d;
+  }
+  return {wrap_axis_deg(rad2deg(theta)), d};
+}
+
+int section_of(double theta_deg) {
+  const int s = static_cast<int>(std::floor((wrap_axis_deg(theta_deg) + 15.0) / 30.0));
+  return s % 6;
+}
+
+int bad_voltage_of(int section) {
+  static constexpr int kBad[6] = {0, 2, 1, 0, 2, 1};
+  return kBad[section];
+}
+
+SensorAngles sensor_angles(const CalibrationParams& p, const Electronics& e,
+                           const std::array<double, 3>& V, PairInversion method) {
+  SensorAngles s;
+  s.theta12 = pair_angle(p, e, V, 0, 1, method);
+  s.theta13 = pair_angle(p, e, V, 0, 2, method);
+  s.theta23 = pair_angle(p, e, V, 1, 2, method);
+  s.section = section_of(s.theta12.theta_deg);
+  switch (bad_voltage_of(s.section)) {
+    case 0: s.theta_sec_deg = s.theta23.theta_deg; break;
+    case 1: s.theta_sec_deg = s.theta13.theta_deg; break;
+    default: s.theta_sec_deg = s.theta12.theta_deg; break;
+  }
+  return s;
+}
+
+}  // namespace polrig

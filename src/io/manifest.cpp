@@ -1,0 +1,51 @@
+#include "polrig/io/manifest.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include "polrig/io/csv.h"
+#include "polrig/version.h"
+
+namespace polrig {
+
+void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
+  YAML::Emitter out;
+  out << YAML::BeginMap;
+  out << YAML::Key << "manifest_schema" << YAML::Value << 1;
+  out << YAML::Key << "program" << YAML::Value << "polrig";
+  out << YAML::Key << "version" << YAML::Value << POLRIG_VERSION;
+  out << YAML::Key << "git_revision" << YAML::Value << POLRIG_GIT_REVISION;
+  out << YAML::Key << "command" << YAML::Value << m.command;
+  std::string resolved;
+  if (m.rig) {
+    resolved = rig_to_yaml(m.rig->rig);
+    out << YAML::Key << "seed" << YAML::Value << m.rig->rig.seed;
+    out << YAML::Key << "rig_file" << YAML::Value << m.rig->origin;
+    out << YAML::Key << "overrides" << YAML::Value << YAML::BeginSeq;
+    for (const RigOverride& o : m.rig->overrides) out << o.path + "=" + o.value;
+    out << YAML::EndSeq;
+  }
+  out << YAML::Key << "files" << YAML::Value << YAML::BeginMap;
+  for (const DatasetFile& f : m.files) {
+    out << YAML::Key << f.name << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "schema" << YAML::Value << f.schema;
+    out << YAML::Key << "description" << YAML::Value << f.description;
+    out << YAML::EndMap;
+  }
+  if (m.rig) {
+    out << YAML::Key << "rig.yaml" << YAML::Value << YAML::BeginMap;
+    out << YAML::Key << "schema" << YAML::Value << 1;
+    out << YAML::Key << "description" << YAML::Value
+        << "the effective rig (file + overrides + defaults); loads back to the same rig";
+    out << YAML::EndMap;
+  }
+  out << YAML::EndMap;
+  if (m.rig) {
+    out << YAML::Key << "rig_text" << YAML::Value << YAML::Literal << m.rig->text;
+    out << YAML::Key << "rig_resolved" << YAML::Value << YAML::Literal << resolved;
+  }
+  out << YAML::EndMap;
+  write_text_file(dir / "manifest.yaml", std::string(out.c_str()) + "\n");
+  if (m.rig) write_text_file(dir / "rig.yaml", resolved);
+}
+
+}  // namespace polrig

@@ -1,0 +1,306 @@
+#include "polrig/io/rig_yaml.h"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <fmt/format.h>
+#include <yaml-cpp/yaml.h>
+
+#include "polrig/rig/keys.h"
+
+namespace polrig {
+namespace {
+
+// Where a value came from: a line of the rig file, or a --set argument.
+struct Origin {
+  std::string where;  // "rigs/x.yaml:12" or "--set a.b=1"
+};
+
+class RigParser {
+ public:
+  RigParser(std::string_view origin, const std::vector<RigOverride>& overrides)
+      : file_(origin), overrides_(overrides) {}
+
+  Rig parse(std::string_view text) {
+    YAML::Node root;
+    try {
+      root = YAML::Load(std::string(text));
+    } catch (const YAML::Exception& e) {
+      throw RigError(fmt::format("{}:{}:{}: YAML syntax error: {}", file_, e.mark.line + 1,
+                                 e.mark.column + 1, e.msg));
+    }
+    if (!root.IsMap() && !(root.IsNull() && !overrides_.empty()))
+      throw RigError(fmt::format("{}: expected a mapping of rig sections (device, source, "
+                                 "eccentricity, schedule, electronics, seed)", file_));
+    if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+    for (const RigOverride& o : overrides_) apply_override(root, o);
+
+    Rig rig;
+    walk(root, "", rig);
+    check_schedule_form();
+    if (auto problem = check_rig(rig))
+      throw RigError(fmt::format("{}: key '{}': {}", where(problem->path), problem->path,
+                                 problem->message));
+    return rig;
+  }
+
+ private:
+  std::string file_;
+  const std::vector<RigOverride>& overrides_;
+  std::map<std::string, int> line_of_;  // key path → 1-based line in the file
+  std::set<std::string> present_;
+
+  const RigOverride* override_for(const std::string& path) const {
+    for (auto it = overrides_.rbegin(); it != overrides_.rend(); ++it)
+      if (it->path == path || it->path.starts_with(path + ".")) return &*it;
+    return nullptr;
+  }
+
+  std::string where(const std::string& path) const {
+    if (const RigOverride* o = override_for(path)) return o->text();
+    auto it = line_of_.find(path);
+    if (it != line_of_.end()) return fmt::format("{}:{}", file_, it->second);
+    return fmt::format("{} (default value)", file_);
+  }
+
+  [[noreturn]] void fail(const std::string& path, const std::string& message) const {
+    throw RigError(fmt::format("{}: key '{}': {}", where(path), path, message));
+  }
+
+  static bool is_section(std::string_view path) {
+    for (const RigKey& k : rig_keys())
+      if (k.path.size() > path.size() && k.path.starts_with(path) && k.path[path.size()] == '.')
+        return true;
+    return false;
+  }
+
+  void apply_override(YAML::Node& root, const RigOverride& o) {
+    if (!find_rig_key(o.path))
+      throw RigError(fmt::format("{}: unknown key '{}' (see docs/formats.md for the rig's "
+                                 "keys)", o.text(), o.path));
+    YAML::Node value;
+    try {
+      value = YAML::Load(o.value);
+    } catch (const YAML::Exception& e) {
+      throw RigError(fmt::format("{}: key '{}': the value is not valid YAML: {}", o.text(),
+                                 o.path, e.msg));
+    }
+    std::vector<std::string> parts;
+    std::stringstream ss(o.path);
+    for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
+    // yaml-cpp nodes are handles: rebinding with reset() walks down without copying.
+    YAML::Node node;
+    node.reset(root);
+    std::string prefix;
+    for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+      prefix += (i ? "." : "") + parts[i];
+      YAML::Node child = node[parts[i]];
+      if (!child.IsDefined() || child.IsNull()) {
+        node[parts[i]] = YAML::Node(YAML::NodeType::Map);
+        child = node[parts[i]];
+      } else if (!child.IsMap()) {
+        throw RigError(fmt::format("{}: key '{}': the file gives it a value, expected a "
+                                   "section", o.text(), prefix));
+      }
+      node.reset(child);
+    }
+    node[parts.back()] = value;
+  }
+
+  void walk(const YAML::Node& map, const std::string& prefix, Rig& rig) {
+    std::set<std::string> seen;
+    for (auto it = map.begin(); it != map.end(); ++it) {
+      const std::string key = it->first.as<std::string>();
+      const std::string path = prefix.empty() ? key : prefix + "." + key;
+      if (it->first.Mark().line >= 0 && !override_for(path))
+        line_of_[path] = it->first.Mark().line + 1;
+      if (!seen.insert(key).second) fail(path, "duplicate key");
+      if (const RigKey* k = find_rig_key(path)) {
+        read_leaf(*k, path, it->second, rig);
+        present_.insert(path);
+      } else if (is_section(path)) {
+        if (!it->second.IsMap()) fail(path, "expected a section (a mapping of keys)");
+        walk(it->second, path, rig);
+      } else {
+        fail(path, "unknown key (see docs/formats.md for the rig's keys)");
+      }
+    }
+  }
+
+  static std::string shown(const YAML::Node& n) {
+    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsSequence()) return "a list";
+    if (n.IsMap()) return "a mapping";
+    return "nothing";
+  }
+
+  double read_real(const RigKey& k, const std::string& path, const YAML::Node& n) const {
+    if (!n.IsScalar()) fail(path, fmt::format("expected {} ({}), got {}", k.expects,
+                                              k.unit.empty() ? "a number" : k.unit, shown(n)));
+    double v = 0.0;
+    try {
+      v = parse_finite_number(n.Scalar(), "value");
+    } catch (const RigError&) {
+      fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
+    }
+    if (k.valid_real && !k.valid_real(v))
+      fail(path, fmt::format("expected {}, got {}", k.expects, n.Scalar()));
+    return v;
+  }
+
+  void read_leaf(const RigKey& k, const std::string& path, const YAML::Node& n, Rig& rig) {
+    using K = RigKey::Kind;
+    switch (k.kind) {
+      case K::Real:
+        k.real(rig) = read_real(k, path, n);
+        return;
+      case K::Integer: {
+        long long v = 0;
+        if (!n.IsScalar() || !parse_integer(n.Scalar(), v))
+          fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
+        if (k.valid_integer && !k.valid_integer(v))
+          fail(path, fmt::format("expected {}, got {}", k.expects, n.Scalar()));
+        k.integer(rig) = static_cast<int>(v);
+        return;
+      }
+      case K::Seed: {
+        std::uint64_t v = 0;
+        const std::string s = n.IsScalar() ? n.Scalar() : "";
+        auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+        if (s.empty() || ec != std::errc() || end != s.data() + s.size())
+          fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
+        k.seed(rig) = v;
+        return;
+      }
+      case K::Text:
+        if (!n.IsScalar() || (k.valid_text && !k.valid_text(n.Scalar())))
+          fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
+        k.text(rig) = n.Scalar();
+        return;
+      case K::RealArray: {
+        std::span<double> dst = k.array(rig);
+        if (!n.IsSequence() || n.size() != dst.size())
+          fail(path, fmt::format("expected a list of {} ({}), got {}", k.expects, k.unit,
+                                 n.IsSequence() ? fmt::format("{} values", n.size())
+                                                : shown(n)));
+        for (std::size_t i = 0; i < dst.size(); ++i) dst[i] = read_real(k, path, n[i]);
+        return;
+      }
+      case K::RealList: {
+        if (!n.IsSequence() || n.size() == 0)
+          fail(path, fmt::format("expected {}, got {}", k.expects,
+                                 n.IsSequence() ? "an empty list" : shown(n)));
+        std::vector<double>& dst = k.list(rig);
+        dst.clear();
+        for (std::size_t i = 0; i < n.size(); ++i) dst.push_back(read_real(k, path, n[i]));
+        return;
+      }
+    }
+  }
+
+  static bool parse_integer(const std::string& s, long long& v) {
+    auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    return !s.empty() && ec == std::errc() && end == s.data() + s.size();
+  }
+
+  void check_schedule_form() const {
+    if (!present_.count("schedule.angles_deg")) return;
+    for (const char* p : {"schedule.start_deg", "schedule.step_deg", "schedule.stop_deg"})
+      if (present_.count(p))
+        fail("schedule.angles_deg",
+             fmt::format("expected either an explicit list or start/step/stop, not both "
+                         "('{}' is also given)", p));
+  }
+};
+
+std::string number_text(double v) { return fmt::format("{}", v); }
+
+}  // namespace
+
+double parse_finite_number(std::string_view text, std::string_view what) {
+  double v = 0.0;
+  const char* b = text.data();
+  const char* e = text.data() + text.size();
+  if (b != e && *b == '+') ++b;
+  auto [end, ec] = std::from_chars(b, e, v);
+  if (b == e || ec != std::errc() || end != e || !std::isfinite(v))
+    throw RigError(fmt::format("{}: expected a finite number, got '{}'", what, text));
+  return v;
+}
+
+RigOverride RigOverride::parse(std::string_view arg) {
+  const auto eq = arg.find('=');
+  if (eq == std::string_view::npos || eq == 0)
+    throw RigError(fmt::format("--set {}: expected key.path=value", arg));
+  return {std::string(arg.substr(0, eq)), std::string(arg.substr(eq + 1))};
+}
+
+LoadedRig parse_rig(std::string_view text, std::string_view origin,
+                    const std::vector<RigOverride>& overrides) {
+  RigParser parser(origin, overrides);
+  return {parser.parse(text), std::string(origin), std::string(text), overrides};
+}
+
+LoadedRig load_rig(const std::filesystem::path& file, const std::vector<RigOverride>& overrides) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec))
+    throw RigError(fmt::format("{}: cannot read the rig file: {}", file.string(),
+                               std::filesystem::exists(file, ec) ? "not a regular file"
+                                                                 : "no such file"));
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream buf;
+  buf << in.rdbuf();
+  if (!in && !in.eof())
+    throw RigError(fmt::format("{}: cannot read the rig file", file.string()));
+  return parse_rig(buf.str(), file.string(), overrides);
+}
+
+std::string rig_to_yaml(const Rig& rig_in) {
+  Rig rig = rig_in;  // accessors hand out references into a mutable Rig
+  const bool explicit_stops = !rig.schedule.angles_deg.empty();
+  YAML::Node root(YAML::NodeType::Map);
+  for (const RigKey& k : rig_keys()) {
+    YAML::Node value;
+    using K = RigKey::Kind;
+    switch (k.kind) {
+      case K::Real: value = number_text(k.real(rig)); break;
+      case K::Integer: value = k.integer(rig); break;
+      case K::Seed: value = k.seed(rig); break;
+      case K::Text: value = k.text(rig); break;
+      case K::RealArray:
+      case K::RealList: {
+        if (k.kind == K::RealList && k.list(rig).empty()) continue;
+        std::span<const double> src =
+            k.kind == K::RealArray ? std::span<const double>(k.array(rig))
+                                   : std::span<const double>(k.list(rig));
+        value = YAML::Node(YAML::NodeType::Sequence);
+        for (double v : src) value.push_back(number_text(v));
+        value.SetStyle(YAML::EmitterStyle::Flow);
+        break;
+      }
+    }
+    // An explicit list of stops replaces start/step/stop; the file may hold only one form.
+    if (explicit_stops && (k.path == "schedule.start_deg" || k.path == "schedule.step_deg" ||
+                           k.path == "schedule.stop_deg"))
+      continue;
+    std::stringstream ss{std::string(k.path)};
+    std::vector<std::string> parts;
+    for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);
+    YAML::Node node;
+    node.reset(root);
+    for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+      if (!node[parts[i]]) node[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      YAML::Node child = node[parts[i]];
+      node.reset(child);
+    }
+    node[parts.back()] = value;
+  }
+  YAML::Emitter out;
+  out << root;
+  return std::string(out.c_str()) + "\n";
+}
+
+}  // namespace polrig

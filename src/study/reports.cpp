@@ -1,0 +1,196 @@
+#include "polrig/study/reports.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "polrig/io/csv.h"
+#include "polrig/io/dataset.h"
+#include "polrig/io/plot.h"
+
+namespace polrig {
+
+namespace {
+const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
+
+std::string line_style(int pair, const char* extra = "") {
+  return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
+}
+}  // namespace
+
+std::vector<DatasetFile> report_simulation(const std::filesystem::path& dir,
+                                           const Simulation& sim, bool plots) {
+  std::vector<DatasetFile> files = write_simulation(dir, sim);
+  if (!plots) return files;
+  // stops.csv columns: 2 theta_R, 11–13 V_ideal, 14–16 V_ecc, 17–19 V (measured).
+  Plot volts{"voltages.png", "Pair voltages over the schedule", "table angle θ_R (°)",
+             "V_i (mV)"};
+  Plot dev{"deviations.png", "Eccentricity deviation V_i - V_i,ideal (Eq. 5)",
+           "table angle θ_R (°)", "ΔV_i (mV)"};
+  for (int i = 0; i < 3; ++i) {
+    volts.series.push_back({"stops.csv", fmt::format("2:(${}*1e3)", 11 + i),
+                            fmt::format("V{} ideal", i + 1), line_style(i)});
+    volts.series.push_back({"stops.csv", fmt::format("2:(${}*1e3)", 17 + i),
+                            fmt::format("V{} measured", i + 1),
+                            fmt::format("points pt 7 ps 0.8 lc rgb '{}'", kPairColour[i])});
+    dev.series.push_back({"stops.csv", fmt::format("2:((${}-${})*1e3)", 14 + i, 11 + i),
+                          fmt::format("ΔV{} = V{},ecc - V{},ideal", i + 1, i + 1, i + 1),
+                          fmt::format("linespoints lw 2 pt 7 ps 0.6 lc rgb '{}'", kPairColour[i])});
+    dev.series.push_back({"stops.csv", fmt::format("2:((${}-${})*1e3)", 17 + i, 11 + i),
+                          fmt::format("V{} measured - V{},ideal", i + 1, i + 1),
+                          fmt::format("points pt 6 ps 1 lc rgb '{}'", kPairColour[i])});
+  }
+  render_plots(dir, "plots.gp", {volts, dev});
+  files.push_back({"voltages.png", 1, "pair voltages, ideal and measured, against θ_R"});
+  files.push_back({"deviations.png", 1, "eccentricity deviations against θ_R"});
+  return files;
+}
+
+std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const CsStudy& study,
+                                         bool plots) {
+  CsvTable dev({"theta_R_deg", "pair", "dv_br_mV", "dv_mr_mV"});
+  for (std::size_t k = 0; k < study.theta_R_deg.size(); ++k)
+    for (int i = 0; i < 3; ++i)
+      dev.add_row({study.theta_R_deg[k], static_cast<double>(i + 1), study.dv_br_V[i][k] * 1e3,
+                   study.dv_mr_V[i][k] * 1e3});
+  write_text_file(dir / "deviations.csv", dev.text());
+
+  CsvTable summary({"pair", "bsd_mV", "asd_mV", "mean_br_mV", "mean_mr_mV", "eq6_mV"});
+  for (int i = 0; i < 3; ++i) {
+    const CsPairSummary& s = study.summary[i];
+    summary.add_row({static_cast<double>(i + 1), s.bsd_mV, s.asd_mV, s.mean_br_mV, s.mean_mr_mV,
+                     s.eq6_mV});
+  }
+  write_text_file(dir / "summary.csv", summary.text());
+  std::vector<DatasetFile> files{
+      {"deviations.csv", 1, "ΔV before (br) and after (mr) central symmetry over a full turn"},
+      {"summary.csv", 1, "per pair: BSD, ASD, expectations and Eq. 6's constant"}};
+  if (!plots) return files;
+
+  // Fig. 8a-like: pair 1 before, after 180° and the CS average; Fig. 9-like: all pairs.
+  Plot pair1{"cs_pair1.png", "Pair 1: deviation before and after 180° rotation, and CS average",
+             "table angle θ_R (°)", "ΔV_1 (mV)"};
+  pair1.series = {
+      {"deviations.csv", "1:($2==1?$3:NaN)", "V1br - V1ideal", "lines lw 2 lc rgb '#1f77b4'"},
+      {"deviations.csv", "1:($2==1?2*$4-$3:NaN)", "V1ar - V1ideal", "lines lw 2 lc rgb '#ff7f0e'"},
+      {"deviations.csv", "1:($2==1?$4:NaN)", "V1mr - V1ideal (CS)", "lines lw 3 lc rgb '#000000'"}};
+  pair1.extra = "set xrange [0:360]\nset xtics 45";
+  Plot all{"cs_deviations.png", "Deviations of the three pairs: before CS (dashed), after CS (solid)",
+           "table angle θ_R (°)", "ΔV_i (mV)"};
+  for (int i = 0; i < 3; ++i) {
+    all.series.push_back({"deviations.csv", fmt::format("1:($2=={}?$3:NaN)", i + 1),
+                          fmt::format("ΔV{} br", i + 1), line_style(i, "dt 2")});
+    all.series.push_back({"deviations.csv", fmt::format("1:($2=={}?$4:NaN)", i + 1),
+                          fmt::format("ΔV{} mr (CS)", i + 1), line_style(i)});
+  }
+  all.extra = "set xrange [0:360]\nset xtics 45";
+  render_plots(dir, "plots.gp", {pair1, all});
+  files.push_back({"cs_pair1.png", 1, "pair 1 before/after rotation and CS average (Fig. 8a)"});
+  files.push_back({"cs_deviations.png", 1, "all pairs before and after CS (Fig. 9)"});
+  return files;
+}
+
+std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const SweepResult& sw,
+                                      bool plots) {
+  std::vector<std::string> header;
+  for (const GridAxis& a : sw.axes) header.emplace_back(a.key->path);
+  const std::size_t first_pair_column = header.size() + 1;  // 1-based for gnuplot
+  constexpr int kPerPair = 7;
+  for (int i = 1; i <= 3; ++i)
+    for (const char* c : {"bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV",
+                          "eq6_mV", "eq6_dev_pct"})
+      header.push_back(fmt::format("pair{}_{}", i, c));
+  CsvTable table(header);
+  for (std::size_t p = 0; p < sw.points(); ++p) {
+    std::vector<double> row;
+    const std::vector<int> idx = sw.indices(p);
+    for (std::size_t a = 0; a < sw.axes.size(); ++a) row.push_back(sw.axes[a].value(idx[a]));
+    for (const CsPairSummary& s : sw.summaries[p]) {
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      row.insert(row.end(), {s.bsd_mV, s.asd_mV, s.bsd_mV > 0 ? 100.0 * s.asd_mV / s.bsd_mV : nan,
+                             s.mean_br_mV, s.mean_mr_mV, s.eq6_mV,
+                             s.mean_mr_mV != 0 ? 100.0 * (s.eq6_mV - s.mean_mr_mV) / s.mean_mr_mV
+                                               : nan});
+    }
+    table.add_row(row);
+  }
+  write_text_file(dir / "sweep.csv", table.text());
+  std::vector<DatasetFile> files{
+      {"sweep.csv", 1, "one row per grid point: the grid values and the CS summary of each pair"}};
+  if (!plots || sw.axes.empty() || sw.axes.size() > 2) return files;
+
+  const auto col = [&](int pair, int offset) {
+    return first_pair_column + static_cast<std::size_t>(pair * kPerPair + offset);
+  };
+  std::vector<Plot> figures;
+  if (sw.axes.size() == 1) {
+    const std::string x(sw.axes[0].key->path);
+    Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)", x, "ASD (mV)",
+             "ASD/BSD (%)"};
+    Plot mean{"sweep_expectation.png",
+              "Expectation of ΔV_mr (lines), Eq. 6 (points), deviation (dashed, right)", x,
+              "expectation (mV)", "(Eq.6 - expectation)/expectation (%)"};
+    for (int i = 0; i < 3; ++i) {
+      asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 1)),
+                            fmt::format("ASD pair {}", i + 1), line_style(i)});
+      asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 2)),
+                            fmt::format("ASD/BSD pair {}", i + 1), line_style(i, "dt 2"), true});
+      mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 4)),
+                             fmt::format("expectation pair {}", i + 1), line_style(i)});
+      mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 5)),
+                             fmt::format("Eq. 6 pair {}", i + 1),
+                             fmt::format("points pt 6 ps 0.8 lc rgb '{}'", kPairColour[i])});
+      mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 6)),
+                             fmt::format("deviation pair {}", i + 1), line_style(i, "dt 2"),
+                             true});
+    }
+    figures = {asd, mean};
+  } else {
+    // Two keys: pair 1 against the second key, one curve per value of the first (at most 6).
+    const GridAxis& outer = sw.axes[0];
+    const std::string x(sw.axes[1].key->path);
+    Plot asd{"sweep_asd.png", fmt::format("Pair 1 ASD after CS, one curve per {}", outer.key->path),
+             x, "ASD (mV)"};
+    Plot mean{"sweep_expectation.png",
+              fmt::format("Pair 1 expectation of ΔV_mr, one curve per {}", outer.key->path), x,
+              "expectation (mV)"};
+    const int curves = std::min(outer.count, 6);
+    for (int c = 0; c < curves; ++c) {
+      const int idx = curves == 1 ? 0 : c * (outer.count - 1) / (curves - 1);
+      const std::string v = fmt::format("{}", outer.value(idx));
+      asd.series.push_back({"sweep.csv", fmt::format("2:($1=={}?${}:NaN)", v, col(0, 1)),
+                            fmt::format("{} = {}", outer.key->path, v), "lines lw 2"});
+      mean.series.push_back({"sweep.csv", fmt::format("2:($1=={}?${}:NaN)", v, col(0, 4)),
+                             fmt::format("{} = {}", outer.key->path, v), "lines lw 2"});
+    }
+    figures = {asd, mean};
+  }
+  render_plots(dir, "plots.gp", figures);
+  files.push_back({"sweep_asd.png", 1, "ASD and ASD/BSD against the swept key (Figs. 11a, 12a)"});
+  files.push_back({"sweep_expectation.png", 1,
+                   "expectation after CS and Eq. 6 against the swept key (Figs. 10, 11b, 12b)"});
+  return files;
+}
+
+std::vector<DatasetFile> report_adc_limits(const std::filesystem::path& dir,
+                                           const std::vector<AdcLimit>& limits, bool plots) {
+  CsvTable table({"d", "vmax_mV", "limit_deg"});
+  for (const AdcLimit& l : limits) table.add_row({l.d, l.vmax_mV, l.limit_deg});
+  write_text_file(dir / "accuracy_limit.csv", table.text());
+  std::vector<DatasetFile> files{
+      {"accuracy_limit.csv", 1, "per d: the largest pair voltage and the ADC accuracy limit"}};
+  if (!plots) return files;
+  Plot fig{"accuracy_limit.png", "ADC accuracy limit of θ12 and maximum voltage (Fig. 6)",
+           "degree of polarization d", "accuracy limit (°)", "max V (mV)"};
+  fig.series = {{"accuracy_limit.csv", "1:3", "accuracy limit", "linespoints lw 2 pt 7 ps 0.7"},
+                {"accuracy_limit.csv", "1:2", "max V", "linespoints lw 2 pt 5 ps 0.7 lc rgb '#d62728'",
+                 true}};
+  fig.extra = "set logscale y\nset y2range [0:*]";
+  render_plots(dir, "plots.gp", {fig});
+  files.push_back({"accuracy_limit.png", 1, "accuracy limit and max voltage against d"});
+  return files;
+}
+
+}  // namespace polrig

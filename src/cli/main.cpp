@@ -242,6 +242,10 @@ int main(int argc, char** argv) {
   show->add_option("--set", show_cmd.sets, "override a rig value: key.path=value (repeatable)");
   auto* keys = rig->add_subcommand("keys", "print every rig key as a Markdown table");
 
+  // --threads is accepted before the command and after it.
+  for (CLI::App* sub : {sim, cs, adc, sw, run})
+    sub->add_option("--threads", threads, "worker threads (default: all cores)")
+        ->check(CLI::Range(1, 1024));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -10,26 +10,38 @@ namespace polrig {
 CsTurn::CsTurn(int steps_per_turn) {
   if (steps_per_turn < 2 || steps_per_turn % 2 != 0)
     throw std::invalid_argument("a CS turn needs an even number of steps ≥ 2");
-  rotation_.resize(static_cast<std::size_t>(steps_per_turn));
-  for (int k = 0; k < steps_per_turn; ++k)
-    rotation_[static_cast<std::size_t>(k)] = TableRotation::at_deg(360.0 * k / steps_per_turn);
+  for (int k = 0; k < steps_per_turn; ++k) {
+    const TableRotation r = TableRotation::at_deg(360.0 * k / steps_per_turn);
+    cos_.push_back(r.c);
+    sin_.push_back(r.s);
+  }
 }
 
 namespace {
 
-// ΔV_br of the three pairs over the turn, into br[i·n + k]. The hot loop of every sweep.
-void deviations_before(const Rig& rig, const CsTurn& turn, double* br) {
+// ΔV_br of the three pairs over the turn, into br[i·n + k]; E holds 6·n irradiances.
+// The hot loop of every sweep, written as plain loops over the turn so that they vectorize.
+void deviations_before(const Rig& rig, const CsTurn& turn, double* E, double* br) {
   const int n = turn.steps();
+  const double* c = turn.cos_theta();
+  const double* s = turn.sin_theta();
   const Point2 port = port_centre(rig.eccentricity);
   const auto p0 = photodiode_positions(rig.device.ring, rig.eccentricity, 0.0);
   const Cos4Source& source = rig.source.cos4;
-  for (int k = 0; k < n; ++k) {
-    const TableRotation& rot = turn.rotation(k);
-    std::array<double, 6> E;
-    for (int m = 0; m < 6; ++m) E[m] = source.falloff((rot * p0[m] - port).squaredNorm());
-    for (int i = 0; i < 3; ++i)
-      br[i * n + k] =
-          eccentricity_bias(rig.device.truth, rig.electronics, i, E[pair_j(i)], E[pair_h(i)]);
+  for (int m = 0; m < 6; ++m) {
+    const double qx = p0[m].x(), qy = p0[m].y();
+    double* Em = E + m * n;
+    for (int k = 0; k < n; ++k) {
+      const double x = c[k] * qx - s[k] * qy - port.x();  // P_m(θ_R) − O_IS
+      const double y = s[k] * qx + c[k] * qy - port.y();
+      Em[k] = source.falloff(x * x + y * y);
+    }
+  }
+  for (int i = 0; i < 3; ++i) {
+    const double* Ej = E + pair_j(i) * n;
+    const double* Eh = E + pair_h(i) * n;
+    for (int k = 0; k < n; ++k)
+      br[i * n + k] = eccentricity_bias(rig.device.truth, rig.electronics, i, Ej[k], Eh[k]);
   }
 }
 
@@ -63,10 +75,10 @@ CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
 
 CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch) {
   const int n = turn.steps();
-  scratch.resize(static_cast<std::size_t>(6 * n));
+  scratch.resize(static_cast<std::size_t>(12 * n));
   double* br = scratch.data();
   double* mr = br + 3 * n;
-  deviations_before(rig, turn, br);
+  deviations_before(rig, turn, mr + 3 * n, br);
   for (int i = 0; i < 3; ++i) central_symmetry_average(br + i * n, mr + i * n, n);
   return summarise(rig, br, mr, n);
 }

@@ -51,8 +51,9 @@ std::vector<DatasetFile> report_simulation(const std::filesystem::path& dir,
 std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const CsStudy& study,
                                          bool plots) {
   CsvTable dev({"theta_R_deg", "pair", "dv_br_mV", "dv_mr_mV"});
-  for (std::size_t k = 0; k < study.theta_R_deg.size(); ++k)
-    for (int i = 0; i < 3; ++i)
+  // Pair-major, so that each pair's rows are contiguous (and plot as one line).
+  for (int i = 0; i < 3; ++i)
+    for (std::size_t k = 0; k < study.theta_R_deg.size(); ++k)
       dev.add_row({study.theta_R_deg[k], static_cast<double>(i + 1), study.dv_br_V[i][k] * 1e3,
                    study.dv_mr_V[i][k] * 1e3});
   write_text_file(dir / "deviations.csv", dev.text());

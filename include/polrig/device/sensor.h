@@ -3,6 +3,7 @@
 // channels on a ring, paired (1,2), (3,4), (5,6) into three log amplifiers.
 #include <array>
 #include <cmath>
+#include <numbers>
 
 #include "polrig/calib/params.h"
 #include "polrig/device/electronics.h"
@@ -42,7 +43,7 @@ std::array<double, 3> pair_voltages(const CalibrationParams& p, const Electronic
 // Inline: it is the inner loop of the CS study and of sweeps.
 inline double eccentricity_bias(const CalibrationParams& p, const Electronics& e, int i,
                                 double E_j, double E_h) {
-  return p.kv[i] * e.volts_per_decade * std::log10(E_j / E_h);
+  return p.kv[i] * e.volts_per_decade * (std::log(E_j / E_h) * (1.0 / std::numbers::ln10));
 }
 
 }  // namespace polrig

@@ -25,12 +25,14 @@ using CsSummary = std::array<CsPairSummary, 3>;
 class CsTurn {
  public:
   explicit CsTurn(int steps_per_turn = 360);  // steps must be even: θ_R + 180° is a step
-  int steps() const { return static_cast<int>(rotation_.size()); }
+  int steps() const { return static_cast<int>(cos_.size()); }
   double theta_R_deg(int k) const { return 360.0 * k / steps(); }
-  const TableRotation& rotation(int k) const { return rotation_[static_cast<std::size_t>(k)]; }
+  // cos θ_R and sin θ_R of every step, as separate arrays so loops over them vectorize.
+  const double* cos_theta() const { return cos_.data(); }
+  const double* sin_theta() const { return sin_.data(); }
 
  private:
-  std::vector<TableRotation> rotation_;
+  std::vector<double> cos_, sin_;
 };
 
 struct CsStudy {

@@ -1,1 +1,363 @@
+// Studies: every "Published behaviour" item of spec §2–3, the CS method's exact properties,
+// the simulation's noise statistics and determinism.
 #include <gtest/gtest.h>
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "polrig/calib/angles.h"
+#include "polrig/sim/simulate.h"
+#include "polrig/study/adc_limit.h"
+#include "polrig/study/cs.h"
+#include "polrig/study/sweep.h"
+#include "polrig/units.h"
+
+namespace polrig {
+namespace {
+
+// The paper's CS simulation is of an ideal device: theory parameters (kv = 1, v_dec = 0.5 V).
+Rig ideal_rig(double L_IS, double alpha_IS, double L_S, double alpha_S) {
+  Rig rig;
+  rig.device.truth = rig.device.theory();
+  rig.eccentricity = {L_IS, alpha_IS, L_S, alpha_S};
+  return rig;
+}
+
+double max_abs(const std::vector<double>& v) {
+  double m = 0;
+  for (double x : v) m = std::max(m, std::abs(x));
+  return m;
+}
+
+// First Fourier harmonic of a curve sampled over one full turn.
+std::complex<double> first_harmonic(const std::vector<double>& v) {
+  std::complex<double> c = 0;
+  const double n = static_cast<double>(v.size());
+  for (std::size_t k = 0; k < v.size(); ++k)
+    c += v[k] * std::polar(2.0 / n, -2.0 * std::numbers::pi * static_cast<double>(k) / n);
+  return c;
+}
+
+// ---- ADC accuracy limit (paper §2.4, Fig. 6) ---------------------------------------------
+
+TEST(PublishedAdcLimit, AboutTwoHundredthsOfADegreeAtDFivePercent) {
+  // "the max error is ±0.02° when d is equal to 0.05": quoted to one digit, ±0.005°.
+  const AdcLimit l = adc_accuracy_limit(0.05, Electronics{}, kWang2019FilmAxesDeg);
+  EXPECT_NEAR(l.limit_deg, 0.02, 0.005);
+  EXPECT_NEAR(l.vmax_mV, 21.73, 0.005);
+}
+
+TEST(PublishedAdcLimit, AboutOneThousandthOfADegreeAtDPointSeven) {
+  // "the accuracy limit was about ±0.001° when d was ~0.7": one digit, ±0.0005°.
+  const AdcLimit l = adc_accuracy_limit(0.7, Electronics{}, kWang2019FilmAxesDeg);
+  EXPECT_NEAR(l.limit_deg, 0.001, 0.0005);
+}
+
+TEST(PublishedAdcLimit, FallsMonotonicallyWithD) {
+  double previous = 1e9;
+  for (int k = 1; k <= 14; ++k) {  // d = 0.05 … 0.70
+    const AdcLimit l = adc_accuracy_limit(0.05 * k, Electronics{}, kWang2019FilmAxesDeg);
+    EXPECT_LT(l.limit_deg, previous) << "d=" << l.d;
+    previous = l.limit_deg;
+  }
+}
+
+TEST(PublishedAdcLimit, SaturationAboveDPoint8813BreaksTheLimit) {
+  // Above d = 0.8813 the largest voltage exceeds Vref and clamps: the error jumps.
+  const AdcLimit below = adc_accuracy_limit(0.88, Electronics{}, kWang2019FilmAxesDeg);
+  const AdcLimit above = adc_accuracy_limit(0.90, Electronics{}, kWang2019FilmAxesDeg);
+  EXPECT_LT(below.vmax_mV, 600.0);
+  EXPECT_GT(above.vmax_mV, 600.0);
+  EXPECT_GT(above.limit_deg, 100 * below.limit_deg);
+}
+
+TEST(AdcLimit, ErrorIsZeroWithoutQuantization) {
+  Electronics fine;
+  fine.adc_bits = 31;  // LSB 0.3 nV: the limit shrinks by 2^15 against 16 bits
+  const AdcLimit l16 = adc_accuracy_limit(0.5, Electronics{}, kWang2019FilmAxesDeg);
+  const AdcLimit l31 = adc_accuracy_limit(0.5, fine, kWang2019FilmAxesDeg);
+  EXPECT_LT(l31.limit_deg, l16.limit_deg * 1e-3);
+}
+
+// ---- CS method (paper §3.2, Figs. 8–12) --------------------------------------------------
+
+TEST(PublishedCs, PortOffsetAloneGivesANearSineWhoseCsAverageIsNearZero) {
+  // L_IS = 0.05 mm, α_IS = 0°, sensor centred.
+  const CsStudy s = cs_study(ideal_rig(0.05, 0.0, 0.0, 0.0), CsTurn(360));
+  for (int i = 0; i < 3; ++i) {
+    const std::vector<double>& br = s.dv_br_V[i];
+    const std::complex<double> c1 = first_harmonic(br);
+    // Near-sine: the first harmonic carries all but a fraction ~L_IS·L_photo/a ≈ 1e-3 of it.
+    std::vector<double> residual(br.size());
+    for (std::size_t k = 0; k < br.size(); ++k)
+      residual[k] = br[k] - std::real(c1 * std::polar(1.0, 2 * std::numbers::pi * k / 360.0));
+    EXPECT_LT(max_abs(residual), 2e-3 * std::abs(c1)) << "pair " << i + 1;
+    // ΔV_mr ≈ 0: bounded by the second-order ripple v_dec·|log10(1 − 4b²/a²)| (see
+    // Cs.CentredSensorHasZeroConstantAndASecondOrderRipple), ~1e-3 of the ΔV_br amplitude.
+    const double a = 20.0 * 20.0 + 14.0 * 14.0 + 0.05 * 0.05, b = 14.0 * 0.05;
+    EXPECT_LE(max_abs(s.dv_mr_V[i]), 0.5 * std::abs(std::log10(1 - 4 * b * b / (a * a))))
+        << "pair " << i + 1;
+    EXPECT_LT(max_abs(s.dv_mr_V[i]), 2e-3 * std::abs(c1)) << "pair " << i + 1;
+  }
+}
+
+TEST(PublishedCs, AmplitudeIsSetByLIsAndPhaseByAlphaIs) {
+  const CsStudy a = cs_study(ideal_rig(0.05, 0.0, 0.0, 0.0), CsTurn(360));
+  const CsStudy b = cs_study(ideal_rig(0.10, 0.0, 0.0, 0.0), CsTurn(360));
+  const CsStudy c = cs_study(ideal_rig(0.05, 40.0, 0.0, 0.0), CsTurn(360));
+  for (int i = 0; i < 3; ++i) {
+    // Linear in L_IS to first order: the ratio is 2 up to O(L_IS/L_o)² ≈ 1e-5.
+    EXPECT_NEAR(std::abs(first_harmonic(b.dv_br_V[i])) / std::abs(first_harmonic(a.dv_br_V[i])),
+                2.0, 1e-4);
+    // Turning the port by α_IS is turning the whole picture: a pure shift of the curve,
+    // exact for a centred sensor.
+    for (int k = 0; k < 360; ++k)
+      EXPECT_NEAR(c.dv_br_V[i][k], a.dv_br_V[i][(k + 320) % 360], 1e-15);
+  }
+}
+
+TEST(PublishedCs, SensorOffsetAloneGivesConstantsWithinHalfAMillivolt) {
+  // L_S = 0.02 mm, α_S = 70°, port centred: every ΔV is constant and |ΔV| ≤ 0.5 mV; Eq. 6 is
+  // then exact.
+  const CsStudy s = cs_study(ideal_rig(0.0, 0.0, 0.02, 70.0), CsTurn(360));
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_LT(s.summary[i].bsd_mV, 1e-12);
+    EXPECT_LT(s.summary[i].asd_mV, 1e-12);
+    EXPECT_LE(std::abs(s.summary[i].mean_br_mV), 0.5);
+    EXPECT_GT(std::abs(s.summary[i].mean_br_mV), 0.01);  // not trivially zero
+    EXPECT_NEAR(s.summary[i].mean_mr_mV, s.summary[i].eq6_mV, 1e-12);
+  }
+}
+
+TEST(PublishedCs, BothOffsetsSuperpose) {
+  // ΔV(both) − ΔV(port only) − ΔV(sensor only) is second order in the offsets: below 1e-3 of
+  // the curve, and a quarter when both offsets halve.
+  const auto residual = [](double scale) {
+    const CsTurn turn(360);
+    const CsStudy both = cs_study(ideal_rig(0.05 * scale, 0, 0.02 * scale, 70), turn);
+    const CsStudy port = cs_study(ideal_rig(0.05 * scale, 0, 0, 0), turn);
+    const CsStudy sensor = cs_study(ideal_rig(0, 0, 0.02 * scale, 70), turn);
+    double r = 0, size = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 360; ++k) {
+        r = std::max(r, std::abs(both.dv_br_V[i][k] - port.dv_br_V[i][k] - sensor.dv_br_V[i][k]));
+        size = std::max(size, std::abs(both.dv_br_V[i][k]));
+      }
+    return std::pair{r, size};
+  };
+  const auto [r1, size1] = residual(1.0);
+  const auto [r2, size2] = residual(0.5);
+  EXPECT_LT(r1, 1e-3 * size1);
+  EXPECT_NEAR(r1 / r2, 4.0, 0.1);
+}
+
+TEST(PublishedCs, FirstCsDeviationPeaksAtAlphaS240) {
+  for (double L_IS : {0.0, 0.05}) {
+    Rig base = ideal_rig(L_IS, 0.0, 0.02, 0.0);
+    const SweepResult r = sweep(base, {GridAxis::parse("eccentricity.alpha_S=0:359:360")},
+                                CsTurn(360));
+    std::size_t best = 0;
+    for (std::size_t p = 0; p < r.points(); ++p)
+      if (r.summaries[p][0].mean_mr_mV > r.summaries[best][0].mean_mr_mV) best = p;
+    EXPECT_EQ(r.axes[0].value(static_cast<int>(best)), 240.0) << "L_IS=" << L_IS;
+  }
+}
+
+class SlowPublishedCsGrid : public ::testing::Test {
+ protected:
+  // L_IS and L_S each over [0.001, 1] mm, α_S = 240° (Figs. 11–12).
+  static SweepResult grid() {
+    return sweep(ideal_rig(0.0, 0.0, 0.0, 240.0),
+                 {GridAxis::parse("eccentricity.L_IS=0.001:1:60"),
+                  GridAxis::parse("eccentricity.L_S=0.001:1:60")},
+                 CsTurn(360));
+  }
+};
+
+TEST_F(SlowPublishedCsGrid, EquationSixMatchesTheExpectationToBetterThan023Percent) {
+  const SweepResult r = grid();
+  double worst = 0;
+  for (std::size_t p = 0; p < r.points(); ++p)
+    for (const CsPairSummary& s : r.summaries[p])
+      worst = std::max(worst, std::abs((s.eq6_mV - s.mean_mr_mV) / s.mean_mr_mV));
+  EXPECT_LT(worst, 0.0023);
+}
+
+TEST_F(SlowPublishedCsGrid, AsdBarelyDependsOnLsAndAsdOverBsdIsAFewPercent) {
+  const SweepResult r = grid();
+  // At L_IS = 1 mm (last outer index): ASD over L_S varies far less than over L_IS, where it
+  // grows as L_IS² (the CS residue is second order in the port offset).
+  double lo = 1e9, hi = 0;
+  for (int j = 0; j < 60; ++j) {
+    const CsPairSummary& s = r.summaries[59 * 60 + j][0];
+    lo = std::min(lo, s.asd_mV);
+    hi = std::max(hi, s.asd_mV);
+    EXPECT_GT(100 * s.asd_mV / s.bsd_mV, 1.0);
+    EXPECT_LT(100 * s.asd_mV / s.bsd_mV, 5.0);
+  }
+  EXPECT_LT((hi - lo) / hi, 0.01);
+  const double asd_1 = r.summaries[59 * 60 + 30][0].asd_mV;
+  const double asd_half = r.summaries[29 * 60 + 30][0].asd_mV;
+  const double L1 = r.axes[0].value(59), Lh = r.axes[0].value(29);
+  EXPECT_NEAR(asd_1 / asd_half, (L1 * L1) / (Lh * Lh), 0.01 * (L1 * L1) / (Lh * Lh));
+}
+
+TEST_F(SlowPublishedCsGrid, ExpectationBarelyDependsOnLIs) {
+  // At L_S = 1 mm, the expectation depends on L_IS only through L_IS² beside L_o² + L_R²
+  // (Eq. 6): a relative change ≤ L_IS²/(L_o² + L_photo²), plus Eq. 6's own 0.23%.
+  const SweepResult r = grid();
+  const double first = r.summaries[0 * 60 + 59][0].mean_mr_mV;
+  const double bound = 1.0 / (20.0 * 20.0 + 14.0 * 14.0) + 0.0023;
+  for (int i = 0; i < 60; ++i) {
+    const double e = r.summaries[static_cast<std::size_t>(i) * 60 + 59][0].mean_mr_mV;
+    EXPECT_LT(std::abs(e - first) / std::abs(first), bound);
+  }
+}
+
+TEST(Cs, AverageIsExactlyConstantWhenThePortIsCentred) {
+  // Constant up to rounding only: |Rot·P|² carries a few ulps of L² ≈ 200 mm², i.e. ~3e-16
+  // relative to L_o² + L², which log10 turns into ~3e-16 V. Allow 1e-15 V (1e-12 mV).
+  const CsStudy s = cs_study(ideal_rig(0.0, 0.0, 0.7, 123.0), CsTurn(360));
+  for (int i = 0; i < 3; ++i)
+    for (int k = 1; k < 360; ++k) EXPECT_NEAR(s.dv_mr_V[i][k], s.dv_mr_V[i][0], 1e-15);
+}
+
+TEST(Cs, CentredSensorHasZeroConstantAndASecondOrderRipple) {
+  // Sensor centred (L_R1 = L_R2): Eq. 6's constant is 0. The exact CS average is
+  // v_dec·log10[(a² − 4b²cos²ψ_h)/(a² − 4b²cos²ψ_j)], a = L_o² + L_photo² + L_IS²,
+  // b = L_photo·L_IS: zero mean over a turn, ripple at most v_dec·|log10(1 − 4b²/a²)|.
+  const double L_IS = 0.3;
+  const CsStudy s = cs_study(ideal_rig(L_IS, 17.0, 0.0, 0.0), CsTurn(360));
+  const double a = 20.0 * 20.0 + 14.0 * 14.0 + L_IS * L_IS, b = 14.0 * L_IS;
+  const double bound = 0.5 * std::abs(std::log10(1 - 4 * b * b / (a * a)));
+  for (int i = 0; i < 3; ++i) {
+    // Zero up to rounding, 1e-15 V = 1e-12 mV (see AverageIsExactlyConstantWhenThePortIsCentred).
+    EXPECT_NEAR(s.summary[i].eq6_mV, 0.0, 1e-12);
+    EXPECT_NEAR(s.summary[i].mean_mr_mV, 0.0, 1e-12);
+    EXPECT_LE(max_abs(s.dv_mr_V[i]), bound * (1 + 1e-9));
+    EXPECT_GT(max_abs(s.dv_mr_V[i]), 0.3 * bound);  // the ripple is real, not zero
+  }
+}
+
+TEST(Cs, RigGainScalesDeviationsAndEquationSix) {
+  Rig ideal = ideal_rig(0.05, 0, 0.02, 70);
+  Rig real = ideal;
+  real.device.truth = CalibrationParams::wang2019_indoor();
+  const CsTurn turn(360);
+  const CsStudy a = cs_study(ideal, turn), b = cs_study(real, turn);
+  for (int i = 0; i < 3; ++i) {
+    const double kv = real.device.truth.kv[i];
+    EXPECT_NEAR(b.summary[i].bsd_mV, kv * a.summary[i].bsd_mV, 1e-12);
+    EXPECT_NEAR(b.summary[i].eq6_mV, kv * a.summary[i].eq6_mV, 1e-12);
+  }
+}
+
+// ---- The simulation ----------------------------------------------------------------------
+
+TEST(Simulate, ExtremeVoltagesFollowTheTableAngleAnticlockwise) {
+  // End-to-end sign check: with a theory device and no eccentricity or noise, the sensor
+  // reports θ = θ_R − ψ_P.
+  Rig rig = ideal_rig(0, 0, 0, 0);
+  rig.electronics.noise_sigma_V = 0;
+  rig.source.polarizer_deg = 10.0;
+  rig.schedule.angles_deg = {30.0, 100.0, 200.0};
+  const Simulation sim = simulate(rig);
+  for (const Stop& s : sim.stops) {
+    const SensorAngles a = sensor_angles(rig.device.truth, rig.electronics, s.V_ideal);
+    EXPECT_NEAR(axis_difference_deg(a.theta12.theta_deg, s.theta_R_deg - 10.0), 0.0, 1e-9);
+  }
+}
+
+TEST(Simulate, NoiseAndAdcStatisticsMatchTheirModel) {
+  // σ = 0.1 mV ≫ LSB = 18 µV: the samples' standard deviation is √(σ² + LSB²/12). Each stop's
+  // n = 40 estimate has relative error 1/√(2(n−1)); averaged over 37·3 of them, 1.1%. The mean of
+  // the samples has error σ/√40 about V_ecc. Allow 5 standard errors.
+  const Rig rig;
+  const Simulation sim = simulate(rig, true);
+  const double lsb = rig.electronics.vref_V / 32768.0;
+  const double sigma = std::sqrt(std::pow(rig.electronics.noise_sigma_V, 2) + lsb * lsb / 12);
+  double sd_sum = 0, z2 = 0;
+  int count = 0;
+  for (const Stop& s : sim.stops)
+    for (int i = 0; i < 3; ++i) {
+      sd_sum += s.V_std[i];
+      const double z = (s.V_mean[i] - s.V_ecc[i]) / (sigma / std::sqrt(40.0));
+      z2 += z * z;
+      ++count;
+    }
+  const double rel_err = 1.0 / std::sqrt(2.0 * 39.0 * count);
+  EXPECT_NEAR(sd_sum / count / sigma, 1.0, 5 * rel_err);
+  EXPECT_NEAR(z2 / count, 1.0, 5 * std::sqrt(2.0 / count));
+  ASSERT_EQ(sim.samples.size(), 37u * 40u);
+  for (const auto& v : sim.samples)
+    for (double x : v) EXPECT_EQ(x, adc_quantize(x, rig.electronics));  // on the ADC grid
+}
+
+TEST(Simulate, IsBitIdenticalForAnyThreadCount) {
+  const Rig rig;
+  Simulation one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = simulate(rig, true);
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = simulate(rig, true);
+  }
+  ASSERT_EQ(one.stops.size(), two.stops.size());
+  for (std::size_t s = 0; s < one.stops.size(); ++s) {
+    EXPECT_EQ(one.stops[s].V_mean, two.stops[s].V_mean);
+    EXPECT_EQ(one.stops[s].V_std, two.stops[s].V_std);
+  }
+  EXPECT_EQ(one.samples, two.samples);
+}
+
+TEST(Simulate, SeedChangesTheNoiseOnly) {
+  Rig a, b;
+  b.seed = a.seed + 1;
+  const Simulation sa = simulate(a), sb = simulate(b);
+  EXPECT_EQ(sa.stops[3].V_ecc, sb.stops[3].V_ecc);
+  EXPECT_NE(sa.stops[3].V_mean, sb.stops[3].V_mean);
+}
+
+TEST(Sweep, GridValuesIncludeBothEndsAndOrderIsRowMajor) {
+  const GridAxis a = GridAxis::parse("eccentricity.L_S=0.001:1:5");
+  EXPECT_EQ(a.value(0), 0.001);
+  EXPECT_EQ(a.value(4), 1.0);
+  EXPECT_DOUBLE_EQ(a.value(2), 0.5005);
+  const SweepResult r = sweep(Rig{}, {a, GridAxis::parse("eccentricity.L_IS=0:0.2:3")}, CsTurn(36));
+  ASSERT_EQ(r.points(), 15u);
+  EXPECT_EQ(r.indices(4), (std::vector<int>{1, 1}));
+  // Each point equals the CS study of the rig with those values set.
+  Rig rig;
+  rig.eccentricity.L_S = a.value(1);
+  rig.eccentricity.L_IS = 0.1;
+  const CsStudy s = cs_study(rig, CsTurn(36));
+  EXPECT_EQ(r.summaries[4][2].asd_mV, s.summary[2].asd_mV);
+}
+
+TEST(Sweep, IsBitIdenticalForAnyThreadCount) {
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:40"),
+                                   GridAxis::parse("eccentricity.alpha_IS=0:350:36")};
+  SweepResult one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = sweep(Rig{}, axes, CsTurn(360));
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = sweep(Rig{}, axes, CsTurn(360));
+  }
+  for (std::size_t p = 0; p < one.points(); ++p)
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(one.summaries[p][i].asd_mV, two.summaries[p][i].asd_mV);
+      EXPECT_EQ(one.summaries[p][i].mean_mr_mV, two.summaries[p][i].mean_mr_mV);
+    }
+}
+
+}  // namespace
+}  // namespace polrig

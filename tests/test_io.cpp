@@ -1,1 +1,98 @@
+// Output plumbing: CSV text, folders that appear whole or not at all, manifests.
 #include <gtest/gtest.h>
+
+#include <fstream>
+#include <sstream>
+
+#include "polrig/io/csv.h"
+#include "polrig/io/manifest.h"
+#include "polrig/io/output_dir.h"
+
+namespace polrig {
+namespace {
+namespace fs = std::filesystem;
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path p = fs::temp_directory_path() / ("polrig-test-io-" + name);
+  fs::remove_all(p);
+  return p;
+}
+
+std::string read(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+TEST(Csv, WritesShortestExactNumbers) {
+  CsvTable t({"a", "b", "c"});
+  t.add_row({1.0, 0.1, 1.0 / 3.0});
+  t.add_row({-2.5e-7, 360.0, 0.30000000000000004});
+  EXPECT_EQ(t.text(), "a,b,c\n1,0.1,0.3333333333333333\n-2.5e-07,360,0.30000000000000004\n");
+  EXPECT_EQ(t.rows(), 2u);
+  EXPECT_THROW(t.add_row({1.0}), std::logic_error);
+}
+
+TEST(OutputDir, AppearsOnlyOnCommit) {
+  const fs::path base = fresh_dir("commit");
+  const fs::path dest = base / "nested" / "out";
+  {
+    OutputDir out(dest, false);
+    write_text_file(out.staging() / "x.csv", "x\n1\n");
+    EXPECT_FALSE(fs::exists(dest));
+    out.commit();
+  }
+  EXPECT_EQ(read(dest / "x.csv"), "x\n1\n");
+  for (const auto& e : fs::directory_iterator(dest.parent_path()))
+    EXPECT_EQ(e.path().filename(), "out");  // no staging folder left beside it
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, LeavesNothingWhenAbandoned) {
+  const fs::path base = fresh_dir("abandon");
+  const fs::path dest = base / "a" / "b" / "out";
+  try {
+    OutputDir out(dest, false);
+    write_text_file(out.staging() / "half.csv", "x\n");
+    throw std::runtime_error("simulated failure mid-way");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_FALSE(fs::exists(dest));
+  EXPECT_FALSE(fs::exists(base / "a"));  // parents it created are removed again
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, RefusesToReplaceWithoutForce) {
+  const fs::path base = fresh_dir("replace");
+  const fs::path dest = base / "out";
+  fs::create_directories(dest);
+  write_text_file(dest / "old.txt", "old");
+  EXPECT_THROW(OutputDir(dest, false), std::runtime_error);
+  EXPECT_EQ(read(dest / "old.txt"), "old");
+  {
+    OutputDir out(dest, true);
+    write_text_file(out.staging() / "new.txt", "new");
+    EXPECT_EQ(read(dest / "old.txt"), "old");  // untouched until commit
+    out.commit();
+  }
+  EXPECT_FALSE(fs::exists(dest / "old.txt"));
+  EXPECT_EQ(read(dest / "new.txt"), "new");
+  fs::remove_all(base);
+}
+
+TEST(Manifest, NamesEveryFileWithItsSchema) {
+  const fs::path dir = fresh_dir("manifest");
+  fs::create_directories(dir);
+  write_manifest(dir, {"polrig study adc -o x", nullptr, {{"accuracy_limit.csv", 1, "limits"}}});
+  const std::string m = read(dir / "manifest.yaml");
+  EXPECT_NE(m.find("accuracy_limit.csv:"), std::string::npos);
+  EXPECT_NE(m.find("schema: 1"), std::string::npos);
+  EXPECT_NE(m.find("git_revision:"), std::string::npos);
+  EXPECT_NE(m.find("command: polrig study adc -o x"), std::string::npos);
+  EXPECT_FALSE(fs::exists(dir / "rig.yaml"));  // no rig, no rig file
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace polrig

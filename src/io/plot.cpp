@@ -34,7 +34,8 @@ std::string script_for(const Plot& p) {
                    p.height);
   s += fmt::format("set output {}\n", quoted(p.png));
   s += "set datafile separator ','\nset grid\nset key outside right top\n";
-  s += fmt::format("set title {}\nset xlabel {}\nset ylabel {}\n", quoted(p.title),
+  // Axis labels and legends may hold rig key paths (eccentricity.L_IS): no enhanced text there.
+  s += fmt::format("set title {}\nset xlabel {} noenhanced\nset ylabel {}\n", quoted(p.title),
                    quoted(p.xlabel), quoted(p.ylabel));
   bool any_y2 = false;
   for (const PlotSeries& ps : p.series) any_y2 |= ps.y2;
@@ -43,7 +44,7 @@ std::string script_for(const Plot& p) {
   s += "plot ";
   for (std::size_t i = 0; i < p.series.size(); ++i) {
     const PlotSeries& ps = p.series[i];
-    s += fmt::format("{}{} skip 1 using {} axes {} title {} with {}", i ? ", \\\n     " : "",
+    s += fmt::format("{}{} skip 1 using {} axes {} title {} noenhanced with {}", i ? ", \\\n     " : "",
                      quoted(ps.file), ps.using_, ps.y2 ? "x1y2" : "x1y1", quoted(ps.title),
                      ps.style);
   }

@@ -131,8 +131,8 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
     Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)", x, "ASD (mV)",
              "ASD/BSD (%)"};
     Plot mean{"sweep_expectation.png",
-              "Expectation of ΔV_mr (lines), Eq. 6 (points), deviation (dashed, right)", x,
-              "expectation (mV)", "(Eq.6 - expectation)/expectation (%)"};
+              "Expectation of ΔV_{mr} (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)",
+              x, "expectation (mV)", "Eq. 6 - expectation (µV)"};
     for (int i = 0; i < 3; ++i) {
       asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 1)),
                             fmt::format("ASD pair {}", i + 1), line_style(i)});
@@ -143,9 +143,9 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
       mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 5)),
                              fmt::format("Eq. 6 pair {}", i + 1),
                              fmt::format("points pt 6 ps 0.8 lc rgb '{}'", kPairColour[i])});
-      mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 6)),
-                             fmt::format("deviation pair {}", i + 1), line_style(i, "dt 2"),
-                             true});
+      mean.series.push_back({"sweep.csv", fmt::format("1:((${}-${})*1e3)", col(i, 5), col(i, 4)),
+                             fmt::format("Eq. 6 - expectation, pair {}", i + 1),
+                             line_style(i, "dt 2"), true});
     }
     figures = {asd, mean};
   } else {
@@ -155,7 +155,7 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
     Plot asd{"sweep_asd.png", fmt::format("Pair 1 ASD after CS, one curve per {}", outer.key->path),
              x, "ASD (mV)"};
     Plot mean{"sweep_expectation.png",
-              fmt::format("Pair 1 expectation of ΔV_mr, one curve per {}", outer.key->path), x,
+              fmt::format("Pair 1 expectation of ΔV_{{mr}}, one curve per {}", outer.key->path), x,
               "expectation (mV)"};
     const int curves = std::min(outer.count, 6);
     for (int c = 0; c < curves; ++c) {

@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Regenerates the figures and numbers of docs/validation.md from the built polrig.
+# Usage: bash scripts/make-validation.sh   (after scripts/build.sh)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+p=./build/polrig
+rig=rigs/wang2019-cs-simulation.yaml
+out=$(mktemp -d)
+img=docs/img
+mkdir -p "$img"
+
+$p study adc --d 0.05:0.95:91 -o "$out/adc"
+$p study cs $rig --set eccentricity.L_S=0 -o "$out/fig8a"
+$p study cs $rig --set eccentricity.L_IS=0 -o "$out/fig8b"
+$p study cs $rig -o "$out/fig9"
+$p sweep $rig --set eccentricity.L_IS=0 --grid eccentricity.alpha_S=0:359:360 -o "$out/fig10"
+$p sweep $rig --set eccentricity.alpha_S=240 --set eccentricity.L_IS=1 \
+  --grid eccentricity.L_S=0.001:1:100 -o "$out/fig11"
+$p sweep $rig --set eccentricity.alpha_S=240 --set eccentricity.L_S=1 \
+  --grid eccentricity.L_IS=0.001:1:100 -o "$out/fig12"
+$p sweep $rig --set eccentricity.alpha_S=240 \
+  --grid eccentricity.L_IS=0.001:1:100 --grid eccentricity.L_S=0.001:1:100 -o "$out/grid"
+$p simulate rigs/wang2019-indoor.yaml -o "$out/simulate"
+
+cp "$out/adc/accuracy_limit.png" "$img/fig6_accuracy_limit.png"
+cp "$out/fig8a/cs_pair1.png" "$img/fig8a_port_offset_pair1.png"
+cp "$out/fig8b/cs_deviations.png" "$img/fig8b_sensor_offset.png"
+cp "$out/fig9/cs_deviations.png" "$img/fig9_both_offsets.png"
+cp "$out/fig10/sweep_expectation.png" "$img/fig10_alpha_S.png"
+cp "$out/fig11/sweep_asd.png" "$img/fig11a_asd_vs_L_S.png"
+cp "$out/fig11/sweep_expectation.png" "$img/fig11b_expectation_vs_L_S.png"
+cp "$out/fig12/sweep_asd.png" "$img/fig12a_asd_vs_L_IS.png"
+cp "$out/fig12/sweep_expectation.png" "$img/fig12b_expectation_vs_L_IS.png"
+cp "$out/simulate/deviations.png" "$img/simulate_indoor_deviations.png"
+
+echo "== ADC limits (d = 0.05, 0.7) =="
+grep -E '^(0.05|0.7),' "$out/adc/accuracy_limit.csv"
+echo "== Fig. 8a / 8b / 9 summaries =="
+for f in fig8a fig8b fig9; do echo "-- $f"; cat "$out/$f/summary.csv"; done
+echo "== Fig. 10: alpha_S of the largest pair-1 CS deviation =="
+awk -F, 'NR>1 && $6>m {m=$6; a=$1} END {print a, m}' "$out/fig10/sweep.csv"
+echo "== Grid [0.001,1]^2: worst |Eq.6 - expectation|/expectation (%), ASD/BSD range (%) =="
+awk -F, 'NR>1 { for (i=0;i<3;i++) { d=$(9+7*i); if (d<0) d=-d; if (d>w) w=d }
+                 r=$(5); if (min==""||r<min) min=r; if (r>max) max=r }
+         END { print "eq6 worst", w, "asd/bsd", min, max }' "$out/grid/sweep.csv"
+echo "== Fig. 11 (L_IS = 1): ASD range over L_S =="
+awk -F, 'NR>1 {a=$3; if (lo==""||a<lo) lo=a; if (a>hi) hi=a} END {print lo, hi, (hi-lo)/hi*100 "%"}' "$out/fig11/sweep.csv"
+echo "== Fig. 12 (L_S = 1): expectation range over L_IS =="
+awk -F, 'NR>1 {a=$6; if (lo==""||a<lo) lo=a; if (a>hi) hi=a} END {print lo, hi, (hi-lo)/hi*100 "%"}' "$out/fig12/sweep.csv"
+rm -rf "$out"

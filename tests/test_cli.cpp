@@ -1,1 +1,537 @@
+// End-to-end tests of the polrig executable: each test runs the real program in a fresh
+// temporary folder and inspects the files it writes (or does not write).
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "polrig/io/rig_yaml.h"
+#include "polrig/rig/rig.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::string kExe = POLRIG_EXE;
+const std::string kRig = POLRIG_SOURCE_DIR "/rigs/wang2019-indoor.yaml";
+
+std::string q(const std::string& s) {  // single-quoted for sh
+  std::string out = "'";
+  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+std::string q(const fs::path& p) { return q(p.string()); }
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+void write_file(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  for (std::string line; std::getline(ss, line);) out.push_back(line);
+  return out;
+}
+
+std::vector<std::string> split(const std::string& line, char sep = ',') {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  for (std::string f; std::getline(ss, f, sep);) out.push_back(f);
+  if (!line.empty() && line.back() == sep) out.emplace_back();
+  return out;
+}
+
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+};
+Csv read_csv(const fs::path& p) {
+  Csv csv;
+  const std::vector<std::string> lines = lines_of(read_file(p));
+  if (lines.empty()) return csv;
+  csv.header = split(lines[0]);
+  for (std::size_t i = 1; i < lines.size(); ++i) csv.rows.push_back(split(lines[i]));
+  return csv;
+}
+
+::testing::AssertionResult HasText(const char* hay_expr, const char* needle_expr,
+                                   const std::string& hay, const std::string& needle) {
+  if (hay.find(needle) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << hay_expr << " does not contain " << needle_expr
+                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
+                                       << needle << "\"";
+}
+#define EXPECT_HAS(hay, needle) EXPECT_PRED_FORMAT2(HasText, hay, needle)
+
+bool gnuplot_present() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
+
+bool starts_with_png_signature(const fs::path& p) {
+  const std::string data = read_file(p);
+  return data.size() > 8 && data.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0;
+}
+
+class Cli : public ::testing::Test {
+ protected:
+  struct Result {
+    int status = -1;  // exit status, or -1 if the program did not exit normally
+    std::string out, err;
+  };
+
+  fs::path tmp;
+
+  void SetUp() override {
+    static int counter = 0;
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    tmp = fs::temp_directory_path() /
+          ("polrig_test_cli_" + std::string(info->name()) + "_" + std::to_string(::getpid()) +
+           "_" + std::to_string(counter++));
+    fs::remove_all(tmp);
+    fs::create_directories(tmp);
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+  }
+
+  // Runs `polrig ARGS` (ARGS already shell-quoted where needed); stdout and stderr go to files
+  // in the temp folder. `prefix` is put before the program (e.g. "cd X &&" or "PATH=… ").
+  Result polrig(const std::string& args, const std::string& prefix = "") {
+    const int n = runs_++;
+    const fs::path out = tmp / ("stdout-" + std::to_string(n) + ".txt");
+    const fs::path err = tmp / ("stderr-" + std::to_string(n) + ".txt");
+    const std::string cmd = prefix + q(kExe) + " " + args + " >" + q(out) + " 2>" + q(err);
+    const int rc = std::system(cmd.c_str());
+    Result r;
+    r.status = (rc != -1 && WIFEXITED(rc)) ? WEXITSTATUS(rc) : -1;
+    r.out = read_file(out);
+    r.err = read_file(err);
+    return r;
+  }
+
+  // Runs and expects success; returns the result.
+  Result ok(const std::string& args, const std::string& prefix = "") {
+    Result r = polrig(args, prefix);
+    EXPECT_EQ(r.status, 0) << "polrig " << args << "\nstderr: " << r.err << "\nstdout: " << r.out;
+    return r;
+  }
+
+  // Entries of `parent` that are staging or backup folders of `name`.
+  static std::vector<std::string> leftovers(const fs::path& parent, const std::string& name) {
+    std::vector<std::string> found;
+    std::error_code ec;
+    if (!fs::exists(parent, ec)) return found;
+    for (const auto& e : fs::directory_iterator(parent)) {
+      const std::string f = e.path().filename().string();
+      if (f.rfind("." + name + ".partial-", 0) == 0 || f.rfind("." + name + ".old-", 0) == 0)
+        found.push_back(f);
+    }
+    return found;
+  }
+
+ private:
+  int runs_ = 0;
+};
+
+std::string dir_arg(const fs::path& p) { return q(p); }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// simulate
+// ---------------------------------------------------------------------------------------------
+
+TEST_F(Cli, SimulateWritesStopsCsv) {
+  const fs::path out = tmp / "sim";
+  const Result r = ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  EXPECT_HAS(r.out, "wrote " + out.string());
+  const Csv csv = read_csv(out / "stops.csv");
+  EXPECT_EQ(lines_of(read_file(out / "stops.csv"))[0].rfind("stop,theta_R_deg,theta_deg,d,", 0),
+            0u)
+      << read_file(out / "stops.csv").substr(0, 200);
+  const std::set<std::string> columns(csv.header.begin(), csv.header.end());
+  for (const char* c : {"V1", "V2", "V3"}) EXPECT_TRUE(columns.count(c)) << "no column " << c;
+  ASSERT_EQ(csv.rows.size(), 37u);
+  for (std::size_t i = 0; i < csv.rows.size(); ++i) {
+    SCOPED_TRACE(i);
+    ASSERT_EQ(csv.rows[i].size(), csv.header.size());
+    EXPECT_EQ(std::stod(csv.rows[i][0]), static_cast<double>(i));
+    EXPECT_DOUBLE_EQ(std::stod(csv.rows[i][1]), 10.0 * static_cast<double>(i));
+  }
+  // --no-plots: no PNG files.
+  EXPECT_FALSE(fs::exists(out / "voltages.png"));
+  EXPECT_FALSE(fs::exists(out / "deviations.png"));
+  EXPECT_TRUE(leftovers(tmp, "sim").empty());
+}
+
+TEST_F(Cli, SimulateIsIndependentOfThreadCount) {
+  const fs::path a = tmp / "t1", b = tmp / "t2", c = tmp / "t2-nosamples";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(a) + " --no-plots --samples --threads 1");
+  ok("simulate " + q(kRig) + " -o " + dir_arg(b) + " --no-plots --samples --threads 2");
+  ok("simulate " + q(kRig) + " -o " + dir_arg(c) + " --no-plots --threads 2");
+  const std::string stops = read_file(a / "stops.csv");
+  ASSERT_FALSE(stops.empty());
+  EXPECT_EQ(stops, read_file(b / "stops.csv")) << "stops.csv differs between 1 and 2 threads";
+  EXPECT_EQ(stops, read_file(c / "stops.csv")) << "stops.csv depends on --samples";
+  const std::string samples = read_file(a / "samples.csv");
+  ASSERT_FALSE(samples.empty());
+  EXPECT_EQ(samples, read_file(b / "samples.csv")) << "samples.csv differs between 1 and 2 threads";
+  EXPECT_FALSE(fs::exists(c / "samples.csv"));
+  const Csv csv = read_csv(a / "samples.csv");
+  EXPECT_EQ(csv.header, (std::vector<std::string>{"stop", "theta_R_deg", "sample", "V1", "V2",
+                                                  "V3"}));
+  EXPECT_EQ(csv.rows.size(), 37u * 40u);
+  // The rig files in both datasets are identical too.
+  EXPECT_EQ(read_file(a / "rig.yaml"), read_file(b / "rig.yaml"));
+}
+
+TEST_F(Cli, SimulateWithPlotsWritesPngFiles) {
+  if (!gnuplot_present()) GTEST_SKIP() << "gnuplot is not installed";
+  const fs::path out = tmp / "plots";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(out));
+  for (const char* png : {"voltages.png", "deviations.png"}) {
+    SCOPED_TRACE(png);
+    ASSERT_TRUE(fs::exists(out / png));
+    EXPECT_TRUE(starts_with_png_signature(out / png));
+  }
+  const YAML::Node manifest = YAML::LoadFile((out / "manifest.yaml").string());
+  EXPECT_TRUE(manifest["files"]["voltages.png"].IsMap());
+  EXPECT_TRUE(manifest["files"]["deviations.png"].IsMap());
+}
+
+TEST_F(Cli, ManifestRecordsEverythingNeededToReproduce) {
+  const fs::path out = tmp / "sim";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots --set seed=7 --set device.d=0.3");
+  ASSERT_TRUE(fs::exists(out / "manifest.yaml"));
+  const YAML::Node m = YAML::LoadFile((out / "manifest.yaml").string());
+  for (const char* key : {"git_revision", "version", "seed", "rig_text", "rig_resolved", "files"}) {
+    SCOPED_TRACE(key);
+    EXPECT_TRUE(m[key].IsDefined()) << "manifest.yaml has no '" << key << "'";
+  }
+  EXPECT_FALSE(m["git_revision"].as<std::string>("").empty());
+  EXPECT_FALSE(m["version"].as<std::string>("").empty());
+  EXPECT_EQ(m["seed"].as<std::uint64_t>(0), 7u);
+  EXPECT_EQ(m["rig_text"].as<std::string>(""), read_file(kRig));
+  EXPECT_EQ(m["rig_resolved"].as<std::string>(""), read_file(out / "rig.yaml"));
+  EXPECT_EQ(m["rig_file"].as<std::string>(""), kRig);
+  ASSERT_TRUE(m["overrides"].IsSequence());
+  ASSERT_EQ(m["overrides"].size(), 2u);
+  EXPECT_EQ(m["overrides"][0].as<std::string>(), "seed=7");
+  EXPECT_EQ(m["overrides"][1].as<std::string>(), "device.d=0.3");
+  EXPECT_HAS(m["command"].as<std::string>(""), "polrig simulate");
+  ASSERT_TRUE(m["files"].IsMap());
+  EXPECT_EQ(m["files"]["stops.csv"]["schema"].as<int>(0), 1);
+  EXPECT_TRUE(m["files"]["rig.yaml"].IsMap());
+  // Nothing in the manifest depends on the time of the run: two runs give the same manifest
+  // up to the output folder in the command line.
+  const fs::path out2 = tmp / "sim2";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(out2) + " --no-plots --set seed=7 --set device.d=0.3");
+  std::string m2 = read_file(out2 / "manifest.yaml");
+  const std::string from = out2.string(), to = out.string();
+  for (auto pos = m2.find(from); pos != std::string::npos; pos = m2.find(from, pos + to.size()))
+    m2.replace(pos, from.size(), to);
+  EXPECT_EQ(read_file(out / "manifest.yaml"), m2);
+}
+
+TEST_F(Cli, ManifestRigTextIsTheFileTextExactly) {
+  // rig_text is documented as the rig file's text: it must survive any valid rig file, also
+  // one without a final newline, with trailing blank lines or with an indented first line.
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"no-final-newline.yaml", "seed: 5"},
+      {"trailing-blank-lines.yaml", "seed: 5\n\n\n"},
+      {"indented.yaml", "  seed: 5\n  device:\n    d: 0.4\n"},
+  };
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    write_file(tmp / name, text);
+    const fs::path out = tmp / ("out-" + name);
+    ok("simulate " + q(tmp / name) + " -o " + dir_arg(out) + " --no-plots");
+    const YAML::Node m = YAML::LoadFile((out / "manifest.yaml").string());
+    EXPECT_EQ(m["rig_text"].as<std::string>("<missing>"), text);
+  }
+}
+
+TEST_F(Cli, RigShowAndRigKeys) {
+  const Result show = ok("rig show " + q(kRig) + " --set device.d=0.3");
+  const polrig::Rig shown = polrig::parse_rig(show.out, "rig show").rig;
+  EXPECT_EQ(shown.device.d, 0.3);
+  polrig::Rig expected = polrig::load_rig(kRig).rig;
+  expected.device.d = 0.3;
+  EXPECT_EQ(show.out, polrig::rig_to_yaml(expected));
+
+  const Result bad = polrig("rig show " + q(kRig) + " --set device.d=3");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_HAS(bad.err, "--set device.d=3: key 'device.d': expected a degree of polarization");
+
+  const Result keys = ok("rig keys");
+  EXPECT_HAS(keys.out, "| key | unit | default | accepts | meaning |");
+  EXPECT_HAS(keys.out, "| `device.d` |");
+  EXPECT_HAS(keys.out, "| `eccentricity.L_IS` | mm | 0.05 |");
+  EXPECT_HAS(keys.out, "| `seed` |");
+}
+
+TEST_F(Cli, RigYamlInTheDatasetLoadsBackToTheSameRig) {
+  const fs::path out = tmp / "sim";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  const polrig::Rig original = polrig::load_rig(kRig).rig;
+  const polrig::Rig back = polrig::load_rig(out / "rig.yaml").rig;
+  EXPECT_TRUE(back.device.truth == original.device.truth);
+  EXPECT_EQ(back.device.d, original.device.d);
+  EXPECT_EQ(back.device.ring.beta_deg, original.device.ring.beta_deg);
+  EXPECT_EQ(back.device.film_axis_deg, original.device.film_axis_deg);
+  EXPECT_EQ(back.source.cos4.L_o, original.source.cos4.L_o);
+  EXPECT_EQ(back.source.cos4.E_0, original.source.cos4.E_0);
+  EXPECT_EQ(back.eccentricity.L_IS, original.eccentricity.L_IS);
+  EXPECT_EQ(back.eccentricity.L_S, original.eccentricity.L_S);
+  EXPECT_EQ(back.eccentricity.alpha_S, original.eccentricity.alpha_S);
+  EXPECT_EQ(back.schedule.table_angles_deg(), original.schedule.table_angles_deg());
+  EXPECT_EQ(back.schedule.samples_per_stop, original.schedule.samples_per_stop);
+  EXPECT_EQ(back.electronics.noise_sigma_V, original.electronics.noise_sigma_V);
+  EXPECT_EQ(back.electronics.adc_bits, original.electronics.adc_bits);
+  EXPECT_EQ(back.seed, original.seed);
+  EXPECT_EQ(polrig::rig_to_yaml(back), polrig::rig_to_yaml(original));
+}
+
+TEST_F(Cli, DatasetReproducesItself) {
+  // With overrides, so that the dataset's rig.yaml (not the original file) carries them.
+  const fs::path first = tmp / "first", again = tmp / "again";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(first) +
+     " --no-plots --samples --set seed=11 --set eccentricity.L_S=0.3 --set "
+     "'device.truth.kv=[1, 1.01, 0.99]'");
+  ok("simulate " + q((first / "rig.yaml").string()) + " -o " + dir_arg(again) +
+     " --no-plots --samples");
+  const std::string stops = read_file(first / "stops.csv");
+  ASSERT_FALSE(stops.empty());
+  EXPECT_EQ(stops, read_file(again / "stops.csv"));
+  EXPECT_EQ(read_file(first / "samples.csv"), read_file(again / "samples.csv"));
+  EXPECT_EQ(read_file(first / "rig.yaml"), read_file(again / "rig.yaml"));
+  // And the overrides did change the data (the test is not vacuous).
+  const fs::path plain = tmp / "plain";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(plain) + " --no-plots");
+  EXPECT_NE(stops, read_file(plain / "stops.csv"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// studies, sweep, run
+// ---------------------------------------------------------------------------------------------
+
+TEST_F(Cli, StudyCsWritesDeviationsAndSummary) {
+  const fs::path out = tmp / "cs";
+  ok("study cs " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  const Csv dev = read_csv(out / "deviations.csv");
+  EXPECT_EQ(dev.header,
+            (std::vector<std::string>{"theta_R_deg", "pair", "dv_br_mV", "dv_mr_mV"}));
+  ASSERT_EQ(dev.rows.size(), 1080u);
+  for (std::size_t k = 0; k < dev.rows.size(); ++k) {
+    ASSERT_EQ(dev.rows[k].size(), 4u) << "row " << k;
+    ASSERT_EQ(std::stoi(dev.rows[k][1]), static_cast<int>(k / 360) + 1) << "row " << k;
+  }
+  const Csv sum = read_csv(out / "summary.csv");
+  EXPECT_EQ(sum.header, (std::vector<std::string>{"pair", "bsd_mV", "asd_mV", "mean_br_mV",
+                                                  "mean_mr_mV", "eq6_mV"}));
+  ASSERT_EQ(sum.rows.size(), 3u);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(sum.rows[i][0], std::to_string(i + 1));
+  EXPECT_TRUE(fs::exists(out / "manifest.yaml"));
+  EXPECT_TRUE(fs::exists(out / "rig.yaml"));
+}
+
+TEST_F(Cli, SweepWritesTheGridAndIsIndependentOfThreadCount) {
+  const std::string grids =
+      " --grid eccentricity.L_S=0.001:1:5 --grid eccentricity.L_IS=0.001:1:4";
+  const fs::path a = tmp / "sw1", b = tmp / "sw2";
+  ok("sweep " + q(kRig) + grids + " -o " + dir_arg(a) + " --no-plots --threads 1");
+  ok("sweep " + q(kRig) + grids + " -o " + dir_arg(b) + " --no-plots --threads 2");
+  const Csv csv = read_csv(a / "sweep.csv");
+  ASSERT_GE(csv.header.size(), 3u);
+  EXPECT_EQ(csv.header[0], "eccentricity.L_S");
+  EXPECT_EQ(csv.header[1], "eccentricity.L_IS");
+  EXPECT_EQ(csv.header[2], "pair1_bsd_mV");
+  ASSERT_EQ(csv.rows.size(), 20u);
+  // Row-major, the last axis fastest; both ends exact.
+  EXPECT_EQ(csv.rows.front()[0], "0.001");
+  EXPECT_EQ(csv.rows.front()[1], "0.001");
+  EXPECT_EQ(csv.rows[3][0], "0.001");
+  EXPECT_EQ(csv.rows[3][1], "1");
+  EXPECT_EQ(csv.rows[4][0], "0.25075");
+  EXPECT_EQ(csv.rows.back()[0], "1");
+  EXPECT_EQ(csv.rows.back()[1], "1");
+  for (const auto& row : csv.rows) EXPECT_EQ(row.size(), csv.header.size());
+  EXPECT_EQ(read_file(a / "sweep.csv"), read_file(b / "sweep.csv"))
+      << "sweep.csv differs between 1 and 2 threads";
+}
+
+TEST_F(Cli, StudyAdcWritesAccuracyLimits) {
+  const fs::path out = tmp / "adc";
+  ok("study adc --d 0.05,0.5 -o " + dir_arg(out) + " --no-plots");
+  const Csv csv = read_csv(out / "accuracy_limit.csv");
+  EXPECT_EQ(csv.header, (std::vector<std::string>{"d", "vmax_mV", "limit_deg"}));
+  ASSERT_EQ(csv.rows.size(), 2u);
+  EXPECT_EQ(csv.rows[0][0], "0.05");
+  EXPECT_EQ(csv.rows[1][0], "0.5");
+  // A larger d gives larger voltages and a finer accuracy limit.
+  EXPECT_GT(std::stod(csv.rows[1][1]), std::stod(csv.rows[0][1]));
+  EXPECT_LT(std::stod(csv.rows[1][2]), std::stod(csv.rows[0][2]));
+  EXPECT_TRUE(fs::exists(out / "manifest.yaml"));
+}
+
+TEST_F(Cli, RunWritesSimulateCsAndAdc) {
+  const fs::path out = tmp / "run";
+  const std::string plots = gnuplot_present() ? "" : " --no-plots";
+  const Result r = ok("run " + q(kRig) + " -o " + dir_arg(out) + plots);
+  EXPECT_HAS(r.out, "CS study at the rig's eccentricity");
+  for (const char* sub : {"simulate", "cs", "adc"}) {
+    SCOPED_TRACE(sub);
+    EXPECT_TRUE(fs::is_directory(out / sub));
+    EXPECT_TRUE(fs::exists(out / sub / "manifest.yaml"));
+  }
+  EXPECT_EQ(read_csv(out / "simulate" / "stops.csv").rows.size(), 37u);
+  EXPECT_EQ(read_csv(out / "cs" / "deviations.csv").rows.size(), 1080u);
+  EXPECT_EQ(read_csv(out / "cs" / "summary.csv").rows.size(), 3u);
+  EXPECT_EQ(read_csv(out / "adc" / "accuracy_limit.csv").rows.size(), 19u);
+  if (plots.empty()) {
+    EXPECT_TRUE(starts_with_png_signature(out / "simulate" / "voltages.png"));
+    EXPECT_TRUE(starts_with_png_signature(out / "cs" / "cs_deviations.png"));
+    EXPECT_TRUE(starts_with_png_signature(out / "adc" / "accuracy_limit.png"));
+  }
+  // The parts equal the standalone commands' output.
+  const fs::path sim = tmp / "sim", cs = tmp / "cs";
+  ok("simulate " + q(kRig) + " -o " + dir_arg(sim) + " --no-plots");
+  ok("study cs " + q(kRig) + " -o " + dir_arg(cs) + " --no-plots");
+  EXPECT_EQ(read_file(out / "simulate" / "stops.csv"), read_file(sim / "stops.csv"));
+  EXPECT_EQ(read_file(out / "cs" / "deviations.csv"), read_file(cs / "deviations.csv"));
+  EXPECT_EQ(read_file(out / "cs" / "summary.csv"), read_file(cs / "summary.csv"));
+  EXPECT_TRUE(leftovers(tmp, "run").empty());
+}
+
+TEST_F(Cli, RelativeAndTrailingSlashOutputPaths) {
+  ok("simulate " + q(kRig) + " -o rel/out --no-plots", "cd " + q(tmp) + " && ");
+  EXPECT_TRUE(fs::exists(tmp / "rel" / "out" / "stops.csv"));
+  EXPECT_TRUE(leftovers(tmp / "rel", "out").empty());
+  ok("simulate " + q(kRig) + " -o " + q(tmp.string() + "/slash/") + " --no-plots");
+  EXPECT_TRUE(fs::exists(tmp / "slash" / "stops.csv"));
+  EXPECT_TRUE(leftovers(tmp, "slash").empty());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input writes nothing
+// ---------------------------------------------------------------------------------------------
+
+TEST_F(Cli, BadInputWritesNothing) {
+  write_file(tmp / "unknown-key.yaml", "seed: 1\nsource:\n  L_0: 20\n");
+  struct Case {
+    std::string name;
+    std::string args;      // without -o
+    std::string expected;  // in stderr
+  };
+  const std::string missing = (tmp / "missing-rig.yaml").string();
+  const std::vector<Case> cases = {
+      {"missing rig file", "simulate " + q(missing),
+       missing + ": cannot read the rig file: no such file"},
+      {"unknown key in the rig file", "simulate " + q(tmp / "unknown-key.yaml"),
+       (tmp / "unknown-key.yaml").string() + ":3: key 'source.L_0': unknown key"},
+      {"--set unknown key", "simulate " + q(kRig) + " --set source.L_0=20",
+       "--set source.L_0=20: unknown key 'source.L_0'"},
+      {"--set negative distance", "simulate " + q(kRig) + " --set source.L_o=-1",
+       "--set source.L_o=-1: key 'source.L_o': expected a length > 0"},
+      {"--set without =", "study cs " + q(kRig) + " --set source.L_o",
+       "--set source.L_o: expected key.path=value"},
+      {"bad --grid key", "sweep " + q(kRig) + " --grid eccentricity.L_X=0:1:3",
+       "--grid eccentricity.L_X=0:1:3: unknown key 'eccentricity.L_X'"},
+      {"--grid with count 0", "sweep " + q(kRig) + " --grid eccentricity.L_S=0:1:0",
+       "--grid eccentricity.L_S=0:1:0: expected a whole count in [1, 1e8], got '0'"},
+      {"--grid value out of range", "sweep " + q(kRig) + " --grid device.d=0.5:1.5:3",
+       "key 'device.d': expected a degree of polarization in (0, 1)"},
+      {"--grid point breaks a rule", "sweep " + q(kRig) + " --grid schedule.start_deg=0:400:3",
+       "key 'schedule.stop_deg': expected an angle ≥ schedule.start_deg"},
+      {"study adc --d 1.5", "study adc --d 1.5",
+       "--d 1.5: expected degrees of polarization in (0, 1), got 1.5"},
+      {"run with a bad rig", "run " + q(tmp / "unknown-key.yaml"), "key 'source.L_0'"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    // The output folder's parent does not exist either: nothing may be created.
+    const fs::path parent = tmp / "nested";
+    const fs::path out = parent / "out";
+    const Result r = polrig(c.args + " -o " + dir_arg(out) + " --no-plots");
+    EXPECT_NE(r.status, 0) << r.err;
+    EXPECT_HAS(r.err, "polrig: error: ");
+    EXPECT_HAS(r.err, c.expected);
+    EXPECT_FALSE(fs::exists(out)) << "the output folder was written";
+    EXPECT_FALSE(fs::exists(parent)) << "the output folder's parent was created";
+    EXPECT_TRUE(leftovers(parent, "out").empty());
+    EXPECT_TRUE(leftovers(tmp, "out").empty());
+    EXPECT_EQ(r.out.find("wrote"), std::string::npos) << r.out;
+    std::error_code ec;
+    fs::remove_all(parent, ec);
+  }
+}
+
+TEST_F(Cli, FailureAfterStagingLeavesNothing) {
+  // A gnuplot that passes the availability check but fails to plot: the error comes after the
+  // staging folder was filled with CSV files.
+  const fs::path bin = tmp / "fakebin";
+  fs::create_directories(bin);
+  write_file(bin / "gnuplot",
+             "#!/bin/sh\nif [ \"$1\" = --version ]; then echo 'gnuplot 5.4'; exit 0; fi\n"
+             "echo 'fake gnuplot: cannot plot' >&2\nexit 3\n");
+  fs::permissions(bin / "gnuplot", fs::perms::owner_all | fs::perms::group_read |
+                                       fs::perms::group_exec | fs::perms::others_read |
+                                       fs::perms::others_exec);
+  const fs::path parent = tmp / "nested" / "deeper";
+  const fs::path out = parent / "out";
+  const std::string path_env = "PATH=" + q(bin.string() + ":" + std::getenv("PATH")) + " ";
+  const Result r = polrig("simulate " + q(kRig) + " -o " + dir_arg(out), path_env);
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "gnuplot failed");
+  EXPECT_HAS(r.err, "fake gnuplot: cannot plot");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_TRUE(leftovers(parent, "out").empty());
+  EXPECT_FALSE(fs::exists(tmp / "nested")) << "created parent folders were left behind";
+
+  // The same failure with an existing output folder and --force keeps the old folder.
+  const fs::path keep = tmp / "keep";
+  fs::create_directories(keep);
+  write_file(keep / "marker.txt", "old");
+  const Result r2 = polrig("simulate " + q(kRig) + " -o " + dir_arg(keep) + " --force", path_env);
+  EXPECT_NE(r2.status, 0);
+  EXPECT_EQ(read_file(keep / "marker.txt"), "old");
+  EXPECT_FALSE(fs::exists(keep / "stops.csv"));
+  EXPECT_TRUE(leftovers(tmp, "keep").empty());
+}
+
+TEST_F(Cli, ExistingOutputFolderNeedsForce) {
+  const fs::path out = tmp / "existing";
+  fs::create_directories(out / "sub");
+  write_file(out / "marker.txt", "old content");
+  write_file(out / "sub" / "x.txt", "x");
+
+  const Result r = polrig("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, out.string() + ": the output folder exists");
+  EXPECT_HAS(r.err, "--force");
+  EXPECT_EQ(read_file(out / "marker.txt"), "old content");
+  EXPECT_EQ(read_file(out / "sub" / "x.txt"), "x");
+  EXPECT_FALSE(fs::exists(out / "stops.csv"));
+  EXPECT_TRUE(leftovers(tmp, "existing").empty());
+
+  ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots --force");
+  EXPECT_FALSE(fs::exists(out / "marker.txt")) << "--force must replace the folder, not merge";
+  EXPECT_FALSE(fs::exists(out / "sub"));
+  EXPECT_EQ(read_csv(out / "stops.csv").rows.size(), 37u);
+  EXPECT_TRUE(leftovers(tmp, "existing").empty());
+}

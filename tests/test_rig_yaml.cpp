@@ -321,25 +321,14 @@ TEST(RigYamlOverride, LaterSetWins) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(RigYamlError, YamlSyntaxErrorNamesFileLineAndColumn) {
-  // Line 3 opens a flow list that is never closed.
+  // Line 3 opens a flow list that is never closed; yaml-cpp notices on line 4.
   const std::string msg = rig_error("seed: 1\ndevice:\n  beta_deg: [0, 1, 2\n  d: 0.5\n");
-  EXPECT_STARTS(msg, std::string(kOrigin) + ":");
-  EXPECT_HAS(msg, ": YAML syntax error: ");
-  // "file:LINE:COL: YAML syntax error"
-  const std::string head = msg.substr(0, msg.find(": YAML syntax error"));
-  const std::string linecol = head.substr(std::string(kOrigin).size() + 1);
-  const auto colon = linecol.find(':');
-  ASSERT_NE(colon, std::string::npos) << msg;
-  const int line = std::stoi(linecol.substr(0, colon));
-  const int col = std::stoi(linecol.substr(colon + 1));
-  EXPECT_GE(line, 3) << msg;
-  EXPECT_LE(line, 5) << msg;
-  EXPECT_GE(col, 1) << msg;
+  EXPECT_STARTS(msg, std::string(kOrigin) + ":4:4: YAML syntax error: ");
+  EXPECT_HAS(msg, "end of sequence flow not found");
 
-  // A tab-indented / badly indented map: a different syntax error, still file:line:col.
+  // A key indented less than its siblings: another syntax error, still file:line:col.
   const std::string msg2 = rig_error("device:\n  d: 0.5\n L_photo: 14\n");
-  EXPECT_STARTS(msg2, std::string(kOrigin) + ":3:");
-  EXPECT_HAS(msg2, ": YAML syntax error: ");
+  EXPECT_STARTS(msg2, std::string(kOrigin) + ":3:2: YAML syntax error: ");
 }
 
 TEST(RigYamlError, UnknownTopLevelKey) {

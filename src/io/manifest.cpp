@@ -7,6 +7,17 @@
 
 namespace polrig {
 
+namespace {
+// A YAML literal block reproduces a text exactly only if it ends in one newline, has no
+// carriage returns or tabs, and its first line is not indented; otherwise quote it.
+bool literal_block_is_exact(const std::string& t) {
+  if (t.empty() || t.back() != '\n') return false;
+  if (t.size() >= 2 && t[t.size() - 2] == '\n') return false;
+  if (t.front() == ' ' || t.front() == '\n') return false;
+  return t.find_first_of("\r\t") == std::string::npos;
+}
+}  // namespace
+
 void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
   YAML::Emitter out;
   out << YAML::BeginMap;
@@ -40,7 +51,11 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
   }
   out << YAML::EndMap;
   if (m.rig) {
-    out << YAML::Key << "rig_text" << YAML::Value << YAML::Literal << m.rig->text;
+    out << YAML::Key << "rig_text" << YAML::Value;
+    if (literal_block_is_exact(m.rig->text))
+      out << YAML::Literal << m.rig->text;
+    else
+      out << YAML::DoubleQuoted << m.rig->text;
     out << YAML::Key << "rig_resolved" << YAML::Value << YAML::Literal << resolved;
   }
   out << YAML::EndMap;

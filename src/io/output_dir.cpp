@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -12,6 +13,13 @@ namespace fs = std::filesystem;
 OutputDir::OutputDir(fs::path destination, bool replace)
     : destination_(fs::absolute(std::move(destination)).lexically_normal()), replace_(replace) {
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
+  // Replacing a folder that holds the working directory would delete the user's work.
+  const fs::path cwd = fs::current_path().lexically_normal();
+  const auto [d_end, c_it] = std::mismatch(destination_.begin(), destination_.end(), cwd.begin(), cwd.end());
+  if (d_end == destination_.end() || destination_ == destination_.root_path())
+    throw std::runtime_error(fmt::format(
+        "{}: refusing to write an output folder that contains the current directory",
+        destination_.string()));
   if (fs::exists(destination_) && !replace_)
     throw std::runtime_error(fmt::format(
         "{}: the output folder exists; choose another or pass --force to replace it",

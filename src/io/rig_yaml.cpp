@@ -113,7 +113,11 @@ class RigParser {
   void walk(const YAML::Node& map, const std::string& prefix, Rig& rig) {
     std::set<std::string> seen;
     for (auto it = map.begin(); it != map.end(); ++it) {
-      const std::string key = it->first.as<std::string>();
+      if (!it->first.IsScalar())
+        throw RigError(fmt::format("{}:{}: expected a key name under '{}', got {}", file_,
+                                   it->first.Mark().line + 1, prefix.empty() ? "(top)" : prefix,
+                                   shown(it->first)));
+      const std::string key = it->first.Scalar();
       const std::string path = prefix.empty() ? key : prefix + "." + key;
       if (it->first.Mark().line >= 0 && !override_for(path))
         line_of_[path] = it->first.Mark().line + 1;
@@ -183,7 +187,8 @@ class RigParser {
       case K::RealArray: {
         std::span<double> dst = k.array(rig);
         if (!n.IsSequence() || n.size() != dst.size())
-          fail(path, fmt::format("expected a list of {} ({}), got {}", k.expects, k.unit,
+          fail(path, fmt::format("expected a list of {}{}, got {}", k.expects,
+                                 k.unit.empty() ? "" : fmt::format(" ({})", k.unit),
                                  n.IsSequence() ? fmt::format("{} values", n.size())
                                                 : shown(n)));
         for (std::size_t i = 0; i < dst.size(); ++i) dst[i] = read_real(k, path, n[i]);

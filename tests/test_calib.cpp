@@ -4,6 +4,8 @@
 #include <cmath>
 
 #include "polrig/calib/angles.h"
+#include "polrig/calib/fit.h"
+#include "polrig/calib/model.h"
 #include "polrig/device/sensor.h"
 #include "polrig/units.h"
 
@@ -115,6 +117,141 @@ TEST(Section, ThetaSecIsThePairWithoutTheBadVoltage) {
   const SensorAngles above = sensor_angles(t, Electronics{}, voltages(t, 45.1, 0.5));
   EXPECT_EQ(above.section, 2);
   EXPECT_EQ(above.theta_sec_deg, above.theta13.theta_deg);
+}
+
+// ---- Eq. 15 and its fit --------------------------------------------------------------------
+
+std::vector<Observation> table2_observations(const std::vector<double>& thetas, double d) {
+  const FitParams truth = FitParams::coupled(CalibrationParams::wang2019_indoor(), d);
+  std::vector<Observation> obs;
+  for (double t : thetas)
+    for (int i = 0; i < 3; ++i) obs.push_back({t, i, eq15_voltage(truth, 0.5, i, t)});
+  return obs;
+}
+
+std::vector<double> cs_angles() {  // the paper's 19 CS points, 0°..180° every 10°
+  std::vector<double> t;
+  for (int k = 0; k <= 18; ++k) t.push_back(10.0 * k);
+  return t;
+}
+
+FitParams nominal_start(double d) {
+  return FitParams::coupled(CalibrationParams::theory(kWang2019FilmAxesDeg), d);
+}
+
+TEST(Eq15Model, AgreesWithTheDeviceModel) {
+  const CalibrationParams p = CalibrationParams::wang2019_indoor();
+  const FitParams f = FitParams::coupled(p, 0.55);
+  for (double theta = 0; theta < 180; theta += 11) {
+    const auto V = voltages(p, theta, 0.55);
+    for (int i = 0; i < 3; ++i) EXPECT_NEAR(eq15_voltage(f, 0.5, i, theta), V[i], 1e-15);
+  }
+}
+
+TEST(Eq15Model, DecouplingRoundTripsAndDaChangesOnlyD) {
+  const CalibrationParams p = CalibrationParams::wang2019_indoor();
+  const CalibrationParams q = FitParams::coupled(p, 0.55).decoupled(0.55);
+  for (int m = 0; m < 6; ++m) EXPECT_NEAR(q.kd[m], p.kd[m], 1e-15);
+  // Another d_a rescales kd but leaves every angle unchanged (§3.5).
+  const CalibrationParams r = FitParams::coupled(p, 0.55).decoupled(0.6);
+  for (double theta = 0; theta < 180; theta += 13) {
+    const auto V = voltages(p, theta, 0.55);
+    EXPECT_NEAR(sensor_angles(r, Electronics{}, V).theta_sec_deg,
+                sensor_angles(p, Electronics{}, V).theta_sec_deg, 1e-9);
+    EXPECT_NEAR(sensor_angles(r, Electronics{}, V).theta12.d, 0.6, 1e-12);
+  }
+}
+
+TEST(Eq15Model, JacobianMatchesCentralDifferences) {
+  // Central differences: truncation ~h²·f'''/6, rounding ~1e-16·|V|/h; with h = 1e-5 (relative)
+  // both stay below 1e-9 V + 1e-7 of the derivative.
+  const FitParams p = FitParams::coupled(CalibrationParams::wang2019_indoor(), 0.55);
+  const FitParams::Vector x = p.vector();
+  for (double theta : {0.0, 17.0, 45.0, 100.0, 163.0}) {
+    for (int i = 0; i < 3; ++i) {
+      const FitParams::Vector g = eq15_gradient(p, 0.5, i, theta);
+      for (int c = 0; c < FitParams::kCount; ++c) {
+        const double h = 1e-5 * std::max(1.0, std::abs(x(c)));
+        FitParams::Vector xp = x, xm = x;
+        xp(c) += h;
+        xm(c) -= h;
+        const double fd = (eq15_voltage(FitParams::from_vector(xp), 0.5, i, theta) -
+                           eq15_voltage(FitParams::from_vector(xm), 0.5, i, theta)) / (2 * h);
+        EXPECT_NEAR(g(c), fd, 1e-9 + 1e-7 * std::abs(fd))
+            << "theta=" << theta << " V" << i + 1 << " x" << c;
+      }
+    }
+  }
+}
+
+TEST(Eq15Fit, RecoversTable2FromNoiseFreeData) {
+  // Spec: noise-free data from Table 2's indoor parameters are recovered to 1e-6 (angles in
+  // degrees, k in mV), starting from the nominal values.
+  const FitResult r = fit_eq15(table2_observations(cs_angles(), 0.55), nominal_start(0.55), 0.5);
+  const CalibrationParams got = r.params.decoupled(0.55);
+  const CalibrationParams want = CalibrationParams::wang2019_indoor();
+  for (int m = 0; m < 6; ++m) {
+    EXPECT_NEAR(got.alpha_deg[m], want.alpha_deg[m], 1e-6) << m;
+    EXPECT_NEAR(got.kd[m], want.kd[m], 1e-6) << m;
+  }
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(got.k_mV[i], want.k_mV[i], 1e-6) << i;
+    EXPECT_NEAR(got.kv[i], want.kv[i], 1e-6) << i;
+  }
+  EXPECT_LT(r.residual_rms_V, 1e-12);
+  EXPECT_EQ(r.observations, 57);
+  EXPECT_GT(r.iterations, 0);
+}
+
+TEST(Eq15Fit, StandardErrorsMatchTheScatterOfRepeatedFits) {
+  // Gaussian noise σ on every voltage: the reported standard errors must match the spread of
+  // the estimates over repeated fits. With 200 fits the sample SD has ~5% relative error;
+  // allow 25% (5 standard errors).
+  const double sigma = 1e-4;
+  const std::vector<Observation> clean = table2_observations(cs_angles(), 0.55);
+  std::vector<FitParams::Vector> est;
+  FitParams::Vector mean_se = FitParams::Vector::Zero();
+  const int trials = 200;
+  for (int t = 0; t < trials; ++t) {
+    std::vector<Observation> obs = clean;
+    for (std::size_t n = 0; n < obs.size(); ++n)
+      obs[n].volts += sigma * standard_normal(99, static_cast<std::uint64_t>(t), n, 0);
+    const FitResult r = fit_eq15(obs, nominal_start(0.55), 0.5);
+    est.push_back(r.params.vector());
+    mean_se += r.standard_error.vector() / trials;
+  }
+  for (int c : {FitParams::alpha_index(0), FitParams::alpha_index(3), FitParams::k_index(1),
+                FitParams::kv_index(2), FitParams::c_index(4)}) {
+    double m = 0, s = 0;
+    for (const auto& e : est) m += e(c) / trials;
+    for (const auto& e : est) s += (e(c) - m) * (e(c) - m) / (trials - 1);
+    EXPECT_NEAR(std::sqrt(s) / mean_se(c), 1.0, 0.25) << "x" << c;
+  }
+}
+
+TEST(Eq15Fit, TooFewObservationsIsAnError) {
+  try {
+    fit_eq15(table2_observations({0, 30, 60, 90, 120}, 0.55), nominal_start(0.55), 0.5);
+    FAIL() << "expected CalibrationError";
+  } catch (const CalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("V1 has 5 observation(s)"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Eq15Fit, AnglesThatCannotSeparateTheParametersAreAnError) {
+  // Six stops but only two distinct polarization angles (mod 180°): rank deficient.
+  try {
+    fit_eq15(table2_observations({0, 180, 360, 90, 270, 450}, 0.55), nominal_start(0.55), 0.5);
+    FAIL() << "expected CalibrationError";
+  } catch (const CalibrationError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot determine"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Eq15Fit, UnpolarizedLightIsAnError) {
+  // d = 0: no voltage depends on α or on the angle; nothing can be calibrated.
+  EXPECT_THROW(fit_eq15(table2_observations(cs_angles(), 0.0), nominal_start(0.0), 0.5),
+               CalibrationError);
 }
 
 }  // namespace

@@ -26,6 +26,13 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
   out << YAML::Key << "version" << YAML::Value << POLRIG_VERSION;
   out << YAML::Key << "git_revision" << YAML::Value << POLRIG_GIT_REVISION;
   out << YAML::Key << "command" << YAML::Value << m.command;
+  out << YAML::Key << "working_directory" << YAML::Value
+      << std::filesystem::current_path().string();
+  if (!m.inputs.empty()) {
+    out << YAML::Key << "inputs" << YAML::Value << YAML::BeginSeq;
+    for (const std::string& in : m.inputs) out << in;
+    out << YAML::EndSeq;
+  }
   std::string resolved;
   if (m.rig) {
     resolved = rig_to_yaml(m.rig->rig);
@@ -36,7 +43,10 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
     out << YAML::EndSeq;
   }
   out << YAML::Key << "files" << YAML::Value << YAML::BeginMap;
-  for (const DatasetFile& f : m.files) {
+  std::vector<DatasetFile> files = m.files;
+  if (std::filesystem::exists(dir / "plots.gp"))
+    files.push_back({"plots.gp", 1, "the gnuplot script that drew the PNGs from the CSVs"});
+  for (const DatasetFile& f : files) {
     out << YAML::Key << f.name << YAML::Value << YAML::BeginMap;
     out << YAML::Key << "schema" << YAML::Value << f.schema;
     out << YAML::Key << "description" << YAML::Value << f.description;

@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "polrig/io/measured.h"
+#include "polrig/io/params_yaml.h"
 #include "polrig/rig/keys.h"
 
 namespace polrig {
@@ -32,7 +34,7 @@ class RigParser {
       throw RigError(fmt::format("{}:{}:{}: YAML syntax error: {}", file_, e.mark.line + 1,
                                  e.mark.column + 1, e.msg));
     }
-    if (!root.IsMap() && !(root.IsNull() && !overrides_.empty()))
+    if (!root.IsMap() && !root.IsNull())
       throw RigError(fmt::format("{}: expected a mapping of rig sections (device, source, "
                                  "eccentricity, schedule, electronics, seed)", file_));
     if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
@@ -41,9 +43,14 @@ class RigParser {
     Rig rig;
     walk(root, "", rig);
     check_schedule_form();
-    if (auto problem = check_rig(rig))
-      throw RigError(fmt::format("{}: key '{}': {}", where(problem->path), problem->path,
-                                 problem->message));
+    load_truth_from(rig);
+    if (auto problem = check_rig(rig)) {
+      std::string also;
+      if (!problem->related_path.empty())
+        also = fmt::format(" ('{}' from {})", problem->related_path, where(problem->related_path));
+      throw RigError(fmt::format("{}: key '{}': {}{}", where(problem->path), problem->path,
+                                 problem->message, also));
+    }
     return rig;
   }
 
@@ -142,8 +149,7 @@ class RigParser {
   }
 
   double read_real(const RigKey& k, const std::string& path, const YAML::Node& n) const {
-    if (!n.IsScalar()) fail(path, fmt::format("expected {} ({}), got {}", k.expects,
-                                              k.unit.empty() ? "a number" : k.unit, shown(n)));
+    if (!n.IsScalar()) fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
     double v = 0.0;
     try {
       v = parse_finite_number(n.Scalar(), "value");
@@ -211,10 +217,32 @@ class RigParser {
     return !s.empty() && ec == std::errc() && end == s.data() + s.size();
   }
 
+  // device.truth_from: the true parameters come from a calibration's params.yaml.
+  void load_truth_from(Rig& rig) const {
+    if (rig.device.truth_from.empty()) return;
+    for (const std::string& p : present_)
+      if (p.starts_with("device.truth."))
+        fail("device.truth_from", fmt::format("expected either device.truth_from or "
+                                              "device.truth.* keys, not both ('{}' is also given)", p));
+    std::filesystem::path params = rig.device.truth_from;
+    if (params.is_relative() && !std::filesystem::path(file_).parent_path().empty() &&
+        !override_for("device.truth_from"))
+      params = std::filesystem::path(file_).parent_path() / params;
+    try {
+      rig.device.truth = read_params_yaml(params).params;
+    } catch (const DataError& e) {
+      fail("device.truth_from", fmt::format("cannot load the parameters: {}", e.what()));
+    }
+    rig.device.truth_from.clear();
+  }
+
   void check_schedule_form() const {
     if (!present_.count("schedule.angles_deg")) return;
+    // `--set schedule.angles_deg=[…]` replaces a file's start/step/stop; within one source
+    // (the file, or the overrides) only one form may be given.
+    const bool list_overridden = override_for("schedule.angles_deg") != nullptr;
     for (const char* p : {"schedule.start_deg", "schedule.step_deg", "schedule.stop_deg"})
-      if (present_.count(p))
+      if (present_.count(p) && (override_for(p) != nullptr) == list_overridden)
         fail("schedule.angles_deg",
              fmt::format("expected either an explicit list or start/step/stop, not both "
                          "('{}' is also given)", p));
@@ -274,7 +302,10 @@ std::string rig_to_yaml(const Rig& rig_in) {
       case K::Real: value = number_text(k.real(rig)); break;
       case K::Integer: value = k.integer(rig); break;
       case K::Seed: value = k.seed(rig); break;
-      case K::Text: value = k.text(rig); break;
+      case K::Text:
+        if (k.text(rig).empty()) continue;  // an optional path that is not set
+        value = k.text(rig);
+        break;
       case K::RealArray:
       case K::RealList: {
         if (k.kind == K::RealList && k.list(rig).empty()) continue;

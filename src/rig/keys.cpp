@@ -64,6 +64,14 @@ std::vector<RigKey> make_keys() {
                        "true polarizer coefficients kd_m = (τM−τm)/(τM+τm) − 1 (Eq. 15)",
                        [](Rig& r) { return std::span<double>(r.device.truth.kd); },
                        polarizer_kd));
+  {
+    RigKey k{"device.truth_from", K::Text, "", "a path to a params.yaml",
+             "load device.truth from a calibration's params.yaml (path relative to the rig "
+             "file); excludes device.truth.*"};
+    k.text = [](Rig& r) -> std::string& { return r.device.truth_from; };
+    k.valid_text = [](std::string_view v) { return !v.empty(); };
+    keys.push_back(k);
+  }
   // --- source -------------------------------------------------------------------------
   {
     RigKey k{"source.model", K::Text, "", "\"cos4\"",
@@ -73,7 +81,7 @@ std::vector<RigKey> make_keys() {
     k.valid_text = [](std::string_view v) { return v == "cos4"; };
     keys.push_back(k);
   }
-  keys.push_back(real("source.L_o", "mm", "a length > 0 (cos⁴φ vanishes off-axis at 0)",
+  keys.push_back(real("source.L_o", "mm", "a length > 0 (at 0 the cos⁴ law gives no light off-axis)",
                       "distance from the port plane down to the photosensitive plane",
                       [](Rig& r) -> double& { return r.source.cos4.L_o; }, positive));
   keys.push_back(real("source.E_0", "W/m^2", "an irradiance > 0",
@@ -164,7 +172,8 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
     if (s.stop_deg < s.start_deg)
       return RigProblem{"schedule.stop_deg",
                         fmt::format("expected an angle ≥ schedule.start_deg ({}), got {}",
-                                    s.start_deg, s.stop_deg)};
+                                    s.start_deg, s.stop_deg),
+                        "schedule.start_deg"};
     if ((s.stop_deg - s.start_deg) / s.step_deg > 1e6)
       return RigProblem{"schedule.step_deg", "expected at most 1e6 stops"};
   }

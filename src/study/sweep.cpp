@@ -1,6 +1,7 @@
 #include "polrig/study/sweep.h"
 
 #include <algorithm>
+#include <string>
 
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -31,10 +32,11 @@ GridAxis GridAxis::parse(std::string_view arg) {
     axis.stop = parse_finite_number(spec.substr(c1 + 1, c2 - c1 - 1), "stop");
     const double count = parse_finite_number(spec.substr(c2 + 1), "count");
     if (count < 1 || count != std::floor(count) || count > 1e8)
-      return fail(fmt::format("expected a whole count in [1, 1e8], got '{}'", spec.substr(c2 + 1)));
+      throw RigError(fmt::format("count: expected a whole number in [1, 1e8], got '{}'",
+                                 spec.substr(c2 + 1)));
     axis.count = static_cast<int>(count);
   } catch (const RigError& e) {
-    return fail(e.what());
+    return fail(e.what());  // parse_finite_number names only the part: "count: expected …"
   }
   if (axis.count == 1 && axis.start != axis.stop)
     return fail("a single point needs start = stop");
@@ -48,9 +50,11 @@ GridAxis GridAxis::parse(std::string_view arg) {
 double GridAxis::value(int index) const {
   if (count == 1) return start;
   if (index == count - 1) return stop;  // exact end point
-  // Weighted form: exact at both ends and free of the drift of start + i·step.
+  // Weighted form, exact at both ends; then rounded to 15 significant digits, so that a decimal
+  // grid such as 0.05:0.95:19 gives 0.15 and not 0.15000000000000002.
   const double n = count - 1;
-  return (start * (n - index) + stop * index) / n;
+  const double v = (start * (n - index) + stop * index) / n;
+  return std::stod(fmt::format("{:.15g}", v));
 }
 
 std::string GridAxis::text() const {

@@ -2,6 +2,8 @@
 // The sensor's electronics after the photodiodes: log amplifiers, the ADC and electrical noise.
 #include <cstdint>
 
+#include "polrig/random.h"  // the noise streams
+
 namespace polrig {
 
 struct Electronics {
@@ -18,13 +20,5 @@ double adc_volts(std::int32_t count, const Electronics& e);
 inline double adc_quantize(double volts, const Electronics& e) {
   return adc_volts(adc_count(volts, e), e);
 }
-
-// A standard normal deviate that is a pure function of (seed, stop, channel, sample).
-//
-// Counter-based, so that every random number is reproducible whatever thread draws it and in
-// whatever order; std::normal_distribution is not specified bit-for-bit across libraries.
-// SplitMix64 mixing of the counters, then Box–Muller on two 53-bit uniforms.
-double standard_normal(std::uint64_t seed, std::uint64_t stop, std::uint64_t channel,
-                       std::uint64_t sample);
 
 }  // namespace polrig

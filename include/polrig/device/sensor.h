@@ -3,6 +3,7 @@
 // channels on a ring, paired (1,2), (3,4), (5,6) into three log amplifiers.
 #include <array>
 #include <cmath>
+#include <string>
 #include <numbers>
 
 #include "polrig/calib/params.h"
@@ -16,6 +17,9 @@ struct SensorSpec {
   std::array<double, 6> film_axis_deg = kWang2019FilmAxesDeg;  // sensor frame, degrees
   double d = 0.55;  // degree of linear polarization of the light reaching the sensor, in (0, 1)
   CalibrationParams truth = CalibrationParams::wang2019_indoor();
+  // A params.yaml (written by `polrig calibrate`) whose α, k, kv, kd replace `truth` when the
+  // rig is loaded; empty for none. The loader resolves it, so a loaded rig has it empty.
+  std::string truth_from;
 
   CalibrationParams theory() const { return CalibrationParams::theory(film_axis_deg); }
 };

@@ -17,9 +17,10 @@ struct DatasetFile {
 };
 
 struct Manifest {
-  std::string command;      // the polrig command line
-  const LoadedRig* rig = nullptr;  // null for studies that take no rig
-  std::vector<DatasetFile> files;
+  std::string command;             // the polrig command line, shell-quoted
+  const LoadedRig* rig = nullptr;  // null for commands that take no rig
+  std::vector<DatasetFile> files;  // plots.gp is added when the folder holds one
+  std::vector<std::string> inputs = {};  // data files read (calibrate, apply)
 };
 
 // Writes DIR/manifest.yaml and, when there is a rig, DIR/rig.yaml (the effective rig).

@@ -41,6 +41,7 @@ const RigKey* find_rig_key(std::string_view path);
 struct RigProblem {
   std::string path;
   std::string message;
+  std::string related_path = {};  // the other key of the rule, if any
 };
 std::optional<RigProblem> check_rig(const Rig& rig);
 

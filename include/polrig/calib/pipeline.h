@@ -1,0 +1,90 @@
+#pragma once
+// The paper's calibration (Wang et al. 2019 §4, Fig. 14): preprocessing, least squares,
+// decoupling, and the accuracy of the result, for the three calibration types.
+#include <array>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "polrig/calib/fit.h"
+#include "polrig/calib/preprocess.h"
+
+namespace polrig {
+
+enum class CalibrationMethod {
+  Section,                      // type 1: the raw stops, section algorithm only
+  CentralSymmetry,              // type 2: CS points + section
+  CentralSymmetryNoncontinuous  // type 3: CS points, noncontinuous selection + section
+};
+std::string_view method_name(CalibrationMethod m);  // "section", "cs", "cs-nc"
+std::optional<CalibrationMethod> parse_method(std::string_view name);
+inline constexpr std::array<CalibrationMethod, 3> kAllMethods{
+    CalibrationMethod::Section, CalibrationMethod::CentralSymmetry,
+    CalibrationMethod::CentralSymmetryNoncontinuous};
+
+struct CalibrationOptions {
+  CalibrationMethod method = CalibrationMethod::CentralSymmetryNoncontinuous;
+  std::optional<double> d_a;  // the rig's stated d; without it, max_m c_m (best film ideal)
+  NoncontinuousRule noncontinuous;
+  std::array<double, 6> film_axis_deg = kWang2019FilmAxesDeg;  // for the nominal start
+  double volts_per_decade = 0.5;
+  FitOptions fit;
+};
+
+// A point at which a calibration is judged: the reference angle (the table angle) and the
+// voltages there (a raw stop, or a CS point).
+struct EvalPoint {
+  double theta_ref_deg;
+  std::array<double, 3> V;
+};
+
+// θ12, θ13, θ23 and θ_sec minus the reference angle, each wrapped into [−90°, 90°).
+struct AngleErrors {
+  double theta_ref_deg;
+  double e12_deg, e13_deg, e23_deg, esec_deg;
+  int section;
+  double d;  // the degree of polarization θ12's pair implies (scale set by d_a)
+};
+
+struct AngleAccuracy {
+  double max_deg = 0, min_deg = 0;
+  double accuracy_deg() const { return 0.5 * (max_deg - min_deg); }  // paper §4.5: ±half range
+};
+enum AngleIndex { kTheta12 = 0, kTheta13 = 1, kTheta23 = 2, kThetaSec = 3 };
+
+struct CalibrationResult {
+  CalibrationMethod method;
+  FitResult fit;
+  double d_a = 0;
+  std::string d_a_source;            // "given" or how it was chosen
+  CalibrationParams params;          // decoupled with d_a
+  CalibrationParams standard_error;  // kd's from c's: se(c_m)/d_a
+  std::vector<EvalPoint> points;     // raw stops (type 1) or CS points (types 2, 3)
+  std::vector<std::vector<bool>> fitted;  // fitted[i][n]: V_{i+1} of point n entered the fit
+  std::vector<AngleErrors> errors;   // at every point
+  std::array<AngleAccuracy, 4> accuracy;  // θ12, θ13, θ23, θ_sec
+};
+
+// Runs one calibration type on the stops. Throws CalibrationError with the reason when the
+// data cannot be calibrated (unpaired CS stops, too few stops, d too small, no convergence…).
+CalibrationResult calibrate(const std::vector<StopVoltages>& stops,
+                            const CalibrationOptions& options);
+
+std::vector<AngleErrors> angle_errors(const CalibrationParams& p, double volts_per_decade,
+                                      const std::vector<EvalPoint>& points);
+std::array<AngleAccuracy, 4> accuracy_of(const std::vector<AngleErrors>& errors);
+
+// The replacement analysis (§4.6, Fig. 21): the θ_sec accuracy with each subset of
+// {α, k, kv, kd} put back to its theory value, for all 16 subsets.
+struct Replacement {
+  std::string label;  // "none", "α", "k-kv", …, "α-k-kv-kd"
+  unsigned mask;      // bit 0 α, bit 1 k, bit 2 kv, bit 3 kd
+  double accuracy_deg;
+};
+std::vector<Replacement> replacement_analysis(const CalibrationParams& calibrated,
+                                              const CalibrationParams& theory,
+                                              double volts_per_decade,
+                                              const std::vector<EvalPoint>& points);
+
+}  // namespace polrig

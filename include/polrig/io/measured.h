@@ -1,0 +1,51 @@
+#pragma once
+// Reading voltages to calibrate: a dataset folder written by `polrig simulate` (its stops.csv and
+// rig.yaml), or a researcher's own CSV with the header theta_R_deg,V1,V2,V3 (volts). Both go
+// through the same reader, so measured data calibrate exactly like synthetic data.
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "polrig/calib/preprocess.h"
+#include "polrig/rig/rig.h"
+
+namespace polrig {
+
+// Bad data files. what() names the file, the line and the column.
+class DataError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A CSV file as text cells; line numbers are 1-based and count the header.
+struct CsvFile {
+  std::string origin;
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+  std::vector<int> line;  // line of each row
+
+  static CsvFile read(const std::filesystem::path& path);
+  // Index of a column, or DataError naming the file and the missing column.
+  std::size_t column(std::string_view name) const;
+  std::optional<std::size_t> find_column(std::string_view name) const;
+  // The cell as a finite number, or DataError naming file:line and the column.
+  double number(std::size_t row, std::size_t column) const;
+};
+
+struct MeasuredData {
+  std::string origin;               // the CSV read
+  std::vector<StopVoltages> stops;  // in file order; labels are "file:line"
+  std::optional<Rig> rig;           // the dataset's rig.yaml, when there is one
+};
+
+// `input` is a folder (reads stops.csv, and rig.yaml when present) or a CSV file. Requires
+// theta_R_deg, V1, V2, V3; other columns are ignored. Throws DataError (or RigError for the
+// dataset's rig.yaml).
+MeasuredData read_measured(const std::filesystem::path& input);
+
+// Voltages only (for `polrig apply`): V1, V2, V3 required, theta_R_deg optional (NaN if absent).
+MeasuredData read_voltages(const std::filesystem::path& input);
+
+}  // namespace polrig

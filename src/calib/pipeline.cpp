@@ -1,0 +1,159 @@
+#include "polrig/calib/pipeline.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <fmt/format.h>
+
+#include "polrig/calib/angles.h"
+#include "polrig/units.h"
+
+namespace polrig {
+
+std::string_view method_name(CalibrationMethod m) {
+  switch (m) {
+    case CalibrationMethod::Section: return "section";
+    case CalibrationMethod::CentralSymmetry: return "cs";
+    case CalibrationMethod::CentralSymmetryNoncontinuous: return "cs-nc";
+  }
+  return "?";
+}
+
+std::optional<CalibrationMethod> parse_method(std::string_view name) {
+  for (CalibrationMethod m : kAllMethods)
+    if (method_name(m) == name) return m;
+  return std::nullopt;
+}
+
+namespace {
+
+std::vector<Observation> observations_of(const std::vector<EvalPoint>& points) {
+  std::vector<Observation> obs;
+  for (const EvalPoint& p : points)
+    for (int i = 0; i < 3; ++i) obs.push_back({p.theta_ref_deg, i, p.V[i]});
+  return obs;
+}
+
+// The start value of c: the median degree of polarization that the theory parameters read
+// from the voltages (θ12's pair).
+double estimate_d(const std::vector<EvalPoint>& points, const CalibrationOptions& o) {
+  const CalibrationParams theory = CalibrationParams::theory(o.film_axis_deg);
+  Electronics e;
+  e.volts_per_decade = o.volts_per_decade;
+  std::vector<double> d;
+  for (const EvalPoint& p : points) d.push_back(pair_angle(theory, e, p.V, 0, 1).d);
+  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
+  return d[d.size() / 2];
+}
+
+}  // namespace
+
+std::vector<AngleErrors> angle_errors(const CalibrationParams& p, double v_dec,
+                                      const std::vector<EvalPoint>& points) {
+  Electronics e;
+  e.volts_per_decade = v_dec;
+  std::vector<AngleErrors> out;
+  for (const EvalPoint& pt : points) {
+    const SensorAngles a = sensor_angles(p, e, pt.V);
+    const double ref = pt.theta_ref_deg;
+    out.push_back({ref, axis_difference_deg(a.theta12.theta_deg, ref),
+                   axis_difference_deg(a.theta13.theta_deg, ref),
+                   axis_difference_deg(a.theta23.theta_deg, ref),
+                   axis_difference_deg(a.theta_sec_deg, ref), a.section, a.theta12.d});
+  }
+  return out;
+}
+
+std::array<AngleAccuracy, 4> accuracy_of(const std::vector<AngleErrors>& errors) {
+  std::array<AngleAccuracy, 4> acc;
+  for (int k = 0; k < 4; ++k) {
+    acc[k].max_deg = -1e300;
+    acc[k].min_deg = 1e300;
+  }
+  for (const AngleErrors& e : errors) {
+    const double v[4] = {e.e12_deg, e.e13_deg, e.e23_deg, e.esec_deg};
+    for (int k = 0; k < 4; ++k) {
+      acc[k].max_deg = std::max(acc[k].max_deg, v[k]);
+      acc[k].min_deg = std::min(acc[k].min_deg, v[k]);
+    }
+  }
+  return acc;
+}
+
+CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const CalibrationOptions& o) {
+  CalibrationResult r;
+  r.method = o.method;
+  if (o.method == CalibrationMethod::Section) {
+    for (const StopVoltages& s : stops) r.points.push_back({s.theta_R_deg, s.V});
+  } else {
+    for (const CsPoint& p : central_symmetry_points(stops)) r.points.push_back({p.theta_R_deg, p.V});
+  }
+  if (r.points.size() < 6)
+    throw CalibrationError(fmt::format(
+        "{} {} to fit; Eq. 15 has 6 unknowns per pair, so at least 6 are needed",
+        r.points.size(), o.method == CalibrationMethod::Section ? "stops" : "CS points"));
+
+  const double d0 = estimate_d(r.points, o);
+  if (!(d0 >= 0.02))
+    throw CalibrationError(fmt::format(
+        "the light's degree of polarization is about {:.3g}: too small to calibrate (the angle "
+        "signal vanishes as d → 0; at least 0.02 is needed)", d0));
+  const FitParams start = FitParams::coupled(CalibrationParams::theory(o.film_axis_deg), d0);
+
+  const std::vector<Observation> all = observations_of(r.points);
+  std::vector<Observation> used = all;
+  if (o.method == CalibrationMethod::CentralSymmetryNoncontinuous) {
+    // Slopes from a preliminary fit of all CS points, so that the selection does not depend on
+    // how the table zero sits against the port polarizer.
+    const FitResult preliminary = fit_eq15(all, start, o.volts_per_decade, o.fit);
+    used = select_noncontinuous(all, preliminary.params, o.volts_per_decade, o.noncontinuous);
+  }
+  r.fit = fit_eq15(used, start, o.volts_per_decade, o.fit);
+
+  r.fitted.assign(3, std::vector<bool>(r.points.size(), false));
+  for (const Observation& ob : used)
+    for (std::size_t n = 0; n < r.points.size(); ++n)
+      if (r.points[n].theta_ref_deg == ob.theta_deg && r.points[n].V[ob.pair] == ob.volts)
+        r.fitted[ob.pair][n] = true;
+
+  if (o.d_a) {
+    r.d_a = *o.d_a;
+    r.d_a_source = "given";
+  } else {
+    r.d_a = *std::max_element(r.fit.params.c.begin(), r.fit.params.c.end());
+    r.d_a_source = "max c_m (the best film taken as ideal, kd = 0)";
+  }
+  if (!(r.d_a > 0.0 && r.d_a < 1.0))
+    throw CalibrationError(fmt::format("d_a = {} is outside (0, 1)", r.d_a));
+  r.params = r.fit.params.decoupled(r.d_a);
+  r.standard_error.alpha_deg = r.fit.standard_error.alpha_deg;
+  r.standard_error.k_mV = r.fit.standard_error.k_mV;
+  r.standard_error.kv = r.fit.standard_error.kv;
+  for (int m = 0; m < 6; ++m) r.standard_error.kd[m] = r.fit.standard_error.c[m] / r.d_a;
+
+  r.errors = angle_errors(r.params, o.volts_per_decade, r.points);
+  r.accuracy = accuracy_of(r.errors);
+  return r;
+}
+
+std::vector<Replacement> replacement_analysis(const CalibrationParams& calibrated,
+                                              const CalibrationParams& theory, double v_dec,
+                                              const std::vector<EvalPoint>& points) {
+  static const char* const kNames[4] = {"α", "k", "kv", "kd"};
+  std::vector<Replacement> out;
+  for (unsigned mask = 0; mask < 16; ++mask) {
+    CalibrationParams p = calibrated;
+    if (mask & 1u) p.alpha_deg = theory.alpha_deg;
+    if (mask & 2u) p.k_mV = theory.k_mV;
+    if (mask & 4u) p.kv = theory.kv;
+    if (mask & 8u) p.kd = theory.kd;
+    std::string label;
+    for (int b = 0; b < 4; ++b)
+      if (mask & (1u << b)) label += (label.empty() ? "" : "-") + std::string(kNames[b]);
+    if (label.empty()) label = "none";
+    out.push_back({label, mask, accuracy_of(angle_errors(p, v_dec, points))[kThetaSec].accuracy_deg()});
+  }
+  return out;
+}
+
+}  // namespace polrig

@@ -1,0 +1,218 @@
+// Commands that calibrate: calibrate, apply, study calibration.
+#include <cmath>
+#include <iostream>
+#include <limits>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "cli.h"
+#include "polrig/calib/angles.h"
+#include "polrig/calib/pipeline.h"
+#include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "polrig/io/params_yaml.h"
+#include "polrig/io/plot.h"
+#include "polrig/study/calibration_reports.h"
+#include "polrig/study/calibration_trials.h"
+#include "polrig/units.h"
+
+namespace polrig::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+// Settings of the calibration itself, shared by calibrate and study calibration.
+struct CalibrationSettings {
+  std::optional<double> d_a;
+  double nc_threshold = NoncontinuousRule{}.min_relative_slope;
+  int nc_min_points = NoncontinuousRule{}.min_points;
+
+  void add_to(CLI::App& app) {
+    app.add_option("--d-a", d_a, "the rig's stated degree of polarization d_a for decoupling")
+        ->check(CLI::Range(1e-6, 1.0 - 1e-12));
+    app.add_option("--nc-threshold", nc_threshold,
+                   "noncontinuous rule: keep a voltage where |dV/dθ| ≥ this × its largest slope")
+        ->check(CLI::Range(0.0, 1.0))
+        ->capture_default_str();
+    app.add_option("--nc-min-points", nc_min_points,
+                   "noncontinuous rule: keep at least this many points per voltage")
+        ->check(CLI::Range(6, 100000))
+        ->capture_default_str();
+  }
+  CalibrationOptions options(const Rig& rig, std::optional<double> rig_d) const {
+    CalibrationOptions o;
+    o.d_a = d_a ? d_a : rig_d;
+    o.film_axis_deg = rig.device.film_axis_deg;
+    o.volts_per_decade = rig.electronics.volts_per_decade;
+    o.noncontinuous = {nc_threshold, nc_min_points};
+    return o;
+  }
+};
+
+void run_calibrate(const std::string& input, const std::string& method_text,
+                   const std::string& rig_path, const CalibrationSettings& settings,
+                   const OutputOptions& out) {
+  std::vector<CalibrationMethod> methods;
+  if (method_text == "all") {
+    methods.assign(kAllMethods.begin(), kAllMethods.end());
+  } else if (auto m = parse_method(method_text)) {
+    methods.push_back(*m);
+  } else {
+    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc or all", method_text));
+  }
+  const MeasuredData data = read_measured(input);
+  // The sensor description (film axes, amplifier scale): --rig, else the dataset's rig.yaml,
+  // else the default rig. d_a: --d-a, else the dataset rig's d.
+  std::optional<LoadedRig> given;
+  if (!rig_path.empty()) given = load_rig(rig_path);
+  const Rig rig = given ? given->rig : data.rig ? *data.rig : Rig{};
+  const std::optional<double> rig_d =
+      given ? std::optional<double>(given->rig.device.d)
+            : data.rig ? std::optional<double>(data.rig->device.d) : std::nullopt;
+
+  OutputDir dir = out.open();
+  std::vector<CalibrationResult> results;
+  for (CalibrationMethod m : methods) {
+    CalibrationOptions o = settings.options(rig, rig_d);
+    o.method = m;
+    results.push_back(calibrate(data.stops, o));
+  }
+  const Manifest base{command_line(), given ? &*given : nullptr, {}, {data.origin}};
+  const auto options_of = [&](CalibrationMethod m) {
+    CalibrationOptions o = settings.options(rig, rig_d);
+    o.method = m;
+    return o;
+  };
+  if (results.size() == 1) {
+    Manifest m = base;
+    m.files = report_calibration(dir.staging(), results[0], options_of(results[0].method), out.plots());
+    write_manifest(dir.staging(), m);
+  } else {
+    for (const CalibrationResult& r : results) {
+      const fs::path sub = dir.staging() / std::string(method_name(r.method));
+      fs::create_directory(sub);
+      Manifest m = base;
+      m.files = report_calibration(sub, r, options_of(r.method), out.plots());
+      write_manifest(sub, m);
+    }
+    Manifest m = base;
+    m.files = report_calibration_comparison(dir.staging(), results, out.plots());
+    write_manifest(dir.staging(), m);
+  }
+  finish(dir);
+  for (const CalibrationResult& r : results)
+    std::cout << fmt::format("{:8s} accuracy θ_sec ±{:.5f}°  (θ12 ±{:.5f}, θ13 ±{:.5f}, θ23 ±{:.5f}); "
+                             "{} observations, residual RMS {:.4f} mV, d_a = {} ({})\n",
+                             method_name(r.method), r.accuracy[kThetaSec].accuracy_deg(),
+                             r.accuracy[kTheta12].accuracy_deg(), r.accuracy[kTheta13].accuracy_deg(),
+                             r.accuracy[kTheta23].accuracy_deg(), r.fit.observations,
+                             r.fit.residual_rms_V * 1e3, r.d_a, r.d_a_source);
+}
+
+void run_apply(const std::string& params_path, const std::string& voltages_path,
+               const OutputOptions& out) {
+  const LoadedParams p = read_params_yaml(params_path);
+  const MeasuredData data = read_voltages(voltages_path);
+  const bool have_reference = !std::isnan(data.stops.front().theta_R_deg);
+  OutputDir dir = out.open(have_reference);
+  Electronics e;
+  e.volts_per_decade = p.volts_per_decade;
+  std::string text = "row,theta_R_deg,theta12_deg,theta13_deg,theta23_deg,theta_sec_deg,section,d,error_deg\n";
+  for (std::size_t n = 0; n < data.stops.size(); ++n) {
+    const StopVoltages& s = data.stops[n];
+    const SensorAngles a = sensor_angles(p.params, e, s.V);
+    const double err = have_reference ? axis_difference_deg(a.theta_sec_deg, s.theta_R_deg)
+                                      : std::numeric_limits<double>::quiet_NaN();
+    // d of the pair the section algorithm used.
+    const int bad = bad_voltage_of(a.section);
+    const double d = bad == 0 ? a.theta23.d : bad == 1 ? a.theta13.d : a.theta12.d;
+    text += fmt::format("{},{},{},{},{},{},{},{},{}\n", n, s.theta_R_deg, a.theta12.theta_deg,
+                        a.theta13.theta_deg, a.theta23.theta_deg, a.theta_sec_deg, a.section, d, err);
+  }
+  write_text_file(dir.staging() / "angles.csv", text);
+  std::vector<DatasetFile> files{{"angles.csv", 1,
+                                  "θ12, θ13, θ23, θ_sec, section and d for every row; error_deg = "
+                                  "θ_sec − theta_R_deg when the input has theta_R_deg"}};
+  if (have_reference && out.plots()) {
+    Plot fig{"errors.png", "θ_sec − θ_R with the calibrated parameters", "θ_R (°)", "error (°)"};
+    fig.series = {{"angles.csv", "2:9", "θ_sec − θ_R", "linespoints lw 1.5 pt 7 ps 0.7"}};
+    render_plots(dir.staging(), "plots.gp", {fig});
+    files.push_back({"errors.png", 1, "θ_sec − θ_R against θ_R"});
+  }
+  write_manifest(dir.staging(), {command_line(), nullptr, files, {params_path, data.origin}});
+  finish(dir);
+}
+
+}  // namespace
+
+std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, int& threads) {
+  std::vector<Command> commands;
+  {
+    auto* app = root.add_subcommand(
+        "calibrate", "calibrate a simulate dataset or measured voltages (Eq. 15, three types)");
+    auto input = std::make_shared<std::string>();
+    auto method = std::make_shared<std::string>("cs-nc");
+    auto rig = std::make_shared<std::string>();
+    auto settings = std::make_shared<CalibrationSettings>();
+    auto out = std::make_shared<OutputOptions>();
+    app->add_option("INPUT", *input, "a folder written by polrig simulate, or a CSV with "
+                                     "theta_R_deg,V1,V2,V3 (volts)")->required();
+    app->add_option("--method", *method, "section | cs | cs-nc | all")->capture_default_str();
+    app->add_option("--rig", *rig, "rig file describing the sensor (film axes, amplifier); "
+                                   "default: the dataset's rig.yaml, else the default rig");
+    settings->add_to(*app);
+    out->add_to(*app);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *out); }});
+  }
+  {
+    auto* app = root.add_subcommand("apply", "turn voltages into θ and d with calibrated parameters");
+    auto params = std::make_shared<std::string>();
+    auto voltages = std::make_shared<std::string>();
+    auto out = std::make_shared<OutputOptions>();
+    app->add_option("PARAMS", *params, "params.yaml written by polrig calibrate")->required();
+    app->add_option("VOLTAGES", *voltages, "CSV with V1,V2,V3 (volts), optionally theta_R_deg")->required();
+    out->add_to(*app);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] { run_apply(*params, *voltages, *out); }});
+  }
+  {
+    auto* app = study.add_subcommand(
+        "calibration", "Monte-Carlo calibrations over noise and eccentricity, all three types");
+    auto rig = std::make_shared<RigInput>();
+    auto out = std::make_shared<OutputOptions>();
+    auto trials = std::make_shared<int>(100);
+    auto L_IS_max = std::make_shared<std::optional<double>>();
+    auto L_S_max = std::make_shared<std::optional<double>>();
+    auto settings = std::make_shared<CalibrationSettings>();
+    rig->add_to(*app, true);
+    out->add_to(*app);
+    app->add_option("--trials", *trials, "number of simulated calibration runs")
+        ->check(CLI::Range(1, 10000000))->capture_default_str();
+    app->add_option("--L-IS-max", *L_IS_max, "largest port offset drawn, mm (default: 2 × the rig's L_IS)")
+        ->check(CLI::Range(0.0, 1e3));
+    app->add_option("--L-S-max", *L_S_max, "largest sensor offset drawn, mm (default: 2 × the rig's L_S)")
+        ->check(CLI::Range(0.0, 1e3));
+    settings->add_to(*app);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      const LoadedRig r = rig->load();
+      TrialSettings s;
+      s.trials = *trials;
+      s.L_IS_max = L_IS_max->value_or(2.0 * r.rig.eccentricity.L_IS);
+      s.L_S_max = L_S_max->value_or(2.0 * r.rig.eccentricity.L_S);
+      s.calibration = settings->options(r.rig, r.rig.device.d);
+      OutputDir dir = out->open();
+      const std::vector<Trial> result = calibration_trials(r.rig, s);
+      write_manifest(dir.staging(), {command_line(), &r, report_calibration_trials(dir.staging(), result, out->plots())});
+      finish(dir);
+      for (const TrialSummary& t : summarize_trials(result))
+        std::cout << fmt::format("{:8s} median ±{:.5f}°  (5%: {:.5f}, 95%: {:.5f}; {} failed)\n",
+                                 method_name(t.method), t.median_deg, t.p05_deg, t.p95_deg, t.failed);
+    }});
+  }
+  return commands;
+}
+
+}  // namespace polrig::cli

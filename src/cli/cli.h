@@ -1,0 +1,53 @@
+#pragma once
+// Shared pieces of the polrig commands. Every command follows one pattern: parse and check all
+// input, open the output (a staging folder, so nothing appears on failure), compute, write,
+// commit.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "polrig/io/manifest.h"
+#include "polrig/io/output_dir.h"
+#include "polrig/io/rig_yaml.h"
+
+namespace polrig::cli {
+
+// The command line as typed, shell-quoted, for manifests.
+const std::string& command_line();
+void set_command_line(int argc, char** argv);
+
+// Options shared by every command that writes a folder.
+struct OutputOptions {
+  std::string out;
+  bool force = false;
+  bool no_plots = false;
+  void add_to(CLI::App& app);
+  // Fails early (before any computation) if gnuplot is needed and missing, or the destination
+  // exists without --force.
+  OutputDir open(bool plots_needed = true) const;
+  bool plots() const { return !no_plots; }
+};
+
+// A rig argument with its --set overrides. Without a rig file, the overrides apply to the
+// default rig (rigs/wang2019-indoor.yaml's values).
+struct RigInput {
+  std::string path;
+  std::vector<std::string> sets;
+  void add_to(CLI::App& app, bool required);
+  LoadedRig load() const;
+};
+
+void add_threads_option(CLI::App& app, int& threads);
+void finish(OutputDir& out);
+
+// Command registration; each returns the function to run when the command was chosen.
+struct Command {
+  CLI::App* app;
+  std::function<void()> run;
+};
+std::vector<Command> add_rig_commands(CLI::App& root, int& threads);
+std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, int& threads);
+
+}  // namespace polrig::cli

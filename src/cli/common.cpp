@@ -1,0 +1,69 @@
+#include <iostream>
+
+#include <fmt/format.h>
+
+#include "cli.h"
+#include "polrig/io/plot.h"
+
+namespace polrig::cli {
+namespace {
+std::string g_command_line;
+
+std::string shell_word(const std::string& w) {
+  if (!w.empty() && w.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
+                                        "0123456789_-./:=+,@%") == std::string::npos)
+    return w;
+  std::string q = "'";
+  for (char c : w) q += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+}  // namespace
+
+const std::string& command_line() { return g_command_line; }
+
+void set_command_line(int argc, char** argv) {
+  g_command_line = "polrig";
+  for (int i = 1; i < argc; ++i) g_command_line += " " + shell_word(argv[i]);
+}
+
+void OutputOptions::add_to(CLI::App& app) {
+  app.add_option("-o,--out", out, "output folder (written whole or not at all)")->required();
+  app.add_flag("--force", force, "replace the output folder if it exists");
+  app.add_flag("--no-plots", no_plots, "write the CSV files only, no PNG plots");
+}
+
+OutputDir OutputOptions::open(bool plots_needed) const {
+  if (plots_needed && !no_plots && !gnuplot_available())
+    throw std::runtime_error(
+        "gnuplot is needed for the PNG plots and was not found; install it "
+        "(scripts/setup-deps.sh) or pass --no-plots");
+  return OutputDir(out, force);
+}
+
+void RigInput::add_to(CLI::App& app, bool required) {
+  auto* r = app.add_option("RIG", path, "rig file (YAML), e.g. rigs/wang2019-indoor.yaml");
+  if (required) r->required();
+  app.add_option("--set", sets, "override a rig value: key.path=value (repeatable)")
+      ->type_name("KEY=VALUE")
+      ->allow_extra_args(false);
+}
+
+LoadedRig RigInput::load() const {
+  std::vector<RigOverride> overrides;
+  for (const std::string& s : sets) overrides.push_back(RigOverride::parse(s));
+  if (path.empty()) return parse_rig("", "(default rig)", overrides);
+  return load_rig(path, overrides);
+}
+
+void add_threads_option(CLI::App& app, int& threads) {
+  app.add_option("--threads", threads,
+                 "worker threads (default: all cores); results do not depend on it")
+      ->check(CLI::Range(1, 1024));
+}
+
+void finish(OutputDir& out) {
+  out.commit();
+  std::cout << "wrote " << out.destination().string() << "\n";
+}
+
+}  // namespace polrig::cli

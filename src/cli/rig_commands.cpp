@@ -1,0 +1,288 @@
+// Commands that run the rig model: simulate, study cs, study adc, sweep, run, rig show/keys.
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+
+#include <fmt/format.h>
+
+#include "cli.h"
+#include "polrig/calib/pipeline.h"
+#include "polrig/rig/keys.h"
+#include "polrig/sim/simulate.h"
+#include "polrig/study/adc_limit.h"
+#include "polrig/study/calibration_reports.h"
+#include "polrig/study/cs.h"
+#include "polrig/study/reports.h"
+#include "polrig/study/sweep.h"
+
+namespace polrig::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+struct EvenSteps : CLI::Validator {
+  EvenSteps() : CLI::Validator("EVEN") {
+    func_ = [](const std::string& s) -> std::string {
+      int v = 0;
+      if (!CLI::detail::lexical_cast(s, v) || v < 2 || v > 3600000 || v % 2 != 0)
+        return "expected an even number of table angles per turn in [2, 3600000], got " + s;
+      return {};
+    };
+  }
+};
+
+std::vector<double> parse_d_list(const std::string& text) {
+  const auto fail = [&](const std::string& why) -> std::vector<double> {
+    throw RigError(fmt::format("--d {}: {}", text, why));
+  };
+  std::vector<double> ds;
+  if (text.find(':') != std::string::npos) {
+    GridAxis axis;
+    try {
+      axis = GridAxis::parse("device.d=" + text);
+    } catch (const RigError& e) {
+      const std::string msg = e.what();
+      return fail(msg.substr(msg.find(": ") + 2));  // drop the --grid prefix
+    }
+    for (int i = 0; i < axis.count; ++i) ds.push_back(axis.value(i));
+    return ds;
+  }
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', pos), text.size());
+    double d = 0;
+    try {
+      d = parse_finite_number(std::string_view(text).substr(pos, comma - pos), "value");
+    } catch (const RigError& e) {
+      return fail(e.what());
+    }
+    if (!(d > 0.0 && d < 1.0)) return fail(fmt::format("expected values in (0, 1), got {}", d));
+    ds.push_back(d);
+    pos = comma + 1;
+  }
+  return ds;
+}
+
+std::vector<AdcLimit> adc_limits(const Rig& rig, const std::vector<double>& ds, double step) {
+  std::vector<AdcLimit> limits;
+  for (double d : ds) limits.push_back(adc_accuracy_limit(d, rig.electronics, rig.device.film_axis_deg, step));
+  return limits;
+}
+
+// The stops of a simulation as calibration input: the same type a measured CSV becomes.
+std::vector<StopVoltages> stops_of(const Simulation& sim) {
+  std::vector<StopVoltages> stops;
+  for (std::size_t k = 0; k < sim.stops.size(); ++k)
+    stops.push_back({sim.stops[k].theta_R_deg, sim.stops[k].V_mean, fmt::format("stop {}", k)});
+  return stops;
+}
+
+CalibrationOptions calibration_options_for(const Rig& rig, CalibrationMethod m) {
+  CalibrationOptions o;
+  o.method = m;
+  o.d_a = rig.device.d;
+  o.film_axis_deg = rig.device.film_axis_deg;
+  o.volts_per_decade = rig.electronics.volts_per_decade;
+  return o;
+}
+
+// The keys a CS study reads; sweeping any other key repeats the same row.
+bool cs_study_reads(std::string_view path) {
+  return path.starts_with("eccentricity.") || path == "source.L_o" || path == "device.L_photo" ||
+         path == "electronics.volts_per_decade";
+}
+
+}  // namespace
+
+std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
+  std::vector<Command> commands;
+
+  // ---- simulate
+  {
+    auto* app = root.add_subcommand("simulate", "synthetic measurements over the rig's table schedule");
+    auto rig = std::make_shared<RigInput>();
+    auto out = std::make_shared<OutputOptions>();
+    auto samples = std::make_shared<bool>(false);
+    rig->add_to(*app, true);
+    out->add_to(*app);
+    app->add_flag("--samples", *samples, "also write every quantized sample (samples.csv)");
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      const LoadedRig r = rig->load();
+      OutputDir dir = out->open();
+      const Simulation sim = simulate(r.rig, *samples);
+      write_manifest(dir.staging(), {command_line(), &r, report_simulation(dir.staging(), sim, out->plots())});
+      finish(dir);
+    }});
+  }
+
+  auto* study = root.add_subcommand("study", "studies of the rig");
+  study->require_subcommand(1);
+
+  // ---- study cs
+  {
+    auto* app = study->add_subcommand("cs", "central-symmetry study over a full turn (Figs. 8-9)");
+    auto rig = std::make_shared<RigInput>();
+    auto out = std::make_shared<OutputOptions>();
+    auto steps = std::make_shared<int>(360);
+    rig->add_to(*app, true);
+    out->add_to(*app);
+    app->add_option("--steps", *steps, "table angles per turn (even)")->check(EvenSteps())->capture_default_str();
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      const LoadedRig r = rig->load();
+      OutputDir dir = out->open();
+      const CsStudy s = cs_study(r.rig, CsTurn(*steps));
+      write_manifest(dir.staging(), {command_line(), &r, report_cs_study(dir.staging(), s, out->plots())});
+      finish(dir);
+    }});
+  }
+
+  // ---- study adc
+  {
+    auto* app = study->add_subcommand("adc", "ADC accuracy limit against d (Fig. 6)");
+    auto rig = std::make_shared<RigInput>();
+    auto out = std::make_shared<OutputOptions>();
+    auto d_list = std::make_shared<std::string>("0.05:0.95:19");
+    auto step = std::make_shared<double>(0.1);
+    rig->add_to(*app, false);
+    out->add_to(*app);
+    app->add_option("--d", *d_list, "degrees of polarization: a,b,c or start:stop:count")->capture_default_str();
+    app->add_option("--step", *step, "θ step in degrees")->check(CLI::Range(1e-4, 10.0))->capture_default_str();
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      // Electronics and film axes come from the rig; without one, from the default rig.
+      const LoadedRig r = rig->load();
+      const std::vector<double> ds = parse_d_list(*d_list);
+      OutputDir dir = out->open();
+      const auto files = report_adc_limits(dir.staging(), adc_limits(r.rig, ds, *step), out->plots());
+      write_manifest(dir.staging(), {command_line(), &r, files});
+      finish(dir);
+    }});
+  }
+
+  // ---- sweep
+  {
+    auto* app = root.add_subcommand("sweep", "the CS study over a grid of rig keys (Figs. 10-12)");
+    auto rig = std::make_shared<RigInput>();
+    auto out = std::make_shared<OutputOptions>();
+    auto grids = std::make_shared<std::vector<std::string>>();
+    auto steps = std::make_shared<int>(360);
+    rig->add_to(*app, true);
+    out->add_to(*app);
+    app->add_option("--grid", *grids, "key=start:stop:count (repeatable: the product grid)")
+        ->required()
+        ->type_name("KEY=START:STOP:COUNT")
+        ->allow_extra_args(false);
+    app->add_option("--steps", *steps, "table angles per turn (even)")->check(EvenSteps())->capture_default_str();
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      const LoadedRig r = rig->load();
+      std::vector<GridAxis> axes;
+      for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
+      for (const GridAxis& a : axes)
+        if (!cs_study_reads(a.key->path))
+          std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
+                                   "row along that axis will be the same\n", a.key->path);
+      OutputDir dir = out->open(axes.size() <= 2);
+      const bool tty = ::isatty(2);
+      const auto t0 = std::chrono::steady_clock::now();
+      auto last = t0;
+      const SweepResult result = sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t done, std::size_t total) {
+        const auto now = std::chrono::steady_clock::now();
+        if (done < total && now - last < std::chrono::milliseconds(500)) return;
+        last = now;
+        std::fprintf(stderr, "%ssweep: %zu/%zu grid points (%.0f%%), %.1f s%s", tty ? "\r" : "",
+                     done, total, 100.0 * static_cast<double>(done) / static_cast<double>(total),
+                     std::chrono::duration<double>(now - t0).count(),
+                     (tty && done < total) ? "" : "\n");
+      });
+      write_manifest(dir.staging(), {command_line(), &r, report_sweep(dir.staging(), result, out->plots())});
+      finish(dir);
+    }});
+  }
+
+  // ---- run: the main job
+  {
+    auto* app = root.add_subcommand(
+        "run", "the main job: simulate the indoor calibration run, calibrate it three ways, the "
+               "CS study and the ADC limits, into one folder");
+    auto rig = std::make_shared<RigInput>();
+    auto out = std::make_shared<OutputOptions>();
+    rig->add_to(*app, true);
+    out->add_to(*app);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      const LoadedRig r = rig->load();
+      OutputDir dir = out->open();
+      const Simulation sim = simulate(r.rig, false);
+      std::vector<CalibrationResult> calibrations;
+      for (CalibrationMethod m : kAllMethods)
+        calibrations.push_back(calibrate(stops_of(sim), calibration_options_for(r.rig, m)));
+      const CsStudy cs = cs_study(r.rig, CsTurn(360));
+      std::vector<double> ds;
+      for (int k = 1; k <= 19; ++k) ds.push_back(k / 20.0);
+      const std::vector<AdcLimit> limits = adc_limits(r.rig, ds, 0.1);
+
+      const fs::path base = dir.staging();
+      for (const char* sub : {"simulate", "calibration", "cs", "adc"}) fs::create_directory(base / sub);
+      write_manifest(base / "simulate", {command_line(), &r, report_simulation(base / "simulate", sim, out->plots())});
+      std::vector<DatasetFile> cal_files = report_calibration_comparison(base / "calibration", calibrations, out->plots());
+      for (const CalibrationResult& c : calibrations) {
+        const fs::path d = base / "calibration" / std::string(method_name(c.method));
+        fs::create_directory(d);
+        write_manifest(d, {command_line(), &r, report_calibration(d, c, calibration_options_for(r.rig, c.method), out->plots())});
+      }
+      write_manifest(base / "calibration", {command_line(), &r, cal_files});
+      write_manifest(base / "cs", {command_line(), &r, report_cs_study(base / "cs", cs, out->plots())});
+      write_manifest(base / "adc", {command_line(), &r, report_adc_limits(base / "adc", limits, out->plots())});
+      finish(dir);
+
+      std::cout << "Calibration of the simulated indoor run, accuracy of θ_sec (degrees):\n";
+      for (const CalibrationResult& c : calibrations)
+        std::cout << fmt::format("  {:8s} ±{:.5f}\n", method_name(c.method), c.accuracy[kThetaSec].accuracy_deg());
+      std::cout << "CS study at the rig's eccentricity (mV):\n"
+                << "  pair     BSD       ASD   mean_br   mean_mr     Eq. 6\n";
+      for (int i = 0; i < 3; ++i) {
+        const CsPairSummary& s = cs.summary[i];
+        std::cout << fmt::format("  {:4d} {:9.5f} {:9.5f} {:9.5f} {:9.5f} {:9.5f}\n", i + 1, s.bsd_mV,
+                                 s.asd_mV, s.mean_br_mV, s.mean_mr_mV, s.eq6_mV);
+      }
+    }});
+  }
+
+  // ---- rig show / rig keys
+  auto* rig_app = root.add_subcommand("rig", "inspect rig files");
+  rig_app->require_subcommand(1);
+  {
+    auto* app = rig_app->add_subcommand("show", "print the effective rig (file + overrides + defaults)");
+    auto rig = std::make_shared<RigInput>();
+    rig->add_to(*app, true);
+    commands.push_back({app, [=] { std::cout << rig_to_yaml(rig->load().rig); }});
+  }
+  {
+    auto* app = rig_app->add_subcommand("keys", "print every rig key as a Markdown table");
+    commands.push_back({app, [] {
+      Rig defaults;
+      std::cout << "| key | unit | default | accepts | meaning |\n|---|---|---|---|---|\n";
+      for (const RigKey& k : rig_keys()) {
+        std::string def;
+        using K = RigKey::Kind;
+        switch (k.kind) {
+          case K::Real: def = fmt::format("{}", k.real(defaults)); break;
+          case K::Integer: def = fmt::format("{}", k.integer(defaults)); break;
+          case K::Seed: def = fmt::format("{}", k.seed(defaults)); break;
+          case K::Text: def = k.text(defaults).empty() ? "(none)" : k.text(defaults); break;
+          case K::RealArray: def = fmt::format("[{}]", fmt::join(k.array(defaults), ", ")); break;
+          case K::RealList: def = "(none)"; break;
+        }
+        std::cout << fmt::format("| `{}` | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects, k.doc);
+      }
+    }});
+  }
+  return commands;
+}
+
+}  // namespace polrig::cli

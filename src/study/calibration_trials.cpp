@@ -1,0 +1,88 @@
+#include "polrig/study/calibration_trials.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <tbb/parallel_for.h>
+
+#include "polrig/random.h"
+#include "polrig/sim/simulate.h"
+
+namespace polrig {
+
+namespace {
+
+Trial run_trial(const Rig& base, const TrialSettings& s, int index) {
+  Trial t;
+  t.index = index;
+  t.seed = derive_seed(base.seed, static_cast<std::uint64_t>(index));
+  // Stream 0 of the trial's seed draws its geometry; the noise uses the seed itself.
+  const auto u = [&](std::uint64_t k) { return uniform_unit(t.seed, 0, 0xEC, k); };
+  t.eccentricity = {s.L_IS_max * u(0), 360.0 * u(1), s.L_S_max * u(2), 360.0 * u(3)};
+
+  Rig rig = base;
+  rig.seed = t.seed;
+  rig.eccentricity = t.eccentricity;
+  const Simulation sim = simulate(rig);
+  std::vector<StopVoltages> stops;
+  for (std::size_t k = 0; k < sim.stops.size(); ++k)
+    stops.push_back({sim.stops[k].theta_R_deg, sim.stops[k].V_mean, "stop " + std::to_string(k)});
+
+  for (std::size_t m = 0; m < kAllMethods.size(); ++m) {
+    CalibrationOptions o = s.calibration;
+    o.method = kAllMethods[m];
+    try {
+      t.accuracy_deg[m] = calibrate(stops, o).accuracy[kThetaSec].accuracy_deg();
+    } catch (const CalibrationError& e) {
+      t.accuracy_deg[m] = std::numeric_limits<double>::quiet_NaN();
+      t.failure[m] = e.what();
+    }
+  }
+  return t;
+}
+
+double quantile(std::vector<double> sorted, double q) {
+  // Linear interpolation between order statistics (type 7, as R's and NumPy's default).
+  const double pos = q * static_cast<double>(sorted.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+}
+
+}  // namespace
+
+std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& s) {
+  std::vector<Trial> trials(static_cast<std::size_t>(std::max(0, s.trials)));
+  tbb::parallel_for(0, s.trials, [&](int k) { trials[static_cast<std::size_t>(k)] = run_trial(rig, s, k); });
+  return trials;
+}
+
+std::vector<TrialSummary> summarize_trials(const std::vector<Trial>& trials) {
+  std::vector<TrialSummary> out;
+  for (std::size_t m = 0; m < kAllMethods.size(); ++m) {
+    TrialSummary s;
+    s.method = kAllMethods[m];
+    std::vector<double> acc;
+    for (const Trial& t : trials) {
+      if (std::isnan(t.accuracy_deg[m])) ++s.failed;
+      else acc.push_back(t.accuracy_deg[m]);
+    }
+    s.succeeded = static_cast<int>(acc.size());
+    if (!acc.empty()) {
+      std::sort(acc.begin(), acc.end());
+      s.median_deg = quantile(acc, 0.5);
+      s.p05_deg = quantile(acc, 0.05);
+      s.p95_deg = quantile(acc, 0.95);
+      double sum = 0;
+      for (double a : acc) sum += a;
+      s.mean_deg = sum / static_cast<double>(acc.size());
+    } else {
+      s.median_deg = s.p05_deg = s.p95_deg = s.mean_deg = std::numeric_limits<double>::quiet_NaN();
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace polrig

@@ -453,7 +453,7 @@ TEST_F(Cli, BadInputWritesNothing) {
       {"bad --grid key", "sweep " + q(kRig) + " --grid eccentricity.L_X=0:1:3",
        "--grid eccentricity.L_X=0:1:3: unknown key 'eccentricity.L_X'"},
       {"--grid with count 0", "sweep " + q(kRig) + " --grid eccentricity.L_S=0:1:0",
-       "--grid eccentricity.L_S=0:1:0: expected a whole count in [1, 1e8], got '0'"},
+       "--grid eccentricity.L_S=0:1:0: count: expected a whole number in [1, 1e8], got '0'"},
       {"--grid value out of range", "sweep " + q(kRig) + " --grid device.d=0.5:1.5:3",
        "key 'device.d': expected a degree of polarization in (0, 1)"},
       {"--grid point breaks a rule", "sweep " + q(kRig) + " --grid schedule.start_deg=0:400:3",

@@ -300,8 +300,10 @@ TEST(RigYamlOverride, OverridesCreateMissingSections) {
 TEST(RigYamlOverride, OverridesOnAnEmptyFile) {
   const Rig r = parse_ok("", sets({"seed=7"}));
   EXPECT_EQ(r.seed, 7u);
-  // An empty file alone is not a rig.
-  const std::string msg = rig_error("");
+  // An empty or comment-only file is the default rig, as `{}` is; a scalar document is not.
+  expect_same_rig(parse_ok(""), Rig{});
+  expect_same_rig(parse_ok("# only a comment\n"), Rig{});
+  const std::string msg = rig_error("42\n");
   EXPECT_STARTS(msg, std::string(kOrigin) + ": expected a mapping of rig sections");
 }
 
@@ -392,9 +394,9 @@ TEST(RigYamlError, StringWhereNumberExpected) {
 
 TEST(RigYamlError, ListOrMappingWhereScalarExpected) {
   expect_file_error("source:\n  L_o: [20, 30]\n", 2, "source.L_o",
-                    "expected a length > 0 (cos⁴φ vanishes off-axis at 0) (mm), got a list");
+                    "expected a length > 0 (at 0 the cos⁴ law gives no light off-axis), got a list");
   expect_file_error("device:\n  d: [0.5]\n", 2, "device.d",
-                    "expected a degree of polarization in (0, 1) (a number), got a list");
+                    "expected a degree of polarization in (0, 1), got a list");
   expect_file_error("electronics:\n  adc_bits: [16]\n", 2, "electronics.adc_bits",
                     "expected an integer in [2, 31], got a list");
   expect_file_error("source:\n  model: [cos4]\n", 2, "source.model",
@@ -402,7 +404,7 @@ TEST(RigYamlError, ListOrMappingWhereScalarExpected) {
   expect_file_error("seed:\n  value: 3\n", 1, "seed",
                     "expected an unsigned 64-bit integer, got a mapping");
   expect_file_error("device:\n  d:\n", 2, "device.d",
-                    "expected a degree of polarization in (0, 1) (a number), got nothing");
+                    "expected a degree of polarization in (0, 1), got nothing");
 }
 
 TEST(RigYamlError, ScalarWhereSectionExpected) {
@@ -465,7 +467,7 @@ TEST(RigYamlError, NegativeLength) {
 
 TEST(RigYamlError, ZeroSourceDistance) {
   expect_file_error("source:\n  L_o: 0\n", 2, "source.L_o",
-                    "expected a length > 0 (cos⁴φ vanishes off-axis at 0), got 0");
+                    "expected a length > 0 (at 0 the cos⁴ law gives no light off-axis), got 0");
   expect_file_error("source:\n  E_0: -3\n", 2, "source.E_0", "expected an irradiance > 0, got -3");
 }
 
@@ -523,7 +525,7 @@ TEST(RigYamlError, NanAndInfinityAreRejected) {
   for (const char* v : {".nan", ".NaN", "nan", ".inf", "-.inf", "inf", "1e999"}) {
     SCOPED_TRACE(v);
     expect_file_error(std::string("source:\n  L_o: ") + v + "\n", 2, "source.L_o",
-                      std::string("expected a length > 0 (cos⁴φ vanishes off-axis at 0), got '") +
+                      std::string("expected a length > 0 (at 0 the cos⁴ law gives no light off-axis), got '") +
                           v + "'");
     // Keys that accept any angle still require a finite one.
     expect_file_error(std::string("eccentricity:\n  alpha_IS: ") + v + "\n", 2,
@@ -548,7 +550,8 @@ TEST(RigYamlError, StopBeforeStart) {
   const std::string msg = rig_error("schedule:\n  start_deg: 400\n");
   EXPECT_EQ(msg, std::string(kOrigin) +
                      " (default value): key 'schedule.stop_deg': expected an angle ≥ "
-                     "schedule.start_deg (400), got 360");
+                     "schedule.start_deg (400), got 360 ('schedule.start_deg' from " +
+                     std::string(kOrigin) + ":2)");
 }
 
 TEST(RigYamlError, TooManyStops) {
@@ -597,10 +600,12 @@ TEST(RigYamlError, AnglesListTogetherWithStartStepStop) {
                       "expected either an explicit list or start/step/stop, not both "
                       "('schedule." + key + "' is also given)");
   }
-  // The default rig file gives start/step/stop; adding a list with --set is the same error,
-  // and names the --set.
-  const std::string msg =
-      rig_error(read_file(kDefaultRigFile), sets({"schedule.angles_deg=[0, 90]"}));
+  // The default rig file gives start/step/stop; a list given with --set replaces them.
+  const Rig r = parse_ok(read_file(kDefaultRigFile), sets({"schedule.angles_deg=[0, 90]"}));
+  EXPECT_EQ(r.schedule.table_angles_deg(), (std::vector<double>{0, 90}));
+  // Both forms among the overrides are still an error, naming the --set.
+  const std::string msg = rig_error(
+      read_file(kDefaultRigFile), sets({"schedule.angles_deg=[0, 90]", "schedule.step_deg=5"}));
   EXPECT_STARTS(msg, "--set schedule.angles_deg=[0, 90]: key 'schedule.angles_deg': ");
   EXPECT_HAS(msg, "expected either an explicit list or start/step/stop, not both");
 }
@@ -647,8 +652,8 @@ TEST(RigYamlFile, ErrorsInAFileNameThePathAndLine) {
     FAIL() << "load_rig accepted L_o = -2";
   } catch (const RigError& e) {
     EXPECT_EQ(std::string(e.what()),
-              file.string() + ":5: key 'source.L_o': expected a length > 0 (cos⁴φ vanishes "
-                              "off-axis at 0), got -2");
+              file.string() + ":5: key 'source.L_o': expected a length > 0 (at 0 the cos⁴ "
+                              "law gives no light off-axis), got -2");
   }
   // load_rig applies overrides, and the error then names the --set.
   write_file(file, "seed: 1\n");
@@ -682,8 +687,8 @@ TEST(RigYamlOverrideError, WrongTypeNamesTheSetNotTheFileLine) {
                   "expected an integer in [1, 100000], got '3.5'");
 
   const std::string msg4 = rig_error("seed: 1\n", sets({"source.L_o=-1"}));
-  EXPECT_EQ(msg4, "--set source.L_o=-1: key 'source.L_o': expected a length > 0 (cos⁴φ "
-                  "vanishes off-axis at 0), got -1");
+  EXPECT_EQ(msg4, "--set source.L_o=-1: key 'source.L_o': expected a length > 0 (at 0 the cos⁴ law "
+            "gives no light off-axis), got -1");
 
   const std::string msg5 = rig_error("seed: 1\n", sets({"source.model=traced"}));
   EXPECT_EQ(msg5, "--set source.model=traced: key 'source.model': expected \"cos4\", got "
@@ -778,8 +783,8 @@ TEST(RigToYaml, EveryKeyIsWritten) {
   for (const polrig::RigKey& k : polrig::rig_keys()) {
     SCOPED_TRACE(std::string(k.path));
     const YAML::Node n = find_path(root, k.path);
-    if (k.path == "schedule.angles_deg") {
-      EXPECT_FALSE(n.IsDefined()) << "an empty angle list is omitted";
+    if (k.path == "schedule.angles_deg" || k.path == "device.truth_from") {
+      EXPECT_FALSE(n.IsDefined()) << "an empty list or path is omitted";
       continue;
     }
     EXPECT_TRUE(n.IsDefined()) << "missing from rig_to_yaml:\n" << text;
@@ -809,5 +814,5 @@ TEST(RigToYaml, OnlyKnownKeysAreWritten) {
   };
   walk(root, "");
   for (const std::string& p : leaves) EXPECT_NE(polrig::find_rig_key(p), nullptr) << p;
-  EXPECT_EQ(leaves.size(), polrig::rig_keys().size() - 1);  // all but the empty angle list
+  EXPECT_EQ(leaves.size(), polrig::rig_keys().size() - 2);  // all but the empty list and path
 }

@@ -58,7 +58,7 @@ std::vector<double> parse_d_list(const std::string& text) {
     } catch (const RigError& e) {
       return fail(e.what());
     }
-    if (!(d > 0.0 && d < 1.0)) return fail(fmt::format("expected values in (0, 1), got {}", d));
+    if (!(d > 0.0 && d < 1.0)) return fail(fmt::format("expected degrees of polarization in (0, 1), got {}", d));
     ds.push_back(d);
     pos = comma + 1;
   }

@@ -35,7 +35,7 @@ std::string script_for(const Plot& p) {
   s += fmt::format("set output {}\n", quoted(p.png));
   s += "set datafile separator ','\nset grid\nset key outside right top\n";
   // Axis labels and legends may hold rig key paths (eccentricity.L_IS): no enhanced text there.
-  s += fmt::format("set title {}\nset xlabel {} noenhanced\nset ylabel {}\n", quoted(p.title),
+  s += fmt::format("set title {} noenhanced\nset xlabel {} noenhanced\nset ylabel {}\n", quoted(p.title),
                    quoted(p.xlabel), quoted(p.ylabel));
   bool any_y2 = false;
   for (const PlotSeries& ps : p.series) any_y2 |= ps.y2;

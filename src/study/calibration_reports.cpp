@@ -194,7 +194,7 @@ std::vector<DatasetFile> report_calibration_trials(const std::filesystem::path& 
   fig.series = {{"cdf.csv", "2:1", "type 1: section", "steps lw 2 lc rgb '#7f7f7f'"},
                 {"cdf.csv", "3:1", "type 2: CS + section", "steps lw 2 lc rgb '#1f77b4'"},
                 {"cdf.csv", "4:1", "type 3: CS + noncontinuous + section", "steps lw 2 lc rgb '#d62728'"}};
-  fig.extra = "set logscale x\nset yrange [0:1]\nset key inside left top";
+  fig.extra = "set logscale x\nset yrange [0:1]";
   render_plots(dir, "plots.gp", {fig});
   files.push_back({"accuracy_cdf.png", 1, "distribution of the accuracy of each type"});
   return files;

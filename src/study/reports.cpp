@@ -15,6 +15,11 @@ namespace polrig {
 namespace {
 const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
 
+std::string axis_label(const GridAxis& a) {
+  return a.key->unit.empty() ? std::string(a.key->path)
+                             : fmt::format("{} ({})", a.key->path, a.key->unit);
+}
+
 std::string line_style(int pair, const char* extra = "") {
   return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
 }
@@ -110,10 +115,15 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
     for (std::size_t a = 0; a < sw.axes.size(); ++a) row.push_back(sw.axes[a].value(idx[a]));
     for (const CsPairSummary& s : sw.summaries[p]) {
       const double nan = std::numeric_limits<double>::quiet_NaN();
-      row.insert(row.end(), {s.bsd_mV, s.asd_mV, s.bsd_mV > 0 ? 100.0 * s.asd_mV / s.bsd_mV : nan,
-                             s.mean_br_mV, s.mean_mr_mV, s.eq6_mV,
-                             s.mean_mr_mV != 0 ? 100.0 * (s.eq6_mV - s.mean_mr_mV) / s.mean_mr_mV
-                                               : nan});
+      // Ratios only where the denominator is above rounding (1e-9 mV; a centred rig's
+      // deviations are ~1e-14 mV of rounding), else NaN.
+      constexpr double kRounding_mV = 1e-9;
+      row.insert(row.end(),
+                 {s.bsd_mV, s.asd_mV, s.bsd_mV > kRounding_mV ? 100.0 * s.asd_mV / s.bsd_mV : nan,
+                  s.mean_br_mV, s.mean_mr_mV, s.eq6_mV,
+                  std::abs(s.mean_mr_mV) > kRounding_mV
+                      ? 100.0 * (s.eq6_mV - s.mean_mr_mV) / s.mean_mr_mV
+                      : nan});
     }
     table.add_row(row);
   }
@@ -127,11 +137,11 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
   };
   std::vector<Plot> figures;
   if (sw.axes.size() == 1) {
-    const std::string x(sw.axes[0].key->path);
+    const std::string x = axis_label(sw.axes[0]);
     Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)", x, "ASD (mV)",
              "ASD/BSD (%)"};
     Plot mean{"sweep_expectation.png",
-              "Expectation of ΔV_{mr} (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)",
+              "Expectation of ΔV_mr (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)",
               x, "expectation (mV)", "Eq. 6 - expectation (µV)"};
     for (int i = 0; i < 3; ++i) {
       asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 1)),
@@ -151,11 +161,11 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
   } else {
     // Two keys: pair 1 against the second key, one curve per value of the first (at most 6).
     const GridAxis& outer = sw.axes[0];
-    const std::string x(sw.axes[1].key->path);
+    const std::string x = axis_label(sw.axes[1]);
     Plot asd{"sweep_asd.png", fmt::format("Pair 1 ASD after CS, one curve per {}", outer.key->path),
              x, "ASD (mV)"};
     Plot mean{"sweep_expectation.png",
-              fmt::format("Pair 1 expectation of ΔV_{{mr}}, one curve per {}", outer.key->path), x,
+              fmt::format("Pair 1 expectation of ΔV_mr, one curve per {}", outer.key->path), x,
               "expectation (mV)"};
     const int curves = std::min(outer.count, 6);
     for (int c = 0; c < curves; ++c) {

@@ -4,7 +4,11 @@
 #include <cmath>
 #include <vector>
 
+#include <Eigen/Dense>
 #include <benchmark/benchmark.h>
+
+#include "polrig/calib/fit.h"
+#include "polrig/calib/pipeline.h"
 
 #include "polrig/rig/rig.h"
 #include "polrig/sim/simulate.h"
@@ -64,5 +68,44 @@ void BM_Simulate_DefaultRig(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * 37);
 }
 BENCHMARK(BM_Simulate_DefaultRig)->UseRealTime();
+
+// ---- Calibration --------------------------------------------------------------------------
+
+// Reference: one column-pivoting QR of a 57 × 18 matrix, the linear algebra of one LM step.
+void BM_Reference_QR_57x18(benchmark::State& state) {
+  const Eigen::MatrixXd J = Eigen::MatrixXd::Random(57, 18);
+  for (auto _ : state) {
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
+    benchmark::DoNotOptimize(qr.matrixQR().data());
+  }
+}
+BENCHMARK(BM_Reference_QR_57x18);
+
+// One Eq. 15 fit: the paper's 19 CS points (57 observations), 18 unknowns, from the nominal
+// values, with the noise of the default rig.
+void BM_Fit_Eq15_57x18(benchmark::State& state) {
+  const FitParams truth = FitParams::coupled(CalibrationParams::wang2019_indoor(), 0.55);
+  std::vector<Observation> obs;
+  for (int k = 0; k <= 18; ++k)
+    for (int i = 0; i < 3; ++i)
+      obs.push_back({10.0 * k, i,
+                     eq15_voltage(truth, 0.5, i, 10.0 * k) + 1e-5 * standard_normal(1, k, i, 0)});
+  const FitParams start = FitParams::coupled(CalibrationParams::theory(kWang2019FilmAxesDeg), 0.55);
+  for (auto _ : state) benchmark::DoNotOptimize(fit_eq15(obs, start, 0.5));
+}
+BENCHMARK(BM_Fit_Eq15_57x18)->Unit(benchmark::kMicrosecond);
+
+// A whole type-3 calibration of the simulated indoor run (CS, preliminary fit, selection, fit,
+// decoupling, error curves).
+void BM_Calibrate_CsNc_DefaultRig(benchmark::State& state) {
+  const Rig rig;
+  const Simulation sim = simulate(rig);
+  std::vector<StopVoltages> stops;
+  for (const Stop& s : sim.stops) stops.push_back({s.theta_R_deg, s.V_mean, "s"});
+  CalibrationOptions o;
+  o.d_a = 0.55;
+  for (auto _ : state) benchmark::DoNotOptimize(calibrate(stops, o));
+}
+BENCHMARK(BM_Calibrate_CsNc_DefaultRig)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

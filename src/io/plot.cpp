@@ -69,9 +69,12 @@ void render_plots(const fs::path& dir, const std::string& script_name,
   in.close();
   std::error_code ec;
   fs::remove(log, ec);
-  if (rc != 0)
-    throw std::runtime_error(fmt::format("gnuplot failed on {}: {}", (dir / script_name).string(),
-                                         msg.str()));
+  if (rc != 0) {
+    // gnuplot echoes the whole plot command; its last lines say what went wrong.
+    std::string text = msg.str();
+    if (text.size() > 400) text = "…" + text.substr(text.size() - 400);
+    throw std::runtime_error(fmt::format("gnuplot failed on {}: {}", script_name, text));
+  }
 }
 
 }  // namespace polrig

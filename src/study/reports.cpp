@@ -13,6 +13,8 @@
 namespace polrig {
 
 namespace {
+// Deviations below this are rounding (a centred rig gives ~1e-14 mV): ratios there are NaN.
+constexpr double kRounding_mV = 1e-9;
 const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
 
 std::string axis_label(const GridAxis& a) {
@@ -117,7 +119,6 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
       const double nan = std::numeric_limits<double>::quiet_NaN();
       // Ratios only where the denominator is above rounding (1e-9 mV; a centred rig's
       // deviations are ~1e-14 mV of rounding), else NaN.
-      constexpr double kRounding_mV = 1e-9;
       row.insert(row.end(),
                  {s.bsd_mV, s.asd_mV, s.bsd_mV > kRounding_mV ? 100.0 * s.asd_mV / s.bsd_mV : nan,
                   s.mean_br_mV, s.mean_mr_mV, s.eq6_mV,
@@ -146,8 +147,12 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
     for (int i = 0; i < 3; ++i) {
       asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 1)),
                             fmt::format("ASD pair {}", i + 1), line_style(i)});
-      asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 2)),
-                            fmt::format("ASD/BSD pair {}", i + 1), line_style(i, "dt 2"), true});
+      // gnuplot refuses a series with no defined point: the ratio is NaN where BSD is zero.
+      const bool ratio_defined = std::any_of(sw.summaries.begin(), sw.summaries.end(),
+                                             [&](const CsSummary& s) { return s[i].bsd_mV > kRounding_mV; });
+      if (ratio_defined)
+        asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 2)),
+                              fmt::format("ASD/BSD pair {}", i + 1), line_style(i, "dt 2"), true});
       mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 4)),
                              fmt::format("expectation pair {}", i + 1), line_style(i)});
       mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 5)),

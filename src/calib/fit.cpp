@@ -84,6 +84,11 @@ FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start,
 
   FitResult result;
   result.params = FitParams::from_vector(x);
+  for (int i = 0; i < 3; ++i)
+    if (!(result.params.kv[i] > 0.0))
+      throw CalibrationError(fmt::format(
+          "the fit gives kv_{} = {:.3g}, not a log-amplifier gain: the voltages do not vary with the "
+          "angle as Eq. 15 says (is the light polarized?)", i + 1, result.params.kv[i]));
   result.observations = static_cast<int>(data.size());
   result.iterations = static_cast<int>(lm.iterations());
   result.evaluations = static_cast<int>(lm.nfev());

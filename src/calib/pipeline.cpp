@@ -34,16 +34,19 @@ std::vector<Observation> observations_of(const std::vector<EvalPoint>& points) {
   return obs;
 }
 
-// The start value of c: the median degree of polarization that the theory parameters read
-// from the voltages (θ12's pair).
+// The start value of c, from how much the voltages swing: an ideal pair spans
+// ±v_dec·log10[(1 + d)/(1 − d)], so half the range of V_i gives d_i = (10^(A/v) − 1)/(10^(A/v) + 1).
+// The median over the three pairs; offsets k_i do not enter, and unpolarized light gives ~0.
 double estimate_d(const std::vector<EvalPoint>& points, const CalibrationOptions& o) {
-  const CalibrationParams theory = CalibrationParams::theory(o.film_axis_deg);
-  Electronics e;
-  e.volts_per_decade = o.volts_per_decade;
-  std::vector<double> d;
-  for (const EvalPoint& p : points) d.push_back(pair_angle(theory, e, p.V, 0, 1).d);
-  std::nth_element(d.begin(), d.begin() + static_cast<long>(d.size() / 2), d.end());
-  return d[d.size() / 2];
+  std::array<double, 3> d{};
+  for (int i = 0; i < 3; ++i) {
+    double lo = points.front().V[i], hi = lo;
+    for (const EvalPoint& p : points) lo = std::min(lo, p.V[i]), hi = std::max(hi, p.V[i]);
+    const double a = std::pow(10.0, 0.5 * (hi - lo) / o.volts_per_decade);
+    d[i] = (a - 1.0) / (a + 1.0);
+  }
+  std::sort(d.begin(), d.end());
+  return d[1];
 }
 
 }  // namespace

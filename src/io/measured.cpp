@@ -45,6 +45,7 @@ CsvFile CsvFile::read(const fs::path& path) {
     if (!text.empty() && text[0] == '#') continue;                       // comment
     if (f.header.empty()) {
       f.header = split_fields(text);
+      f.header_line = n;
       continue;
     }
     std::vector<std::string> fields = split_fields(text);
@@ -68,8 +69,8 @@ std::optional<std::size_t> CsvFile::find_column(std::string_view name) const {
 
 std::size_t CsvFile::column(std::string_view name) const {
   if (auto c = find_column(name)) return *c;
-  throw DataError(fmt::format("{}:1: missing column '{}' (the header must hold theta_R_deg, V1, "
-                              "V2, V3; see docs/formats.md)", origin, name));
+  throw DataError(fmt::format("{}:{}: missing column '{}' (the header must hold theta_R_deg, V1, "
+                              "V2, V3; see docs/formats.md)", origin, header_line, name));
 }
 
 double CsvFile::number(std::size_t row, std::size_t col) const {

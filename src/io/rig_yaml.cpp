@@ -233,6 +233,17 @@ class RigParser {
     } catch (const DataError& e) {
       fail("device.truth_from", fmt::format("cannot load the parameters: {}", e.what()));
     }
+    // The loaded values must pass the same checks as device.truth.* in a rig file, so that the
+    // effective rig (rig.yaml) loads back.
+    for (const RigKey& k : rig_keys()) {
+      if (!k.path.starts_with("device.truth.") || k.kind != RigKey::Kind::RealArray) continue;
+      for (double v : k.array(rig))
+        if (k.valid_real && !k.valid_real(v))
+          fail("device.truth_from",
+               fmt::format("{} gives {} = {}, expected {} (as for '{}')", params.string(),
+                           k.path.substr(std::string_view("device.truth.").size()), v, k.expects,
+                           k.path));
+    }
     rig.device.truth_from.clear();
   }
 

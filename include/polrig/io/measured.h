@@ -25,6 +25,7 @@ struct CsvFile {
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> rows;
   std::vector<int> line;  // line of each row
+  int header_line = 1;
 
   static CsvFile read(const std::filesystem::path& path);
   // Index of a column, or DataError naming the file and the missing column.

@@ -279,6 +279,14 @@ std::vector<double> paper_schedule() {  // 0°:10°:360°, 37 stops
   return t;
 }
 
+// The stops of simulating `rig` as calibration input: each stop's V_mean, labelled "s".
+std::vector<StopVoltages> simulated_stops(const Rig& rig) {
+  const Simulation sim = simulate(rig);
+  std::vector<StopVoltages> stops;
+  for (const Stop& s : sim.stops) stops.push_back({s.theta_R_deg, s.V_mean, "s"});
+  return stops;
+}
+
 TEST(CentralSymmetry, PaperScheduleGivesNineteenPoints) {
   // Spec §4: 37 stops, CS pairs stops 180° apart: 19 points, 57 voltages.
   const auto pts = central_symmetry_points(table2_stops(paper_schedule(), 0.55));
@@ -393,9 +401,7 @@ TEST(Pipeline, WithoutCsTheFourAnglesAreAboutEquallyPoor) {
   // sine, not the angle algorithm, limits them.
   Rig rig;
   rig.electronics.noise_sigma_V = 0;
-  const Simulation sim = simulate(rig);
-  std::vector<StopVoltages> stops;
-  for (const Stop& s : sim.stops) stops.push_back({s.theta_R_deg, s.V_mean, "s"});
+  const std::vector<StopVoltages> stops = simulated_stops(rig);
   CalibrationOptions o;
   o.method = CalibrationMethod::Section;
   o.d_a = 0.55;
@@ -413,9 +419,7 @@ TEST(Pipeline, KAbsorbsTheCsConstant) {
   // ADC (at most half an LSB, 0.009 mV) and the CS ripple (ASD 0.0008 mV): allow 0.01 mV.
   Rig rig;
   rig.electronics.noise_sigma_V = 0;
-  const Simulation sim = simulate(rig);
-  std::vector<StopVoltages> stops;
-  for (const Stop& s : sim.stops) stops.push_back({s.theta_R_deg, s.V_mean, "s"});
+  const std::vector<StopVoltages> stops = simulated_stops(rig);
   CalibrationOptions o;
   o.method = CalibrationMethod::CentralSymmetry;
   o.d_a = rig.device.d;

@@ -2,13 +2,12 @@
 // naming file:line and column), params.yaml (exact round trip and errors), a rig's
 // device.truth_from, and calibrate()'s refusals of data it cannot calibrate.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <string>
 #include <vector>
@@ -23,24 +22,13 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
 #include "polrig/sim/simulate.h"
+#include "support.h"
 
 namespace polrig {
 namespace {
 namespace fs = std::filesystem;
 
-void write_text(const fs::path& p, const std::string& text) {
-  std::ofstream out(p, std::ios::binary);
-  out << text;
-}
-
-::testing::AssertionResult HasText(const char* hay_expr, const char* needle_expr,
-                                   const std::string& hay, const std::string& needle) {
-  if (hay.find(needle) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << hay_expr << " does not contain " << needle_expr
-                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
-                                       << needle << "\"";
-}
-#define EXPECT_HAS(hay, needle) EXPECT_PRED_FORMAT2(HasText, hay, needle)
+using test::write_file;
 
 // The message of the exception of type E that `f` throws; a test failure (and "") if it throws
 // nothing or something else.
@@ -75,20 +63,11 @@ template <std::size_t N>
 // A fresh temporary folder per test, removed afterwards.
 class CalibIo : public ::testing::Test {
  protected:
-  fs::path tmp;
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    tmp = fs::temp_directory_path() / ("polrig_test_calib_io_" + std::string(info->name()) +
-                                       "_" + std::to_string(::getpid()));
-    fs::remove_all(tmp);
-    fs::create_directories(tmp);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-  }
+  test::TempDir temp_dir{"polrig_test_calib_io_"};
+  const fs::path tmp = temp_dir.path();
+  // Writes tmp/NAME and returns its path.
   fs::path file(const std::string& name, const std::string& text) {
-    write_text(tmp / name, text);
+    write_file(tmp / name, text);
     return tmp / name;
   }
 };
@@ -240,8 +219,8 @@ TEST_F(CalibIo, ReadMeasuredReadsADatasetFolderAndItsRig) {
   }
   const fs::path dir = tmp / "dataset";
   fs::create_directories(dir);
-  write_text(dir / "stops.csv", text);
-  write_text(dir / "rig.yaml", rig_to_yaml(rig));
+  write_file(dir / "stops.csv", text);
+  write_file(dir / "rig.yaml", rig_to_yaml(rig));
 
   const MeasuredData d = read_measured(dir);
   EXPECT_EQ(d.origin, (dir / "stops.csv").string());
@@ -267,7 +246,7 @@ TEST_F(CalibIo, ReadMeasuredReadsADatasetFolderAndItsRig) {
   EXPECT_HAS(error_of<DataError>([&] { read_measured(empty); }),
              (empty / "stops.csv").string() + ": cannot read the file");
   // A broken rig.yaml in the dataset is a RigError naming it.
-  write_text(dir / "rig.yaml", "device:\n  d: 3\n");
+  write_file(dir / "rig.yaml", "device:\n  d: 3\n");
   const std::string e = error_of<RigError>([&] { read_measured(dir); });
   EXPECT_HAS(e, (dir / "rig.yaml").string() + ":2: key 'device.d'");
 }
@@ -416,7 +395,7 @@ TEST_F(ParamsErrors, YamlSyntaxErrorAndMissingFile) {
 
 TEST_F(CalibIo, TruthFromLoadsTheParamsNextToTheRigFile) {
   const CalibrationResult r = cs_result();
-  write_text(tmp / "params.yaml", params_to_yaml(r, 0.5));
+  write_file(tmp / "params.yaml", params_to_yaml(r, 0.5));
   const fs::path rig_file = file("rig.yaml", "device: {truth_from: params.yaml}\nseed: 3\n");
   const Rig rig = load_rig(rig_file).rig;
   EXPECT_TRUE(rig.device.truth == r.params);
@@ -435,12 +414,12 @@ TEST_F(CalibIo, TruthFromLoadsTheParamsNextToTheRigFile) {
   // The path is relative to the rig file, not to the working directory.
   const fs::path sub = tmp / "sub";
   fs::create_directories(sub);
-  write_text(sub / "rig.yaml", "device:\n  truth_from: ../params.yaml\n");
+  write_file(sub / "rig.yaml", "device:\n  truth_from: ../params.yaml\n");
   EXPECT_TRUE(load_rig(sub / "rig.yaml").rig.device.truth == r.params);
 }
 
 TEST_F(CalibIo, TruthFromAndTruthKeysExcludeEachOther) {
-  write_text(tmp / "params.yaml", params_to_yaml(cs_result(), 0.5));
+  write_file(tmp / "params.yaml", params_to_yaml(cs_result(), 0.5));
   const fs::path rig_file =
       file("rig.yaml", "device:\n  truth_from: params.yaml\n  truth:\n    kv: [1, 1, 1]\n");
   const std::string e = error_of<RigError>([&] { load_rig(rig_file); });
@@ -460,7 +439,7 @@ TEST_F(CalibIo, TruthFromMissingOrBadParamsIsARigError) {
   EXPECT_HAS(e, rig_file.string() + ":2: key 'device.truth_from'");
   EXPECT_HAS(e, (tmp / "nothere.yaml").string());
   // A params file with an error: the message carries the params file's own file:line.
-  write_text(tmp / "bad.yaml", "d_a: 0.55\nalpha_deg: [0, 0, 0, 0, 0, 0]\nk_mV: [0, 0, 0]\n"
+  write_file(tmp / "bad.yaml", "d_a: 0.55\nalpha_deg: [0, 0, 0, 0, 0, 0]\nk_mV: [0, 0, 0]\n"
                                "kv: [1, 0, 1]\nkd: [0, 0, 0, 0, 0, 0]\n");
   const fs::path bad_rig = file("bad-rig.yaml", "device: {truth_from: bad.yaml}\n");
   const std::string b = error_of<RigError>([&] { load_rig(bad_rig); });
@@ -473,7 +452,7 @@ TEST_F(CalibIo, TruthFromGivesARigThatRigToYamlCanWriteAndReload) {
   // kd > −1), while a rig's device.truth.kd must lie in (−1, 0]. Whatever the loader decides,
   // the rig it returns must survive rig_to_yaml → parse_rig (the dataset's rig.yaml is written
   // that way): either truth_from refuses kd > 0 naming kd, or the round trip works.
-  write_text(tmp / "params.yaml",
+  write_file(tmp / "params.yaml",
              "d_a: 0.5\nalpha_deg: [0, 0, -120, -120, 120, 120]\nk_mV: [0, 0, 0]\n"
              "kv: [1, 1, 1]\nkd: [0.05, 0, 0, 0, 0, 0]\n");
   const fs::path rig_file = file("rig.yaml", "device: {truth_from: params.yaml, d: 0.5}\n");

@@ -1,154 +1,38 @@
 // End-to-end tests of the polrig executable: each test runs the real program in a fresh
 // temporary folder and inspects the files it writes (or does not write).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <set>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
+#include "support.h"
 
 namespace fs = std::filesystem;
+using namespace polrig::test;
 
 namespace {
 
-const std::string kExe = POLRIG_EXE;
-const std::string kRig = POLRIG_SOURCE_DIR "/rigs/wang2019-indoor.yaml";
+const std::string& kRig = kDefaultRigFile;
 
-std::string q(const std::string& s) {  // single-quoted for sh
-  std::string out = "'";
-  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-std::string q(const fs::path& p) { return q(p.string()); }
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void write_file(const fs::path& p, const std::string& text) {
-  std::ofstream out(p, std::ios::binary);
-  out << text;
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream ss(text);
-  for (std::string line; std::getline(ss, line);) out.push_back(line);
-  return out;
-}
-
-std::vector<std::string> split(const std::string& line, char sep = ',') {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  for (std::string f; std::getline(ss, f, sep);) out.push_back(f);
-  if (!line.empty() && line.back() == sep) out.emplace_back();
-  return out;
-}
-
-struct Csv {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-};
-Csv read_csv(const fs::path& p) {
-  Csv csv;
-  const std::vector<std::string> lines = lines_of(read_file(p));
-  if (lines.empty()) return csv;
-  csv.header = split(lines[0]);
-  for (std::size_t i = 1; i < lines.size(); ++i) csv.rows.push_back(split(lines[i]));
-  return csv;
-}
-
-::testing::AssertionResult HasText(const char* hay_expr, const char* needle_expr,
-                                   const std::string& hay, const std::string& needle) {
-  if (hay.find(needle) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << hay_expr << " does not contain " << needle_expr
-                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
-                                       << needle << "\"";
-}
-#define EXPECT_HAS(hay, needle) EXPECT_PRED_FORMAT2(HasText, hay, needle)
-
-bool gnuplot_present() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
-
-bool starts_with_png_signature(const fs::path& p) {
-  const std::string data = read_file(p);
-  return data.size() > 8 && data.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0;
-}
-
-class Cli : public ::testing::Test {
+class Cli : public PolrigTest {
  protected:
-  struct Result {
-    int status = -1;  // exit status, or -1 if the program did not exit normally
-    std::string out, err;
-  };
-
-  fs::path tmp;
-
-  void SetUp() override {
-    static int counter = 0;
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    tmp = fs::temp_directory_path() /
-          ("polrig_test_cli_" + std::string(info->name()) + "_" + std::to_string(::getpid()) +
-           "_" + std::to_string(counter++));
-    fs::remove_all(tmp);
-    fs::create_directories(tmp);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-  }
-
-  // Runs `polrig ARGS` (ARGS already shell-quoted where needed); stdout and stderr go to files
-  // in the temp folder. `prefix` is put before the program (e.g. "cd X &&" or "PATH=… ").
-  Result polrig(const std::string& args, const std::string& prefix = "") {
-    const int n = runs_++;
-    const fs::path out = tmp / ("stdout-" + std::to_string(n) + ".txt");
-    const fs::path err = tmp / ("stderr-" + std::to_string(n) + ".txt");
-    const std::string cmd = prefix + q(kExe) + " " + args + " >" + q(out) + " 2>" + q(err);
-    const int rc = std::system(cmd.c_str());
-    Result r;
-    r.status = (rc != -1 && WIFEXITED(rc)) ? WEXITSTATUS(rc) : -1;
-    r.out = read_file(out);
-    r.err = read_file(err);
-    return r;
-  }
-
-  // Runs and expects success; returns the result.
-  Result ok(const std::string& args, const std::string& prefix = "") {
-    Result r = polrig(args, prefix);
-    EXPECT_EQ(r.status, 0) << "polrig " << args << "\nstderr: " << r.err << "\nstdout: " << r.out;
-    return r;
-  }
+  Cli() : PolrigTest("polrig_test_cli_", "") {}
 
   // Entries of `parent` that are staging or backup folders of `name`.
   static std::vector<std::string> leftovers(const fs::path& parent, const std::string& name) {
-    std::vector<std::string> found;
-    std::error_code ec;
-    if (!fs::exists(parent, ec)) return found;
-    for (const auto& e : fs::directory_iterator(parent)) {
-      const std::string f = e.path().filename().string();
-      if (f.rfind("." + name + ".partial-", 0) == 0 || f.rfind("." + name + ".old-", 0) == 0)
-        found.push_back(f);
-    }
-    return found;
+    return entries_where(parent, [&](const std::string& f) {
+      return f.rfind("." + name + ".partial-", 0) == 0 || f.rfind("." + name + ".old-", 0) == 0;
+    });
   }
-
- private:
-  int runs_ = 0;
 };
 
-std::string dir_arg(const fs::path& p) { return q(p); }
+std::string dir_arg(const fs::path& p) { return shell_quote(p); }
 
 }  // namespace
 
@@ -158,7 +42,7 @@ std::string dir_arg(const fs::path& p) { return q(p); }
 
 TEST_F(Cli, SimulateWritesStopsCsv) {
   const fs::path out = tmp / "sim";
-  const Result r = ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  const Result r = ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(out) + " --no-plots");
   EXPECT_HAS(r.out, "wrote " + out.string());
   const Csv csv = read_csv(out / "stops.csv");
   EXPECT_EQ(lines_of(read_file(out / "stops.csv"))[0].rfind("stop,theta_R_deg,theta_deg,d,", 0),
@@ -181,9 +65,9 @@ TEST_F(Cli, SimulateWritesStopsCsv) {
 
 TEST_F(Cli, SimulateIsIndependentOfThreadCount) {
   const fs::path a = tmp / "t1", b = tmp / "t2", c = tmp / "t2-nosamples";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(a) + " --no-plots --samples --threads 1");
-  ok("simulate " + q(kRig) + " -o " + dir_arg(b) + " --no-plots --samples --threads 2");
-  ok("simulate " + q(kRig) + " -o " + dir_arg(c) + " --no-plots --threads 2");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(a) + " --no-plots --samples --threads 1");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(b) + " --no-plots --samples --threads 2");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(c) + " --no-plots --threads 2");
   const std::string stops = read_file(a / "stops.csv");
   ASSERT_FALSE(stops.empty());
   EXPECT_EQ(stops, read_file(b / "stops.csv")) << "stops.csv differs between 1 and 2 threads";
@@ -203,7 +87,7 @@ TEST_F(Cli, SimulateIsIndependentOfThreadCount) {
 TEST_F(Cli, SimulateWithPlotsWritesPngFiles) {
   if (!gnuplot_present()) GTEST_SKIP() << "gnuplot is not installed";
   const fs::path out = tmp / "plots";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(out));
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(out));
   for (const char* png : {"voltages.png", "deviations.png"}) {
     SCOPED_TRACE(png);
     ASSERT_TRUE(fs::exists(out / png));
@@ -216,7 +100,8 @@ TEST_F(Cli, SimulateWithPlotsWritesPngFiles) {
 
 TEST_F(Cli, ManifestRecordsEverythingNeededToReproduce) {
   const fs::path out = tmp / "sim";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots --set seed=7 --set device.d=0.3");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(out) +
+     " --no-plots --set seed=7 --set device.d=0.3");
   ASSERT_TRUE(fs::exists(out / "manifest.yaml"));
   const YAML::Node m = YAML::LoadFile((out / "manifest.yaml").string());
   for (const char* key : {"git_revision", "version", "seed", "rig_text", "rig_resolved", "files"}) {
@@ -240,7 +125,8 @@ TEST_F(Cli, ManifestRecordsEverythingNeededToReproduce) {
   // Nothing in the manifest depends on the time of the run: two runs give the same manifest
   // up to the output folder in the command line.
   const fs::path out2 = tmp / "sim2";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(out2) + " --no-plots --set seed=7 --set device.d=0.3");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(out2) +
+     " --no-plots --set seed=7 --set device.d=0.3");
   std::string m2 = read_file(out2 / "manifest.yaml");
   const std::string from = out2.string(), to = out.string();
   for (auto pos = m2.find(from); pos != std::string::npos; pos = m2.find(from, pos + to.size()))
@@ -260,21 +146,21 @@ TEST_F(Cli, ManifestRigTextIsTheFileTextExactly) {
     SCOPED_TRACE(name);
     write_file(tmp / name, text);
     const fs::path out = tmp / ("out-" + name);
-    ok("simulate " + q(tmp / name) + " -o " + dir_arg(out) + " --no-plots");
+    ok("simulate " + shell_quote(tmp / name) + " -o " + dir_arg(out) + " --no-plots");
     const YAML::Node m = YAML::LoadFile((out / "manifest.yaml").string());
     EXPECT_EQ(m["rig_text"].as<std::string>("<missing>"), text);
   }
 }
 
 TEST_F(Cli, RigShowAndRigKeys) {
-  const Result show = ok("rig show " + q(kRig) + " --set device.d=0.3");
+  const Result show = ok("rig show " + shell_quote(kRig) + " --set device.d=0.3");
   const polrig::Rig shown = polrig::parse_rig(show.out, "rig show").rig;
   EXPECT_EQ(shown.device.d, 0.3);
   polrig::Rig expected = polrig::load_rig(kRig).rig;
   expected.device.d = 0.3;
   EXPECT_EQ(show.out, polrig::rig_to_yaml(expected));
 
-  const Result bad = polrig("rig show " + q(kRig) + " --set device.d=3");
+  const Result bad = polrig("rig show " + shell_quote(kRig) + " --set device.d=3");
   EXPECT_NE(bad.status, 0);
   EXPECT_HAS(bad.err, "--set device.d=3: key 'device.d': expected a degree of polarization");
 
@@ -287,7 +173,7 @@ TEST_F(Cli, RigShowAndRigKeys) {
 
 TEST_F(Cli, RigYamlInTheDatasetLoadsBackToTheSameRig) {
   const fs::path out = tmp / "sim";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(out) + " --no-plots");
   const polrig::Rig original = polrig::load_rig(kRig).rig;
   const polrig::Rig back = polrig::load_rig(out / "rig.yaml").rig;
   EXPECT_TRUE(back.device.truth == original.device.truth);
@@ -310,10 +196,10 @@ TEST_F(Cli, RigYamlInTheDatasetLoadsBackToTheSameRig) {
 TEST_F(Cli, DatasetReproducesItself) {
   // With overrides, so that the dataset's rig.yaml (not the original file) carries them.
   const fs::path first = tmp / "first", again = tmp / "again";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(first) +
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(first) +
      " --no-plots --samples --set seed=11 --set eccentricity.L_S=0.3 --set "
      "'device.truth.kv=[1, 1.01, 0.99]'");
-  ok("simulate " + q((first / "rig.yaml").string()) + " -o " + dir_arg(again) +
+  ok("simulate " + shell_quote((first / "rig.yaml").string()) + " -o " + dir_arg(again) +
      " --no-plots --samples");
   const std::string stops = read_file(first / "stops.csv");
   ASSERT_FALSE(stops.empty());
@@ -322,7 +208,7 @@ TEST_F(Cli, DatasetReproducesItself) {
   EXPECT_EQ(read_file(first / "rig.yaml"), read_file(again / "rig.yaml"));
   // And the overrides did change the data (the test is not vacuous).
   const fs::path plain = tmp / "plain";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(plain) + " --no-plots");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(plain) + " --no-plots");
   EXPECT_NE(stops, read_file(plain / "stops.csv"));
 }
 
@@ -332,7 +218,7 @@ TEST_F(Cli, DatasetReproducesItself) {
 
 TEST_F(Cli, StudyCsWritesDeviationsAndSummary) {
   const fs::path out = tmp / "cs";
-  ok("study cs " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  ok("study cs " + shell_quote(kRig) + " -o " + dir_arg(out) + " --no-plots");
   const Csv dev = read_csv(out / "deviations.csv");
   EXPECT_EQ(dev.header,
             (std::vector<std::string>{"theta_R_deg", "pair", "dv_br_mV", "dv_mr_mV"}));
@@ -354,8 +240,8 @@ TEST_F(Cli, SweepWritesTheGridAndIsIndependentOfThreadCount) {
   const std::string grids =
       " --grid eccentricity.L_S=0.001:1:5 --grid eccentricity.L_IS=0.001:1:4";
   const fs::path a = tmp / "sw1", b = tmp / "sw2";
-  ok("sweep " + q(kRig) + grids + " -o " + dir_arg(a) + " --no-plots --threads 1");
-  ok("sweep " + q(kRig) + grids + " -o " + dir_arg(b) + " --no-plots --threads 2");
+  ok("sweep " + shell_quote(kRig) + grids + " -o " + dir_arg(a) + " --no-plots --threads 1");
+  ok("sweep " + shell_quote(kRig) + grids + " -o " + dir_arg(b) + " --no-plots --threads 2");
   const Csv csv = read_csv(a / "sweep.csv");
   ASSERT_GE(csv.header.size(), 3u);
   EXPECT_EQ(csv.header[0], "eccentricity.L_S");
@@ -392,7 +278,7 @@ TEST_F(Cli, StudyAdcWritesAccuracyLimits) {
 TEST_F(Cli, RunWritesSimulateCsAndAdc) {
   const fs::path out = tmp / "run";
   const std::string plots = gnuplot_present() ? "" : " --no-plots";
-  const Result r = ok("run " + q(kRig) + " -o " + dir_arg(out) + plots);
+  const Result r = ok("run " + shell_quote(kRig) + " -o " + dir_arg(out) + plots);
   EXPECT_HAS(r.out, "CS study at the rig's eccentricity");
   for (const char* sub : {"simulate", "cs", "adc"}) {
     SCOPED_TRACE(sub);
@@ -410,8 +296,8 @@ TEST_F(Cli, RunWritesSimulateCsAndAdc) {
   }
   // The parts equal the standalone commands' output.
   const fs::path sim = tmp / "sim", cs = tmp / "cs";
-  ok("simulate " + q(kRig) + " -o " + dir_arg(sim) + " --no-plots");
-  ok("study cs " + q(kRig) + " -o " + dir_arg(cs) + " --no-plots");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(sim) + " --no-plots");
+  ok("study cs " + shell_quote(kRig) + " -o " + dir_arg(cs) + " --no-plots");
   EXPECT_EQ(read_file(out / "simulate" / "stops.csv"), read_file(sim / "stops.csv"));
   EXPECT_EQ(read_file(out / "cs" / "deviations.csv"), read_file(cs / "deviations.csv"));
   EXPECT_EQ(read_file(out / "cs" / "summary.csv"), read_file(cs / "summary.csv"));
@@ -419,10 +305,11 @@ TEST_F(Cli, RunWritesSimulateCsAndAdc) {
 }
 
 TEST_F(Cli, RelativeAndTrailingSlashOutputPaths) {
-  ok("simulate " + q(kRig) + " -o rel/out --no-plots", "cd " + q(tmp) + " && ");
+  ok("simulate " + shell_quote(kRig) + " -o rel/out --no-plots", "cd " + shell_quote(tmp) + " && ");
   EXPECT_TRUE(fs::exists(tmp / "rel" / "out" / "stops.csv"));
   EXPECT_TRUE(leftovers(tmp / "rel", "out").empty());
-  ok("simulate " + q(kRig) + " -o " + q(tmp.string() + "/slash/") + " --no-plots");
+  ok("simulate " + shell_quote(kRig) + " -o " + shell_quote(tmp.string() + "/slash/") +
+     " --no-plots");
   EXPECT_TRUE(fs::exists(tmp / "slash" / "stops.csv"));
   EXPECT_TRUE(leftovers(tmp, "slash").empty());
 }
@@ -440,27 +327,28 @@ TEST_F(Cli, BadInputWritesNothing) {
   };
   const std::string missing = (tmp / "missing-rig.yaml").string();
   const std::vector<Case> cases = {
-      {"missing rig file", "simulate " + q(missing),
+      {"missing rig file", "simulate " + shell_quote(missing),
        missing + ": cannot read the rig file: no such file"},
-      {"unknown key in the rig file", "simulate " + q(tmp / "unknown-key.yaml"),
+      {"unknown key in the rig file", "simulate " + shell_quote(tmp / "unknown-key.yaml"),
        (tmp / "unknown-key.yaml").string() + ":3: key 'source.L_0': unknown key"},
-      {"--set unknown key", "simulate " + q(kRig) + " --set source.L_0=20",
+      {"--set unknown key", "simulate " + shell_quote(kRig) + " --set source.L_0=20",
        "--set source.L_0=20: unknown key 'source.L_0'"},
-      {"--set negative distance", "simulate " + q(kRig) + " --set source.L_o=-1",
+      {"--set negative distance", "simulate " + shell_quote(kRig) + " --set source.L_o=-1",
        "--set source.L_o=-1: key 'source.L_o': expected a length > 0"},
-      {"--set without =", "study cs " + q(kRig) + " --set source.L_o",
+      {"--set without =", "study cs " + shell_quote(kRig) + " --set source.L_o",
        "--set source.L_o: expected key.path=value"},
-      {"bad --grid key", "sweep " + q(kRig) + " --grid eccentricity.L_X=0:1:3",
+      {"bad --grid key", "sweep " + shell_quote(kRig) + " --grid eccentricity.L_X=0:1:3",
        "--grid eccentricity.L_X=0:1:3: unknown key 'eccentricity.L_X'"},
-      {"--grid with count 0", "sweep " + q(kRig) + " --grid eccentricity.L_S=0:1:0",
+      {"--grid with count 0", "sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0:1:0",
        "--grid eccentricity.L_S=0:1:0: count: expected a whole number in [1, 1e8], got '0'"},
-      {"--grid value out of range", "sweep " + q(kRig) + " --grid device.d=0.5:1.5:3",
+      {"--grid value out of range", "sweep " + shell_quote(kRig) + " --grid device.d=0.5:1.5:3",
        "key 'device.d': expected a degree of polarization in (0, 1)"},
-      {"--grid point breaks a rule", "sweep " + q(kRig) + " --grid schedule.start_deg=0:400:3",
+      {"--grid point breaks a rule",
+       "sweep " + shell_quote(kRig) + " --grid schedule.start_deg=0:400:3",
        "key 'schedule.stop_deg': expected an angle ≥ schedule.start_deg"},
       {"study adc --d 1.5", "study adc --d 1.5",
        "--d 1.5: expected degrees of polarization in (0, 1), got 1.5"},
-      {"run with a bad rig", "run " + q(tmp / "unknown-key.yaml"), "key 'source.L_0'"},
+      {"run with a bad rig", "run " + shell_quote(tmp / "unknown-key.yaml"), "key 'source.L_0'"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
@@ -494,8 +382,9 @@ TEST_F(Cli, FailureAfterStagingLeavesNothing) {
                                        fs::perms::others_exec);
   const fs::path parent = tmp / "nested" / "deeper";
   const fs::path out = parent / "out";
-  const std::string path_env = "PATH=" + q(bin.string() + ":" + std::getenv("PATH")) + " ";
-  const Result r = polrig("simulate " + q(kRig) + " -o " + dir_arg(out), path_env);
+  const std::string path_env =
+      "PATH=" + shell_quote(bin.string() + ":" + std::getenv("PATH")) + " ";
+  const Result r = polrig("simulate " + shell_quote(kRig) + " -o " + dir_arg(out), path_env);
   EXPECT_NE(r.status, 0);
   EXPECT_HAS(r.err, "gnuplot failed");
   EXPECT_HAS(r.err, "fake gnuplot: cannot plot");
@@ -507,7 +396,8 @@ TEST_F(Cli, FailureAfterStagingLeavesNothing) {
   const fs::path keep = tmp / "keep";
   fs::create_directories(keep);
   write_file(keep / "marker.txt", "old");
-  const Result r2 = polrig("simulate " + q(kRig) + " -o " + dir_arg(keep) + " --force", path_env);
+  const Result r2 =
+      polrig("simulate " + shell_quote(kRig) + " -o " + dir_arg(keep) + " --force", path_env);
   EXPECT_NE(r2.status, 0);
   EXPECT_EQ(read_file(keep / "marker.txt"), "old");
   EXPECT_FALSE(fs::exists(keep / "stops.csv"));
@@ -520,7 +410,7 @@ TEST_F(Cli, ExistingOutputFolderNeedsForce) {
   write_file(out / "marker.txt", "old content");
   write_file(out / "sub" / "x.txt", "x");
 
-  const Result r = polrig("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots");
+  const Result r = polrig("simulate " + shell_quote(kRig) + " -o " + dir_arg(out) + " --no-plots");
   EXPECT_NE(r.status, 0);
   EXPECT_HAS(r.err, out.string() + ": the output folder exists");
   EXPECT_HAS(r.err, "--force");
@@ -529,7 +419,7 @@ TEST_F(Cli, ExistingOutputFolderNeedsForce) {
   EXPECT_FALSE(fs::exists(out / "stops.csv"));
   EXPECT_TRUE(leftovers(tmp, "existing").empty());
 
-  ok("simulate " + q(kRig) + " -o " + dir_arg(out) + " --no-plots --force");
+  ok("simulate " + shell_quote(kRig) + " -o " + dir_arg(out) + " --no-plots --force");
   EXPECT_FALSE(fs::exists(out / "marker.txt")) << "--force must replace the folder, not merge";
   EXPECT_FALSE(fs::exists(out / "sub"));
   EXPECT_EQ(read_csv(out / "stops.csv").rows.size(), 37u);

@@ -1,82 +1,26 @@
 // End-to-end tests of calibrate, apply and study calibration: each test runs the real polrig
 // executable in a fresh temporary folder and inspects the files it writes (or does not write).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
+#include "support.h"
 
 namespace fs = std::filesystem;
+using namespace polrig::test;
 
 namespace {
 
-const std::string kExe = POLRIG_EXE;
-const std::string kRig = POLRIG_SOURCE_DIR "/rigs/wang2019-indoor.yaml";
-
-std::string q(const std::string& s) {  // single-quoted for sh
-  std::string out = "'";
-  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-std::string q(const fs::path& p) { return q(p.string()); }
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-void write_file(const fs::path& p, const std::string& text) {
-  std::ofstream out(p, std::ios::binary);
-  out << text;
-}
-
-std::vector<std::string> lines_of(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream ss(text);
-  for (std::string line; std::getline(ss, line);) out.push_back(line);
-  return out;
-}
-
-std::vector<std::string> split(const std::string& line, char sep = ',') {
-  std::vector<std::string> out;
-  std::stringstream ss(line);
-  for (std::string f; std::getline(ss, f, sep);) out.push_back(f);
-  if (!line.empty() && line.back() == sep) out.emplace_back();
-  return out;
-}
-
-struct Csv {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-  std::size_t col(const std::string& name) const {
-    for (std::size_t c = 0; c < header.size(); ++c)
-      if (header[c] == name) return c;
-    ADD_FAILURE() << "no column " << name;
-    return 0;
-  }
-};
-Csv read_csv(const fs::path& p) {
-  Csv csv;
-  const std::vector<std::string> lines = lines_of(read_file(p));
-  if (lines.empty()) return csv;
-  csv.header = split(lines[0]);
-  for (std::size_t i = 1; i < lines.size(); ++i) csv.rows.push_back(split(lines[i]));
-  return csv;
-}
+const std::string& kRig = kDefaultRigFile;
 
 // The top-level lines of a params.yaml for the four parameter lists (not the standard errors,
 // which are indented).
@@ -88,22 +32,6 @@ std::map<std::string, std::string> param_lines(const fs::path& params) {
   return out;
 }
 
-::testing::AssertionResult HasText(const char* hay_expr, const char* needle_expr,
-                                   const std::string& hay, const std::string& needle) {
-  if (hay.find(needle) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << hay_expr << " does not contain " << needle_expr
-                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
-                                       << needle << "\"";
-}
-#define EXPECT_HAS(hay, needle) EXPECT_PRED_FORMAT2(HasText, hay, needle)
-
-bool gnuplot_present() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
-
-bool starts_with_png_signature(const fs::path& p) {
-  const std::string data = read_file(p);
-  return data.size() > 8 && data.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0;
-}
-
 // θ_a − θ_b for axes (period 180°), in [−90°, 90°).
 double axis_diff(double a, double b) {
   double x = std::fmod(a - b + 90.0, 180.0);
@@ -111,71 +39,25 @@ double axis_diff(double a, double b) {
   return x - 90.0;
 }
 
-class CliCalibration : public ::testing::Test {
+// Each run's stdout and stderr go to tmp/logs, so that they do not show up among the outputs
+// checked.
+class CliCalibration : public PolrigTest {
  protected:
-  struct Result {
-    int status = -1;  // exit status, or -1 if the program did not exit normally
-    std::string out, err;
-  };
-
-  fs::path tmp;
-
-  void SetUp() override {
-    static int counter = 0;
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    tmp = fs::temp_directory_path() /
-          ("polrig_test_cli_calibration_" + std::string(info->name()) + "_" +
-           std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(tmp);
-    fs::create_directories(tmp);
-  }
-  void TearDown() override {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-  }
-
-  // Runs `polrig ARGS` (ARGS already shell-quoted where needed); stdout and stderr go to files
-  // in a separate folder (so that they do not show up among the outputs checked).
-  Result polrig(const std::string& args, const std::string& prefix = "") {
-    const int n = runs_++;
-    const fs::path logs = tmp / "logs";
-    fs::create_directories(logs);
-    const fs::path out = logs / ("stdout-" + std::to_string(n) + ".txt");
-    const fs::path err = logs / ("stderr-" + std::to_string(n) + ".txt");
-    const std::string cmd = prefix + q(kExe) + " " + args + " >" + q(out) + " 2>" + q(err);
-    const int rc = std::system(cmd.c_str());
-    Result r;
-    r.status = (rc != -1 && WIFEXITED(rc)) ? WEXITSTATUS(rc) : -1;
-    r.out = read_file(out);
-    r.err = read_file(err);
-    return r;
-  }
-
-  Result ok(const std::string& args, const std::string& prefix = "") {
-    Result r = polrig(args, prefix);
-    EXPECT_EQ(r.status, 0) << "polrig " << args << "\nstderr: " << r.err << "\nstdout: " << r.out;
-    return r;
-  }
+  CliCalibration() : PolrigTest("polrig_test_cli_calibration_", "logs") {}
 
   // Simulates the indoor rig into tmp/NAME (extra: more options).
   fs::path simulate(const std::string& name = "sim", const std::string& extra = "") {
     const fs::path out = tmp / name;
-    ok("simulate " + q(kRig) + " -o " + q(out) + " --no-plots" + extra);
+    ok("simulate " + shell_quote(kRig) + " -o " + shell_quote(out) + " --no-plots" + extra);
     return out;
   }
 
   // Entries of `parent` that are staging or backup folders (of `name` or of anything else).
   static std::vector<std::string> leftovers(const fs::path& parent, const std::string& name) {
-    std::vector<std::string> found;
-    std::error_code ec;
-    if (!fs::exists(parent, ec)) return found;
-    for (const auto& e : fs::directory_iterator(parent)) {
-      const std::string f = e.path().filename().string();
-      if (f.rfind("." + name + ".", 0) == 0 || f.find(".partial-") != std::string::npos ||
-          f.find(".old-") != std::string::npos)
-        found.push_back(f);
-    }
-    return found;
+    return entries_where(parent, [&](const std::string& f) {
+      return f.rfind("." + name + ".", 0) == 0 || f.find(".partial-") != std::string::npos ||
+             f.find(".old-") != std::string::npos;
+    });
   }
 
   // Runs a command that must fail with `status` (or any non-zero status for -1), naming each of
@@ -209,9 +91,6 @@ class CliCalibration : public ::testing::Test {
     }
     return text;
   }
-
- private:
-  int runs_ = 0;
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -221,7 +100,8 @@ class CliCalibration : public ::testing::Test {
 TEST_F(CliCalibration, CalibrateCsWritesTheReport) {
   const fs::path sim = simulate();
   const fs::path cal = tmp / "cal";
-  const Result r = ok("calibrate " + q(sim) + " --method cs -o " + q(cal) + " --no-plots");
+  const Result r =
+      ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
   EXPECT_HAS(r.out, "wrote " + cal.string());
   EXPECT_HAS(r.out, "d_a = 0.55 (given)");
 
@@ -295,8 +175,10 @@ TEST_F(CliCalibration, MeasuredCsvCalibratesExactlyLikeTheDataset) {
   write_file(csv, measured_from(sim / "stops.csv"));
   ASSERT_EQ(lines_of(read_file(csv)).size(), 38u);
   const fs::path from_dataset = tmp / "cal-dataset", from_csv = tmp / "cal-csv";
-  ok("calibrate " + q(sim) + " --method all -o " + q(from_dataset) + " --no-plots");
-  ok("calibrate " + q(csv) + " --method all --d-a 0.55 -o " + q(from_csv) + " --no-plots");
+  ok("calibrate " + shell_quote(sim) + " --method all -o " + shell_quote(from_dataset) +
+     " --no-plots");
+  ok("calibrate " + shell_quote(csv) + " --method all --d-a 0.55 -o " + shell_quote(from_csv) +
+     " --no-plots");
   for (const char* m : {"cs", "section", "cs-nc"}) {
     SCOPED_TRACE(m);
     const auto a = param_lines(from_dataset / m / "params.yaml");
@@ -312,7 +194,8 @@ TEST_F(CliCalibration, MeasuredCsvCalibratesExactlyLikeTheDataset) {
 TEST_F(CliCalibration, MethodAllWritesSubfoldersAndComparison) {
   const fs::path sim = simulate();
   const fs::path cal = tmp / "cal";
-  const Result r = ok("calibrate " + q(sim) + " --method all -o " + q(cal) + " --no-plots");
+  const Result r =
+      ok("calibrate " + shell_quote(sim) + " --method all -o " + shell_quote(cal) + " --no-plots");
   const std::vector<std::string> methods{"section", "cs", "cs-nc"};
   for (const std::string& m : methods) {
     SCOPED_TRACE(m);
@@ -347,7 +230,7 @@ TEST_F(CliCalibration, MethodAllWithPlotsWritesPngFiles) {
   if (!gnuplot_present()) GTEST_SKIP() << "gnuplot is not installed";
   const fs::path sim = simulate();
   const fs::path cal = tmp / "cal";
-  ok("calibrate " + q(sim) + " --method all -o " + q(cal));
+  ok("calibrate " + shell_quote(sim) + " --method all -o " + shell_quote(cal));
   ASSERT_TRUE(fs::exists(cal / "comparison.png"));
   EXPECT_TRUE(starts_with_png_signature(cal / "comparison.png"));
   for (const char* m : {"section", "cs", "cs-nc"}) {
@@ -366,13 +249,13 @@ TEST_F(CliCalibration, MethodAllWithPlotsWritesPngFiles) {
 TEST_F(CliCalibration, ApplyTurnsVoltagesIntoAngles) {
   const fs::path sim = simulate();
   const fs::path cal = tmp / "cal";
-  ok("calibrate " + q(sim) + " --method cs -o " + q(cal) + " --no-plots");
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
 
   const auto check = [&](const fs::path& stops, double max_error_deg) {
     SCOPED_TRACE(stops.string());
     const fs::path out = tmp / ("apply-" + stops.parent_path().filename().string());
-    const Result r = ok("apply " + q(cal / "params.yaml") + " " + q(stops) + " -o " + q(out) +
-                        " --no-plots");
+    const Result r = ok("apply " + shell_quote(cal / "params.yaml") + " " + shell_quote(stops) +
+                        " -o " + shell_quote(out) + " --no-plots");
     EXPECT_HAS(r.out, "wrote " + out.string());
     const Csv a = read_csv(out / "angles.csv");
     EXPECT_EQ(a.header, (std::vector<std::string>{"row", "theta_R_deg", "theta12_deg",
@@ -414,14 +297,15 @@ TEST_F(CliCalibration, ApplyTurnsVoltagesIntoAngles) {
 TEST_F(CliCalibration, ApplyWithoutThetaWritesNanErrors) {
   const fs::path sim = simulate();
   const fs::path cal = tmp / "cal";
-  ok("calibrate " + q(sim) + " --method cs -o " + q(cal) + " --no-plots");
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
   std::string text = "V1,V2,V3\n";
   const Csv s = read_csv(sim / "stops.csv");
   for (std::size_t n = 0; n < 3; ++n)
     text += s.rows[n][s.col("V1")] + "," + s.rows[n][s.col("V2")] + "," + s.rows[n][s.col("V3")] + "\n";
   write_file(tmp / "v.csv", text);
   const fs::path out = tmp / "apply";
-  ok("apply " + q(cal / "params.yaml") + " " + q(tmp / "v.csv") + " -o " + q(out));
+  ok("apply " + shell_quote(cal / "params.yaml") + " " + shell_quote(tmp / "v.csv") + " -o " +
+     shell_quote(out));
   const Csv a = read_csv(out / "angles.csv");
   ASSERT_EQ(a.rows.size(), 3u);
   for (const auto& row : a.rows) {
@@ -438,11 +322,13 @@ TEST_F(CliCalibration, ApplyWithoutThetaWritesNanErrors) {
 TEST_F(CliCalibration, RigWithTruthFromCalibrationSimulates) {
   const fs::path sim = simulate();
   const fs::path cal = tmp / "cal";
-  ok("calibrate " + q(sim) + " --method cs -o " + q(cal) + " --no-plots");
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
   // Relative to the rig file, run from another working directory.
   write_file(tmp / "calibrated.yaml", "device:\n  truth_from: cal/params.yaml\nseed: 5\n");
   const fs::path again = tmp / "again";
-  ok("simulate " + q(tmp / "calibrated.yaml") + " -o " + q(again) + " --no-plots", "cd / && ");
+  ok("simulate " + shell_quote(tmp / "calibrated.yaml") + " -o " + shell_quote(again) +
+         " --no-plots",
+     "cd / && ");
   ASSERT_TRUE(fs::exists(again / "stops.csv"));
   EXPECT_EQ(read_csv(again / "stops.csv").rows.size(), 37u);
   const std::string resolved = read_file(again / "rig.yaml");
@@ -451,16 +337,18 @@ TEST_F(CliCalibration, RigWithTruthFromCalibrationSimulates) {
   EXPECT_TRUE(polrig::load_rig(again / "rig.yaml").rig.device.truth == p.params);
   // The dataset reproduces itself from its rig.yaml.
   const fs::path third = tmp / "third";
-  ok("simulate " + q(again / "rig.yaml") + " -o " + q(third) + " --no-plots");
+  ok("simulate " + shell_quote(again / "rig.yaml") + " -o " + shell_quote(third) + " --no-plots");
   EXPECT_EQ(read_file(third / "stops.csv"), read_file(again / "stops.csv"));
   // An absolute path works too.
   write_file(tmp / "abs.yaml", "device:\n  truth_from: " + (cal / "params.yaml").string() + "\n");
-  ok("simulate " + q(tmp / "abs.yaml") + " -o " + q(tmp / "abs") + " --no-plots");
+  ok("simulate " + shell_quote(tmp / "abs.yaml") + " -o " + shell_quote(tmp / "abs") +
+     " --no-plots");
 }
 
 TEST_F(CliCalibration, RigWithMissingTruthFromFileIsRefused) {
   write_file(tmp / "rig.yaml", "device:\n  truth_from: nothere/params.yaml\n");
-  expect_refused("simulate " + q(tmp / "rig.yaml") + " -o " + q(tmp / "out") + " --no-plots",
+  expect_refused("simulate " + shell_quote(tmp / "rig.yaml") + " -o " + shell_quote(tmp / "out") +
+                     " --no-plots",
                  tmp / "out", 2,
                  {(tmp / "rig.yaml").string() + ":2: key 'device.truth_from'",
                   (tmp / "nothere" / "params.yaml").string()});
@@ -472,9 +360,10 @@ TEST_F(CliCalibration, RigWithMissingTruthFromFileIsRefused) {
 
 TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
   const fs::path a = tmp / "mc1", b = tmp / "mc2";
-  ok("study calibration " + q(kRig) + " --trials 8 -o " + q(a) + " --no-plots --threads 1");
-  const Result r =
-      ok("study calibration " + q(kRig) + " --trials 8 -o " + q(b) + " --no-plots --threads 2");
+  ok("study calibration " + shell_quote(kRig) + " --trials 8 -o " + shell_quote(a) +
+     " --no-plots --threads 1");
+  const Result r = ok("study calibration " + shell_quote(kRig) + " --trials 8 -o " +
+                      shell_quote(b) + " --no-plots --threads 2");
   const Csv trials = read_csv(a / "trials.csv");
   EXPECT_EQ(trials.header,
             (std::vector<std::string>{"trial", "seed", "L_IS", "alpha_IS", "L_S", "alpha_S",
@@ -515,16 +404,19 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
 
 TEST_F(CliCalibration, MissingInputIsRefused) {
   const fs::path none = tmp / "none.csv";
-  expect_refused("calibrate " + q(none) + " -o " + q(tmp / "out") + " --no-plots", tmp / "out",
-                 2, {none.string() + ": cannot read the file: no such file"});
+  expect_refused(
+      "calibrate " + shell_quote(none) + " -o " + shell_quote(tmp / "out") + " --no-plots",
+      tmp / "out", 2, {none.string() + ": cannot read the file: no such file"});
   // A missing dataset folder names the path given.
-  expect_refused("calibrate " + q(tmp / "nosim") + " -o " + q(tmp / "out") + " --no-plots",
-                 tmp / "out", 2, {(tmp / "nosim").string()});
+  expect_refused(
+      "calibrate " + shell_quote(tmp / "nosim") + " -o " + shell_quote(tmp / "out") + " --no-plots",
+      tmp / "out", 2, {(tmp / "nosim").string()});
 }
 
 TEST_F(CliCalibration, CsvMissingAColumnIsRefused) {
   write_file(tmp / "nov3.csv", "theta_R_deg,V1,V2\n0,0.1,0.2\n");
-  expect_refused("calibrate " + q(tmp / "nov3.csv") + " -o " + q(tmp / "out") + " --no-plots",
+  expect_refused("calibrate " + shell_quote(tmp / "nov3.csv") + " -o " + shell_quote(tmp / "out") +
+                     " --no-plots",
                  tmp / "out", 2, {(tmp / "nov3.csv").string() + ":1: missing column 'V3'"});
 }
 
@@ -538,7 +430,8 @@ TEST_F(CliCalibration, CsvWithTextInANumberIsRefused) {
   for (const std::string& l : lines) text += l + "\n";
   const fs::path csv = tmp / "abc.csv";
   write_file(csv, text);
-  expect_refused("calibrate " + q(csv) + " --method cs -o " + q(tmp / "out") + " --no-plots",
+  expect_refused("calibrate " + shell_quote(csv) + " --method cs -o " + shell_quote(tmp / "out") +
+                     " --no-plots",
                  tmp / "out", 2,
                  {csv.string() + ":4:", "'V1'",
                   csv.string() + ":4: column 'V1': expected a finite number, got 'abc'"});
@@ -546,18 +439,20 @@ TEST_F(CliCalibration, CsvWithTextInANumberIsRefused) {
 
 TEST_F(CliCalibration, EmptyCsvIsRefused) {
   write_file(tmp / "empty.csv", "");
-  expect_refused("calibrate " + q(tmp / "empty.csv") + " -o " + q(tmp / "out") + " --no-plots",
+  expect_refused("calibrate " + shell_quote(tmp / "empty.csv") + " -o " + shell_quote(tmp / "out") +
+                     " --no-plots",
                  tmp / "out", 2, {(tmp / "empty.csv").string() + ": the file is empty"});
   write_file(tmp / "header.csv", "theta_R_deg,V1,V2,V3\n");
-  expect_refused("calibrate " + q(tmp / "header.csv") + " -o " + q(tmp / "out") + " --no-plots",
+  expect_refused("calibrate " + shell_quote(tmp / "header.csv") + " -o " +
+                     shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 2, {(tmp / "header.csv").string() + ": no data rows"});
 }
 
 TEST_F(CliCalibration, TooFewStopsIsRefused) {
   const fs::path sim = simulate();
   write_file(tmp / "five.csv", measured_from(sim / "stops.csv", {0, 1, 2, 3, 4}));
-  expect_refused("calibrate " + q(tmp / "five.csv") + " --method section -o " + q(tmp / "out") +
-                     " --no-plots",
+  expect_refused("calibrate " + shell_quote(tmp / "five.csv") + " --method section -o " +
+                     shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 3, {"cannot calibrate", "5 stops to fit", "at least 6"});
 }
 
@@ -574,20 +469,22 @@ TEST_F(CliCalibration, UnpairedStopIsRefusedForCentralSymmetry) {
   text += odd;
   const fs::path csv = tmp / "unpaired.csv";
   write_file(csv, text);
-  expect_refused("calibrate " + q(csv) + " --method cs -o " + q(tmp / "out") + " --no-plots",
-                 tmp / "out", 3,
-                 {csv.string() + ":38 (theta_R = 185°) has no partner 180° away",
-                  "--method section"});
+  expect_refused(
+      "calibrate " + shell_quote(csv) + " --method cs -o " + shell_quote(tmp / "out") +
+          " --no-plots",
+      tmp / "out", 3,
+      {csv.string() + ":38 (theta_R = 185°) has no partner 180° away", "--method section"});
   // The brief's schedule 0, 10, …, 170 plus 185: no stop has a partner; the first is named.
   rows.resize(18);
   std::string half = measured_from(sim / "stops.csv", rows) + odd;
   write_file(tmp / "half.csv", half);
-  expect_refused("calibrate " + q(tmp / "half.csv") + " --method cs -o " + q(tmp / "out") +
-                     " --no-plots",
+  expect_refused("calibrate " + shell_quote(tmp / "half.csv") + " --method cs -o " +
+                     shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 3,
                  {(tmp / "half.csv").string() + ":2 (theta_R = 0°) has no partner 180° away"});
   // The section method takes the same file.
-  ok("calibrate " + q(csv) + " --method section --d-a 0.55 -o " + q(tmp / "sec") + " --no-plots");
+  ok("calibrate " + shell_quote(csv) + " --method section --d-a 0.55 -o " +
+     shell_quote(tmp / "sec") + " --no-plots");
   EXPECT_EQ(read_csv(tmp / "sec" / "points.csv").rows.size(), 37u);
 }
 
@@ -597,42 +494,45 @@ TEST_F(CliCalibration, UnpolarizedLightIsRefused) {
   std::string text = "theta_R_deg,V1,V2,V3\n";
   for (int n = 0; n <= 36; ++n) text += std::to_string(10 * n) + ",-0.0101519,0.007923,-0.0094542\n";
   write_file(tmp / "unpolarized.csv", text);
-  expect_refused("calibrate " + q(tmp / "unpolarized.csv") + " --method cs --d-a 0.55 -o " +
-                     q(tmp / "out") + " --no-plots",
+  expect_refused("calibrate " + shell_quote(tmp / "unpolarized.csv") +
+                     " --method cs --d-a 0.55 -o " + shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 3, {"cannot calibrate", "too small"});
 }
 
 TEST_F(CliCalibration, UnknownMethodIsRefused) {
   const fs::path sim = simulate();
-  expect_refused("calibrate " + q(sim) + " --method bogus -o " + q(tmp / "out") + " --no-plots",
+  expect_refused("calibrate " + shell_quote(sim) + " --method bogus -o " +
+                     shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 2, {"--method bogus: expected section, cs, cs-nc or all"});
 }
 
 TEST_F(CliCalibration, ApplyWithParamsMissingKdIsRefused) {
   const fs::path sim = simulate();
   const fs::path cal = tmp / "cal";
-  ok("calibrate " + q(sim) + " --method cs -o " + q(cal) + " --no-plots");
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
   std::string text;
   for (const std::string& l : lines_of(read_file(cal / "params.yaml")))
     if (l.rfind("kd:", 0) != 0) text += l + "\n";
   ASSERT_NE(text.size(), read_file(cal / "params.yaml").size());
   write_file(tmp / "nokd.yaml", text);
-  expect_refused("apply " + q(tmp / "nokd.yaml") + " " + q(sim / "stops.csv") + " -o " +
-                     q(tmp / "out") + " --no-plots",
+  expect_refused("apply " + shell_quote(tmp / "nokd.yaml") + " " + shell_quote(sim / "stops.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 2, {(tmp / "nokd.yaml").string() + ": missing key 'kd'"});
   // Voltages with a bad cell: the voltages file, line and column.
   write_file(tmp / "v.csv", "V1,V2,V3\n0.1,0.2,0.3\n0.1,x,0.3\n");
-  expect_refused("apply " + q(cal / "params.yaml") + " " + q(tmp / "v.csv") + " -o " +
-                     q(tmp / "out") + " --no-plots",
+  expect_refused("apply " + shell_quote(cal / "params.yaml") + " " + shell_quote(tmp / "v.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 2, {(tmp / "v.csv").string() + ":3: column 'V2'"});
 }
 
 TEST_F(CliCalibration, DaOutsideTheUnitIntervalIsRejectedByTheParser) {
   const fs::path sim = simulate();
-  expect_refused("calibrate " + q(sim) + " --d-a 1.5 -o " + q(tmp / "out") + " --no-plots",
-                 tmp / "out", -1, {"--d-a"});
-  expect_refused("calibrate " + q(sim) + " --d-a 0 -o " + q(tmp / "out") + " --no-plots",
-                 tmp / "out", -1, {"--d-a"});
+  expect_refused(
+      "calibrate " + shell_quote(sim) + " --d-a 1.5 -o " + shell_quote(tmp / "out") + " --no-plots",
+      tmp / "out", -1, {"--d-a"});
+  expect_refused(
+      "calibrate " + shell_quote(sim) + " --d-a 0 -o " + shell_quote(tmp / "out") + " --no-plots",
+      tmp / "out", -1, {"--d-a"});
 }
 
 }  // namespace

@@ -1,28 +1,23 @@
 // Output plumbing: CSV text, folders that appear whole or not at all, manifests.
 #include <gtest/gtest.h>
 
-#include <fstream>
-#include <sstream>
+#include <filesystem>
+#include <string>
 
 #include "polrig/io/csv.h"
 #include "polrig/io/manifest.h"
 #include "polrig/io/output_dir.h"
+#include "support.h"
 
 namespace polrig {
 namespace {
 namespace fs = std::filesystem;
+using test::read_file;
 
 fs::path fresh_dir(const std::string& name) {
   const fs::path p = fs::temp_directory_path() / ("polrig-test-io-" + name);
   fs::remove_all(p);
   return p;
-}
-
-std::string read(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
 }
 
 TEST(Csv, WritesShortestExactNumbers) {
@@ -43,7 +38,7 @@ TEST(OutputDir, AppearsOnlyOnCommit) {
     EXPECT_FALSE(fs::exists(dest));
     out.commit();
   }
-  EXPECT_EQ(read(dest / "x.csv"), "x\n1\n");
+  EXPECT_EQ(read_file(dest / "x.csv"), "x\n1\n");
   for (const auto& e : fs::directory_iterator(dest.parent_path()))
     EXPECT_EQ(e.path().filename(), "out");  // no staging folder left beside it
   fs::remove_all(base);
@@ -69,15 +64,15 @@ TEST(OutputDir, RefusesToReplaceWithoutForce) {
   fs::create_directories(dest);
   write_text_file(dest / "old.txt", "old");
   EXPECT_THROW(OutputDir(dest, false), std::runtime_error);
-  EXPECT_EQ(read(dest / "old.txt"), "old");
+  EXPECT_EQ(read_file(dest / "old.txt"), "old");
   {
     OutputDir out(dest, true);
     write_text_file(out.staging() / "new.txt", "new");
-    EXPECT_EQ(read(dest / "old.txt"), "old");  // untouched until commit
+    EXPECT_EQ(read_file(dest / "old.txt"), "old");  // untouched until commit
     out.commit();
   }
   EXPECT_FALSE(fs::exists(dest / "old.txt"));
-  EXPECT_EQ(read(dest / "new.txt"), "new");
+  EXPECT_EQ(read_file(dest / "new.txt"), "new");
   fs::remove_all(base);
 }
 
@@ -85,7 +80,7 @@ TEST(Manifest, NamesEveryFileWithItsSchema) {
   const fs::path dir = fresh_dir("manifest");
   fs::create_directories(dir);
   write_manifest(dir, {"polrig study adc -o x", nullptr, {{"accuracy_limit.csv", 1, "limits"}}});
-  const std::string m = read(dir / "manifest.yaml");
+  const std::string m = read_file(dir / "manifest.yaml");
   EXPECT_NE(m.find("accuracy_limit.csv:"), std::string::npos);
   EXPECT_NE(m.find("schema: 1"), std::string::npos);
   EXPECT_NE(m.find("git_revision:"), std::string::npos);

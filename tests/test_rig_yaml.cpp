@@ -10,18 +10,16 @@
 #include <cmath>
 #include <functional>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <sstream>
 #include <string>
 #include <string_view>
 #include <vector>
 
-#include <unistd.h>
-
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/keys.h"
 #include "polrig/rig/rig.h"
+#include "support.h"
 
 namespace fs = std::filesystem;
 using polrig::LoadedRig;
@@ -29,36 +27,14 @@ using polrig::parse_rig;
 using polrig::Rig;
 using polrig::RigError;
 using polrig::RigOverride;
+using polrig::test::kDefaultRigFile;
+using polrig::test::read_file;
+using polrig::test::TempDir;
+using polrig::test::write_file;
 
 namespace {
 
 constexpr const char* kOrigin = "rigs/test-rig.yaml";
-const std::string kDefaultRigFile = POLRIG_SOURCE_DIR "/rigs/wang2019-indoor.yaml";
-
-// gtest predicate-formatter: `hay` contains `needle`, with the whole message on failure.
-::testing::AssertionResult HasText(const char* hay_expr, const char* needle_expr,
-                                   const std::string& hay, const std::string& needle) {
-  if (hay.find(needle) != std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << hay_expr << " does not contain " << needle_expr
-                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
-                                       << needle << "\"";
-}
-::testing::AssertionResult LacksText(const char* hay_expr, const char* needle_expr,
-                                     const std::string& hay, const std::string& needle) {
-  if (hay.find(needle) == std::string::npos) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << hay_expr << " contains " << needle_expr
-                                       << " but should not\n  text: \"" << hay << "\"";
-}
-::testing::AssertionResult StartsWith(const char* hay_expr, const char* prefix_expr,
-                                      const std::string& hay, const std::string& prefix) {
-  if (hay.rfind(prefix, 0) == 0) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << hay_expr << " does not start with " << prefix_expr
-                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
-                                       << prefix << "...\"";
-}
-#define EXPECT_HAS(hay, needle) EXPECT_PRED_FORMAT2(HasText, hay, needle)
-#define EXPECT_LACKS(hay, needle) EXPECT_PRED_FORMAT2(LacksText, hay, needle)
-#define EXPECT_STARTS(hay, prefix) EXPECT_PRED_FORMAT2(StartsWith, hay, prefix)
 
 std::vector<RigOverride> sets(std::initializer_list<const char*> args) {
   std::vector<RigOverride> out;
@@ -132,40 +108,6 @@ void expect_same_rig(const Rig& a, const Rig& b) {
   EXPECT_EQ(a.electronics.vref_V, b.electronics.vref_V);
   EXPECT_EQ(a.electronics.noise_sigma_V, b.electronics.noise_sigma_V);
   EXPECT_EQ(a.seed, b.seed);
-}
-
-// A fresh folder under the system temp folder, removed at the end of the test.
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("polrig_test_rig_yaml_" + std::string(info ? info->name() : "x") + "_" +
-             std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
-
-void write_file(const fs::path& p, const std::string& text) {
-  std::ofstream out(p, std::ios::binary);
-  out << text;
-}
-
-std::string read_file(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 }  // namespace
@@ -622,7 +564,7 @@ TEST(RigYamlError, EmptyAnglesList) {
 // ---------------------------------------------------------------------------------------------
 
 TEST(RigYamlFile, MissingFileNamesThePath) {
-  TempDir tmp;
+  TempDir tmp("polrig_test_rig_yaml_");
   const fs::path missing = tmp.path() / "no-such-rig.yaml";
   try {
     polrig::load_rig(missing);
@@ -633,7 +575,7 @@ TEST(RigYamlFile, MissingFileNamesThePath) {
 }
 
 TEST(RigYamlFile, DirectoryIsNotARigFile) {
-  TempDir tmp;
+  TempDir tmp("polrig_test_rig_yaml_");
   try {
     polrig::load_rig(tmp.path());
     FAIL() << "load_rig accepted a directory";
@@ -644,7 +586,7 @@ TEST(RigYamlFile, DirectoryIsNotARigFile) {
 }
 
 TEST(RigYamlFile, ErrorsInAFileNameThePathAndLine) {
-  TempDir tmp;
+  TempDir tmp("polrig_test_rig_yaml_");
   const fs::path file = tmp.path() / "bad.yaml";
   write_file(file, "# a comment\nseed: 1\n\nsource:\n  L_o: -2\n");
   try {

@@ -1,0 +1,241 @@
+// Helpers shared by the test programs: files and temporary folders, CSV text, substring
+// assertions and running the polrig executable. Header-only; tests/CMakeLists.txt defines
+// POLRIG_EXE and POLRIG_SOURCE_DIR for every test target.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <system_error>
+#include <vector>
+
+namespace polrig::test {
+
+namespace fs = std::filesystem;
+
+// The polrig executable under test, and the shipped rig file of the default (indoor) rig.
+inline const std::string kPolrigExe = POLRIG_EXE;
+inline const std::string kDefaultRigFile = POLRIG_SOURCE_DIR "/rigs/wang2019-indoor.yaml";
+
+// ---------------------------------------------------------------------------------------------
+// Files and folders
+// ---------------------------------------------------------------------------------------------
+
+// The bytes of file `p` ("" if it cannot be read).
+inline std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// Replaces (or creates) file `p` with exactly `text`.
+inline void write_file(const fs::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+// A fresh folder under the system temp folder, named after `prefix`, the running test, the
+// process and a counter; removed with the object.
+class TempDir {
+ public:
+  explicit TempDir(const std::string& prefix) {
+    static int counter = 0;
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    path_ = fs::temp_directory_path() /
+            (prefix + std::string(info ? info->name() : "x") + "_" + std::to_string(::getpid()) +
+             "_" + std::to_string(counter++));
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// The names of the entries of folder `parent` for which `keep(name)` holds (none if `parent`
+// does not exist).
+template <class Keep>
+std::vector<std::string> entries_where(const fs::path& parent, Keep keep) {
+  std::vector<std::string> found;
+  std::error_code ec;
+  if (!fs::exists(parent, ec)) return found;
+  for (const auto& e : fs::directory_iterator(parent)) {
+    const std::string f = e.path().filename().string();
+    if (keep(f)) found.push_back(f);
+  }
+  return found;
+}
+
+// True if file `p` starts with the 8-byte PNG signature (and has more after it).
+inline bool starts_with_png_signature(const fs::path& p) {
+  const std::string data = read_file(p);
+  return data.size() > 8 && data.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text and CSV
+// ---------------------------------------------------------------------------------------------
+
+// The lines of `text`, without their '\n'.
+inline std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  for (std::string line; std::getline(ss, line);) out.push_back(line);
+  return out;
+}
+
+// The fields of one CSV line (no quoting), keeping a trailing empty field.
+inline std::vector<std::string> split(const std::string& line, char sep = ',') {
+  std::vector<std::string> out;
+  std::stringstream ss(line);
+  for (std::string f; std::getline(ss, f, sep);) out.push_back(f);
+  if (!line.empty() && line.back() == sep) out.emplace_back();
+  return out;
+}
+
+// A CSV file as text cells: the header and the data rows.
+struct Csv {
+  std::vector<std::string> header;
+  std::vector<std::vector<std::string>> rows;
+
+  // The index of column `name`; a test failure (and 0) if there is none.
+  std::size_t col(const std::string& name) const {
+    for (std::size_t c = 0; c < header.size(); ++c)
+      if (header[c] == name) return c;
+    ADD_FAILURE() << "no column " << name;
+    return 0;
+  }
+};
+
+// File `p` as a Csv: its first line is the header (an empty Csv for an empty or missing file).
+inline Csv read_csv(const fs::path& p) {
+  Csv csv;
+  const std::vector<std::string> lines = lines_of(read_file(p));
+  if (lines.empty()) return csv;
+  csv.header = split(lines[0]);
+  for (std::size_t i = 1; i < lines.size(); ++i) csv.rows.push_back(split(lines[i]));
+  return csv;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Substring assertions: EXPECT_HAS, EXPECT_LACKS, EXPECT_STARTS
+// ---------------------------------------------------------------------------------------------
+
+// gtest predicate-formatter: `hay` contains `needle`, with the whole text on failure.
+inline ::testing::AssertionResult HasText(const char* hay_expr, const char* needle_expr,
+                                          const std::string& hay, const std::string& needle) {
+  if (hay.find(needle) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << hay_expr << " does not contain " << needle_expr
+                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
+                                       << needle << "\"";
+}
+
+// gtest predicate-formatter: `hay` does not contain `needle`.
+inline ::testing::AssertionResult LacksText(const char* hay_expr, const char* needle_expr,
+                                            const std::string& hay, const std::string& needle) {
+  if (hay.find(needle) == std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << hay_expr << " contains " << needle_expr
+                                       << " but should not\n  text: \"" << hay << "\"";
+}
+
+// gtest predicate-formatter: `hay` starts with `prefix`.
+inline ::testing::AssertionResult StartsWith(const char* hay_expr, const char* prefix_expr,
+                                             const std::string& hay, const std::string& prefix) {
+  if (hay.rfind(prefix, 0) == 0) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << hay_expr << " does not start with " << prefix_expr
+                                       << "\n  text:     \"" << hay << "\"\n  expected: \""
+                                       << prefix << "...\"";
+}
+
+#define EXPECT_HAS(hay, needle) EXPECT_PRED_FORMAT2(::polrig::test::HasText, hay, needle)
+#define EXPECT_LACKS(hay, needle) EXPECT_PRED_FORMAT2(::polrig::test::LacksText, hay, needle)
+#define EXPECT_STARTS(hay, prefix) EXPECT_PRED_FORMAT2(::polrig::test::StartsWith, hay, prefix)
+
+// ---------------------------------------------------------------------------------------------
+// Running the polrig executable
+// ---------------------------------------------------------------------------------------------
+
+// `s` single-quoted for sh.
+inline std::string shell_quote(const std::string& s) {
+  std::string out = "'";
+  for (char c : s) out += (c == '\'') ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+inline std::string shell_quote(const fs::path& p) { return shell_quote(p.string()); }
+
+// True if `gnuplot` runs (the plotting commands need it).
+inline bool gnuplot_present() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
+
+// What one run of the polrig executable gave.
+struct RunResult {
+  int status = -1;  // exit status, or -1 if the program did not exit normally
+  std::string out, err;
+};
+
+// Runs `polrig ARGS` through sh (ARGS already shell-quoted where needed), with `prefix` put
+// before the program (e.g. "cd X && " or "PATH=… "); stdout and stderr go to the two files.
+inline RunResult run_polrig(const std::string& args, const std::string& prefix,
+                            const fs::path& stdout_file, const fs::path& stderr_file) {
+  const std::string cmd = prefix + shell_quote(kPolrigExe) + " " + args + " >" +
+                          shell_quote(stdout_file) + " 2>" + shell_quote(stderr_file);
+  const int rc = std::system(cmd.c_str());
+  RunResult r;
+  r.status = (rc != -1 && WIFEXITED(rc)) ? WEXITSTATUS(rc) : -1;
+  r.out = read_file(stdout_file);
+  r.err = read_file(stderr_file);
+  return r;
+}
+
+// Base of the fixtures that run the polrig executable: a fresh temporary folder `tmp` per
+// test, and polrig() / ok() to run the program.
+class PolrigTest : public ::testing::Test {
+ protected:
+  using Result = RunResult;
+
+  // `tmp_prefix` starts the name of the temporary folder; the n-th run's stdout and stderr are
+  // kept in tmp/`log_folder` (tmp itself when it is empty) as stdout-n.txt and stderr-n.txt.
+  PolrigTest(const std::string& tmp_prefix, const std::string& log_folder)
+      : temp_dir_(tmp_prefix), logs_(log_folder.empty() ? tmp : tmp / log_folder) {}
+
+  // Runs `polrig ARGS` (see run_polrig) and returns what it gave.
+  Result polrig(const std::string& args, const std::string& prefix = "") {
+    const int n = runs_++;
+    fs::create_directories(logs_);
+    return run_polrig(args, prefix, logs_ / ("stdout-" + std::to_string(n) + ".txt"),
+                      logs_ / ("stderr-" + std::to_string(n) + ".txt"));
+  }
+
+  // Runs and expects success; returns the result.
+  Result ok(const std::string& args, const std::string& prefix = "") {
+    Result r = polrig(args, prefix);
+    EXPECT_EQ(r.status, 0) << "polrig " << args << "\nstderr: " << r.err << "\nstdout: " << r.out;
+    return r;
+  }
+
+ private:
+  TempDir temp_dir_;  // before `tmp`, which is initialized from it
+
+ protected:
+  const fs::path tmp = temp_dir_.path();
+
+ private:
+  fs::path logs_;
+  int runs_ = 0;
+};
+
+}  // namespace polrig::test

@@ -7,4 +7,4 @@ out="${1:-results/wang2019-indoor}"
 bash scripts/setup-deps.sh
 bash scripts/build.sh
 ./build/polrig run rigs/wang2019-indoor.yaml -o "$out" --force
-echo "results: $out (simulate/, cs/, adc/)"
+echo "results: $out (simulate/, calibration/, cs/, adc/)"

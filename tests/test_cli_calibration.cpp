@@ -103,12 +103,12 @@ TEST_F(CliCalibration, CalibrateCsWritesTheReport) {
   const Result r =
       ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
   EXPECT_HAS(r.out, "wrote " + cal.string());
-  EXPECT_HAS(r.out, "d_a = 0.55 (given)");
+  EXPECT_HAS(r.out, "d_a = 0.55 (the rig's device.d)");
 
   const YAML::Node params = YAML::LoadFile((cal / "params.yaml").string());
   EXPECT_EQ(params["method"].as<std::string>(""), "cs");
   EXPECT_EQ(params["d_a"].as<double>(0), 0.55);  // the dataset rig's d
-  EXPECT_EQ(params["d_a_source"].as<std::string>(""), "given");
+  EXPECT_EQ(params["d_a_source"].as<std::string>(""), "the rig's device.d");
   EXPECT_EQ(params["fit"]["observations"].as<int>(0), 57);
   const polrig::LoadedParams loaded = polrig::read_params_yaml(cal / "params.yaml");
   // Close to the rig's truth (Table 2): the CS calibration recovers the device.
@@ -154,8 +154,9 @@ TEST_F(CliCalibration, CalibrateCsWritesTheReport) {
 
   const YAML::Node manifest = YAML::LoadFile((cal / "manifest.yaml").string());
   ASSERT_TRUE(manifest["inputs"].IsSequence());
-  ASSERT_EQ(manifest["inputs"].size(), 1u);
+  ASSERT_EQ(manifest["inputs"].size(), 2u);  // the voltages and the rig that described the sensor
   EXPECT_EQ(manifest["inputs"][0].as<std::string>(""), (sim / "stops.csv").string());
+  EXPECT_EQ(manifest["inputs"][1].as<std::string>(""), (sim / "rig.yaml").string());
   for (const char* f : {"params.yaml", "points.csv", "errors.csv", "accuracy.csv",
                         "replacement.csv", "model_curve.csv"}) {
     SCOPED_TRACE(f);
@@ -473,7 +474,7 @@ TEST_F(CliCalibration, UnpairedStopIsRefusedForCentralSymmetry) {
       "calibrate " + shell_quote(csv) + " --method cs -o " + shell_quote(tmp / "out") +
           " --no-plots",
       tmp / "out", 3,
-      {csv.string() + ":38 (theta_R = 185°) has no partner 180° away", "--method section"});
+      {csv.string() + ":38 (theta_R = 185°) has no partner 180° away", "the section method does not"});
   // The brief's schedule 0, 10, …, 170 plus 185: no stop has a partner; the first is named.
   rows.resize(18);
   std::string half = measured_from(sim / "stops.csv", rows) + odd;

@@ -545,6 +545,10 @@ TEST(RigYamlError, AnglesListTogetherWithStartStepStop) {
   // The default rig file gives start/step/stop; a list given with --set replaces them.
   const Rig r = parse_ok(read_file(kDefaultRigFile), sets({"schedule.angles_deg=[0, 90]"}));
   EXPECT_EQ(r.schedule.table_angles_deg(), (std::vector<double>{0, 90}));
+  // A --set of start/step/stop cannot be silently ignored under a file's explicit list.
+  const std::string ignored =
+      rig_error("schedule:\n  angles_deg: [0, 180]\n", sets({"schedule.step_deg=5"}));
+  EXPECT_HAS(ignored, "expected either an explicit list or start/step/stop, not both");
   // Both forms among the overrides are still an error, naming the --set.
   const std::string msg = rig_error(
       read_file(kDefaultRigFile), sets({"schedule.angles_deg=[0, 90]", "schedule.step_deg=5"}));

@@ -59,10 +59,12 @@ std::vector<AngleErrors> angle_errors(const CalibrationParams& p, double v_dec,
   for (const EvalPoint& pt : points) {
     const SensorAngles a = sensor_angles(p, e, pt.V);
     const double ref = pt.theta_ref_deg;
+    const int bad = bad_voltage_of(a.section);
+    const double d = bad == 0 ? a.theta23.d : bad == 1 ? a.theta13.d : a.theta12.d;
     out.push_back({ref, axis_difference_deg(a.theta12.theta_deg, ref),
                    axis_difference_deg(a.theta13.theta_deg, ref),
                    axis_difference_deg(a.theta23.theta_deg, ref),
-                   axis_difference_deg(a.theta_sec_deg, ref), a.section, a.theta12.d});
+                   axis_difference_deg(a.theta_sec_deg, ref), a.section, d});
   }
   return out;
 }
@@ -121,7 +123,7 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
 
   if (o.d_a) {
     r.d_a = *o.d_a;
-    r.d_a_source = "given";
+    r.d_a_source = o.d_a_source;
   } else {
     r.d_a = *std::max_element(r.fit.params.c.begin(), r.fit.params.c.end());
     r.d_a_source = "max c_m (the best film taken as ideal, kd = 0)";

@@ -30,7 +30,7 @@ std::vector<CsPoint> central_symmetry_points(const std::vector<StopVoltages>& st
     if (!paired[s])
       throw CalibrationError(fmt::format(
           "{} (theta_R = {}°) has no partner 180° away; central symmetry needs every stop "
-          "paired (use --method section for unpaired data)",
+          "paired (the section method does not)",
           stops[s].label, stops[s].theta_R_deg));
   return points;
 }

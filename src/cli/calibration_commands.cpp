@@ -30,7 +30,14 @@ struct CalibrationSettings {
 
   void add_to(CLI::App& app) {
     app.add_option("--d-a", d_a, "the rig's stated degree of polarization d_a for decoupling")
-        ->check(CLI::Range(1e-6, 1.0 - 1e-12));
+        ->check(CLI::Validator(
+            [](const std::string& s) -> std::string {
+              double v = 0;
+              if (!CLI::detail::lexical_cast(s, v) || !(v > 0 && v < 1))
+                return "expected a degree of polarization in (0, 1), got " + s;
+              return {};
+            },
+            "(0, 1)"));
     app.add_option("--nc-threshold", nc_threshold,
                    "noncontinuous rule: keep a voltage where |dV/dθ| ≥ this × its largest slope")
         ->check(CLI::Range(0.0, 1.0))
@@ -43,6 +50,7 @@ struct CalibrationSettings {
   CalibrationOptions options(const Rig& rig, std::optional<double> rig_d) const {
     CalibrationOptions o;
     o.d_a = d_a ? d_a : rig_d;
+    o.d_a_source = d_a ? "--d-a" : "the rig's device.d";
     o.film_axis_deg = rig.device.film_axis_deg;
     o.volts_per_decade = rig.electronics.volts_per_decade;
     o.noncontinuous = {nc_threshold, nc_min_points};
@@ -76,9 +84,14 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   for (CalibrationMethod m : methods) {
     CalibrationOptions o = settings.options(rig, rig_d);
     o.method = m;
-    results.push_back(calibrate(data.stops, o));
+    try {
+      results.push_back(calibrate(data.stops, o));
+    } catch (const CalibrationError& e) {
+      throw CalibrationError(fmt::format("method {}: {}", method_name(m), e.what()));
+    }
   }
-  const Manifest base{command_line(), given ? &*given : nullptr, {}, {data.origin}};
+  Manifest base{command_line(), given ? &*given : nullptr, {}, {data.origin}};
+  if (!given && data.rig) base.inputs.push_back(data.rig_origin);
   const auto options_of = [&](CalibrationMethod m) {
     CalibrationOptions o = settings.options(rig, rig_d);
     o.method = m;
@@ -101,6 +114,11 @@ void run_calibrate(const std::string& input, const std::string& method_text,
     write_manifest(dir.staging(), m);
   }
   finish(dir);
+  for (const CalibrationResult& r : results)
+    if (r.fit.observations <= FitParams::kCount)
+      std::cerr << fmt::format("polrig: note: {} fitted {} voltages to 18 unknowns: no redundancy, so "
+                               "its accuracy on the fitted points and its standard errors say "
+                               "nothing\n", method_name(r.method), r.fit.observations);
   for (const CalibrationResult& r : results)
     std::cout << fmt::format("{:8s} accuracy θ_sec ±{:.5f}°  (θ12 ±{:.5f}, θ13 ±{:.5f}, θ23 ±{:.5f}); "
                              "{} observations, residual RMS {:.4f} mV, d_a = {} ({})\n",

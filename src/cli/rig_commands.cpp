@@ -1,6 +1,7 @@
 // Commands that run the rig model: simulate, study cs, study adc, sweep, run, rig show/keys.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -39,6 +40,8 @@ std::vector<double> parse_d_list(const std::string& text) {
   };
   std::vector<double> ds;
   if (text.find(':') != std::string::npos) {
+    if (std::count(text.begin(), text.end(), ':') != 2)
+      return fail("expected a,b,c or start:stop:count");
     GridAxis axis;
     try {
       axis = GridAxis::parse("device.d=" + text);
@@ -83,6 +86,7 @@ CalibrationOptions calibration_options_for(const Rig& rig, CalibrationMethod m) 
   CalibrationOptions o;
   o.method = m;
   o.d_a = rig.device.d;
+  o.d_a_source = "the rig's device.d";
   o.film_axis_deg = rig.device.film_axis_deg;
   o.volts_per_decade = rig.electronics.volts_per_decade;
   return o;
@@ -186,6 +190,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         if (!cs_study_reads(a.key->path))
           std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
                                    "row along that axis will be the same\n", a.key->path);
+      check_grid(r.rig, axes);
       OutputDir dir = out->open(axes.size() <= 2);
       const bool tty = ::isatty(2);
       const auto t0 = std::chrono::steady_clock::now();
@@ -219,8 +224,13 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       OutputDir dir = out->open();
       const Simulation sim = simulate(r.rig, false);
       std::vector<CalibrationResult> calibrations;
-      for (CalibrationMethod m : kAllMethods)
-        calibrations.push_back(calibrate(stops_of(sim), calibration_options_for(r.rig, m)));
+      for (CalibrationMethod m : kAllMethods) {
+        try {
+          calibrations.push_back(calibrate(stops_of(sim), calibration_options_for(r.rig, m)));
+        } catch (const CalibrationError& e) {
+          throw CalibrationError(fmt::format("calibration type {} of the simulated run: {}", method_name(m), e.what()));
+        }
+      }
       const CsStudy cs = cs_study(r.rig, CsTurn(360));
       std::vector<double> ds;
       for (int k = 1; k <= 19; ++k) ds.push_back(k / 20.0);
@@ -240,7 +250,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       write_manifest(base / "adc", {command_line(), &r, report_adc_limits(base / "adc", limits, out->plots())});
       finish(dir);
 
-      std::cout << "Calibration of the simulated indoor run, accuracy of θ_sec (degrees):\n";
+      std::cout << "Calibration of the simulated run, accuracy of θ_sec (degrees):\n";
       for (const CalibrationResult& c : calibrations)
         std::cout << fmt::format("  {:8s} ±{:.5f}\n", method_name(c.method), c.accuracy[kThetaSec].accuracy_deg());
       std::cout << "CS study at the rig's eccentricity (mV):\n"

@@ -69,8 +69,8 @@ std::optional<std::size_t> CsvFile::find_column(std::string_view name) const {
 
 std::size_t CsvFile::column(std::string_view name) const {
   if (auto c = find_column(name)) return *c;
-  throw DataError(fmt::format("{}:{}: missing column '{}' (the header must hold theta_R_deg, V1, "
-                              "V2, V3; see docs/formats.md)", origin, header_line, name));
+  throw DataError(fmt::format("{}:{}: missing column '{}' (see docs/formats.md, \"Measured "
+                              "data\")", origin, header_line, name));
 }
 
 double CsvFile::number(std::size_t row, std::size_t col) const {
@@ -94,7 +94,10 @@ MeasuredData read_stops(const fs::path& input, bool need_angle) {
   fs::path csv = input;
   if (fs::is_directory(input, ec)) {
     csv = input / "stops.csv";
-    if (fs::exists(input / "rig.yaml", ec)) data.rig = load_rig(input / "rig.yaml").rig;
+    if (fs::exists(input / "rig.yaml", ec)) {
+      data.rig = load_rig(input / "rig.yaml").rig;
+      data.rig_origin = (input / "rig.yaml").string();
+    }
   }
   const CsvFile f = CsvFile::read(csv);
   data.origin = f.origin;

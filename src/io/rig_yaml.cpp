@@ -253,7 +253,7 @@ class RigParser {
     // (the file, or the overrides) only one form may be given.
     const bool list_overridden = override_for("schedule.angles_deg") != nullptr;
     for (const char* p : {"schedule.start_deg", "schedule.step_deg", "schedule.stop_deg"})
-      if (present_.count(p) && (override_for(p) != nullptr) == list_overridden)
+      if (present_.count(p) && !(list_overridden && override_for(p) == nullptr))
         fail("schedule.angles_deg",
              fmt::format("expected either an explicit list or start/step/stop, not both "
                          "('{}' is also given)", p));

@@ -71,7 +71,7 @@ std::vector<DatasetFile> report_calibration(const std::filesystem::path& dir,
       {"params.yaml", 1, "calibrated Eq. 15 parameters, standard errors and fit statistics"},
       {"points.csv", 1, "the points calibrated (raw stops or CS points), the fitted model, and "
                         "which voltages entered the fit"},
-      {"model_curve.csv", 1, "the fitted Eq. 15 over 0..180° in 0.5° steps"},
+      {"model_curve.csv", 1, "the fitted Eq. 15 over 0..360° in 0.5° steps"},
       {"errors.csv", 1, "θ12, θ13, θ23 and θ_sec minus the reference angle at every point"},
       {"accuracy.csv", 1, "max, min and accuracy (half range) of each error curve"},
       {"replacement.csv", 1, "θ_sec accuracy with subsets of {α, k, kv, kd} put back to theory"}};
@@ -98,7 +98,9 @@ std::vector<DatasetFile> report_calibration(const std::filesystem::path& dir,
                           fmt::format("V{} not fitted", i + 1),
                           fmt::format("points pt 8 ps 1.3 lc rgb '{}'", colours[i])});
   }
-  fit.extra = "set xrange [-5:185]";
+  double hi = 0;
+  for (const EvalPoint& p : r.points) hi = std::max(hi, p.theta_ref_deg);
+  fit.extra = fmt::format("set xrange [-5:{}]", hi + 5);
   Plot repl{"replacement.png", "θ_sec accuracy with parameters replaced by theory values (Fig. 21)",
             "parameters replaced", "accuracy (°)"};
   repl.series = {{"replacement.csv", "2:xtic(1)", "accuracy", "boxes fill solid 0.6 lc rgb '#1f77b4'"}};

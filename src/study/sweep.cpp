@@ -79,6 +79,23 @@ Rig rig_at(const Rig& base, const SweepResult& r, std::size_t p) {
 }
 }  // namespace
 
+void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
+  SweepResult r;
+  r.axes = axes;
+  std::size_t total = 1;
+  for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
+  for (std::size_t p = 0; p < total; ++p) {
+    if (auto problem = check_rig(rig_at(base, r, p))) {
+      std::string where;
+      const std::vector<int> idx = r.indices(p);
+      for (std::size_t a = 0; a < axes.size(); ++a)
+        where += fmt::format("{}{}={}", a ? ", " : "", axes[a].key->path, axes[a].value(idx[a]));
+      throw RigError(fmt::format("--grid point ({}): key '{}': {}", where, problem->path,
+                                 problem->message));
+    }
+  }
+}
+
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                   const SweepProgress& progress) {
   SweepResult result;
@@ -87,16 +104,7 @@ SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTu
   for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
   result.summaries.resize(total);
 
-  for (std::size_t p = 0; p < total; ++p) {
-    if (auto problem = check_rig(rig_at(base, result, p))) {
-      std::string where;
-      for (std::size_t a = 0; a < axes.size(); ++a)
-        where += fmt::format("{}{}={}", a ? ", " : "", axes[a].key->path,
-                             axes[a].value(result.indices(p)[a]));
-      throw RigError(fmt::format("--grid point ({}): key '{}': {}", where, problem->path,
-                                 problem->message));
-    }
-  }
+  check_grid(base, axes);
 
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
   // Chunks of the grid in turn, each in parallel, so progress can be told between them.

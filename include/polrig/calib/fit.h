@@ -32,7 +32,7 @@ struct FitOptions {
 
 struct FitResult {
   FitParams params;
-  FitParams standard_error;  // √diag(s²·(JᵀJ)⁻¹), s² = RSS/(N − 18); 0 for an exact fit
+  FitParams standard_error;  // √diag(s²·(JᵀJ)⁻¹), s² = RSS/(N − 18); NaN when N = 18 (no redundancy)
   double residual_rms_V = 0;
   int observations = 0;
   int iterations = 0;

@@ -26,6 +26,7 @@ inline constexpr std::array<CalibrationMethod, 3> kAllMethods{
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::CentralSymmetryNoncontinuous;
   std::optional<double> d_a;  // the rig's stated d; without it, max_m c_m (best film ideal)
+  std::string d_a_source = "given";  // where d_a came from, for params.yaml
   NoncontinuousRule noncontinuous;
   std::array<double, 6> film_axis_deg = kWang2019FilmAxesDeg;  // for the nominal start
   double volts_per_decade = 0.5;
@@ -44,7 +45,7 @@ struct AngleErrors {
   double theta_ref_deg;
   double e12_deg, e13_deg, e23_deg, esec_deg;
   int section;
-  double d;  // the degree of polarization θ12's pair implies (scale set by d_a)
+  double d;  // the degree of polarization θ_sec's pair implies (scale set by d_a)
 };
 
 struct AngleAccuracy {

@@ -39,6 +39,7 @@ struct MeasuredData {
   std::string origin;               // the CSV read
   std::vector<StopVoltages> stops;  // in file order; labels are "file:line"
   std::optional<Rig> rig;           // the dataset's rig.yaml, when there is one
+  std::string rig_origin;           // its path
 };
 
 // `input` is a folder (reads stops.csv, and rig.yaml when present) or a CSV file. Requires

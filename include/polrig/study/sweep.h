@@ -33,8 +33,11 @@ struct SweepResult {
 
 using SweepProgress = std::function<void(std::size_t done, std::size_t total)>;
 
-// Checks every grid point against the rig's rules first (throws RigError; nothing runs), then
-// runs the CS study at each point in parallel. Results do not depend on the thread count.
+// Checks every grid point against the rig's rules; throws RigError naming the first bad point.
+void check_grid(const Rig& base, const std::vector<GridAxis>& axes);
+
+// Checks the grid (check_grid), then runs the CS study at each point in parallel. Results do not
+// depend on the thread count.
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                   const SweepProgress& progress = {});
 

@@ -7,6 +7,7 @@ packages=(
   cmake g++ make git pkg-config
   libeigen3-dev libtbb-dev libyaml-cpp-dev libfmt-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  libembree-dev libopenexr-dev
   gnuplot-nox fonts-dejavu-core
 )
 

@@ -102,9 +102,12 @@ class MapReader {
 
   YAML::Node take(const char* key) {
     used_.insert(key);
-    if (!node_ || !node_.IsMap()) return YAML::Node();
-    const YAML::Node n = node_[key];
-    return n ? n : YAML::Node();
+    // An undefined node for a missing key (a default Node would be a defined null). Look up
+    // through a const node: a non-const operator[] would insert the missing key.
+    if (!node_ || !node_.IsMap()) return YAML::Node(YAML::NodeType::Undefined);
+    const YAML::Node& map = node_;
+    const YAML::Node n = map[key];
+    return n ? n : YAML::Node(YAML::NodeType::Undefined);
   }
   static std::string shown(const YAML::Node& n) {
     if (n.IsScalar()) return "'" + n.Scalar() + "'";

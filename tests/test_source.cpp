@@ -1,0 +1,210 @@
+// The traced source: scene files, the Embree sphere solve, the port's irradiance below it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "polrig/io/scene_yaml.h"
+#include "polrig/source/sphere_tracer.h"
+#include "polrig/source/traced_port.h"
+#include "support.h"
+
+namespace polrig {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// A point lamp at the centre and no baffles: every quantity of sphere theory is exact.
+SceneSpec theory_sphere(long long photons) {
+  SceneSpec s;
+  s.lamps = {LampSpec{{0, 0, 0}, 0.0, 100.0, 0.0}};
+  s.baffles.clear();
+  s.trace.photons = photons;
+  s.trace.batches = 16;
+  s.trace.wall_bins_theta = 20;
+  s.trace.wall_bins_phi = 20;
+  return s;
+}
+
+// Port fraction of the sphere: cap area 2πRh over 4πR², h = R − √(R² − a²). From the centre the
+// cap subtends the same fraction of directions.
+double port_fraction(const SceneSpec& s) {
+  const double R = s.sphere.radius(), a = s.port.radius();
+  return (R - std::sqrt(R * R - a * a)) / (2 * R);
+}
+
+TEST(SphereSolve, EnergyBookkeepingClosesAndNothingLeaks) {
+  SceneSpec s;  // the default scene: lamp, baffle
+  s.trace.photons = 200000;
+  const SphereSolution sol = SphereTracer(s).solve();
+  const EnergyLedger& L = sol.ledger;
+  EXPECT_EQ(L.launched, 200000);
+  EXPECT_EQ(L.ended(), L.launched);  // exact: every photon ends once
+  EXPECT_EQ(L.leaked, 0);
+  EXPECT_GT(L.escaped, 0);
+  EXPECT_GT(L.absorbed_baffles, 0);
+  EXPECT_GT(L.absorbed_lamps, 0);
+  EXPECT_GT(L.rays, L.launched);
+}
+
+TEST(SphereSolve, EscapeFractionMatchesSphereTheory) {
+  // A photon from the centre leaves directly with probability f, else after each diffuse
+  // reflection (probability ρ) with probability f: P = f + (1 − f)·ρf/(1 − ρ(1 − f)).
+  // Binomial standard error √(P(1 − P)/N); allow 5.
+  const SceneSpec s = theory_sphere(400000);
+  const SphereSolution sol = SphereTracer(s).solve();
+  const double f = port_fraction(s), rho = s.sphere.reflectance;
+  const double P = f + (1 - f) * rho * f / (1 - rho * (1 - f));
+  const double N = static_cast<double>(sol.ledger.launched);
+  EXPECT_NEAR(sol.ledger.escaped / N, P, 5 * std::sqrt(P * (1 - P) / N));
+}
+
+TEST(SphereSolve, MeanWallIrradianceMatchesSphereTheory) {
+  // Design: E = Φ·ρ/(A_s·(1 − ρ(1 − f))), first strike excluded, where Φ is the flux that first
+  // strikes the wall: Φ(1 − f) for a lamp at the centre. Batch standard error; allow 5.
+  const SceneSpec s = theory_sphere(400000);
+  const SphereSolution sol = SphereTracer(s).solve();
+  const double R = s.sphere.radius(), f = port_fraction(s), rho = s.sphere.reflectance;
+  const double A_s = 4 * kPi * R * R * 1e-6, A_wall = A_s * (1 - f);
+  const double theory = 100.0 * (1 - f) * rho / (A_s * (1 - rho * (1 - f)));
+  double m = 0, m2 = 0;
+  const auto& b = sol.batch_indirect_W;
+  for (double w : b) m += w / A_wall / static_cast<double>(b.size());
+  for (double w : b) m2 += (w / A_wall - m) * (w / A_wall - m);
+  const double se = std::sqrt(m2 / static_cast<double>(b.size() - 1) / static_cast<double>(b.size()));
+  EXPECT_NEAR(m, theory, 5 * se);
+  EXPECT_LT(se, 0.01 * theory);  // the test has teeth: 1% resolution or better
+  // The indirect irradiance is uniform (the integrating sphere's defining property): every bin
+  // agrees with the mean within its own errors.
+  int outliers = 0;
+  for (std::size_t i = 0; i < sol.wall.E.size(); ++i) {
+    if (sol.wall.wall_area_mm2[i] < 0.5 * sol.wall.wall_area_mm2[0]) continue;  // port-cut bins
+    const double e = sol.wall.E[i] - sol.wall.E_first[i];
+    const double e_se = std::hypot(sol.wall.E_se[i], sol.wall.E_first_se[i]);
+    outliers += std::abs(e - theory) > 5 * e_se;
+  }
+  EXPECT_EQ(outliers, 0);
+}
+
+// A solution whose wall has the same radiance L everywhere, to test the port integrals alone.
+SphereSolution uniform_wall(const SceneSpec& s, double L) {
+  SphereSolution sol;
+  sol.wall.n_theta = s.trace.wall_bins_theta;
+  sol.wall.n_phi = s.trace.wall_bins_phi;
+  const std::size_t n = static_cast<std::size_t>(sol.wall.n_theta * sol.wall.n_phi);
+  sol.wall.E.assign(n, kPi * L / s.sphere.reflectance);
+  return sol;
+}
+
+TEST(PortIrradiance, MatchesTheExactDiskViewFactor) {
+  // Uniform radiance L behind the port (its film passes g_up of it): E at height h, offset r, against
+  // E = πL/2·[1 − (h² + r² − a²)/√((h² + r² + a²)² − 4a²r²)]. Quasi-random error from 8 shifts;
+  // allow 5 standard errors.
+  const SceneSpec s = theory_sphere(1000);
+  const SphereTracer tracer(s);
+  const double L = 1000.0;
+  const SphereSolution sol = uniform_wall(s, L);
+  const TracedPort port(tracer, sol);
+  const double g_up = 0.5 * (s.port.polarizer.tau_M + s.port.polarizer.tau_m);
+  for (double h : {5.0, 20.0, 40.0}) {
+    for (double r : {0.0, 10.0, 30.0, 49.0, 60.0, 90.0}) {
+      const StokesIrradiance e = port.plane_irradiance(r, 0.0, h, 4096, 8);
+      const double exact = g_up * disk_irradiance(L, s.port.radius(), h, r);
+      EXPECT_NEAR(e.S0, exact, 5 * e.S0_se + 1e-9 * exact) << "h=" << h << " r=" << r;
+      EXPECT_LT(e.S0_se, 1e-2 * exact + 1e-9) << "h=" << h << " r=" << r;  // resolves 1%
+    }
+  }
+}
+
+TEST(PortIrradiance, SmallPortGivesCosineToTheFourth) {
+  // For a ≪ h the disk view factor tends to πLa²·h²/(h² + r²)², so E(r)/E(0) → cos⁴φ. With
+  // a = 0.5 mm, h = 20 mm the exact finite-port correction (from the disk formula) is below 0.2%:
+  // the traced ratio must sit within 5 standard errors of the exact one, and so within that
+  // correction of cos⁴φ.
+  SceneSpec s = theory_sphere(1000);
+  s.port.diameter = 1.0;
+  const SphereTracer tracer(s);
+  const SphereSolution sol = uniform_wall(s, 1000.0);
+  const TracedPort port(tracer, sol);
+  const double h = 20.0, a = s.port.radius();
+  const StokesIrradiance e0 = port.plane_irradiance(0, 0, h, 4096, 8);
+  for (double r : {5.0, 10.0, 20.0, 30.0}) {
+    const StokesIrradiance e = port.plane_irradiance(r, 0, h, 4096, 8);
+    const double cos4 = std::pow(h * h / (h * h + r * r), 2);
+    const double exact = disk_irradiance(1, a, h, r) / disk_irradiance(1, a, h, 0);
+    EXPECT_LT(std::abs(exact / cos4 - 1), 2e-3) << "r=" << r;
+    const double ratio = e.S0 / e0.S0;
+    const double se = ratio * std::hypot(e.S0_se / e.S0, e0.S0_se / e0.S0);
+    EXPECT_NEAR(ratio, exact, 5 * se + 1e-12) << "r=" << r;
+    EXPECT_NEAR(ratio, cos4, std::abs(exact - cos4) + 5 * se + 1e-12) << "r=" << r;
+  }
+}
+
+TEST(PortIrradiance, FilmGivesItsDegreeOfPolarizationAndAxis) {
+  // Behind the port film (τM, τm, axis ψ): S0 = g_up·E, S1 = g_tp·cos2ψ·E, S2 = g_tp·sin2ψ·E, so
+  // d = (τM − τm)/(τM + τm) and the angle is ψ.
+  SceneSpec s = theory_sphere(1000);
+  s.port.polarizer = {30.0, 0.62, 0.18};
+  const SphereTracer tracer(s);
+  const SphereSolution sol = uniform_wall(s, 500.0);
+  const StokesIrradiance e = TracedPort(tracer, sol).plane_irradiance(3.0, -2.0, 20.0, 1024, 4);
+  EXPECT_NEAR(std::hypot(e.S1, e.S2) / e.S0, 0.55, 1e-12);
+  EXPECT_NEAR(0.5 * std::atan2(e.S2, e.S1) * 180 / kPi, 30.0, 1e-9);
+}
+
+// ---- Scene files -------------------------------------------------------------------------
+
+TEST(SceneFile, TheJf500SceneLoads) {
+  const SceneSpec s = load_scene(POLRIG_SOURCE_DIR "/scenes/jf500.yaml");
+  EXPECT_EQ(s.sphere.diameter, 500.0);
+  EXPECT_EQ(s.port.diameter, 100.0);
+  EXPECT_EQ(s.sensor.lens_focal_length, 50.0);
+  EXPECT_EQ(s.sensor.lens_diameter, 12.7);
+  EXPECT_EQ(s.sensor.photodiode_size, 1.3);
+  EXPECT_EQ(s.sensor.housing_height, 100.0);
+  EXPECT_NEAR(s.port.polarizer.degree_of_polarization(), 0.55, 1e-12);
+  // The dump loads back to the same text.
+  EXPECT_EQ(scene_to_yaml(parse_scene(scene_to_yaml(s), "dump")), scene_to_yaml(s));
+}
+
+void expect_scene_error(const std::string& text, const std::string& expected) {
+  try {
+    parse_scene(text, "scenes/test.yaml");
+    FAIL() << "accepted:\n" << text;
+  } catch (const RigError& e) {
+    EXPECT_HAS(e.what(), expected);
+  }
+}
+
+TEST(SceneFile, BadScenesAreRejectedWithFileLineAndKey) {
+  expect_scene_error("sphere:\n  diameter: [1\n", "scenes/test.yaml:3:1: YAML syntax error");
+  expect_scene_error("sphere:\n  diametre: 500\n", "scenes/test.yaml:2: key 'sphere.diametre': unknown key");
+  expect_scene_error("sphere:\n  reflectance: 1.0\n",
+                     "scenes/test.yaml:2: key 'sphere.reflectance': expected a reflectance in [0, 1), got 1.0");
+  expect_scene_error("sphere:\n  diameter: -5\n", "scenes/test.yaml:2: key 'sphere.diameter': expected a length > 0, got -5");
+  expect_scene_error("port:\n  diameter: 600\n",
+                     "scenes/test.yaml:2: key 'port.diameter': expected a port smaller than the sphere (500 mm), got 600");
+  expect_scene_error("lamps:\n  - position: [0, 0, 245]\n",
+                     "scenes/test.yaml:2: key 'lamps[0].position': expected a lamp inside the sphere");
+  expect_scene_error("lamps: []\n", "key 'lamps': expected at least one lamp");
+  expect_scene_error("port:\n  polarizer:\n    tau_M: 0.2\n    tau_m: 0.3\n",
+                     "scenes/test.yaml:4: key 'port.polarizer.tau_m': expected tau_m < tau_M (0.2), got 0.3");
+  expect_scene_error("sensor:\n  geometry: fisheye\n",
+                     "scenes/test.yaml:2: key 'sensor.geometry': expected \"bare\" or \"lensed\", got 'fisheye'");
+  expect_scene_error("sensor:\n  lens_index: 0.9\n",
+                     "scenes/test.yaml:2: key 'sensor.lens_index': expected a refractive index > 1, got 0.9");
+  expect_scene_error("trace:\n  photons: 1500.5\n",
+                     "scenes/test.yaml:2: key 'trace.photons': expected an integer in [1000, 100000000000], got 1500.5");
+}
+
+TEST(SceneFile, AMissingFileIsNamed) {
+  try {
+    load_scene("/nonexistent/scene.yaml");
+    FAIL();
+  } catch (const RigError& e) {
+    EXPECT_HAS(e.what(), "/nonexistent/scene.yaml: cannot read the scene file: no such file");
+  }
+}
+
+}  // namespace
+}  // namespace polrig

@@ -4,6 +4,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
+#include <optional>
+#include <sstream>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -17,11 +20,20 @@
 #include "polrig/study/cs.h"
 #include "polrig/study/reports.h"
 #include "polrig/study/sweep.h"
+#include "polrig/study/trace_report.h"
+#include "polrig/io/scene_yaml.h"
 
 namespace polrig::cli {
 namespace fs = std::filesystem;
 
 namespace {
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
 
 struct EvenSteps : CLI::Validator {
   EvenSteps() : CLI::Validator("EVEN") {
@@ -260,6 +272,28 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         std::cout << fmt::format("  {:4d} {:9.5f} {:9.5f} {:9.5f} {:9.5f} {:9.5f}\n", i + 1, s.bsd_mV,
                                  s.asd_mV, s.mean_br_mV, s.mean_mr_mV, s.eq6_mV);
       }
+    }});
+  }
+
+  // ---- trace: the sphere solve of a scene
+  {
+    auto* app = root.add_subcommand("trace", "trace a scene's integrating sphere (Embree) and the light below its port");
+    auto scene = std::make_shared<std::string>();
+    auto out = std::make_shared<OutputOptions>();
+    auto photons = std::make_shared<std::optional<long long>>();
+    app->add_option("SCENE", *scene, "scene file (YAML), e.g. scenes/jf500.yaml")->required();
+    app->add_option("--photons", *photons, "photons for the sphere solve (default: the scene's trace.photons)")
+        ->check(CLI::Range(1000LL, 100000000000LL));
+    out->add_to(*app);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      SceneSpec s = load_scene(*scene);
+      if (*photons) s.trace.photons = **photons;
+      OutputDir dir = out->open();
+      Manifest m{command_line(), nullptr, trace_scene(dir.staging(), s, out->plots()), {*scene}};
+      write_manifest(dir.staging(), m);
+      finish(dir);
+      std::cout << read_text(dir.destination() / "trace_summary.yaml");
     }});
   }
 

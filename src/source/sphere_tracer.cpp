@@ -171,7 +171,8 @@ SphereTracer::SphereTracer(const SceneSpec& scene) : scene_(scene), impl_(std::m
   m.spec = &scene_;
   m.R = scene_.sphere.radius();
   m.port_z = scene_.port_plane_z();
-  m.device = rtcNewDevice("threads=1");  // parallelism is ours (TBB); Embree only builds the BVH
+  // No "threads=N" config: Embree would cap the process-wide TBB parallelism with it.
+  m.device = rtcNewDevice(nullptr);
   if (!m.device) throw std::runtime_error("Embree: cannot create a device");
   m.scene = rtcNewScene(m.device);
   rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);

@@ -8,6 +8,8 @@
 #include <benchmark/benchmark.h>
 
 #include "polrig/calib/fit.h"
+#include "polrig/source/sphere_tracer.h"
+#include <tbb/global_control.h>
 #include "polrig/calib/pipeline.h"
 
 #include "polrig/rig/rig.h"
@@ -107,5 +109,34 @@ void BM_Calibrate_CsNc_DefaultRig(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(calibrate(stops, o));
 }
 BENCHMARK(BM_Calibrate_CsNc_DefaultRig)->Unit(benchmark::kMicrosecond);
+
+// ---- The traced sphere -------------------------------------------------------------------
+
+// Reference: plain rtcIntersect1 on the JF-500-like default scene, rays from wall points in
+// cosine-weighted directions (what the photon tracer casts), one thread.
+void BM_Reference_EmbreeIntersect1(benchmark::State& state) {
+  const SphereTracer tracer(SceneSpec{});
+  long long n = 0;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(tracer.plain_intersections(10000, static_cast<std::uint64_t>(n)));
+    n += 10000;
+  }
+  state.SetItemsProcessed(n);  // rays
+}
+BENCHMARK(BM_Reference_EmbreeIntersect1)->Unit(benchmark::kMillisecond);
+
+// The sphere solve on one thread: items are rays (rtcIntersect1 calls), including emission,
+// bounces, tallies and the random numbers.
+void BM_Tracer_SphereSolve(benchmark::State& state) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  SceneSpec scene;
+  scene.trace.photons = 20000;
+  scene.trace.batches = 4;
+  const SphereTracer tracer(scene);
+  long long rays = 0;
+  for (auto _ : state) rays += tracer.solve().ledger.rays;
+  state.SetItemsProcessed(rays);
+}
+BENCHMARK(BM_Tracer_SphereSolve)->Unit(benchmark::kMillisecond);
 
 }  // namespace

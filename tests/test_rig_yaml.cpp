@@ -342,7 +342,7 @@ TEST(RigYamlError, ListOrMappingWhereScalarExpected) {
   expect_file_error("electronics:\n  adc_bits: [16]\n", 2, "electronics.adc_bits",
                     "expected an integer in [2, 31], got a list");
   expect_file_error("source:\n  model: [cos4]\n", 2, "source.model",
-                    "expected \"cos4\", got a list");
+                    "expected \"cos4\" or \"traced\", got a list");
   expect_file_error("seed:\n  value: 3\n", 1, "seed",
                     "expected an unsigned 64-bit integer, got a mapping");
   expect_file_error("device:\n  d:\n", 2, "device.d",
@@ -389,10 +389,16 @@ TEST(RigYamlError, BadSeed) {
                     "expected an unsigned 64-bit integer, got '18446744073709551616'");
 }
 
-TEST(RigYamlError, SourceModelOtherThanCos4) {
+TEST(RigYamlError, SourceModelOtherThanCos4OrTraced) {
+  // A traced source needs its scene; a scene needs the traced model.
   expect_file_error("source:\n  model: traced\n", 2, "source.model",
-                    "expected \"cos4\", got 'traced'");
-  expect_file_error("source:\n  model: COS4\n", 2, "source.model", "expected \"cos4\", got 'COS4'");
+                    "expected source.scene with source.model traced");
+  expect_file_error("source:\n  scene: scenes/jf500.yaml\n", 2, "source.scene",
+                    "expected no scene with source.model cos4 (set source.model: traced)");
+  expect_file_error("source:\n  model: traced\n  scene: no/such/scene.yaml\n", 3, "source.scene",
+                    "cannot load the scene: ");
+  expect_file_error("source:\n  model: COS4\n", 2, "source.model",
+                    "expected \"cos4\" or \"traced\", got 'COS4'");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -636,9 +642,9 @@ TEST(RigYamlOverrideError, WrongTypeNamesTheSetNotTheFileLine) {
   EXPECT_EQ(msg4, "--set source.L_o=-1: key 'source.L_o': expected a length > 0 (at 0 the cos⁴ law "
             "gives no light off-axis), got -1");
 
-  const std::string msg5 = rig_error("seed: 1\n", sets({"source.model=traced"}));
-  EXPECT_EQ(msg5, "--set source.model=traced: key 'source.model': expected \"cos4\", got "
-                  "'traced'");
+  const std::string msg5 = rig_error("seed: 1\n", sets({"source.model=fisheye"}));
+  EXPECT_EQ(msg5, "--set source.model=fisheye: key 'source.model': expected \"cos4\" or "
+                  "\"traced\", got 'fisheye'");
 }
 
 TEST(RigYamlOverrideError, ValueThatIsNotYaml) {
@@ -729,7 +735,7 @@ TEST(RigToYaml, EveryKeyIsWritten) {
   for (const polrig::RigKey& k : polrig::rig_keys()) {
     SCOPED_TRACE(std::string(k.path));
     const YAML::Node n = find_path(root, k.path);
-    if (k.path == "schedule.angles_deg" || k.path == "device.truth_from") {
+    if (k.path == "schedule.angles_deg" || k.path == "device.truth_from" || k.path == "source.scene") {
       EXPECT_FALSE(n.IsDefined()) << "an empty list or path is omitted";
       continue;
     }
@@ -760,5 +766,5 @@ TEST(RigToYaml, OnlyKnownKeysAreWritten) {
   };
   walk(root, "");
   for (const std::string& p : leaves) EXPECT_NE(polrig::find_rig_key(p), nullptr) << p;
-  EXPECT_EQ(leaves.size(), polrig::rig_keys().size() - 2);  // all but the empty list and path
+  EXPECT_EQ(leaves.size(), polrig::rig_keys().size() - 3);  // all but the empty list and paths
 }

@@ -4,7 +4,10 @@
 #include <cmath>
 #include <numbers>
 
+#include "polrig/io/rig_yaml.h"
 #include "polrig/io/scene_yaml.h"
+#include "polrig/sim/simulate.h"
+#include "polrig/study/cs.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
 #include "support.h"
@@ -204,6 +207,76 @@ TEST(SceneFile, AMissingFileIsNamed) {
   } catch (const RigError& e) {
     EXPECT_HAS(e.what(), "/nonexistent/scene.yaml: cannot read the scene file: no such file");
   }
+}
+
+}  // namespace
+}  // namespace polrig
+
+namespace polrig {
+namespace {
+
+// ---- The traced source in the rig pipeline ------------------------------------------------
+
+std::string write_theory_scene(const test::TempDir& dir) {
+  const std::string path = (dir.path() / "theory.yaml").string();
+  test::write_file(path,
+                   "sphere: {diameter: 500, reflectance: 0.98}\n"
+                   "port: {diameter: 100, polarizer: {axis_deg: 0, tau_M: 0.62, tau_m: 0.18}}\n"
+                   "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\n"
+                   "baffles: []\n"
+                   "trace: {photons: 200000, plane_samples: 1024}\n");
+  return path;
+}
+
+TEST(SlowTracedRig, SensorOffsetBiasFollowsTheDiskViewFactor) {
+  // A lamp at the centre and no baffle: the port is a uniform disk (up to the solve's noise).
+  // With the port centred and the sensor off by L_S, every ΔV is the constant
+  // kv·v_dec·log10(E_j/E_h), E from the exact disk view factor averaged over the photodiode
+  // (2 × 2 Gauss points, as the source does): the traced expectation must match it within
+  // 5 standard errors plus 2% (the wall's residual non-uniformity after the smooth fit).
+  const test::TempDir dir("polrig_test_traced_");
+  const std::string scene = write_theory_scene(dir);
+  LoadedRig r = parse_rig("source:\n  model: traced\n  scene: " + scene +
+                              "\neccentricity: {L_IS: 0, alpha_IS: 0, L_S: 0.5, alpha_S: 70}\n",
+                          "inline");
+  const Rig& rig = r.rig;
+  ASSERT_NE(rig.source.traced, nullptr);
+  const CsStudy s = cs_study(rig, CsTurn(36));
+  EXPECT_TRUE(s.traced);
+  const double a = 50.0, h = rig.source.cos4.L_o, g = 0.5 * 1.3 / std::sqrt(3.0);
+  const auto p0 = photodiode_positions(rig.device.ring, rig.eccentricity, 0.0);
+  const auto E_square = [&](const Point2& p) {
+    double e = 0;
+    for (int k = 0; k < 4; ++k)
+      e += 0.25 * disk_irradiance(1.0, a, h, std::hypot(p.x() + ((k & 1) ? g : -g), p.y() + ((k & 2) ? g : -g)));
+    return e;
+  };
+  for (int i = 0; i < 3; ++i) {
+    const double expected = rig.device.truth.kv[i] * 0.5 *
+                            std::log10(E_square(p0[2 * i]) / E_square(p0[2 * i + 1])) * 1e3;
+    EXPECT_NEAR(s.summary[i].mean_br_mV, expected,
+                5 * s.summary[i].mean_br_se_mV + 0.02 * std::abs(expected)) << "pair " << i + 1;
+    EXPECT_GT(std::abs(expected), 0.05);  // a real signal (mV)
+    // The cos⁴ law would give a much larger constant at this L_o: the port is not small.
+    Rig cos4 = rig;
+    cos4.source = SourceSpec{};
+    cos4.source.cos4.L_o = h;
+    EXPECT_GT(std::abs(cs_study(cos4, CsTurn(36)).summary[i].mean_br_mV), 5 * std::abs(expected));
+  }
+}
+
+TEST(TracedRig, SimulateRunsWithTheFilmsPolarization) {
+  const test::TempDir dir("polrig_test_traced_");
+  const std::string scene = write_theory_scene(dir);
+  LoadedRig r = parse_rig("source: {model: traced, scene: " + scene +
+                              "}\nschedule: {start_deg: 0, step_deg: 90, stop_deg: 180, samples_per_stop: 2}\n",
+                          "inline");
+  const Simulation sim = simulate(r.rig);
+  ASSERT_EQ(sim.stops.size(), 3u);
+  EXPECT_NEAR(sim.stops[0].light.d, 0.55, 1e-12);
+  EXPECT_GT(sim.stops[0].light.E_Wm2[0], 0);
+  EXPECT_EQ(rig_to_yaml(r.rig).find("truth_from"), std::string::npos);
+  EXPECT_NE(rig_to_yaml(r.rig).find(scene), std::string::npos);  // the absolute scene path
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 
 #include "polrig/io/measured.h"
 #include "polrig/io/params_yaml.h"
+#include "polrig/io/scene_yaml.h"
 #include "polrig/rig/keys.h"
 
 namespace polrig {
@@ -44,6 +45,7 @@ class RigParser {
     walk(root, "", rig);
     check_schedule_form();
     load_truth_from(rig);
+    load_scene_of(rig);
     if (auto problem = check_rig(rig)) {
       std::string also;
       if (!problem->related_path.empty())
@@ -245,6 +247,29 @@ class RigParser {
                            k.path));
     }
     rig.device.truth_from.clear();
+  }
+
+  // source.model traced: the scene file must load; the path is made absolute so that a dataset's
+  // rig.yaml finds it from anywhere.
+  void load_scene_of(Rig& rig) const {
+    if (rig.source.model != "traced") {
+      if (!rig.source.scene.empty())
+        fail("source.scene", "expected no scene with source.model cos4 (set source.model: traced)");
+      return;
+    }
+    if (rig.source.scene.empty())
+      fail("source.model", "expected source.scene with source.model traced");
+    std::filesystem::path scene = rig.source.scene;
+    if (scene.is_relative() && !override_for("source.scene") &&
+        !std::filesystem::path(file_).parent_path().empty())
+      scene = std::filesystem::path(file_).parent_path() / scene;
+    scene = std::filesystem::absolute(scene).lexically_normal();
+    try {
+      rig.source.traced = std::make_shared<const TracedSource>(load_scene(scene));
+    } catch (const RigError& e) {
+      fail("source.scene", fmt::format("cannot load the scene: {}", e.what()));
+    }
+    rig.source.scene = scene.string();
   }
 
   void check_schedule_form() const {

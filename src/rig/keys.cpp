@@ -74,11 +74,19 @@ std::vector<RigKey> make_keys() {
   }
   // --- source -------------------------------------------------------------------------
   {
-    RigKey k{"source.model", K::Text, "", "\"cos4\"",
-             "source model: cos4 is the analytic E_0·cos⁴φ port (the traced model is not "
-             "built yet)"};
+    RigKey k{"source.model", K::Text, "", "\"cos4\" or \"traced\"",
+             "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
+             "sphere of source.scene"};
     k.text = [](Rig& r) -> std::string& { return r.source.model; };
-    k.valid_text = [](std::string_view v) { return v == "cos4"; };
+    k.valid_text = [](std::string_view v) { return v == "cos4" || v == "traced"; };
+    keys.push_back(k);
+  }
+  {
+    RigKey k{"source.scene", K::Text, "", "a path to a scene file",
+             "traced: the scene (scenes/*.yaml), relative to the rig file; its port film gives "
+             "the light's d and angle"};
+    k.text = [](Rig& r) -> std::string& { return r.source.scene; };
+    k.valid_text = [](std::string_view v) { return !v.empty(); };
     keys.push_back(k);
   }
   keys.push_back(real("source.L_o", "mm", "a length > 0 (at 0 the cos⁴ law gives no light off-axis)",

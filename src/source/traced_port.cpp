@@ -22,49 +22,59 @@ double disk_irradiance(double L, double a, double h, double r) {
 TracedPort::TracedPort(const SphereTracer& tracer, const SphereSolution& solution)
     : tracer_(tracer), solution_(solution) {}
 
-StokesIrradiance TracedPort::plane_irradiance(double x, double y, double L_o, long long samples,
-                                              int shifts) const {
+StokesIrradiance TracedPort::plane_irradiance_shift(double x, double y, double L_o,
+                                                    long long samples, int shift,
+                                                    double L_ref) const {
   const SceneSpec& sc = tracer_.scene();
   const double a = sc.port.radius(), zp = sc.port_plane_z();
   const Vec3 P{x, y, zp - L_o};
+  const double du = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 0);
+  const double dv = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 1);
+  double e = 0;
+  for (long long n = 0; n < samples; ++n) {
+    double u = du + kR2a * static_cast<double>(n + 1), v = dv + kR2b * static_cast<double>(n + 1);
+    u -= std::floor(u);
+    v -= std::floor(v);
+    const double rho = a * std::sqrt(u), phi = 2 * kPi * v;
+    const Vec3 Q{rho * std::cos(phi), rho * std::sin(phi), zp};
+    const Vec3 d{Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]};
+    const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+    const double inv = 1.0 / std::sqrt(r2);
+    const Vec3 dir{d[0] * inv, d[1] * inv, d[2] * inv};
+    const SphereTracer::Hit h = tracer_.first_hit(Q, dir, 0.0);
+    // cos θ_P · cos θ_Q / r², with cos = Δz/r (lengths in mm, the ratio is dimensionless).
+    e += (tracer_.radiance(solution_, h) - L_ref) * (d[2] * d[2]) / (r2 * r2);
+  }
+  e *= kPi * a * a / static_cast<double>(samples);
+  if (L_ref != 0) e += disk_irradiance(L_ref, a, L_o, std::hypot(x, y));
   const PolarizerFilm& film = sc.port.polarizer;
   const double g_up = 0.5 * (film.tau_M + film.tau_m), g_tp = 0.5 * (film.tau_M - film.tau_m);
-  const double c2 = std::cos(2 * deg2rad(film.axis_deg)), s2 = std::sin(2 * deg2rad(film.axis_deg));
-  const double area_m2 = kPi * a * a * 1e-6;
-
-  double sum = 0, sum2 = 0;
-  for (int k = 0; k < shifts; ++k) {
-    const double du = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(k), 0x5041, 0);
-    const double dv = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(k), 0x5041, 1);
-    double e = 0;
-    for (long long n = 0; n < samples; ++n) {
-      double u = du + kR2a * static_cast<double>(n + 1), v = dv + kR2b * static_cast<double>(n + 1);
-      u -= std::floor(u);
-      v -= std::floor(v);
-      const double rho = a * std::sqrt(u), phi = 2 * kPi * v;
-      const Vec3 Q{rho * std::cos(phi), rho * std::sin(phi), zp};
-      const Vec3 d{Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]};
-      const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-      const double inv = 1.0 / std::sqrt(r2);
-      const Vec3 dir{d[0] * inv, d[1] * inv, d[2] * inv};
-      const SphereTracer::Hit h = tracer_.first_hit(Q, dir, 0.0);
-      const double L = tracer_.radiance(solution_, h);
-      // cos θ_P · cos θ_Q / r², with cos = Δz/r, per m² (lengths in mm).
-      e += L * (d[2] * d[2]) / (r2 * r2) * 1e6;
-    }
-    e *= area_m2 / static_cast<double>(samples);
-    sum += e;
-    sum2 += e * e;
-  }
-  const double mean = sum / shifts;
-  const double se = shifts > 1 ? std::sqrt(std::max(0.0, (sum2 / shifts - mean * mean) / (shifts - 1))) : 0.0;
   StokesIrradiance out;
-  out.S0 = g_up * mean;
-  out.S1 = g_tp * c2 * mean;
-  out.S2 = g_tp * s2 * mean;
-  out.S0_se = g_up * se;
-  out.S1_se = std::abs(g_tp * c2) * se;
-  out.S2_se = std::abs(g_tp * s2) * se;
+  out.S0 = g_up * e;
+  out.S1 = g_tp * std::cos(2 * deg2rad(film.axis_deg)) * e;
+  out.S2 = g_tp * std::sin(2 * deg2rad(film.axis_deg)) * e;
+  return out;
+}
+
+StokesIrradiance TracedPort::plane_irradiance(double x, double y, double L_o, long long samples,
+                                              int shifts) const {
+  double s0 = 0, s0sq = 0;
+  StokesIrradiance out;
+  for (int k = 0; k < shifts; ++k) {
+    const StokesIrradiance e = plane_irradiance_shift(x, y, L_o, samples, k);
+    s0 += e.S0;
+    s0sq += e.S0 * e.S0;
+    out.S1 += e.S1 / shifts;
+    out.S2 += e.S2 / shifts;
+  }
+  out.S0 = s0 / shifts;
+  const double var = shifts > 1 ? std::max(0.0, (s0sq / shifts - out.S0 * out.S0) / (shifts - 1)) : 0.0;
+  out.S0_se = std::sqrt(var);
+  // The film scales S1, S2 by fixed factors of S0: their errors follow.
+  if (out.S0 > 0) {
+    out.S1_se = std::abs(out.S1 / out.S0) * out.S0_se;
+    out.S2_se = std::abs(out.S2 / out.S0) * out.S0_se;
+  }
   return out;
 }
 

@@ -5,6 +5,8 @@
 
 #include "polrig/device/sensor.h"
 
+#include <tbb/parallel_for.h>
+
 namespace polrig {
 
 CsTurn::CsTurn(int steps_per_turn) {
@@ -19,14 +21,23 @@ CsTurn::CsTurn(int steps_per_turn) {
 
 namespace {
 
-// ΔV_br of the three pairs over the turn, into br[i·n + k]; E holds 6·n irradiances.
-// The hot loop of every sweep, written as plain loops over the turn so that they vectorize.
-void deviations_before(const Rig& rig, const CsTurn& turn, double* E, double* br) {
+// The six photodiodes' irradiance at every step of the turn, into E[m·n + k], by the rig's source
+// model. The cos⁴ loop is the hot loop of every sweep, written over the turn so that it vectorizes;
+// the traced source integrates the port for each photodiode (shift: see TracedSource).
+void irradiance_over_turn(const Rig& rig, const CsTurn& turn, int shift, double* E) {
   const int n = turn.steps();
   const double* c = turn.cos_theta();
   const double* s = turn.sin_theta();
   const Point2 port = port_centre(rig.eccentricity);
   const auto p0 = photodiode_positions(rig.device.ring, rig.eccentricity, 0.0);
+  if (const TracedSource* traced = rig.source.traced.get()) {
+    tbb::parallel_for(0, 6 * n, [&](int mk) {
+      const int m = mk / n, k = mk % n;
+      const Point2 p{c[k] * p0[m].x() - s[k] * p0[m].y(), s[k] * p0[m].x() + c[k] * p0[m].y()};
+      E[mk] = traced->photodiode_irradiance(p - port, rig.source.cos4.L_o, shift);
+    });
+    return;
+  }
   const Cos4Source& source = rig.source.cos4;
   for (int m = 0; m < 6; ++m) {
     const double qx = p0[m].x(), qy = p0[m].y();
@@ -37,6 +48,12 @@ void deviations_before(const Rig& rig, const CsTurn& turn, double* E, double* br
       Em[k] = source.falloff(x * x + y * y);
     }
   }
+}
+
+// ΔV_br of the three pairs over the turn (Eq. 5), into br[i·n + k].
+void deviations_before(const Rig& rig, const CsTurn& turn, int shift, double* E, double* br) {
+  const int n = turn.steps();
+  irradiance_over_turn(rig, turn, shift, E);
   for (int i = 0; i < 3; ++i) {
     const double* Ej = E + pair_j(i) * n;
     const double* Eh = E + pair_h(i) * n;
@@ -73,26 +90,72 @@ CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
 
 }  // namespace
 
-CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch) {
+namespace {
+
+// One estimate of the turn: ΔV_br and ΔV_mr into scratch, and their summary.
+CsSummary one_pass(const Rig& rig, const CsTurn& turn, int shift, std::vector<double>& scratch) {
   const int n = turn.steps();
   scratch.resize(static_cast<std::size_t>(12 * n));
   double* br = scratch.data();
   double* mr = br + 3 * n;
-  deviations_before(rig, turn, mr + 3 * n, br);
+  deviations_before(rig, turn, shift, mr + 3 * n, br);
   for (int i = 0; i < 3; ++i) central_symmetry_average(br + i * n, mr + i * n, n);
   return summarise(rig, br, mr, n);
+}
+
+// Mean over the shifts of a traced source, with the standard errors of the means.
+CsSummary combine_shifts(const std::vector<CsSummary>& per_shift) {
+  const double S = static_cast<double>(per_shift.size());
+  CsSummary out = per_shift.front();
+  for (int i = 0; i < 3; ++i) {
+    double* mean[4] = {&out[i].bsd_mV, &out[i].asd_mV, &out[i].mean_br_mV, &out[i].mean_mr_mV};
+    double* se[4] = {&out[i].bsd_se_mV, &out[i].asd_se_mV, &out[i].mean_br_se_mV, &out[i].mean_mr_se_mV};
+    for (int q = 0; q < 4; ++q) {
+      const auto get = [&](const CsSummary& s) {
+        const double v[4] = {s[i].bsd_mV, s[i].asd_mV, s[i].mean_br_mV, s[i].mean_mr_mV};
+        return v[q];
+      };
+      double m = 0, m2 = 0;
+      for (const CsSummary& s : per_shift) m += get(s) / S;
+      for (const CsSummary& s : per_shift) m2 += (get(s) - m) * (get(s) - m);
+      *mean[q] = m;
+      *se[q] = S > 1 ? std::sqrt(m2 / (S - 1) / S) : 0.0;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch) {
+  if (!rig.source.traced) return one_pass(rig, turn, -1, scratch);
+  std::vector<CsSummary> per_shift;
+  for (int k = 0; k < rig.source.traced->shifts(); ++k) per_shift.push_back(one_pass(rig, turn, k, scratch));
+  return combine_shifts(per_shift);
 }
 
 CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
   const int n = turn.steps();
   std::vector<double> scratch;
   CsStudy study;
-  study.summary = cs_summary(rig, turn, scratch);
+  study.traced = rig.source.traced != nullptr;
   for (int k = 0; k < n; ++k) study.theta_R_deg.push_back(turn.theta_R_deg(k));
   for (int i = 0; i < 3; ++i) {
-    study.dv_br_V[i].assign(scratch.begin() + i * n, scratch.begin() + (i + 1) * n);
-    study.dv_mr_V[i].assign(scratch.begin() + (3 + i) * n, scratch.begin() + (4 + i) * n);
+    study.dv_br_V[i].assign(static_cast<std::size_t>(n), 0.0);
+    study.dv_mr_V[i].assign(static_cast<std::size_t>(n), 0.0);
   }
+  const int shifts = study.traced ? rig.source.traced->shifts() : 1;
+  std::vector<CsSummary> per_shift;
+  for (int s = 0; s < shifts; ++s) {
+    per_shift.push_back(one_pass(rig, turn, study.traced ? s : -1, scratch));
+    // The curves: the mean of the shifts.
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < n; ++k) {
+        study.dv_br_V[i][static_cast<std::size_t>(k)] += scratch[static_cast<std::size_t>(i * n + k)] / shifts;
+        study.dv_mr_V[i][static_cast<std::size_t>(k)] += scratch[static_cast<std::size_t>((3 + i) * n + k)] / shifts;
+      }
+  }
+  study.summary = study.traced ? combine_shifts(per_shift) : per_shift.front();
   return study;
 }
 

@@ -65,11 +65,16 @@ std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const
                    study.dv_mr_V[i][k] * 1e3});
   write_text_file(dir / "deviations.csv", dev.text());
 
-  CsvTable summary({"pair", "bsd_mV", "asd_mV", "mean_br_mV", "mean_mr_mV", "eq6_mV"});
+  std::vector<std::string> columns{"pair", "bsd_mV", "asd_mV", "mean_br_mV", "mean_mr_mV", "eq6_mV"};
+  if (study.traced)
+    for (const char* c : {"bsd_stderr_mV", "asd_stderr_mV", "mean_br_stderr_mV", "mean_mr_stderr_mV"})
+      columns.emplace_back(c);
+  CsvTable summary(columns);
   for (int i = 0; i < 3; ++i) {
     const CsPairSummary& s = study.summary[i];
-    summary.add_row({static_cast<double>(i + 1), s.bsd_mV, s.asd_mV, s.mean_br_mV, s.mean_mr_mV,
-                     s.eq6_mV});
+    std::vector<double> row{static_cast<double>(i + 1), s.bsd_mV, s.asd_mV, s.mean_br_mV, s.mean_mr_mV, s.eq6_mV};
+    if (study.traced) row.insert(row.end(), {s.bsd_se_mV, s.asd_se_mV, s.mean_br_se_mV, s.mean_mr_se_mV});
+    summary.add_row(row);
   }
   write_text_file(dir / "summary.csv", summary.text());
   std::vector<DatasetFile> files{

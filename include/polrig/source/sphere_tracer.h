@@ -32,8 +32,19 @@ struct WallMap {
   int bin(int i_theta, int i_phi) const { return i_theta * n_phi + i_phi; }
 };
 
+// A smooth fit of the wall irradiance, E(μ, φ) = Σ_l Σ_k P_l(μ)·[a_lk cos kφ + b_lk sin kφ]
+// (μ = cos θ, Legendre P_l), by least squares over the map's full bins. The true irradiance is
+// smooth; the binned map carries each bin's Monte-Carlo noise, which the sensor integrals would
+// otherwise see as structure that moves with the pose.
+struct SmoothWall {
+  int degree = 8, harmonics = 4;
+  std::vector<double> coefficients;  // (degree+1)·(2·harmonics+1), l-major
+  double operator()(double mu, double phi) const;
+};
+
 struct SphereSolution {
   WallMap wall;
+  SmoothWall smooth;
   std::vector<std::array<double, 2>> baffle_E;  // mean irradiance of each baffle's faces (+n, −n)
   EnergyLedger ledger;
   std::vector<double> batch_indirect_W;  // per batch: power landing on the wall after the first strike

@@ -28,6 +28,14 @@ class TracedPort {
   // `shifts` independent shifts.
   StokesIrradiance plane_irradiance(double x, double y, double L_o, long long samples,
                                     int shifts) const;
+  // One shift's estimate alone (no standard error): shift k is the same set of port points
+  // wherever it is evaluated.
+  //
+  // With L_ref > 0 the uniform part is integrated exactly (disk_irradiance) and only L − L_ref is
+  // sampled (a control variate): for a nearly uniform port the sampling error shrinks by
+  // |L − L_ref|/L and varies smoothly from point to point.
+  StokesIrradiance plane_irradiance_shift(double x, double y, double L_o, long long samples,
+                                          int shift, double L_ref = 0) const;
 
  private:
   const SphereTracer& tracer_;

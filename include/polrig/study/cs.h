@@ -17,6 +17,9 @@ struct CsPairSummary {
   double bsd_mV = 0, asd_mV = 0;
   double mean_br_mV = 0, mean_mr_mV = 0;
   double eq6_mV = 0;  // Eq. 6's CS constant, through the pair's amplifier gain kv_i
+  // Standard errors of the four figures above for a traced source (0 for cos4): the spread of
+  // the independent quasi-random shifts.
+  double bsd_se_mV = 0, asd_se_mV = 0, mean_br_se_mV = 0, mean_mr_se_mV = 0;
 };
 using CsSummary = std::array<CsPairSummary, 3>;
 
@@ -36,6 +39,7 @@ class CsTurn {
 };
 
 struct CsStudy {
+  bool traced = false;  // the summary carries standard errors
   std::vector<double> theta_R_deg;
   std::array<std::vector<double>, 3> dv_br_V, dv_mr_V;  // per pair, per table angle
   CsSummary summary;

@@ -431,6 +431,26 @@ TEST(Pipeline, KAbsorbsTheCsConstant) {
   }
 }
 
+TEST(Pipeline, TrialStepsOutsideTheModelDomainDoNotStopTheFit) {
+  // A high d and a quarter-turn schedule: Levenberg–Marquardt tries steps with (1 ± c·cos) ≤ 0.
+  // They must be rejected as steps, not end the calibration (review finding).
+  for (double d : {0.80, 0.85, 0.88}) {
+    Rig rig;
+    rig.device.d = d;
+    rig.device.truth = rig.device.theory();
+    rig.electronics.noise_sigma_V = 0;
+    rig.eccentricity = {0, 0, 0, 0};
+    rig.schedule.start_deg = 0;
+    rig.schedule.step_deg = 5;
+    rig.schedule.stop_deg = 90;
+    CalibrationOptions o;
+    o.method = CalibrationMethod::Section;
+    o.d_a = d;
+    const CalibrationResult r = calibrate(simulated_stops(rig), o);
+    EXPECT_LT(r.accuracy[kThetaSec].accuracy_deg(), 0.01) << "d=" << d;
+  }
+}
+
 TEST(SlowCalibrationTrials, MedianAccuracyOrdersTheThreeTypes) {
   // Spec: with eccentricity and noise, the median accuracy over trials orders
   // type 3 ≤ type 2 ≤ type 1. 1000 trials of the default rig with L_IS ≤ 0.1 mm, L_S ≤ 0.04 mm:

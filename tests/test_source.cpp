@@ -277,6 +277,42 @@ TEST(TracedRig, SimulateRunsWithTheFilmsPolarization) {
   EXPECT_GT(sim.stops[0].light.E_Wm2[0], 0);
   EXPECT_EQ(rig_to_yaml(r.rig).find("truth_from"), std::string::npos);
   EXPECT_NE(rig_to_yaml(r.rig).find(scene), std::string::npos);  // the absolute scene path
+  EXPECT_EQ(r.rig.device.d, sim.stops[0].light.d);  // the rig's d is the film's
+}
+
+TEST(TracedRig, SceneAnglesAreMirroredIntoTheRigFrame) {
+  // The scene is seen from above, the rig from below: a port film at +30° in the scene is at
+  // −30° in the rig frame, so the sensor sees θ = θ_R + 30°.
+  const test::TempDir dir("polrig_test_traced_");
+  const std::string path = (dir.path() / "film30.yaml").string();
+  test::write_file(path,
+                   "port: {polarizer: {axis_deg: 30, tau_M: 0.62, tau_m: 0.18}}\n"
+                   "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\nbaffles: []\n"
+                   "trace: {photons: 20000, plane_samples: 64}\n");
+  LoadedRig r = parse_rig("source: {model: traced, scene: " + path +
+                              "}\nschedule: {angles_deg: [0, 100]}\n", "inline");
+  const Simulation sim = simulate(r.rig);
+  EXPECT_NEAR(sim.stops[0].light.theta_deg, 30.0, 1e-12);
+  EXPECT_NEAR(sim.stops[1].light.theta_deg, 130.0, 1e-12);
+}
+
+TEST(TracedRig, TheCos4SettingsAreRefused) {
+  const test::TempDir dir("polrig_test_traced_");
+  const std::string scene = write_theory_scene(dir);
+  for (const char* extra : {"\n  polarizer_deg: 10", "\n  E_0: 5"}) {
+    try {
+      parse_rig("source:\n  model: traced\n  scene: " + scene + extra + "\n", "inline");
+      FAIL() << extra;
+    } catch (const RigError& e) {
+      EXPECT_HAS(e.what(), "expected no value with source.model traced");
+    }
+  }
+  try {
+    parse_rig("device: {d: 0.3}\nsource: {model: traced, scene: " + scene + "}\n", "inline");
+    FAIL();
+  } catch (const RigError& e) {
+    EXPECT_HAS(e.what(), "key 'device.d': expected the port film's d = ");
+  }
 }
 
 }  // namespace

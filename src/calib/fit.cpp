@@ -17,6 +17,8 @@ const char* parameter_name(int x) {
   return kNames[x];
 }
 
+constexpr double kOutsideDomain_V = 1e3;
+
 struct Eq15Residuals : Eigen::DenseFunctor<double> {
   Eq15Residuals(const std::vector<Observation>& d, double v_dec)
       : Eigen::DenseFunctor<double>(FitParams::kCount, static_cast<int>(d.size())),
@@ -27,8 +29,9 @@ struct Eq15Residuals : Eigen::DenseFunctor<double> {
     const FitParams p = FitParams::from_vector(x);
     for (std::size_t n = 0; n < data.size(); ++n) {
       const double v = eq15_voltage(p, volts_per_decade, data[n].pair, data[n].theta_deg);
-      if (!std::isfinite(v)) return -1;  // left Eq. 15's domain: stop (UserAsked)
-      r(static_cast<Eigen::Index>(n)) = v - data[n].volts;
+      // A trial step outside Eq. 15's domain (1 ± c·cos ≤ 0) gets a large residual, so LM
+      // rejects it and damps; only a solution outside the domain is an error.
+      r(static_cast<Eigen::Index>(n)) = std::isfinite(v) ? v - data[n].volts : kOutsideDomain_V;
     }
     return 0;
   }
@@ -75,9 +78,10 @@ FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start,
   Eigen::VectorXd x = start.vector();
   const auto status = lm.minimize(x);
   using S = Eigen::LevenbergMarquardtSpace::Status;
-  if (status == S::UserAsked)
-    throw CalibrationError("the fit left Eq. 15's domain ((1 ± c·cos) ≤ 0): the data are not "
-                           "those of this sensor model, or d is far from the start value");
+  for (const Observation& o : data)
+    if (!std::isfinite(eq15_voltage(FitParams::from_vector(x), v_dec, o.pair, o.theta_deg)))
+      throw CalibrationError("the fit ended outside Eq. 15's domain ((1 ± c·cos) ≤ 0): the data "
+                             "are not those of this sensor model");
   if (status == S::TooManyFunctionEvaluation || status == S::ImproperInputParameters)
     throw CalibrationError(fmt::format("the fit did not converge in {} evaluations",
                                        options.max_evaluations));

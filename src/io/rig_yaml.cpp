@@ -270,6 +270,17 @@ class RigParser {
       fail("source.scene", fmt::format("cannot load the scene: {}", e.what()));
     }
     rig.source.scene = scene.string();
+    // The light is the film's: its d is the rig's d (for decoupling and the rig's checks), and
+    // the cos⁴ source's own settings would be silently unused.
+    const double film_d = rig.source.traced->degree_of_polarization();
+    if (present_.count("device.d") && std::abs(rig.device.d - film_d) > 1e-12)
+      fail("device.d", fmt::format("expected the port film's d = {} with a traced source (or leave "
+                                   "device.d out), got {}", film_d, rig.device.d));
+    rig.device.d = film_d;
+    for (const char* unused : {"source.polarizer_deg", "source.E_0"})
+      if (present_.count(unused))
+        fail(unused, "expected no value with source.model traced (the scene's port film and lamps "
+                     "set the light)");
   }
 
   void check_schedule_form() const {

@@ -227,6 +227,11 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
   s.trace.wall_bins_phi = static_cast<int>(trace.integer("wall_bins_phi", s.trace.wall_bins_phi, 1, 8192));
   s.trace.plane_samples = trace.integer("plane_samples", s.trace.plane_samples, 16, 100000000LL);
   s.trace.seed = static_cast<std::uint64_t>(trace.integer("seed", static_cast<long long>(s.trace.seed), 0, 9007199254740991LL));
+  if (s.trace.photons < 100LL * s.trace.batches)
+    trace.fail_key("photons", fmt::format("expected at least 100 photons per batch ({} for {} batches), got {}",
+                                          100LL * s.trace.batches, s.trace.batches, s.trace.photons));
+  if (s.trace.wall_bins_theta < 10 || s.trace.wall_bins_phi < 9)
+    trace.fail_key("wall_bins_theta", "expected at least 10 × 9 wall bins (the smooth wall fit has 81 terms)");
   trace.finish();
   top.finish();
   return s;

@@ -15,8 +15,8 @@ PoseLight light_at_pose(const Rig& rig, double theta_R_deg) {
   if (const TracedSource* traced = rig.source.traced.get()) {
     // The traced port: irradiance from the sphere solve; d and the angle from its film.
     for (int m = 0; m < 6; ++m)
-      light.E_Wm2[m] = traced->photodiode_irradiance(p[m] - port, rig.source.cos4.L_o);
-    light.theta_deg = sensor_polarization_angle_deg(theta_R_deg, traced->polarizer_axis_deg());
+      light.E_Wm2[m] = traced->photodiode_irradiance(to_scene(p[m] - port), rig.source.cos4.L_o);
+    light.theta_deg = sensor_polarization_angle_deg(theta_R_deg, traced->polarizer_axis_rig_deg());
     light.d = traced->degree_of_polarization();
     return light;
   }

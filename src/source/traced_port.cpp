@@ -48,7 +48,7 @@ StokesIrradiance TracedPort::plane_irradiance_shift(double x, double y, double L
   e *= kPi * a * a / static_cast<double>(samples);
   if (L_ref != 0) e += disk_irradiance(L_ref, a, L_o, std::hypot(x, y));
   const PolarizerFilm& film = sc.port.polarizer;
-  const double g_up = 0.5 * (film.tau_M + film.tau_m), g_tp = 0.5 * (film.tau_M - film.tau_m);
+  const double g_up = film.g_up(), g_tp = film.g_tp();
   StokesIrradiance out;
   out.S0 = g_up * e;
   out.S1 = g_tp * std::cos(2 * deg2rad(film.axis_deg)) * e;

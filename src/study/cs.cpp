@@ -6,6 +6,7 @@
 #include "polrig/device/sensor.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 namespace polrig {
 
@@ -31,11 +32,13 @@ void irradiance_over_turn(const Rig& rig, const CsTurn& turn, int shift, double*
   const Point2 port = port_centre(rig.eccentricity);
   const auto p0 = photodiode_positions(rig.device.ring, rig.eccentricity, 0.0);
   if (const TracedSource* traced = rig.source.traced.get()) {
-    tbb::parallel_for(0, 6 * n, [&](int mk) {
+    // Isolated: a sweep's outer loop must not run another grid point on this thread while it
+    // waits here, since that point would share this thread's scratch.
+    tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, 6 * n, [&](int mk) {
       const int m = mk / n, k = mk % n;
       const Point2 p{c[k] * p0[m].x() - s[k] * p0[m].y(), s[k] * p0[m].x() + c[k] * p0[m].y()};
-      E[mk] = traced->photodiode_irradiance(p - port, rig.source.cos4.L_o, shift);
-    });
+      E[mk] = traced->photodiode_irradiance(to_scene(p - port), rig.source.cos4.L_o, shift);
+    }); });
     return;
   }
   const Cos4Source& source = rig.source.cos4;

@@ -82,6 +82,10 @@ Rig rig_at(const Rig& base, const SweepResult& r, std::size_t p) {
 void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
   SweepResult r;
   r.axes = axes;
+  double points = 1;
+  for (const GridAxis& a : axes) points *= a.count;
+  if (points > 1e9)
+    throw RigError(fmt::format("--grid: {:.3g} grid points; at most 1e9 (a summary row each)", points));
   std::size_t total = 1;
   for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
   for (std::size_t p = 0; p < total; ++p) {
@@ -98,13 +102,12 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
 
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                   const SweepProgress& progress) {
+  check_grid(base, axes);
   SweepResult result;
   result.axes = axes;
   std::size_t total = 1;
   for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
   result.summaries.resize(total);
-
-  check_grid(base, axes);
 
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
   // Chunks of the grid in turn, each in parallel, so progress can be told between them.

@@ -87,7 +87,7 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
     prof[static_cast<std::size_t>(i)] = {s, std::sqrt(s2sum)};
   });
   const PolarizerFilm& film = scene.port.polarizer;
-  const double g_up = 0.5 * (film.tau_M + film.tau_m);
+  const double g_up = film.g_up();
   const double L_mean = prof[0][0] / (g_up * disk_irradiance(1.0, a, L_o, 0.0));
   CsvTable profile({"r_mm", "S0", "S0_stderr", "L_o_mm", "S0_uniform_disk", "S0_cos4"});
   for (int i = 0; i < radii; ++i) {

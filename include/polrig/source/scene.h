@@ -25,6 +25,8 @@ struct PolarizerFilm {
   double tau_M = 0.62;
   double tau_m = 0.18;
   double degree_of_polarization() const { return (tau_M - tau_m) / (tau_M + tau_m); }
+  double g_up() const { return 0.5 * (tau_M + tau_m); }  // gain for unpolarized light
+  double g_tp() const { return 0.5 * (tau_M - tau_m); }  // gain for totally polarized light
 };
 
 struct PortSpec {

@@ -74,8 +74,9 @@ class SphereTracer {
   // leaves through the port (or starts outside and never enters).
   Hit first_hit(const Vec3& origin, const Vec3& dir, double t_min = 1e-9) const;
 
-  // Radiance (W/m²/sr) of a point a ray has hit, from a solution: ρE/π of the wall bin or the
-  // baffle face; a lamp's own exitance/π plus what it reflects.
+  // Radiance (W/m²/sr) of a point a ray has hit, from a solution: ρE/π of the wall (its smooth
+  // fit) or of the baffle face (uniform per face); a lamp's own exitance/π (its reflection is
+  // not added).
   double radiance(const SphereSolution& s, const Hit& h) const;
 
   const SceneSpec& scene() const { return scene_; }

@@ -16,6 +16,10 @@
 
 namespace polrig {
 
+// The rig frame is seen from the sensor looking up, the scene frame from above (z up): mirror
+// images sharing the x-axis. A rig-plane offset from the port centre in scene coordinates:
+inline Point2 to_scene(const Point2& rig) { return {rig.x(), -rig.y()}; }
+
 class SphereTracer;
 struct SphereSolution;
 
@@ -27,13 +31,17 @@ class TracedSource {
   const SceneSpec& scene() const { return scene_; }
   int shifts() const { return shifts_; }
 
-  // Mean irradiance S0 (W/m²) over a photodiode centred at `p` (port-centred plane coordinates,
-  // mm) on the plane L_o below the port, from shift `shift`, or from all shifts pooled (−1).
+  // Mean irradiance S0 (W/m²) on a photodiode whose centre (or, lensed, whose channel axis) is
+  // at `p` (port-centred plane coordinates, mm), from shift `shift`, or all shifts pooled (−1).
+  // Bare (sensor.geometry: bare): the photodiode lies L_o below the port. Lensed: the channel's
+  // film is L_o below the port, then film_to_lens, the plano-convex lens (traced exactly, with
+  // Fresnel losses) and lens_to_photodiode; the blue filter scales every channel alike.
   double photodiode_irradiance(const Point2& p, double L_o, int shift = -1) const;
 
-  // The port film: degree of polarization and axis (degrees, scene frame).
+  // The port film: degree of polarization, and its axis in the rig frame (the scene's axis,
+  // mirrored: −axis_deg).
   double degree_of_polarization() const { return scene_.port.polarizer.degree_of_polarization(); }
-  double polarizer_axis_deg() const { return scene_.port.polarizer.axis_deg; }
+  double polarizer_axis_rig_deg() const { return -scene_.port.polarizer.axis_deg; }
 
   // Rays traced by the sphere solve, and its time (for speed reports).
   long long solve_rays() const;
@@ -42,6 +50,7 @@ class TracedSource {
  private:
   // The sphere is solved on first use, once, whichever thread asks first.
   const SphereSolution& solution() const;
+  double lensed_irradiance(const Point2& p, double top, int shift) const;
 
   SceneSpec scene_;
   int shifts_ = 8;

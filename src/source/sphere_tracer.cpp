@@ -113,6 +113,33 @@ struct RayContext {
   double t_min;
 };
 
+RayContext ray_context(const Vec3& o, const Vec3& d, double t_min) {
+  RayContext ctx;
+  rtcInitIntersectContext(&ctx.base);
+  ctx.o = o;
+  ctx.d = d;
+  ctx.t_min = t_min;
+  return ctx;
+}
+
+RTCRayHit ray_hit(const Vec3& o, const Vec3& d, float tnear) {
+  RTCRayHit rh;
+  rh.ray.org_x = static_cast<float>(o[0]);
+  rh.ray.org_y = static_cast<float>(o[1]);
+  rh.ray.org_z = static_cast<float>(o[2]);
+  rh.ray.dir_x = static_cast<float>(d[0]);
+  rh.ray.dir_y = static_cast<float>(d[1]);
+  rh.ray.dir_z = static_cast<float>(d[2]);
+  rh.ray.tnear = tnear;
+  rh.ray.tfar = std::numeric_limits<float>::infinity();
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.flags = 0;
+  rh.ray.time = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  return rh;
+}
+
 void bounds_cb(const RTCBoundsFunctionArguments* args) {
   const GeomData* g = static_cast<const GeomData*>(args->geometryUserPtr);
   const SphereTracer::Impl& m = *g->impl;
@@ -200,25 +227,8 @@ SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t
   if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]) && std::isfinite(d[0]) &&
         std::isfinite(d[1]) && std::isfinite(d[2])))
     throw std::logic_error(fmt::format("non-finite ray ({}, {}, {}) + t({}, {}, {})", o[0], o[1], o[2], d[0], d[1], d[2]));
-  RayContext ctx;
-  rtcInitIntersectContext(&ctx.base);
-  ctx.o = o;
-  ctx.d = d;
-  ctx.t_min = t_min;
-  RTCRayHit rh;
-  rh.ray.org_x = static_cast<float>(o[0]);
-  rh.ray.org_y = static_cast<float>(o[1]);
-  rh.ray.org_z = static_cast<float>(o[2]);
-  rh.ray.dir_x = static_cast<float>(d[0]);
-  rh.ray.dir_y = static_cast<float>(d[1]);
-  rh.ray.dir_z = static_cast<float>(d[2]);
-  rh.ray.tnear = 0.0f;
-  rh.ray.tfar = std::numeric_limits<float>::infinity();
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.ray.flags = 0;
-  rh.ray.time = 0;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  RayContext ctx = ray_context(o, d, t_min);
+  RTCRayHit rh = ray_hit(o, d, 0.0f);
   rtcIntersect1(m.scene, &ctx.base, &rh);
   Hit h;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
@@ -286,8 +296,6 @@ SmoothWall fit_smooth_wall(const WallMap& w) {
   SmoothWall s;
   const int n = (s.degree + 1) * (2 * s.harmonics + 1);
   std::vector<int> rows;
-  const double full = 4 * kPi / (w.n_theta * w.n_phi);  // bin area / R² of a full bin
-  (void)full;
   double max_area = 0;
   for (double a : w.wall_area_mm2) max_area = std::max(max_area, a);
   for (int b = 0; b < static_cast<int>(w.E.size()); ++b)
@@ -494,28 +502,9 @@ long long SphereTracer::plain_intersections(long long count, std::uint64_t seed)
     const Vec3 n = uniform_direction(u(0), u(1));
     const Vec3 o = mul(n, m.R);
     const Vec3 d = cosine_direction(mul(n, -1.0), u(2), u(3));
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    RTCRayHit rh;
-    rh.ray.org_x = static_cast<float>(o[0]);
-    rh.ray.org_y = static_cast<float>(o[1]);
-    rh.ray.org_z = static_cast<float>(o[2]);
-    rh.ray.dir_x = static_cast<float>(d[0]);
-    rh.ray.dir_y = static_cast<float>(d[1]);
-    rh.ray.dir_z = static_cast<float>(d[2]);
-    rh.ray.tnear = 1e-4f;
-    rh.ray.tfar = std::numeric_limits<float>::infinity();
-    rh.ray.mask = 0xFFFFFFFFu;
-    rh.ray.flags = 0;
-    rh.ray.time = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     // The user geometry reads the double-precision ray from the context.
-    RayContext rc;
-    rc.base = ctx;
-    rc.o = o;
-    rc.d = d;
-    rc.t_min = 1e-9;
+    RayContext rc = ray_context(o, d, 1e-9);
+    RTCRayHit rh = ray_hit(o, d, 1e-4f);
     rtcIntersect1(m.scene, &rc.base, &rh);
     hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
   }

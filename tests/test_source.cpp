@@ -89,6 +89,24 @@ TEST(SphereSolve, MeanWallIrradianceMatchesSphereTheory) {
   EXPECT_EQ(outliers, 0);
 }
 
+TEST(SphereSolve, DirectIrradianceMatchesTheTalliedFirstStrike) {
+  // The first strike is computed, not sampled: Φ/(4π)·cos θ/D². For a lamp at the centre it is
+  // Φ/(4πR²) everywhere; the tallied first-strike map must agree bin by bin within 5 standard
+  // errors.
+  const SceneSpec s = theory_sphere(400000);
+  const SphereTracer tracer(s);
+  const SphereSolution sol = tracer.solve();
+  const double R = s.sphere.radius(), expected = 100.0 / (4 * kPi * R * R) * 1e6;
+  EXPECT_NEAR(tracer.direct_irradiance({0, 0, R}), expected, 1e-9 * expected);
+  EXPECT_NEAR(tracer.direct_irradiance({R * 0.6, 0, -R * 0.8}), expected, 1e-9 * expected);
+  int outliers = 0;
+  for (std::size_t i = 0; i < sol.wall.E_first.size(); ++i) {
+    if (sol.wall.wall_area_mm2[i] < 0.5 * sol.wall.wall_area_mm2[0]) continue;
+    outliers += std::abs(sol.wall.E_first[i] - expected) > 5 * sol.wall.E_first_se[i];
+  }
+  EXPECT_EQ(outliers, 0);
+}
+
 // A solution whose wall has the same radiance L everywhere, to test the port integrals alone.
 SphereSolution uniform_wall(const SceneSpec& s, double L) {
   SphereSolution sol;

@@ -308,7 +308,9 @@ SmoothWall fit_smooth_wall(const WallMap& w) {
     const double mu = 1.0 - (2.0 * it + 1.0) / w.n_theta, phi = 2 * kPi * (ip + 0.5) / w.n_phi;
     smooth_basis(s.degree, s.harmonics, mu, phi, basis.data());
     for (int c = 0; c < n; ++c) A(static_cast<Eigen::Index>(r), c) = basis[static_cast<std::size_t>(c)];
-    y(static_cast<Eigen::Index>(r)) = w.E[static_cast<std::size_t>(b)];
+    // Only the light after the first strike: it is smooth (nearly uniform); the first strike
+    // is computed exactly where it is needed (SphereTracer::direct_irradiance).
+    y(static_cast<Eigen::Index>(r)) = w.E[static_cast<std::size_t>(b)] - w.E_first[static_cast<std::size_t>(b)];
   }
   const Eigen::VectorXd x = A.colPivHouseholderQr().solve(y);
   s.coefficients.assign(x.data(), x.data() + x.size());
@@ -477,7 +479,8 @@ double SphereTracer::radiance(const SphereSolution& s, const Hit& h) const {
       // The smooth fit when there is one (a solve), else the bin (maps made by hand in tests).
       if (!s.smooth.coefficients.empty()) {
         const double mu = std::clamp(h.point[2] / impl_->R, -1.0, 1.0);
-        return scene_.sphere.reflectance * s.smooth(mu, std::atan2(h.point[1], h.point[0])) / kPi;
+        const double indirect = s.smooth(mu, std::atan2(h.point[1], h.point[0]));
+        return scene_.sphere.reflectance * (direct_irradiance(h.point) + indirect) / kPi;
       }
       return scene_.sphere.reflectance * s.wall.E[static_cast<std::size_t>(wall_bin(s.wall, h.point, impl_->R))] / kPi;
     }
@@ -492,6 +495,27 @@ double SphereTracer::radiance(const SphereSolution& s, const Hit& h) const {
     case Hit::None: break;
   }
   return 0.0;
+}
+
+double SphereTracer::direct_irradiance(const Vec3& wall_point) const {
+  // A uniformly emitting Lambertian sphere radiates like a point of intensity Φ/(4π) at its
+  // centre (outside it); the wall point sees it when the line to the centre is free.
+  const Vec3 n = mul(normalized(wall_point), -1.0);  // inward normal
+  double e = 0;
+  for (std::size_t i = 0; i < scene_.lamps.size(); ++i) {
+    const LampSpec& l = scene_.lamps[i];
+    const Vec3 to = sub(l.position, wall_point);
+    const double D2 = dot(to, to), D = std::sqrt(D2);
+    const Vec3 dir = mul(to, 1.0 / D);
+    const double cos_w = dot(n, dir);
+    if (cos_w <= 0) continue;
+    const Hit h = first_hit(wall_point, dir, 1e-9);
+    const bool seen = l.radius > 0 ? (h.kind == Hit::Lamp && h.index == static_cast<int>(i))
+                                   : (h.kind == Hit::None || h.t >= D);
+    if (!seen) continue;
+    e += l.power / (4 * kPi) * cos_w / D2 * 1e6;  // W/m²
+  }
+  return e;
 }
 
 long long SphereTracer::plain_intersections(long long count, std::uint64_t seed) const {

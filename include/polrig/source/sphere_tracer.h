@@ -32,10 +32,12 @@ struct WallMap {
   int bin(int i_theta, int i_phi) const { return i_theta * n_phi + i_phi; }
 };
 
-// A smooth fit of the wall irradiance, E(μ, φ) = Σ_l Σ_k P_l(μ)·[a_lk cos kφ + b_lk sin kφ]
-// (μ = cos θ, Legendre P_l), by least squares over the map's full bins. The true irradiance is
-// smooth; the binned map carries each bin's Monte-Carlo noise, which the sensor integrals would
-// otherwise see as structure that moves with the pose.
+// A smooth fit of the wall irradiance after the first strike,
+// E(μ, φ) = Σ_l Σ_k P_l(μ)·[a_lk cos kφ + b_lk sin kφ] (μ = cos θ, Legendre P_l), by least
+// squares over the map's full bins. That light is smooth (nearly uniform); the binned map
+// carries each bin's Monte-Carlo noise, which the sensor integrals would otherwise see as
+// structure that moves with the pose. The first strike, which carries the sharp lamp spots, is
+// computed exactly instead (SphereTracer::direct_irradiance).
 struct SmoothWall {
   int degree = 8, harmonics = 4;
   std::vector<double> coefficients;  // (degree+1)·(2·harmonics+1), l-major
@@ -80,6 +82,11 @@ class SphereTracer {
   double radiance(const SphereSolution& s, const Hit& h) const;
 
   const SceneSpec& scene() const { return scene_; }
+
+  // Irradiance (W/m²) on a wall point straight from the lamps (the first strike), computed, not
+  // sampled: each lamp as a point of intensity Φ/(4π) at its centre, hidden where a baffle cuts
+  // the line to it (a hard shadow; the penumbra of a finite lamp is not modelled).
+  double direct_irradiance(const Vec3& wall_point) const;
 
   // For benchmarks: `count` plain rtcIntersect1 calls on this scene with the rays a photon
   // tracer casts (from wall points in cosine-weighted directions). Returns the hits counted.

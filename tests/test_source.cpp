@@ -8,6 +8,7 @@
 #include "polrig/io/scene_yaml.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/cs.h"
+#include "polrig/study/sweep.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
 #include "support.h"
@@ -312,6 +313,20 @@ TEST(TracedRig, SceneAnglesAreMirroredIntoTheRigFrame) {
   const Simulation sim = simulate(r.rig);
   EXPECT_NEAR(sim.stops[0].light.theta_deg, 30.0, 1e-12);
   EXPECT_NEAR(sim.stops[1].light.theta_deg, 130.0, 1e-12);
+}
+
+TEST(TracedRig, ItsEffectiveRigLoadsBack) {
+  // A dataset's rig.yaml must reproduce it: the dump of a traced rig leaves out the settings a
+  // traced rig refuses, and loads back to the same text.
+  const test::TempDir dir("polrig_test_traced_");
+  const std::string scene = write_theory_scene(dir);
+  const LoadedRig r = parse_rig("source: {model: traced, scene: " + scene + "}\n", "inline");
+  const std::string dump = rig_to_yaml(r.rig);
+  EXPECT_LACKS(dump, "E_0");
+  EXPECT_LACKS(dump, "polarizer_deg");
+  EXPECT_EQ(rig_to_yaml(parse_rig(dump, "dump").rig), dump);
+  // A sweep may not vary what the scene sets.
+  EXPECT_THROW(check_grid(r.rig, {GridAxis::parse("device.d=0.3:0.5:3")}), RigError);
 }
 
 TEST(TracedRig, TheCos4SettingsAreRefused) {

@@ -288,12 +288,21 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       SceneSpec s = load_scene(*scene);
-      if (*photons) s.trace.photons = **photons;
+      if (*photons) {
+        if (**photons < 100LL * s.trace.batches)
+          throw RigError(fmt::format("--photons {}: expected at least 100 per batch ({} for {} batches)",
+                                     **photons, 100LL * s.trace.batches, s.trace.batches));
+        s.trace.photons = **photons;
+      }
+      s.trace.photons -= s.trace.photons % s.trace.batches;  // whole batches, as traced
       OutputDir dir = out->open();
+      const auto t0 = std::chrono::steady_clock::now();
       Manifest m{command_line(), nullptr, trace_scene(dir.staging(), s, out->plots()), {*scene}};
+      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       write_manifest(dir.staging(), m);
       finish(dir);
-      std::cout << read_text(dir.destination() / "trace_summary.yaml");
+      std::cout << read_text(dir.destination() / "trace_summary.yaml")
+                << fmt::format("seconds: {:.1f}\n", seconds);
     }});
   }
 

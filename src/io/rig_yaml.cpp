@@ -369,6 +369,9 @@ std::string rig_to_yaml(const Rig& rig_in) {
     if (explicit_stops && (k.path == "schedule.start_deg" || k.path == "schedule.step_deg" ||
                            k.path == "schedule.stop_deg"))
       continue;
+    // A traced source refuses the cos⁴ source's own settings (its scene sets the light).
+    if (rig.source.model == "traced" && (k.path == "source.E_0" || k.path == "source.polarizer_deg"))
+      continue;
     std::stringstream ss{std::string(k.path)};
     std::vector<std::string> parts;
     for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);

@@ -230,8 +230,10 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
   if (s.trace.photons < 100LL * s.trace.batches)
     trace.fail_key("photons", fmt::format("expected at least 100 photons per batch ({} for {} batches), got {}",
                                           100LL * s.trace.batches, s.trace.batches, s.trace.photons));
-  if (s.trace.wall_bins_theta < 10 || s.trace.wall_bins_phi < 9)
-    trace.fail_key("wall_bins_theta", "expected at least 10 × 9 wall bins (the smooth wall fit has 81 terms)");
+  if (s.trace.wall_bins_theta < 10)
+    trace.fail_key("wall_bins_theta", fmt::format("expected at least 10 rows of wall bins (the smooth wall fit has 81 terms), got {}", s.trace.wall_bins_theta));
+  if (s.trace.wall_bins_phi < 9)
+    trace.fail_key("wall_bins_phi", fmt::format("expected at least 9 columns of wall bins (the smooth wall fit has 81 terms), got {}", s.trace.wall_bins_phi));
   trace.finish();
   top.finish();
   return s;

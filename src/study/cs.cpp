@@ -1,6 +1,7 @@
 #include "polrig/study/cs.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "polrig/device/sensor.h"
@@ -130,11 +131,38 @@ CsSummary combine_shifts(const std::vector<CsSummary>& per_shift) {
 
 }  // namespace
 
+namespace {
+
+// A traced source: the figures of the curves averaged over the shifts (their sampling noise
+// reduced by √shifts), with the standard errors of the per-shift figures. Eq. 6 is a cos⁴
+// result and has no meaning here (NaN).
+CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch,
+                         std::vector<double>* mean_curves) {
+  const int n = turn.steps(), S = rig.source.traced->shifts();
+  std::vector<double> mean(static_cast<std::size_t>(6 * n), 0.0);
+  std::vector<CsSummary> per_shift;
+  for (int k = 0; k < S; ++k) {
+    per_shift.push_back(one_pass(rig, turn, k, scratch));
+    for (std::size_t j = 0; j < mean.size(); ++j) mean[j] += scratch[j] / S;
+  }
+  CsSummary out = summarise(rig, mean.data(), mean.data() + 3 * n, n);
+  const CsSummary spread = combine_shifts(per_shift);
+  for (int i = 0; i < 3; ++i) {
+    out[i].bsd_se_mV = spread[i].bsd_se_mV;
+    out[i].asd_se_mV = spread[i].asd_se_mV;
+    out[i].mean_br_se_mV = spread[i].mean_br_se_mV;
+    out[i].mean_mr_se_mV = spread[i].mean_mr_se_mV;
+    out[i].eq6_mV = std::numeric_limits<double>::quiet_NaN();
+  }
+  if (mean_curves) *mean_curves = std::move(mean);
+  return out;
+}
+
+}  // namespace
+
 CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch) {
   if (!rig.source.traced) return one_pass(rig, turn, -1, scratch);
-  std::vector<CsSummary> per_shift;
-  for (int k = 0; k < rig.source.traced->shifts(); ++k) per_shift.push_back(one_pass(rig, turn, k, scratch));
-  return combine_shifts(per_shift);
+  return traced_summary(rig, turn, scratch, nullptr);
 }
 
 CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
@@ -143,22 +171,17 @@ CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
   CsStudy study;
   study.traced = rig.source.traced != nullptr;
   for (int k = 0; k < n; ++k) study.theta_R_deg.push_back(turn.theta_R_deg(k));
+  std::vector<double> curves;
+  if (study.traced) {
+    study.summary = traced_summary(rig, turn, scratch, &curves);
+  } else {
+    study.summary = one_pass(rig, turn, -1, scratch);
+    curves.assign(scratch.begin(), scratch.begin() + 6 * n);
+  }
   for (int i = 0; i < 3; ++i) {
-    study.dv_br_V[i].assign(static_cast<std::size_t>(n), 0.0);
-    study.dv_mr_V[i].assign(static_cast<std::size_t>(n), 0.0);
+    study.dv_br_V[i].assign(curves.begin() + i * n, curves.begin() + (i + 1) * n);
+    study.dv_mr_V[i].assign(curves.begin() + (3 + i) * n, curves.begin() + (4 + i) * n);
   }
-  const int shifts = study.traced ? rig.source.traced->shifts() : 1;
-  std::vector<CsSummary> per_shift;
-  for (int s = 0; s < shifts; ++s) {
-    per_shift.push_back(one_pass(rig, turn, study.traced ? s : -1, scratch));
-    // The curves: the mean of the shifts.
-    for (int i = 0; i < 3; ++i)
-      for (int k = 0; k < n; ++k) {
-        study.dv_br_V[i][static_cast<std::size_t>(k)] += scratch[static_cast<std::size_t>(i * n + k)] / shifts;
-        study.dv_mr_V[i][static_cast<std::size_t>(k)] += scratch[static_cast<std::size_t>((3 + i) * n + k)] / shifts;
-      }
-  }
-  study.summary = study.traced ? combine_shifts(per_shift) : per_shift.front();
   return study;
 }
 

@@ -88,6 +88,11 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
     throw RigError(fmt::format("--grid: {:.3g} grid points; at most 1e9 (a summary row each)", points));
   std::size_t total = 1;
   for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
+  if (base.source.traced)
+    for (const GridAxis& a : axes)
+      if (a.key->path == "device.d" || a.key->path == "source.E_0" || a.key->path == "source.polarizer_deg")
+        throw RigError(fmt::format("--grid {}: a traced source's light comes from its scene; '{}' "
+                                   "cannot be swept", a.text(), a.key->path));
   for (std::size_t p = 0; p < total; ++p) {
     if (auto problem = check_rig(rig_at(base, r, p))) {
       std::string where;

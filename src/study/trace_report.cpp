@@ -109,12 +109,12 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
   }
   std::string summary = fmt::format(
       "photons_launched: {}\nabsorbed_wall: {}\nabsorbed_baffles: {}\nabsorbed_lamps: {}\n"
-      "escaped: {}\nleaked: {}\nrays: {}\nseconds: {:.3f}\nrays_per_second: {:.0f}\n"
+      "escaped: {}\nleaked: {}\nrays: {}\n"
       "lamp_power_W: {}\nfirst_strike_on_wall_W: {}\nport_fraction: {}\n"
       "mean_indirect_wall_irradiance_Wm2: {}\nsphere_theory_Wm2: {}\n"
       "mean_port_radiance_Wm2sr: {}\n",
       L.launched, L.absorbed_wall, L.absorbed_baffles, L.absorbed_lamps, L.escaped, L.leaked, L.rays,
-      sol.seconds, static_cast<double>(L.rays) / sol.seconds, sol.power_W, first_W, f, indirect / area,
+      sol.power_W, first_W, f, indirect / area,
       first_W * rho / (A_s * (1 - rho * (1 - f))), L_mean);
   write_text_file(dir / "trace_summary.yaml", summary);
   write_text_file(dir / "scene.yaml", scene_to_yaml(scene));

@@ -16,9 +16,10 @@ namespace polrig {
 struct CsPairSummary {
   double bsd_mV = 0, asd_mV = 0;
   double mean_br_mV = 0, mean_mr_mV = 0;
-  double eq6_mV = 0;  // Eq. 6's CS constant, through the pair's amplifier gain kv_i
-  // Standard errors of the four figures above for a traced source (0 for cos4): the spread of
-  // the independent quasi-random shifts.
+  double eq6_mV = 0;  // Eq. 6's CS constant, through the pair's amplifier gain kv_i (NaN traced)
+  // A traced source: the figures are those of the curves averaged over the quasi-random shifts,
+  // and these are the standard errors of the per-shift figures (0 for cos4). The per-pose
+  // sampling noise that remains in the averaged curves is not in them (docs/validation.md).
   double bsd_se_mV = 0, asd_se_mV = 0, mean_br_se_mV = 0, mean_mr_se_mV = 0;
 };
 using CsSummary = std::array<CsPairSummary, 3>;

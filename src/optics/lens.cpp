@@ -59,39 +59,28 @@ std::optional<LensRay> trace_through(const PlanoConvexLens& L, const LensRay& in
     if (p[0] * p[0] + p[1] * p[1] > a * a) return std::nullopt;
     return p;
   };
+  // Refraction at one face, with its Fresnel loss; n faces the side the ray comes from.
   LensRay out = in;
+  const auto cross = [&](const V& d, const V& n, double n1, double n2) -> std::optional<V> {
+    const auto t = refract(d, n, n1, n2);
+    if (t) out.transmittance *= fresnel_transmittance(n1, n2, -dot(n, d));
+    return t;
+  };
   const V& d = in.direction;
+  std::optional<V> p1, d1, p2, d2;
   if (d[2] > 0) {
     // Upwards: the plane face, then the convex face from inside.
-    const auto p1 = on_plane(in.origin, d);
-    if (!p1) return std::nullopt;
-    const V n1{0, 0, -1};
-    const auto d1 = refract(d, n1, 1.0, L.index);
-    if (!d1) return std::nullopt;
-    out.transmittance *= fresnel_transmittance(1.0, L.index, -dot(n1, d));
-    const auto p2 = on_sphere(*p1, *d1, true);
-    if (!p2) return std::nullopt;
-    const V n2 = mul(unit(sub(*p2, centre)), -1.0);  // facing the inside, where the ray is
-    const auto d2 = refract(*d1, n2, L.index, 1.0);
-    if (!d2) return std::nullopt;
-    out.transmittance *= fresnel_transmittance(L.index, 1.0, -dot(n2, *d1));
-    out.origin = *p2;
-    out.direction = *d2;
-    return out;
+    if (!(p1 = on_plane(in.origin, d)) || !(d1 = cross(d, {0, 0, -1}, 1.0, L.index))) return std::nullopt;
+    if (!(p2 = on_sphere(*p1, *d1, true))) return std::nullopt;
+    d2 = cross(*d1, mul(unit(sub(*p2, centre)), -1.0), L.index, 1.0);
+  } else {
+    // Downwards: the convex face from outside, then the plane face.
+    if (!(p1 = on_sphere(in.origin, d, false)) || !(d1 = cross(d, unit(sub(*p1, centre)), 1.0, L.index)))
+      return std::nullopt;
+    if (!(p2 = on_plane(*p1, *d1))) return std::nullopt;
+    d2 = cross(*d1, {0, 0, 1}, L.index, 1.0);
   }
-  // Downwards: the convex face from outside, then the plane face.
-  const auto p1 = on_sphere(in.origin, d, false);
-  if (!p1) return std::nullopt;
-  const V n1 = unit(sub(*p1, centre));
-  const auto d1 = refract(d, n1, 1.0, L.index);
-  if (!d1) return std::nullopt;
-  out.transmittance *= fresnel_transmittance(1.0, L.index, -dot(n1, d));
-  const auto p2 = on_plane(*p1, *d1);
-  if (!p2) return std::nullopt;
-  const V n2{0, 0, 1};
-  const auto d2 = refract(*d1, n2, L.index, 1.0);
   if (!d2) return std::nullopt;
-  out.transmittance *= fresnel_transmittance(L.index, 1.0, -dot(n2, *d1));
   out.origin = *p2;
   out.direction = *d2;
   return out;

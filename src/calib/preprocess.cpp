@@ -36,13 +36,10 @@ std::vector<CsPoint> central_symmetry_points(const std::vector<StopVoltages>& st
 }
 
 double eq15_slope(const FitParams& p, double v_dec, int i, double theta_deg) {
-  const int j = pair_j(i), h = pair_h(i);
-  const double xj = deg2rad(2.0 * theta_deg + p.alpha_deg[j]);
-  const double xh = deg2rad(2.0 * theta_deg + p.alpha_deg[h]);
-  const double g = p.kv[i] * v_dec / std::numbers::ln10;
-  // d/dθ of ln(1 + c_j cos x_j) − ln(1 − c_h cos x_h), with dx/dθ = 2.
-  return g * (-2.0 * p.c[j] * std::sin(xj) / (1.0 + p.c[j] * std::cos(xj)) -
-              2.0 * p.c[h] * std::sin(xh) / (1.0 - p.c[h] * std::cos(xh)));
+  // θ enters Eq. 15 only as 2θ + α_m, so ∂V/∂θ = 2·(∂V/∂α_j + ∂V/∂α_h); the gradient is per
+  // degree of α, the slope per radian of θ.
+  const FitParams::Vector g = eq15_gradient(p, v_dec, i, theta_deg);
+  return 2.0 * (g(FitParams::alpha_index(pair_j(i))) + g(FitParams::alpha_index(pair_h(i)))) / deg2rad(1.0);
 }
 
 std::vector<Observation> select_noncontinuous(const std::vector<Observation>& data,

@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 
 #include "polrig/random.h"
+#include "polrig/statistics.h"
 
 namespace polrig {
 namespace {
@@ -434,16 +435,15 @@ SphereSolution SphereTracer::solve() const {
                            std::vector<double>& mean, std::vector<double>& se) {
     mean.assign(n, 0.0);
     se.assign(n, 0.0);
+    std::vector<double> per_batch(static_cast<std::size_t>(B));
     for (std::size_t i = 0; i < n; ++i) {
       const double area_m2 = area_of(i, w, scene_) * 1e-6;
-      double s = 0, s2 = 0;
-      for (int b = 0; b < B; ++b) {
-        const double e = area_m2 > 0 ? get(tally[static_cast<std::size_t>(b)], i) * B / area_m2 : 0.0;
-        s += e;
-        s2 += e * e;
-      }
-      mean[i] = s / B;
-      se[i] = std::sqrt(std::max(0.0, (s2 / B - mean[i] * mean[i]) / (B - 1)));
+      for (int b = 0; b < B; ++b)  // each batch's estimate as if it were the whole run
+        per_batch[static_cast<std::size_t>(b)] =
+            area_m2 > 0 ? get(tally[static_cast<std::size_t>(b)], i) * B / area_m2 : 0.0;
+      const MeanAndSpread m = mean_and_standard_error(per_batch);
+      mean[i] = m.mean;
+      se[i] = m.sd;
     }
   };
   const auto wall_area = [](std::size_t i, const WallMap& wm, const SceneSpec&) { return wm.wall_area_mm2[i]; };

@@ -1,9 +1,11 @@
 #include "polrig/source/traced_port.h"
 
 #include <cmath>
+#include <vector>
 #include <numbers>
 
 #include "polrig/random.h"
+#include "polrig/statistics.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -58,18 +60,17 @@ StokesIrradiance TracedPort::plane_irradiance_shift(double x, double y, double L
 
 StokesIrradiance TracedPort::plane_irradiance(double x, double y, double L_o, long long samples,
                                               int shifts) const {
-  double s0 = 0, s0sq = 0;
+  std::vector<double> s0(static_cast<std::size_t>(shifts));
   StokesIrradiance out;
   for (int k = 0; k < shifts; ++k) {
     const StokesIrradiance e = plane_irradiance_shift(x, y, L_o, samples, k);
-    s0 += e.S0;
-    s0sq += e.S0 * e.S0;
+    s0[static_cast<std::size_t>(k)] = e.S0;
     out.S1 += e.S1 / shifts;
     out.S2 += e.S2 / shifts;
   }
-  out.S0 = s0 / shifts;
-  const double var = shifts > 1 ? std::max(0.0, (s0sq / shifts - out.S0 * out.S0) / (shifts - 1)) : 0.0;
-  out.S0_se = std::sqrt(var);
+  const MeanAndSpread m = mean_and_standard_error(s0);
+  out.S0 = m.mean;
+  out.S0_se = m.sd;
   // The film scales S1, S2 by fixed factors of S0: their errors follow.
   if (out.S0 > 0) {
     out.S1_se = std::abs(out.S1 / out.S0) * out.S0_se;

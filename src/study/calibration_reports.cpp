@@ -45,20 +45,12 @@ std::vector<DatasetFile> report_calibration(const std::filesystem::path& dir,
                     e.e23_deg, e.esec_deg, e.d});
   write_text_file(dir / "errors.csv", errors.text());
 
-  CsvTable acc({"angle", "max_deg", "min_deg", "accuracy_deg"});
-  for (int k = 0; k < 4; ++k)
-    acc.add_row({static_cast<double>(k), r.accuracy[k].max_deg, r.accuracy[k].min_deg,
-                 r.accuracy[k].accuracy_deg()});
-  // The angle column is numeric in CsvTable; name it in the text.
-  std::string acc_text = acc.text();
+  // The angle column holds names, which CsvTable (numbers only) does not write.
   const char* names[4] = {"theta12", "theta13", "theta23", "theta_sec"};
-  {
-    std::string out = "angle,max_deg,min_deg,accuracy_deg\n";
-    for (int k = 0; k < 4; ++k)
-      out += fmt::format("{},{},{},{}\n", names[k], r.accuracy[k].max_deg, r.accuracy[k].min_deg,
-                         r.accuracy[k].accuracy_deg());
-    acc_text = out;
-  }
+  std::string acc_text = "angle,max_deg,min_deg,accuracy_deg\n";
+  for (int k = 0; k < 4; ++k)
+    acc_text += fmt::format("{},{},{},{}\n", names[k], r.accuracy[k].max_deg, r.accuracy[k].min_deg,
+                            r.accuracy[k].accuracy_deg());
   write_text_file(dir / "accuracy.csv", acc_text);
 
   const std::vector<Replacement> rep =

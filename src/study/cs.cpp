@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "polrig/device/sensor.h"
+#include "polrig/statistics.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -37,7 +38,7 @@ void irradiance_over_turn(const Rig& rig, const CsTurn& turn, int shift, double*
     // waits here, since that point would share this thread's scratch.
     tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, 6 * n, [&](int mk) {
       const int m = mk / n, k = mk % n;
-      const Point2 p{c[k] * p0[m].x() - s[k] * p0[m].y(), s[k] * p0[m].x() + c[k] * p0[m].y()};
+      const Point2 p = TableRotation{c[k], s[k]} * p0[m];
       E[mk] = traced->photodiode_irradiance(to_scene(p - port), rig.source.cos4.L_o, shift);
     }); });
     return;
@@ -72,21 +73,11 @@ void central_symmetry_average(const double* br, double* mr, int n) {
   for (int k = 0; k < n; ++k) mr[k] = 0.5 * (br[k] + br[(k + half) % n]);
 }
 
-// Mean and population standard deviation, two-pass.
-std::pair<double, double> mean_and_sd(const double* x, int n) {
-  double sum = 0.0;
-  for (int k = 0; k < n; ++k) sum += x[k];
-  const double mean = sum / n;
-  double ss = 0.0;
-  for (int k = 0; k < n; ++k) ss += (x[k] - mean) * (x[k] - mean);
-  return {mean, std::sqrt(ss / n)};
-}
-
 CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
   CsSummary s;
   for (int i = 0; i < 3; ++i) {
-    const auto [mean_br, bsd] = mean_and_sd(br + i * n, n);
-    const auto [mean_mr, asd] = mean_and_sd(mr + i * n, n);
+    const auto [mean_br, bsd] = mean_and_population_sd({br + i * n, static_cast<std::size_t>(n)});
+    const auto [mean_mr, asd] = mean_and_population_sd({mr + i * n, static_cast<std::size_t>(n)});
     s[i] = {bsd * 1e3, asd * 1e3, mean_br * 1e3, mean_mr * 1e3, eq6_constant_V(rig, i) * 1e3};
   }
   return s;
@@ -107,26 +98,19 @@ CsSummary one_pass(const Rig& rig, const CsTurn& turn, int shift, std::vector<do
   return summarise(rig, br, mr, n);
 }
 
-// Mean over the shifts of a traced source, with the standard errors of the means.
-CsSummary combine_shifts(const std::vector<CsSummary>& per_shift) {
-  const double S = static_cast<double>(per_shift.size());
-  CsSummary out = per_shift.front();
+// The standard errors of a traced source's per-shift figures, into `out`.
+void add_shift_standard_errors(const std::vector<CsSummary>& per_shift, CsSummary& out) {
+  std::vector<double> v(per_shift.size());
+  const auto se_of = [&](auto field) {
+    for (std::size_t k = 0; k < per_shift.size(); ++k) v[k] = field(per_shift[k]);
+    return mean_and_standard_error(v).sd;
+  };
   for (int i = 0; i < 3; ++i) {
-    double* mean[4] = {&out[i].bsd_mV, &out[i].asd_mV, &out[i].mean_br_mV, &out[i].mean_mr_mV};
-    double* se[4] = {&out[i].bsd_se_mV, &out[i].asd_se_mV, &out[i].mean_br_se_mV, &out[i].mean_mr_se_mV};
-    for (int q = 0; q < 4; ++q) {
-      const auto get = [&](const CsSummary& s) {
-        const double v[4] = {s[i].bsd_mV, s[i].asd_mV, s[i].mean_br_mV, s[i].mean_mr_mV};
-        return v[q];
-      };
-      double m = 0, m2 = 0;
-      for (const CsSummary& s : per_shift) m += get(s) / S;
-      for (const CsSummary& s : per_shift) m2 += (get(s) - m) * (get(s) - m);
-      *mean[q] = m;
-      *se[q] = S > 1 ? std::sqrt(m2 / (S - 1) / S) : 0.0;
-    }
+    out[i].bsd_se_mV = se_of([&](const CsSummary& s) { return s[i].bsd_mV; });
+    out[i].asd_se_mV = se_of([&](const CsSummary& s) { return s[i].asd_mV; });
+    out[i].mean_br_se_mV = se_of([&](const CsSummary& s) { return s[i].mean_br_mV; });
+    out[i].mean_mr_se_mV = se_of([&](const CsSummary& s) { return s[i].mean_mr_mV; });
   }
-  return out;
 }
 
 }  // namespace
@@ -146,14 +130,8 @@ CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>
     for (std::size_t j = 0; j < mean.size(); ++j) mean[j] += scratch[j] / S;
   }
   CsSummary out = summarise(rig, mean.data(), mean.data() + 3 * n, n);
-  const CsSummary spread = combine_shifts(per_shift);
-  for (int i = 0; i < 3; ++i) {
-    out[i].bsd_se_mV = spread[i].bsd_se_mV;
-    out[i].asd_se_mV = spread[i].asd_se_mV;
-    out[i].mean_br_se_mV = spread[i].mean_br_se_mV;
-    out[i].mean_mr_se_mV = spread[i].mean_mr_se_mV;
-    out[i].eq6_mV = std::numeric_limits<double>::quiet_NaN();
-  }
+  add_shift_standard_errors(per_shift, out);
+  for (int i = 0; i < 3; ++i) out[i].eq6_mV = std::numeric_limits<double>::quiet_NaN();
   if (mean_curves) *mean_curves = std::move(mean);
   return out;
 }

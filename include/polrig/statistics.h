@@ -1,0 +1,34 @@
+#pragma once
+// The two summaries of a sample that polrig reports, computed in two passes (no cancellation).
+#include <cmath>
+#include <span>
+
+namespace polrig {
+
+struct MeanAndSpread {
+  double mean = 0;
+  double sd = 0;
+};
+
+// Mean and population standard deviation (divide by n): BSD and ASD over a turn.
+inline MeanAndSpread mean_and_population_sd(std::span<const double> x) {
+  double sum = 0;
+  for (double v : x) sum += v;
+  const double mean = sum / static_cast<double>(x.size());
+  double ss = 0;
+  for (double v : x) ss += (v - mean) * (v - mean);
+  return {mean, std::sqrt(ss / static_cast<double>(x.size()))};
+}
+
+// Mean of independent estimates (batches, quasi-random shifts) and its standard error: the
+// sample standard deviation (n − 1) over √n; 0 for a single estimate.
+inline MeanAndSpread mean_and_standard_error(std::span<const double> x) {
+  const double n = static_cast<double>(x.size());
+  const double mean = mean_and_population_sd(x).mean;
+  if (x.size() < 2) return {mean, 0.0};
+  double ss = 0;
+  for (double v : x) ss += (v - mean) * (v - mean);
+  return {mean, std::sqrt(ss / (n - 1) / n)};
+}
+
+}  // namespace polrig

@@ -1,32 +1,18 @@
 #include "polrig/optics/lens.h"
 
 #include <cmath>
+#include <stdexcept>
+
+#include "polrig/optics/polarized_ray.h"
+#include "ray_math.h"
 
 namespace polrig {
-namespace {
-using V = std::array<double, 3>;
-V add(const V& a, const V& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-V sub(const V& a, const V& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-V mul(const V& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const V& a, const V& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V unit(const V& a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
 
-// Snell's law in vector form; n is the unit normal on the side the ray comes from.
-std::optional<V> refract(const V& i, const V& n, double n1, double n2) {
-  const double eta = n1 / n2, cos_i = -dot(n, i);
-  const double k = 1 - eta * eta * (1 - cos_i * cos_i);
-  if (k < 0) return std::nullopt;  // total internal reflection
-  return unit(add(mul(i, eta), mul(n, eta * cos_i - std::sqrt(k))));
-}
-}  // namespace
+using namespace optics_detail;
 
 double fresnel_transmittance(double n1, double n2, double cos_i) {
-  const double sin_t2 = (n1 / n2) * (n1 / n2) * (1 - cos_i * cos_i);
-  if (sin_t2 >= 1) return 0;
-  const double cos_t = std::sqrt(1 - sin_t2);
-  const double rs = (n1 * cos_i - n2 * cos_t) / (n1 * cos_i + n2 * cos_t);
-  const double rp = (n2 * cos_i - n1 * cos_t) / (n2 * cos_i + n1 * cos_t);
-  return 1 - 0.5 * (rs * rs + rp * rp);
+  const FresnelR r = fresnel_r(n1, n2, cos_i);
+  return 1 - 0.5 * (r.s * r.s + r.p * r.p);
 }
 
 PlanoConvexLens PlanoConvexLens::from_focal_length(double f, double t, double D, double n) {
@@ -39,6 +25,20 @@ double PlanoConvexLens::back_focal_length() const {
 }
 
 std::optional<LensRay> trace_through(const PlanoConvexLens& L, const LensRay& in) {
+  return trace_through(L, in, nullptr);
+}
+
+std::optional<LensRay> trace_through(const PlanoConvexLens& L, const LensRay& in,
+                                     PolarizedRay* polarization) {
+  using V = Vec3;
+  std::optional<PolarizedRay> pol;
+  if (polarization) {
+    if (norm(sub(polarization->k, in.direction)) > 1e-9)
+      throw std::invalid_argument("trace_through: polarization->k differs from in.direction");
+    pol = *polarization;
+    pol->k = in.direction;
+    pol->x_hat = unit(reject(pol->x_hat, pol->k));
+  }
   const double R = L.radius_of_curvature, a = 0.5 * L.diameter;
   const V centre{0, 0, L.thickness - R};
   const auto on_sphere = [&](const V& o, const V& d, bool far) -> std::optional<V> {
@@ -61,28 +61,32 @@ std::optional<LensRay> trace_through(const PlanoConvexLens& L, const LensRay& in
   };
   // Refraction at one face, with its Fresnel loss; n faces the side the ray comes from.
   LensRay out = in;
-  const auto cross = [&](const V& d, const V& n, double n1, double n2) -> std::optional<V> {
-    const auto t = refract(d, n, n1, n2);
-    if (t) out.transmittance *= fresnel_transmittance(n1, n2, -dot(n, d));
+  const auto through_face = [&](const V& d, const V& n, double n1, double n2) -> std::optional<V> {
+    const auto t = snell(d, n, n1, n2);
+    if (t) {
+      out.transmittance *= fresnel_transmittance(n1, n2, -dot(n, d));
+      if (pol) refract(*pol, n, n1, n2);  // same Snell call on the same d: pol->k == *t
+    }
     return t;
   };
   const V& d = in.direction;
   std::optional<V> p1, d1, p2, d2;
   if (d[2] > 0) {
     // Upwards: the plane face, then the convex face from inside.
-    if (!(p1 = on_plane(in.origin, d)) || !(d1 = cross(d, {0, 0, -1}, 1.0, L.index))) return std::nullopt;
+    if (!(p1 = on_plane(in.origin, d)) || !(d1 = through_face(d, {0, 0, -1}, 1.0, L.index))) return std::nullopt;
     if (!(p2 = on_sphere(*p1, *d1, true))) return std::nullopt;
-    d2 = cross(*d1, mul(unit(sub(*p2, centre)), -1.0), L.index, 1.0);
+    d2 = through_face(*d1, mul(unit(sub(*p2, centre)), -1.0), L.index, 1.0);
   } else {
     // Downwards: the convex face from outside, then the plane face.
-    if (!(p1 = on_sphere(in.origin, d, false)) || !(d1 = cross(d, unit(sub(*p1, centre)), 1.0, L.index)))
+    if (!(p1 = on_sphere(in.origin, d, false)) || !(d1 = through_face(d, unit(sub(*p1, centre)), 1.0, L.index)))
       return std::nullopt;
     if (!(p2 = on_plane(*p1, *d1))) return std::nullopt;
-    d2 = cross(*d1, {0, 0, 1}, L.index, 1.0);
+    d2 = through_face(*d1, {0, 0, 1}, L.index, 1.0);
   }
   if (!d2) return std::nullopt;
   out.origin = *p2;
   out.direction = *d2;
+  if (pol) *polarization = *pol;
   return out;
 }
 

@@ -12,6 +12,11 @@ double channel_response(const CalibrationParams& p, int m, double theta_deg, dou
   return 1.0 + sign * c * std::cos(deg2rad(2.0 * theta_deg + p.alpha_deg[m]));
 }
 
+double film_axis_from_alpha_deg(const CalibrationParams& p, int m) {
+  const bool is_h = (m % 2) == 1;
+  return 0.5 * ((is_h ? 180.0 : 0.0) - p.alpha_deg[m]);
+}
+
 double pair_voltage(const CalibrationParams& p, const Electronics& e, int i, double E_j,
                     double E_h, double theta_deg, double d) {
   const double ratio = (E_j * channel_response(p, pair_j(i), theta_deg, d)) /

@@ -225,15 +225,13 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
   s.trace.batches = static_cast<int>(trace.integer("batches", s.trace.batches, 2, 1024));
   s.trace.wall_bins_theta = static_cast<int>(trace.integer("wall_bins_theta", s.trace.wall_bins_theta, 2, 4096));
   s.trace.wall_bins_phi = static_cast<int>(trace.integer("wall_bins_phi", s.trace.wall_bins_phi, 1, 8192));
+  s.trace.field_step_deg = trace.real("field_step_deg", s.trace.field_step_deg,
+                                      [](double v) { return v >= 0.25 && v <= 15; }, "a grid step in [0.25, 15] degrees");
   s.trace.plane_samples = trace.integer("plane_samples", s.trace.plane_samples, 16, 100000000LL);
   s.trace.seed = static_cast<std::uint64_t>(trace.integer("seed", static_cast<long long>(s.trace.seed), 0, 9007199254740991LL));
   if (s.trace.photons < 100LL * s.trace.batches)
     trace.fail_key("photons", fmt::format("expected at least 100 photons per batch ({} for {} batches), got {}",
                                           100LL * s.trace.batches, s.trace.batches, s.trace.photons));
-  if (s.trace.wall_bins_theta < 10)
-    trace.fail_key("wall_bins_theta", fmt::format("expected at least 10 rows of wall bins (the smooth wall fit has 81 terms), got {}", s.trace.wall_bins_theta));
-  if (s.trace.wall_bins_phi < 9)
-    trace.fail_key("wall_bins_phi", fmt::format("expected at least 9 columns of wall bins (the smooth wall fit has 81 terms), got {}", s.trace.wall_bins_phi));
   trace.finish();
   top.finish();
   return s;
@@ -275,9 +273,9 @@ std::string scene_to_yaml(const SceneSpec& s) {
       num(o.housing_height), num(o.film_to_lens), num(o.lens_focal_length), num(o.lens_diameter),
       num(o.lens_thickness), num(o.lens_index), num(o.lens_to_photodiode));
   out += fmt::format("trace:\n  photons: {}\n  batches: {}\n  wall_bins_theta: {}\n  wall_bins_phi: {}\n"
-                     "  plane_samples: {}\n  seed: {}\n",
+                     "  field_step_deg: {}\n  plane_samples: {}\n  seed: {}\n",
                      s.trace.photons, s.trace.batches, s.trace.wall_bins_theta, s.trace.wall_bins_phi,
-                     s.trace.plane_samples, s.trace.seed);
+                     num(s.trace.field_step_deg), s.trace.plane_samples, s.trace.seed);
   return out;
 }
 

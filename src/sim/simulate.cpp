@@ -13,17 +13,49 @@ PoseLight light_at_pose(const Rig& rig, double theta_R_deg) {
   const Point2 port = port_centre(rig.eccentricity);
   const auto p = photodiode_positions(rig.device.ring, rig.eccentricity, theta_R_deg);
   if (const TracedSource* traced = rig.source.traced.get()) {
-    // The traced port: irradiance from the sphere solve; d and the angle from its film.
-    for (int m = 0; m < 6; ++m)
-      light.E_Wm2[m] = traced->photodiode_irradiance(to_scene(p[m] - port), rig.source.cos4.L_o);
+    // The traced port: d and the angle from its film; each channel's signal traced.
     light.theta_deg = sensor_polarization_angle_deg(theta_R_deg, traced->polarizer_axis_rig_deg());
     light.d = traced->degree_of_polarization();
+    for (int m = 0; m < 6; ++m) {
+      const std::vector<double> e = traced_effective_irradiance(rig, theta_R_deg, m);
+      double sum = 0;
+      for (double x : e) sum += x;
+      light.E_Wm2[m] = sum / static_cast<double>(e.size());
+    }
     return light;
   }
   for (int m = 0; m < 6; ++m) light.E_Wm2[m] = rig.source.cos4.irradiance(p[m], port);
   light.theta_deg = sensor_polarization_angle_deg(theta_R_deg, rig.source.polarizer_deg);
   light.d = rig.device.d;
   return light;
+}
+
+Rig coaxial(const Rig& rig) {
+  Rig c = rig;
+  c.eccentricity.L_IS = 0;
+  c.eccentricity.L_S = 0;
+  return c;
+}
+
+std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg) {
+  if (rig.source.traced) return light_at_pose(coaxial(rig), theta_R_deg).E_Wm2;
+  const double E0 = rig.source.cos4.E_0;
+  return {E0, E0, E0, E0, E0, E0};
+}
+
+std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m) {
+  const TracedSource& traced = *rig.source.traced;
+  const Point2 p = photodiode_positions(rig.device.ring, rig.eccentricity, theta_R_deg)[static_cast<std::size_t>(m)] -
+                   port_centre(rig.eccentricity);
+  const CalibrationParams& truth = rig.device.truth;
+  // The sensor frame is the scene frame turned by −θ_R (both seen from above; the table turns
+  // anticlockwise seen from below): a sensor-frame angle φ is at φ − θ_R in the scene.
+  const AnalyzerFilm film{film_axis_from_alpha_deg(truth, m) - theta_R_deg, 1.0 + truth.kd[static_cast<std::size_t>(m)]};
+  std::vector<double> e = traced.channel_signal(to_scene(p), rig.source.cos4.L_o, film);
+  const double theta = sensor_polarization_angle_deg(theta_R_deg, traced.polarizer_axis_rig_deg());
+  const double bracket = channel_response(truth, m, theta, traced.degree_of_polarization());
+  for (double& x : e) x /= bracket;
+  return e;
 }
 
 namespace {
@@ -35,9 +67,7 @@ Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg,
   s.light = light_at_pose(rig, theta_R_deg);
   const CalibrationParams& truth = rig.device.truth;
   const Electronics& el = rig.electronics;
-  const double E0 = rig.source.cos4.E_0;
-  const std::array<double, 6> uniform{E0, E0, E0, E0, E0, E0};
-  s.V_ideal = pair_voltages(truth, el, uniform, s.light.theta_deg, s.light.d);
+  s.V_ideal = pair_voltages(truth, el, ideal_irradiance(rig, theta_R_deg), s.light.theta_deg, s.light.d);
   s.V_ecc = pair_voltages(truth, el, s.light.E_Wm2, s.light.theta_deg, s.light.d);
 
   const int n = rig.schedule.samples_per_stop;

@@ -2,8 +2,6 @@
 
 #include <embree3/rtcore.h>
 
-#include <Eigen/Dense>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -272,63 +270,6 @@ struct BatchTally {
 
 }  // namespace
 
-namespace {
-
-// Values of the smooth-wall basis at (μ, φ), in SmoothWall's coefficient order.
-void smooth_basis(int degree, int harmonics, double mu, double phi, double* out) {
-  double p_prev = 1, p = mu;  // P_0, P_1
-  for (int l = 0; l <= degree; ++l) {
-    const double pl = l == 0 ? 1.0 : (l == 1 ? mu : p);
-    double* row = out + l * (2 * harmonics + 1);
-    row[0] = pl;
-    for (int k = 1; k <= harmonics; ++k) {
-      row[2 * k - 1] = pl * std::cos(k * phi);
-      row[2 * k] = pl * std::sin(k * phi);
-    }
-    if (l >= 1) {  // Bonnet: (l+1)P_{l+1} = (2l+1)μP_l − lP_{l−1}
-      const double next = ((2 * l + 1) * mu * pl - l * p_prev) / (l + 1);
-      p_prev = pl;
-      p = next;
-    }
-  }
-}
-
-SmoothWall fit_smooth_wall(const WallMap& w) {
-  SmoothWall s;
-  const int n = (s.degree + 1) * (2 * s.harmonics + 1);
-  std::vector<int> rows;
-  double max_area = 0;
-  for (double a : w.wall_area_mm2) max_area = std::max(max_area, a);
-  for (int b = 0; b < static_cast<int>(w.E.size()); ++b)
-    if (w.wall_area_mm2[static_cast<std::size_t>(b)] > 0.999 * max_area) rows.push_back(b);
-  Eigen::MatrixXd A(static_cast<Eigen::Index>(rows.size()), n);
-  Eigen::VectorXd y(static_cast<Eigen::Index>(rows.size()));
-  std::vector<double> basis(static_cast<std::size_t>(n));
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    const int b = rows[r], it = b / w.n_phi, ip = b % w.n_phi;
-    const double mu = 1.0 - (2.0 * it + 1.0) / w.n_theta, phi = 2 * kPi * (ip + 0.5) / w.n_phi;
-    smooth_basis(s.degree, s.harmonics, mu, phi, basis.data());
-    for (int c = 0; c < n; ++c) A(static_cast<Eigen::Index>(r), c) = basis[static_cast<std::size_t>(c)];
-    // Only the light after the first strike: it is smooth (nearly uniform); the first strike
-    // is computed exactly where it is needed (SphereTracer::direct_irradiance).
-    y(static_cast<Eigen::Index>(r)) = w.E[static_cast<std::size_t>(b)] - w.E_first[static_cast<std::size_t>(b)];
-  }
-  const Eigen::VectorXd x = A.colPivHouseholderQr().solve(y);
-  s.coefficients.assign(x.data(), x.data() + x.size());
-  return s;
-}
-
-}  // namespace
-
-double SmoothWall::operator()(double mu, double phi) const {
-  const int n = (degree + 1) * (2 * harmonics + 1);
-  double basis[128];
-  smooth_basis(degree, harmonics, mu, phi, basis);
-  double e = 0;
-  for (int c = 0; c < n; ++c) e += coefficients[static_cast<std::size_t>(c)] * basis[c];
-  return e;
-}
-
 SphereSolution SphereTracer::solve() const {
   const Impl& m = *impl_;
   const TraceSettings& ts = scene_.trace;
@@ -468,7 +409,8 @@ SphereSolution SphereTracer::solve() const {
     L.leaked += t.ledger.leaked;
     L.rays += t.ledger.rays;
   }
-  sol.smooth = fit_smooth_wall(w);
+  const int steps = static_cast<int>(std::lround(180.0 / ts.field_step_deg));
+  sol.field = compute_wall_field(*this, sol, steps + 1, 2 * steps);
   sol.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
 }
@@ -476,12 +418,9 @@ SphereSolution SphereTracer::solve() const {
 double SphereTracer::radiance(const SphereSolution& s, const Hit& h) const {
   switch (h.kind) {
     case Hit::Wall: {
-      // The smooth fit when there is one (a solve), else the bin (maps made by hand in tests).
-      if (!s.smooth.coefficients.empty()) {
-        const double mu = std::clamp(h.point[2] / impl_->R, -1.0, 1.0);
-        const double indirect = s.smooth(mu, std::atan2(h.point[1], h.point[0]));
-        return scene_.sphere.reflectance * (direct_irradiance(h.point) + indirect) / kPi;
-      }
+      // The computed field when there is one (a solve), else the bin (maps made by hand in tests).
+      if (!s.field.empty())
+        return scene_.sphere.reflectance * (direct_irradiance(h.point) + s.field.after_first_strike(h.point)) / kPi;
       return scene_.sphere.reflectance * s.wall.E[static_cast<std::size_t>(wall_bin(s.wall, h.point, impl_->R))] / kPi;
     }
     case Hit::Baffle: {

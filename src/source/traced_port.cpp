@@ -1,9 +1,12 @@
 #include "polrig/source/traced_port.h"
 
-#include <cmath>
-#include <vector>
-#include <numbers>
+#include <Eigen/Dense>
 
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "polrig/optics/polarized_ray.h"
 #include "polrig/random.h"
 #include "polrig/statistics.h"
 #include "polrig/units.h"
@@ -14,6 +17,46 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 // The R2 sequence (a rank-1 lattice from the plastic number): low discrepancy in 2-D.
 constexpr double kR2a = 0.7548776662466927, kR2b = 0.5698402909980532;
+
+Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Vec3 mul(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+Vec3 unit(const Vec3& a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
+
+struct Rule {
+  std::vector<double> x, w;  // nodes and weights on [0, 1]
+};
+// Gauss–Legendre on [0, 1] (Golub–Welsch).
+Rule gauss_legendre_01(int n) {
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
+  for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = k / std::sqrt(4.0 * k * k - 1.0);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
+  Rule r;
+  for (int k = 0; k < n; ++k) {
+    r.x.push_back(0.5 * (es.eigenvalues()(k) + 1.0));
+    r.w.push_back(es.eigenvectors()(0, k) * es.eigenvectors()(0, k));
+  }
+  return r;
+}
+const Rule& port_radial_rule() {
+  static const Rule r = gauss_legendre_01(48);
+  return r;
+}
+const Rule& occluder_radial_rule() {
+  static const Rule r = gauss_legendre_01(12);
+  return r;
+}
+constexpr int kPortAzimuths = 96, kOccluderAzimuths = 32;
+
+// cos θ_P · cos θ_Q / |Q − P|² for a ray from P to Q (lengths in mm, the ratio dimensionless).
+double plane_to_plane(const Vec3& d) {
+  const double r2 = dot(d, d);
+  return d[2] * d[2] / (r2 * r2);
+}
 }  // namespace
 
 double disk_irradiance(double L, double a, double h, double r) {
@@ -21,15 +64,48 @@ double disk_irradiance(double L, double a, double h, double r) {
   return kPi * L * 0.5 * (1.0 - (s - a * a) / std::sqrt((s + a * a) * (s + a * a) - 4 * a * a * r * r));
 }
 
-TracedPort::TracedPort(const SphereTracer& tracer, const SphereSolution& solution)
-    : tracer_(tracer), solution_(solution) {}
+double mean_port_radiance(const SphereTracer& tracer, const SphereSolution& solution, double h) {
+  const TracedPort port(tracer, solution);
+  const std::vector<double> e = port.irradiance(0, 0, h, [](const Vec3&) { return 1.0; }, 16384, 1);
+  return e[0] / disk_irradiance(1.0, tracer.scene().port.radius(), h, 0);
+}
 
-StokesIrradiance TracedPort::plane_irradiance_shift(double x, double y, double L_o,
-                                                    long long samples, int shift,
-                                                    double L_ref) const {
+TracedPort::TracedPort(const SphereTracer& tracer, const SphereSolution& solution, double L_ref)
+    : tracer_(tracer), solution_(solution), L_ref_(L_ref) {}
+
+double TracedPort::wall_radiance_along(const Vec3& Q, const Vec3& up) const {
+  // The far root of the sphere from a point inside it: the wall, whatever stands in between.
+  const double R = tracer_.scene().sphere.radius();
+  const double b = dot(Q, up), c = dot(Q, Q) - R * R;
+  SphereTracer::Hit h;
+  h.kind = SphereTracer::Hit::Wall;
+  h.point = add(Q, mul(up, -b + std::sqrt(b * b - c)));
+  return tracer_.radiance(solution_, h);
+}
+
+double TracedPort::uniform_part(const Vec3& P, const RayTransmission& T) const {
+  if (L_ref_ == 0) return 0;
+  const double a = tracer_.scene().port.radius(), zp = tracer_.scene().port_plane_z();
+  const Rule& rule = port_radial_rule();
+  double e = 0;
+  for (std::size_t i = 0; i < rule.x.size(); ++i) {
+    // Area-uniform radius ρ = a·√s: dA = (a²/2)·ds·dφ.
+    const double rho = a * std::sqrt(rule.x[i]);
+    double ring = 0;
+    for (int j = 0; j < kPortAzimuths; ++j) {
+      const double phi = 2 * kPi * (j + 0.5) / kPortAzimuths;
+      const Vec3 d = sub({rho * std::cos(phi), rho * std::sin(phi), zp}, P);
+      ring += T(mul(unit(d), -1.0)) * plane_to_plane(d);
+    }
+    e += rule.w[i] * ring;
+  }
+  return L_ref_ * e * 0.5 * a * a * (2 * kPi / kPortAzimuths);
+}
+
+double TracedPort::sampled_part(const Vec3& P, const RayTransmission& T, long long samples,
+                                int shift) const {
   const SceneSpec& sc = tracer_.scene();
   const double a = sc.port.radius(), zp = sc.port_plane_z();
-  const Vec3 P{x, y, zp - L_o};
   const double du = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 0);
   const double dv = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 1);
   double e = 0;
@@ -39,43 +115,107 @@ StokesIrradiance TracedPort::plane_irradiance_shift(double x, double y, double L
     v -= std::floor(v);
     const double rho = a * std::sqrt(u), phi = 2 * kPi * v;
     const Vec3 Q{rho * std::cos(phi), rho * std::sin(phi), zp};
-    const Vec3 d{Q[0] - P[0], Q[1] - P[1], Q[2] - P[2]};
-    const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
-    const double inv = 1.0 / std::sqrt(r2);
-    const Vec3 dir{d[0] * inv, d[1] * inv, d[2] * inv};
-    const SphereTracer::Hit h = tracer_.first_hit(Q, dir, 0.0);
-    // cos θ_P · cos θ_Q / r², with cos = Δz/r (lengths in mm, the ratio is dimensionless).
-    e += (tracer_.radiance(solution_, h) - L_ref) * (d[2] * d[2]) / (r2 * r2);
+    const Vec3 d = sub(Q, P);
+    const Vec3 up = unit(d);
+    e += (wall_radiance_along(Q, up) - L_ref_) * T(mul(up, -1.0)) * plane_to_plane(d);
   }
-  e *= kPi * a * a / static_cast<double>(samples);
-  if (L_ref != 0) e += disk_irradiance(L_ref, a, L_o, std::hypot(x, y));
-  const PolarizerFilm& film = sc.port.polarizer;
-  const double g_up = film.g_up(), g_tp = film.g_tp();
-  StokesIrradiance out;
-  out.S0 = g_up * e;
-  out.S1 = g_tp * std::cos(2 * deg2rad(film.axis_deg)) * e;
-  out.S2 = g_tp * std::sin(2 * deg2rad(film.axis_deg)) * e;
-  return out;
+  return e * kPi * a * a / static_cast<double>(samples);
 }
 
-StokesIrradiance TracedPort::plane_irradiance(double x, double y, double L_o, long long samples,
-                                              int shifts) const {
-  std::vector<double> s0(static_cast<std::size_t>(shifts));
+double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const {
+  const SceneSpec& sc = tracer_.scene();
+  const double a = sc.port.radius(), zp = sc.port_plane_z();
+  const Rule& rule = occluder_radial_rule();
+  // The correction along one ray from P: where `index` of `kind` is the first surface seen
+  // through the port, its radiance replaces the wall's.
+  const auto correction = [&](const Vec3& up, SphereTracer::Hit::Kind kind, int index) {
+    if (up[2] <= 0) return 0.0;
+    const Vec3 Q = add(P, mul(up, (zp - P[2]) / up[2]));
+    if (Q[0] * Q[0] + Q[1] * Q[1] > a * a) return 0.0;  // outside the port's view
+    const SphereTracer::Hit h = tracer_.first_hit(Q, up, 0.0);
+    if (h.kind != kind || h.index != index) return 0.0;
+    return (tracer_.radiance(solution_, h) - wall_radiance_along(Q, up)) * T(mul(up, -1.0));
+  };
+  double e = 0;
+  for (std::size_t b = 0; b < sc.baffles.size(); ++b) {
+    const BaffleSpec& bf = sc.baffles[b];
+    const Vec3 n = unit(bf.normal);
+    const Vec3 t = unit(cross(std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, n)), s = cross(n, t);
+    for (std::size_t i = 0; i < rule.x.size(); ++i) {
+      const double r = bf.radius * std::sqrt(rule.x[i]);
+      const double w = 0.5 * bf.radius * bf.radius * rule.w[i] * (2 * kPi / kOccluderAzimuths);
+      for (int j = 0; j < kOccluderAzimuths; ++j) {
+        const double phi = 2 * kPi * (j + 0.5) / kOccluderAzimuths;
+        const Vec3 d = sub(add(bf.centre, add(mul(t, r * std::cos(phi)), mul(s, r * std::sin(phi)))), P);
+        const double d2 = dot(d, d), dist = std::sqrt(d2);
+        const Vec3 up = mul(d, 1.0 / dist);
+        // dω = |cos θ_B|·dA/d²; times cos θ_P.
+        e += w * correction(up, SphereTracer::Hit::Baffle, static_cast<int>(b)) * up[2] * std::abs(dot(n, up)) / d2;
+      }
+    }
+  }
+  for (std::size_t l = 0; l < sc.lamps.size(); ++l) {
+    const LampSpec& lamp = sc.lamps[l];
+    if (lamp.radius <= 0) continue;
+    const Vec3 to = sub(lamp.position, P);
+    const double D = std::sqrt(dot(to, to));
+    const Vec3 axis = mul(to, 1.0 / D);
+    const Vec3 t = unit(cross(std::abs(axis[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, axis)), s = cross(axis, t);
+    const double cos_max = std::sqrt(std::max(0.0, 1 - (lamp.radius / D) * (lamp.radius / D)));
+    for (std::size_t i = 0; i < rule.x.size(); ++i) {
+      const double cb = cos_max + (1 - cos_max) * rule.x[i], sb = std::sqrt(std::max(0.0, 1 - cb * cb));
+      const double w = (1 - cos_max) * rule.w[i] * (2 * kPi / kOccluderAzimuths);
+      for (int j = 0; j < kOccluderAzimuths; ++j) {
+        const double phi = 2 * kPi * (j + 0.5) / kOccluderAzimuths;
+        const Vec3 up = unit(add(mul(axis, cb), add(mul(t, sb * std::cos(phi)), mul(s, sb * std::sin(phi)))));
+        e += w * correction(up, SphereTracer::Hit::Lamp, static_cast<int>(l)) * up[2];
+      }
+    }
+  }
+  return e;
+}
+
+std::vector<double> TracedPort::irradiance(double x, double y, double h, const RayTransmission& T,
+                                           long long samples, int shifts) const {
+  const Vec3 P{x, y, tracer_.scene().port_plane_z() - h};
+  const double fixed = uniform_part(P, T) + occluder_part(P, T);
+  std::vector<double> e(static_cast<std::size_t>(shifts));
+  for (int k = 0; k < shifts; ++k) e[static_cast<std::size_t>(k)] = fixed + sampled_part(P, T, samples, k);
+  return e;
+}
+
+StokesIrradiance TracedPort::plane_stokes(double x, double y, double h, long long samples,
+                                          int shifts) const {
+  const PolarizerFilm& film = tracer_.scene().port.polarizer;
+  const double psi = deg2rad(film.axis_deg);
+  const Vec3 z{0, 0, 1}, port_axis{std::cos(psi), std::sin(psi), 0};
+  // Through the port film alone, and then an ideal analyzer at β lying in the plane.
+  const RayTransmission through_film = [&](const Vec3&) { return film.g_up(); };
+  const auto analyzer = [&](double beta_deg) -> RayTransmission {
+    const Vec3 axis{std::cos(deg2rad(beta_deg)), std::sin(deg2rad(beta_deg)), 0};
+    return [=, &film](const Vec3& k) {
+      PolarizedRay ray = unpolarized_ray(k, 1.0);
+      pass_sheet_polarizer(ray, z, port_axis, film.tau_M, film.tau_m);
+      pass_sheet_polarizer(ray, z, axis, 1.0, 0.0);
+      return ray.S[0];
+    };
+  };
+  const std::vector<double> s0 = irradiance(x, y, h, through_film, samples, shifts);
+  std::vector<double> s1 = irradiance(x, y, h, analyzer(0), samples, shifts), s2 = irradiance(x, y, h, analyzer(45), samples, shifts);
+  const std::vector<double> s1b = irradiance(x, y, h, analyzer(90), samples, shifts), s2b = irradiance(x, y, h, analyzer(135), samples, shifts);
+  for (std::size_t k = 0; k < s1.size(); ++k) {
+    s1[k] -= s1b[k];
+    s2[k] -= s2b[k];
+  }
   StokesIrradiance out;
-  for (int k = 0; k < shifts; ++k) {
-    const StokesIrradiance e = plane_irradiance_shift(x, y, L_o, samples, k);
-    s0[static_cast<std::size_t>(k)] = e.S0;
-    out.S1 += e.S1 / shifts;
-    out.S2 += e.S2 / shifts;
-  }
-  const MeanAndSpread m = mean_and_standard_error(s0);
-  out.S0 = m.mean;
-  out.S0_se = m.sd;
-  // The film scales S1, S2 by fixed factors of S0: their errors follow.
-  if (out.S0 > 0) {
-    out.S1_se = std::abs(out.S1 / out.S0) * out.S0_se;
-    out.S2_se = std::abs(out.S2 / out.S0) * out.S0_se;
-  }
+  const MeanAndSpread m0 = mean_and_standard_error(s0), m1 = mean_and_standard_error(s1),
+                      m2 = mean_and_standard_error(s2);
+  out.S0 = m0.mean;
+  out.S0_se = m0.sd;
+  out.S1 = m1.mean;
+  out.S1_se = m1.sd;
+  out.S2 = m2.mean;
+  out.S2_se = m2.sd;
   return out;
 }
 

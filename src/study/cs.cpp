@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "polrig/device/sensor.h"
+#include "polrig/sim/simulate.h"
 #include "polrig/statistics.h"
 
 #include <tbb/parallel_for.h>
@@ -24,25 +25,14 @@ CsTurn::CsTurn(int steps_per_turn) {
 
 namespace {
 
-// The six photodiodes' irradiance at every step of the turn, into E[m·n + k], by the rig's source
-// model. The cos⁴ loop is the hot loop of every sweep, written over the turn so that it vectorizes;
-// the traced source integrates the port for each photodiode (shift: see TracedSource).
-void irradiance_over_turn(const Rig& rig, const CsTurn& turn, int shift, double* E) {
+// The six photodiodes' irradiance at every step of the turn under the cos⁴ source, into
+// E[m·n + k]. This is the hot loop of every sweep, written over the turn so that it vectorizes.
+void cos4_irradiance_over_turn(const Rig& rig, const CsTurn& turn, double* E) {
   const int n = turn.steps();
   const double* c = turn.cos_theta();
   const double* s = turn.sin_theta();
   const Point2 port = port_centre(rig.eccentricity);
   const auto p0 = photodiode_positions(rig.device.ring, rig.eccentricity, 0.0);
-  if (const TracedSource* traced = rig.source.traced.get()) {
-    // Isolated: a sweep's outer loop must not run another grid point on this thread while it
-    // waits here, since that point would share this thread's scratch.
-    tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, 6 * n, [&](int mk) {
-      const int m = mk / n, k = mk % n;
-      const Point2 p = TableRotation{c[k], s[k]} * p0[m];
-      E[mk] = traced->photodiode_irradiance(to_scene(p - port), rig.source.cos4.L_o, shift);
-    }); });
-    return;
-  }
   const Cos4Source& source = rig.source.cos4;
   for (int m = 0; m < 6; ++m) {
     const double qx = p0[m].x(), qy = p0[m].y();
@@ -55,10 +45,24 @@ void irradiance_over_turn(const Rig& rig, const CsTurn& turn, int shift, double*
   }
 }
 
-// ΔV_br of the three pairs over the turn (Eq. 5), into br[i·n + k].
-void deviations_before(const Rig& rig, const CsTurn& turn, int shift, double* E, double* br) {
+// The traced source's effective irradiances (light_at_pose) at every step of the turn, one
+// array E[m·n + k] per shift.
+std::vector<std::vector<double>> traced_irradiance_over_turn(const Rig& rig, const CsTurn& turn) {
+  const int n = turn.steps(), S = rig.source.traced->shifts();
+  std::vector<std::vector<double>> E(static_cast<std::size_t>(S), std::vector<double>(static_cast<std::size_t>(6 * n)));
+  // Isolated: a sweep's outer loop must not run another grid point on this thread while it
+  // waits here, since that point would share this thread's scratch.
+  tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, 6 * n, [&](int mk) {
+    const int m = mk / n, k = mk % n;
+    const std::vector<double> e = traced_effective_irradiance(rig, turn.theta_R_deg(k), m);
+    for (int sh = 0; sh < S; ++sh) E[static_cast<std::size_t>(sh)][static_cast<std::size_t>(mk)] = e[static_cast<std::size_t>(sh)];
+  }); });
+  return E;
+}
+
+// ΔV_br of the three pairs over the turn (Eq. 5) from the irradiances E[m·n + k], into br[i·n + k].
+void deviations_before(const Rig& rig, const CsTurn& turn, const double* E, double* br) {
   const int n = turn.steps();
-  irradiance_over_turn(rig, turn, shift, E);
   for (int i = 0; i < 3; ++i) {
     const double* Ej = E + pair_j(i) * n;
     const double* Eh = E + pair_h(i) * n;
@@ -87,13 +91,18 @@ CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
 
 namespace {
 
-// One estimate of the turn: ΔV_br and ΔV_mr into scratch, and their summary.
-CsSummary one_pass(const Rig& rig, const CsTurn& turn, int shift, std::vector<double>& scratch) {
+// One estimate of the turn from irradiances E[m·n + k] (cos⁴ when null): ΔV_br and ΔV_mr into
+// scratch, and their summary.
+CsSummary one_pass(const Rig& rig, const CsTurn& turn, const double* E, std::vector<double>& scratch) {
   const int n = turn.steps();
   scratch.resize(static_cast<std::size_t>(12 * n));
   double* br = scratch.data();
   double* mr = br + 3 * n;
-  deviations_before(rig, turn, shift, mr + 3 * n, br);
+  if (!E) {
+    cos4_irradiance_over_turn(rig, turn, mr + 3 * n);
+    E = mr + 3 * n;
+  }
+  deviations_before(rig, turn, E, br);
   for (int i = 0; i < 3; ++i) central_symmetry_average(br + i * n, mr + i * n, n);
   return summarise(rig, br, mr, n);
 }
@@ -125,8 +134,19 @@ CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>
   const int n = turn.steps(), S = rig.source.traced->shifts();
   std::vector<double> mean(static_cast<std::size_t>(6 * n), 0.0);
   std::vector<CsSummary> per_shift;
+  // ΔV refers to the coaxial rig's traced voltages at the same pose (ideal_irradiance): Eq. 5's
+  // bias of the eccentric rig less that of the coaxial one, log10 of the ratio of ratios.
+  std::vector<std::vector<double>> E = traced_irradiance_over_turn(rig, turn);
+  const std::vector<std::vector<double>> E_ideal = traced_irradiance_over_turn(coaxial(rig), turn);
   for (int k = 0; k < S; ++k) {
-    per_shift.push_back(one_pass(rig, turn, k, scratch));
+    std::vector<double>& e = E[static_cast<std::size_t>(k)];
+    const std::vector<double>& ideal = E_ideal[static_cast<std::size_t>(k)];
+    for (int i = 0; i < 3; ++i)
+      for (int t = 0; t < n; ++t) {  // scale the h channel so that E_j/E_h becomes the ratio of ratios
+        const std::size_t j = static_cast<std::size_t>(pair_j(i) * n + t), h = static_cast<std::size_t>(pair_h(i) * n + t);
+        e[h] *= ideal[j] / ideal[h];
+      }
+    per_shift.push_back(one_pass(rig, turn, e.data(), scratch));
     for (std::size_t j = 0; j < mean.size(); ++j) mean[j] += scratch[j] / S;
   }
   CsSummary out = summarise(rig, mean.data(), mean.data() + 3 * n, n);
@@ -139,7 +159,7 @@ CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>
 }  // namespace
 
 CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch) {
-  if (!rig.source.traced) return one_pass(rig, turn, -1, scratch);
+  if (!rig.source.traced) return one_pass(rig, turn, nullptr, scratch);
   return traced_summary(rig, turn, scratch, nullptr);
 }
 
@@ -153,7 +173,7 @@ CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
   if (study.traced) {
     study.summary = traced_summary(rig, turn, scratch, &curves);
   } else {
-    study.summary = one_pass(rig, turn, -1, scratch);
+    study.summary = one_pass(rig, turn, nullptr, scratch);
     curves.assign(scratch.begin(), scratch.begin() + 6 * n);
   }
   for (int i = 0; i < 3; ++i) {

@@ -11,6 +11,7 @@
 #include "polrig/io/exr.h"
 #include "polrig/io/plot.h"
 #include "polrig/io/scene_yaml.h"
+#include "polrig/statistics.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
 
@@ -47,7 +48,7 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
   write_text_file(dir / "wall_radiance.csv", wall.text());
 
   // Stokes irradiance on the plane L_o below the port, over ±1.5 port radii.
-  const TracedPort port(tracer, sol);
+  const TracedPort port(tracer, sol, mean_port_radiance(tracer, sol, scene.sensor.L_o));
   const double a = scene.port.radius(), L_o = scene.sensor.L_o;
   const int N = 61;
   const double half = 1.5 * a;
@@ -55,7 +56,7 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
   const long long map_samples = std::max<long long>(64, scene.trace.plane_samples / 8);
   tbb::parallel_for(0, N * N, [&](int k) {
     const double x = -half + 2 * half * (k % N) / (N - 1), y = half - 2 * half * (k / N) / (N - 1);
-    grid[static_cast<std::size_t>(k)] = port.plane_irradiance(x, y, L_o, map_samples, 4);
+    grid[static_cast<std::size_t>(k)] = port.plane_stokes(x, y, L_o, map_samples, 4);
   });
   ExrChannel s0{"S0", {}}, s1{"S1", {}}, s2{"S2", {}}, s0se{"S0_se", {}};
   CsvTable plane({"x_mm", "y_mm", "S0", "S1", "S2", "S0_se"});
@@ -73,6 +74,8 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
   // Azimuthally averaged profile against the distance from the port axis, with the uniform-disk
   // formula and cos⁴φ scaled to the centre for comparison.
   const int azimuths = 8, radii = 31;
+  const double g_film = scene.port.polarizer.g_up();
+  const RayTransmission through_film = [g_film](const Vec3&) { return g_film; };
   const long long samples = scene.trace.plane_samples;
   std::vector<std::array<double, 2>> prof(static_cast<std::size_t>(radii));
   tbb::parallel_for(0, radii, [&](int i) {
@@ -80,9 +83,10 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
     double s = 0, s2sum = 0;
     for (int j = 0; j < azimuths; ++j) {
       const double phi = 2 * kPi * j / azimuths;
-      const StokesIrradiance e = port.plane_irradiance(r * std::cos(phi), r * std::sin(phi), L_o, samples, 8);
-      s += e.S0 / azimuths;
-      s2sum += e.S0_se * e.S0_se / (azimuths * azimuths);
+      const MeanAndSpread e = mean_and_standard_error(
+          port.irradiance(r * std::cos(phi), r * std::sin(phi), L_o, through_film, samples, 8));
+      s += e.mean / azimuths;
+      s2sum += e.sd * e.sd / (azimuths * azimuths);
     }
     prof[static_cast<std::size_t>(i)] = {s, std::sqrt(s2sum)};
   });

@@ -33,6 +33,11 @@ constexpr int pair_h(int i) { return 2 * i + 1; }
 // It is the film's transmission normalised by its unpolarized gain g_up (spec §4).
 double channel_response(const CalibrationParams& p, int m, double theta_deg, double d);
 
+// The analyzer film that Eq. 15's α_m stands for: its axis φ_m in the sensor frame, with
+// cos(2θ + α_m) = ±cos 2(θ − φ_m) (the inverse of CalibrationParams::theory). Its polarizing
+// efficiency is 1 + kd_m.
+double film_axis_from_alpha_deg(const CalibrationParams& p, int m);
+
 // Voltage of pair i whose channels receive irradiances E_j and E_h (any common unit), Eq. 15
 // with Eq. 5's unequal-irradiance term, both through the amplifier:
 //   V_i = kv_i·v_dec·log10[(E_j·R_j) / (E_h·R_h)] + k_i,      v_dec = 0.5 V/decade.

@@ -15,12 +15,30 @@ struct PoseLight {
   double d;                     // degree of linear polarization
 };
 
+// The light at each photodiode. For a traced source E_Wm2 is an effective irradiance (the mean
+// of traced_effective_irradiance over its shifts).
 PoseLight light_at_pose(const Rig& rig, double theta_R_deg);
+
+// The rig with port and sensor on the table's axis (L_IS = L_S = 0).
+Rig coaxial(const Rig& rig);
+
+// The irradiances of the ideal, eccentricity-free measurement that V_ideal and ΔV refer to: the
+// uniform E_0 of the cos⁴ model; for a traced source, the coaxial rig's effective irradiances
+// at the same pose (its optics, obliquity and port pattern included, which calibration absorbs,
+// and no eccentricity).
+std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg);
+
+// A traced source's effective irradiance at channel m, one value per shift: the channel's traced
+// signal through its films and optics (TracedSource::channel_signal) divided by Eq. 15's
+// normal-incidence bracket for the pose's (θ, d), so that the device model, which applies the
+// bracket, reproduces the traced signal, obliquity effects included. The channel's analyzer is
+// the film its truth α_m and kd_m stand for, turned with the table.
+std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m);
 
 struct Stop {
   double theta_R_deg;
   PoseLight light;
-  std::array<double, 3> V_ideal;  // the rig's device under uniform light E_0: no eccentricity
+  std::array<double, 3> V_ideal;  // the rig's device without eccentricity (ideal_irradiance)
   std::array<double, 3> V_ecc;    // with the pose's irradiances, before noise and ADC
   std::array<double, 3> V_mean;   // mean of the noisy, ADC-quantized samples
   std::array<double, 3> V_std;    // their sample standard deviation (n − 1); 0 for one sample

@@ -74,6 +74,7 @@ struct TraceSettings {
   int batches = 16;             // independent batches for standard errors
   int wall_bins_theta = 90;     // wall radiance map, polar angle from +z
   int wall_bins_phi = 180;
+  double field_step_deg = 2.0;     // grid step of the computed wall field (wall_field.h)
   long long plane_samples = 4096;  // quasi-random samples per point for plane and sensor integrals
   std::uint64_t seed = 1;
 };

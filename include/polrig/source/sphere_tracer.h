@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "polrig/source/scene.h"
+#include "polrig/source/wall_field.h"
 
 namespace polrig {
 
@@ -32,21 +33,9 @@ struct WallMap {
   int bin(int i_theta, int i_phi) const { return i_theta * n_phi + i_phi; }
 };
 
-// A smooth fit of the wall irradiance after the first strike,
-// E(μ, φ) = Σ_l Σ_k P_l(μ)·[a_lk cos kφ + b_lk sin kφ] (μ = cos θ, Legendre P_l), by least
-// squares over the map's full bins. That light is smooth (nearly uniform); the binned map
-// carries each bin's Monte-Carlo noise, which the sensor integrals would otherwise see as
-// structure that moves with the pose. The first strike, which carries the sharp lamp spots, is
-// computed exactly instead (SphereTracer::direct_irradiance).
-struct SmoothWall {
-  int degree = 8, harmonics = 4;
-  std::vector<double> coefficients;  // (degree+1)·(2·harmonics+1), l-major
-  double operator()(double mu, double phi) const;
-};
-
 struct SphereSolution {
   WallMap wall;
-  SmoothWall smooth;
+  WallField field;  // the light after the first strike, computed (wall_field.h)
   std::vector<std::array<double, 2>> baffle_E;  // mean irradiance of each baffle's faces (+n, −n)
   EnergyLedger ledger;
   std::vector<double> batch_indirect_W;  // per batch: power landing on the wall after the first strike
@@ -76,8 +65,8 @@ class SphereTracer {
   // leaves through the port (or starts outside and never enters).
   Hit first_hit(const Vec3& origin, const Vec3& dir, double t_min = 1e-9) const;
 
-  // Radiance (W/m²/sr) of a point a ray has hit, from a solution: ρE/π of the wall (its smooth
-  // fit) or of the baffle face (uniform per face); a lamp's own exitance/π (its reflection is
+  // Radiance (W/m²/sr) of a point a ray has hit, from a solution: ρE/π of the wall (first strike
+  // plus the computed field) or of the baffle face (uniform per face); a lamp's own exitance/π (its reflection is
   // not added).
   double radiance(const SphereSolution& s, const Hit& h) const;
 

@@ -1,15 +1,15 @@
 #pragma once
 // The traced source as a rig's light (source.model: traced): the scene's sphere is solved once,
-// and the irradiance at a photodiode is the port integral of traced_port.h over the photodiode's
-// square (2 × 2 Gauss points). The light's degree and angle of polarization are those of the
-// scene's port film (normal-incidence model).
+// and each channel's signal is the port integral of traced_port.h through the films (and lens)
+// in front of its photodiode.
 //
-// The quasi-random port samples are the same for every photodiode and pose; each of `shifts`
+// The quasi-random samples are the same for every photodiode and pose; each of `shifts`
 // independent random shifts gives a complete estimate, so studies run once per shift and report
 // the spread of the shifts as standard errors.
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "polrig/rig/geometry.h"
 #include "polrig/source/scene.h"
@@ -23,6 +23,13 @@ inline Point2 to_scene(const Point2& rig) { return {rig.x(), -rig.y()}; }
 class SphereTracer;
 struct SphereSolution;
 
+// A channel's analyzer film: its transmission axis in the scene frame (degrees from +x towards
+// +y) and its polarizing efficiency e = (τM − τm)/(τM + τm) (1 + kd_m of Eq. 15).
+struct AnalyzerFilm {
+  double axis_deg = 0;
+  double efficiency = 1;
+};
+
 class TracedSource {
  public:
   explicit TracedSource(const SceneSpec& scene);
@@ -31,12 +38,19 @@ class TracedSource {
   const SceneSpec& scene() const { return scene_; }
   int shifts() const { return shifts_; }
 
-  // Mean irradiance S0 (W/m²) on a photodiode whose centre (or, lensed, whose channel axis) is
-  // at `p` (port-centred plane coordinates, mm), from shift `shift`, or all shifts pooled (−1).
-  // Bare (sensor.geometry: bare): the photodiode lies L_o below the port. Lensed: the channel's
-  // film is L_o below the port, then film_to_lens, the plano-convex lens (traced exactly, with
-  // Fresnel losses) and lens_to_photodiode; the blue filter scales every channel alike.
-  double photodiode_irradiance(const Point2& p, double L_o, int shift = -1) const;
+  // The signal of one channel, per shift (0 … shifts() − 1): the flux reaching its photodiode
+  // through the port film, the channel's analyzer film and, lensed, the blue filter and the lens,
+  // per unit area, divided by the two films' gains for unpolarized light, g_up·g_up'. Each ray
+  // carries its Stokes vector through the films (O-type sheet polarizers at their oblique
+  // incidence) and the lens's faces (Fresnel s and p), each in its own frame
+  // (optics/polarized_ray.h). At normal incidence under a uniform port the signal is
+  // E·[1 + d·e·cos 2(ψ − β)], Eq. 15's bracket times the irradiance.
+  //
+  // `p` is the photodiode's centre (bare) or its channel's lens axis (lensed), port-centred, in
+  // the scene frame (mm). Bare (sensor.geometry: bare): the film lies on the photodiode, L_o
+  // below the port (2 × 2 Gauss points over its square). Lensed: the film is L_o below the port,
+  // then film_to_lens, the plano-convex lens and lens_to_photodiode.
+  std::vector<double> channel_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const;
 
   // The port film: degree of polarization, and its axis in the rig frame (the scene's axis,
   // mirrored: −axis_deg).
@@ -50,7 +64,8 @@ class TracedSource {
  private:
   // The sphere is solved on first use, once, whichever thread asks first.
   const SphereSolution& solution() const;
-  double lensed_irradiance(const Point2& p, double top, int shift) const;
+  std::vector<double> bare_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const;
+  std::vector<double> lensed_signal(const Point2& p, double top, const AnalyzerFilm& film) const;
 
   SceneSpec scene_;
   int shifts_ = 8;

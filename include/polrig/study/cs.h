@@ -2,7 +2,8 @@
 // The central-symmetry (CS) study (spec §3; Wang et al. 2019 §3.2, Figs. 8–12).
 //
 // Over a full turn of the table, ΔV_br(θ_R) = V − V_ideal is the voltage deviation that the
-// rig's eccentricity causes (Eq. 5, through the rig's amplifiers), and the CS average is
+// rig's eccentricity causes (Eq. 5, through the rig's amplifiers; V_ideal: sim/simulate.h's
+// ideal_irradiance, the coaxial rig's voltages for a traced source), and the CS average is
 // ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2. BSD and ASD are the population standard
 // deviations of ΔV_br and ΔV_mr over the turn; the expectations are their means.
 // Noise and the ADC do not enter: this is the deterministic bias the calibration must absorb.

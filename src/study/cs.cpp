@@ -130,9 +130,10 @@ namespace {
 // reduced by √shifts), with the standard errors of the per-shift figures. Eq. 6 is a cos⁴
 // result and has no meaning here (NaN).
 CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch,
-                         std::vector<double>* mean_curves) {
+                         std::vector<double>* mean_curves, CsSummary* coaxial_summary) {
   const int n = turn.steps(), S = rig.source.traced->shifts();
-  std::vector<double> mean(static_cast<std::size_t>(6 * n), 0.0);
+  std::vector<double> mean(static_cast<std::size_t>(6 * n), 0.0), coaxial_mean(mean.size(), 0.0);
+  std::vector<std::vector<double>> curves;  // per shift, for the standard errors per pose
   std::vector<CsSummary> per_shift;
   // ΔV refers to the coaxial rig's traced voltages at the same pose (ideal_irradiance): Eq. 5's
   // bias of the eccentric rig less that of the coaxial one, log10 of the ratio of ratios.
@@ -141,6 +142,10 @@ CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>
   for (int k = 0; k < S; ++k) {
     std::vector<double>& e = E[static_cast<std::size_t>(k)];
     const std::vector<double>& ideal = E_ideal[static_cast<std::size_t>(k)];
+    if (coaxial_summary) {  // the coaxial rig against the uniform light of the nominal model
+      one_pass(rig, turn, ideal.data(), scratch);
+      for (std::size_t j = 0; j < coaxial_mean.size(); ++j) coaxial_mean[j] += scratch[j] / S;
+    }
     for (int i = 0; i < 3; ++i)
       for (int t = 0; t < n; ++t) {  // scale the h channel so that E_j/E_h becomes the ratio of ratios
         const std::size_t j = static_cast<std::size_t>(pair_j(i) * n + t), h = static_cast<std::size_t>(pair_h(i) * n + t);
@@ -148,11 +153,21 @@ CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>
       }
     per_shift.push_back(one_pass(rig, turn, e.data(), scratch));
     for (std::size_t j = 0; j < mean.size(); ++j) mean[j] += scratch[j] / S;
+    curves.emplace_back(scratch.begin(), scratch.begin() + 6 * n);
   }
   CsSummary out = summarise(rig, mean.data(), mean.data() + 3 * n, n);
   add_shift_standard_errors(per_shift, out);
+  if (coaxial_summary) *coaxial_summary = summarise(rig, coaxial_mean.data(), coaxial_mean.data() + 3 * n, n);
   for (int i = 0; i < 3; ++i) out[i].eq6_mV = std::numeric_limits<double>::quiet_NaN();
-  if (mean_curves) *mean_curves = std::move(mean);
+  if (mean_curves) {
+    std::vector<double> v(static_cast<std::size_t>(S));
+    const std::size_t values = mean.size();
+    for (std::size_t j = 0; j < values; ++j) {
+      for (int k = 0; k < S; ++k) v[static_cast<std::size_t>(k)] = curves[static_cast<std::size_t>(k)][j];
+      mean.push_back(mean_and_standard_error(v).sd);  // appended: the standard error of each value
+    }
+    *mean_curves = std::move(mean);
+  }
   return out;
 }
 
@@ -160,7 +175,7 @@ CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>
 
 CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch) {
   if (!rig.source.traced) return one_pass(rig, turn, nullptr, scratch);
-  return traced_summary(rig, turn, scratch, nullptr);
+  return traced_summary(rig, turn, scratch, nullptr, nullptr);
 }
 
 CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
@@ -171,7 +186,7 @@ CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
   for (int k = 0; k < n; ++k) study.theta_R_deg.push_back(turn.theta_R_deg(k));
   std::vector<double> curves;
   if (study.traced) {
-    study.summary = traced_summary(rig, turn, scratch, &curves);
+    study.summary = traced_summary(rig, turn, scratch, &curves, &study.coaxial);
   } else {
     study.summary = one_pass(rig, turn, nullptr, scratch);
     curves.assign(scratch.begin(), scratch.begin() + 6 * n);
@@ -179,6 +194,10 @@ CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
   for (int i = 0; i < 3; ++i) {
     study.dv_br_V[i].assign(curves.begin() + i * n, curves.begin() + (i + 1) * n);
     study.dv_mr_V[i].assign(curves.begin() + (3 + i) * n, curves.begin() + (4 + i) * n);
+    if (study.traced) {
+      study.dv_br_se_V[i].assign(curves.begin() + (6 + i) * n, curves.begin() + (7 + i) * n);
+      study.dv_mr_se_V[i].assign(curves.begin() + (9 + i) * n, curves.begin() + (10 + i) * n);
+    }
   }
   return study;
 }

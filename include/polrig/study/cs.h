@@ -44,7 +44,12 @@ struct CsStudy {
   bool traced = false;  // the summary carries standard errors
   std::vector<double> theta_R_deg;
   std::array<std::vector<double>, 3> dv_br_V, dv_mr_V;  // per pair, per table angle
+  std::array<std::vector<double>, 3> dv_br_se_V, dv_mr_se_V;  // traced: their standard errors
   CsSummary summary;
+  // Traced: the coaxial rig's own deviations from the nominal model's uniform light (the port's
+  // radiance pattern and the films' obliquity as a sensor on the axis sees them turn); no
+  // eccentricity in them, and CS does not remove their second harmonic.
+  CsSummary coaxial{};
 };
 
 CsStudy cs_study(const Rig& rig, const CsTurn& turn);

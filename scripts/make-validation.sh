@@ -23,6 +23,10 @@ $p sweep $rig --set eccentricity.alpha_S=240 \
 $p simulate rigs/wang2019-indoor.yaml -o "$out/simulate"
 $p calibrate "$out/simulate" --method all -o "$out/calibrate"
 $p study calibration rigs/wang2019-indoor.yaml --trials 1000 -o "$out/trials"
+$p trace scenes/jf500.yaml -o "$out/trace"
+$p study cs rigs/wang2019-indoor-traced.yaml -o "$out/traced_bare"
+$p study cs rigs/wang2019-indoor-traced-lensed.yaml -o "$out/traced_lensed"
+$p study cs rigs/wang2019-indoor.yaml -o "$out/cos4_indoor"
 
 cp "$out/adc/accuracy_limit.png" "$img/fig6_accuracy_limit.png"
 cp "$out/fig8a/cs_pair1.png" "$img/fig8a_port_offset_pair1.png"
@@ -41,6 +45,10 @@ cp "$out/calibrate/cs-nc/fit.png" "$img/fig17_fit_cs_nc.png"
 cp "$out/calibrate/comparison.png" "$img/fig20_comparison.png"
 cp "$out/calibrate/cs-nc/replacement.png" "$img/fig21_replacement.png"
 cp "$out/trials/accuracy_cdf.png" "$img/calibration_trials_cdf.png"
+cp "$out/trace/plane_profile.png" "$img/traced_plane_profile.png"
+cp "$out/trace/wall_radiance.png" "$img/traced_wall_radiance.png"
+cp "$out/traced_bare/cs_pair1.png" "$img/traced_bare_cs_pair1.png"
+cp "$out/traced_lensed/cs_pair1.png" "$img/traced_lensed_cs_pair1.png"
 
 echo "== ADC limits (d = 0.05, 0.7) =="
 grep -E '^(0.05|0.7),' "$out/adc/accuracy_limit.csv"
@@ -64,4 +72,11 @@ echo "== Replacement (cs-nc) =="
 cat "$out/calibrate/cs-nc/replacement.csv"
 echo "== Monte-Carlo calibrations (1000 trials) =="
 cat "$out/trials/summary.csv"
+echo "== Traced source: trace summary, CS studies (cos4 indoor, bare, lensed) =="
+cat "$out/trace/trace_summary.yaml"
+for f in cos4_indoor traced_bare traced_lensed; do echo "-- $f"; cat "$out/$f/summary.csv"; done
+for f in traced_bare traced_lensed; do
+  echo "-- $f: largest and median per-pose standard error of dv_mr (mV)"
+  awk -F, 'NR>1 {print $6}' "$out/$f/deviations.csv" | sort -g | awk '{v[NR]=$1} END {print v[NR], v[int((NR+1)/2)]}'
+done
 rm -rf "$out"

@@ -134,7 +134,7 @@ void BM_Tracer_SphereSolve(benchmark::State& state) {
   scene.trace.batches = 4;
   const SphereTracer tracer(scene);
   long long rays = 0;
-  for (auto _ : state) rays += tracer.solve().ledger.rays;
+  for (auto _ : state) rays += tracer.trace_photons().ledger.rays;
   state.SetItemsProcessed(rays);
 }
 BENCHMARK(BM_Tracer_SphereSolve)->Unit(benchmark::kMillisecond);

@@ -270,7 +270,7 @@ struct BatchTally {
 
 }  // namespace
 
-SphereSolution SphereTracer::solve() const {
+SphereSolution SphereTracer::trace_photons() const {
   const Impl& m = *impl_;
   const TraceSettings& ts = scene_.trace;
   const auto t0 = std::chrono::steady_clock::now();
@@ -409,7 +409,14 @@ SphereSolution SphereTracer::solve() const {
     L.leaked += t.ledger.leaked;
     L.rays += t.ledger.rays;
   }
-  const int steps = static_cast<int>(std::lround(180.0 / ts.field_step_deg));
+  sol.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sol;
+}
+
+SphereSolution SphereTracer::solve() const {
+  const auto t0 = std::chrono::steady_clock::now();
+  SphereSolution sol = trace_photons();
+  const int steps = static_cast<int>(std::lround(180.0 / scene_.trace.field_step_deg));
   sol.field = compute_wall_field(*this, sol, steps + 1, 2 * steps);
   sol.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;

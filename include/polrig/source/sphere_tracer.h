@@ -52,7 +52,10 @@ class SphereTracer {
 
   // Traces scene.trace.photons photons in scene.trace.batches batches (in parallel; the result
   // does not depend on the thread count).
+  // Then computes the wall field (wall_field.h) from them.
   SphereSolution solve() const;
+  // The photons alone: the solution without its wall field (for benchmarks of the tracer).
+  SphereSolution trace_photons() const;
 
   struct Hit {
     enum Kind { None, Wall, Lamp, Baffle } kind = None;

@@ -10,6 +10,7 @@
 #include "polrig/io/scene_yaml.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/cs.h"
+#include "polrig/quadrature.h"
 #include "polrig/statistics.h"
 #include "polrig/study/sweep.h"
 #include "polrig/source/sphere_tracer.h"
@@ -331,24 +332,16 @@ std::string write_theory_scene(const test::TempDir& dir) {
 // between their transmitted fields e ∝ k × m (m = z × axis, the absorption axis), divided by
 // g₁g₂; integrated by a Gauss rule over the port (polar, area-uniform radius).
 double film_pair_signal(const Vec3& P, double a, double zp, double psi, double beta, double d1, double d2) {
-  static const auto rule = [] {
-    const int n = 48;
-    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-    for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = k / std::sqrt(4.0 * k * k - 1.0);
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
-    std::vector<std::array<double, 2>> r;
-    for (int k = 0; k < n; ++k) r.push_back({0.5 * (es.eigenvalues()(k) + 1), es.eigenvectors()(0, k) * es.eigenvectors()(0, k)});
-    return r;
-  }();
+  static const QuadratureRule rule = gauss_legendre_01(48);
   const auto e_of = [](const Eigen::Vector3d& k, double axis) {
     const Eigen::Vector3d m = Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(std::cos(axis), std::sin(axis), 0));
     return k.cross(m).normalized();
   };
   const int azimuths = 96;
   double e = 0;
-  for (const auto& [x, w] : rule)
+  for (std::size_t i = 0; i < rule.x.size(); ++i)
     for (int j = 0; j < azimuths; ++j) {
-      const double rho = a * std::sqrt(x), phi = 2 * kPi * (j + 0.5) / azimuths;
+      const double w = rule.w[i], rho = a * std::sqrt(rule.x[i]), phi = 2 * kPi * (j + 0.5) / azimuths;
       const Eigen::Vector3d d(rho * std::cos(phi) - P[0], rho * std::sin(phi) - P[1], zp - P[2]);
       const Eigen::Vector3d k = -d.normalized();
       const double c = e_of(k, psi).dot(e_of(k, beta));

@@ -1,12 +1,11 @@
 #include "polrig/source/traced_port.h"
 
-#include <Eigen/Dense>
-
 #include <cmath>
 #include <numbers>
 #include <vector>
 
 #include "polrig/optics/polarized_ray.h"
+#include "polrig/quadrature.h"
 #include "polrig/random.h"
 #include "polrig/statistics.h"
 #include "polrig/units.h"
@@ -27,27 +26,12 @@ Vec3 cross(const Vec3& a, const Vec3& b) {
 }
 Vec3 unit(const Vec3& a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
 
-struct Rule {
-  std::vector<double> x, w;  // nodes and weights on [0, 1]
-};
-// Gauss–Legendre on [0, 1] (Golub–Welsch).
-Rule gauss_legendre_01(int n) {
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-  for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = k / std::sqrt(4.0 * k * k - 1.0);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
-  Rule r;
-  for (int k = 0; k < n; ++k) {
-    r.x.push_back(0.5 * (es.eigenvalues()(k) + 1.0));
-    r.w.push_back(es.eigenvectors()(0, k) * es.eigenvectors()(0, k));
-  }
+const QuadratureRule& port_radial_rule() {
+  static const QuadratureRule r = gauss_legendre_01(48);
   return r;
 }
-const Rule& port_radial_rule() {
-  static const Rule r = gauss_legendre_01(48);
-  return r;
-}
-const Rule& occluder_radial_rule() {
-  static const Rule r = gauss_legendre_01(12);
+const QuadratureRule& occluder_radial_rule() {
+  static const QuadratureRule r = gauss_legendre_01(12);
   return r;
 }
 constexpr int kPortAzimuths = 96, kOccluderAzimuths = 32;
@@ -86,7 +70,7 @@ double TracedPort::wall_radiance_along(const Vec3& Q, const Vec3& up) const {
 double TracedPort::uniform_part(const Vec3& P, const RayTransmission& T) const {
   if (L_ref_ == 0) return 0;
   const double a = tracer_.scene().port.radius(), zp = tracer_.scene().port_plane_z();
-  const Rule& rule = port_radial_rule();
+  const QuadratureRule& rule = port_radial_rule();
   double e = 0;
   for (std::size_t i = 0; i < rule.x.size(); ++i) {
     // Area-uniform radius ρ = a·√s: dA = (a²/2)·ds·dφ.
@@ -125,7 +109,7 @@ double TracedPort::sampled_part(const Vec3& P, const RayTransmission& T, long lo
 double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const {
   const SceneSpec& sc = tracer_.scene();
   const double a = sc.port.radius(), zp = sc.port_plane_z();
-  const Rule& rule = occluder_radial_rule();
+  const QuadratureRule& rule = occluder_radial_rule();
   // The correction along one ray from P: where `index` of `kind` is the first surface seen
   // through the port, its radiance replaces the wall's.
   const auto correction = [&](const Vec3& up, SphereTracer::Hit::Kind kind, int index) {

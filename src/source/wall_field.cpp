@@ -1,13 +1,12 @@
 #include "polrig/source/wall_field.h"
 
-#include <Eigen/Dense>
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include <tbb/parallel_for.h>
 
+#include "polrig/quadrature.h"
 #include "polrig/source/sphere_tracer.h"
 
 namespace polrig {
@@ -28,22 +27,6 @@ Vec3 unit(const Vec3& a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
 void basis_around(const Vec3& n, Vec3& t, Vec3& b) {
   t = unit(cross(std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, n));
   b = cross(n, t);
-}
-
-// Gauss–Legendre nodes and weights on [0, 1] (Golub–Welsch: the eigenvalues of the Jacobi matrix).
-struct Rule {
-  std::vector<double> x, w;
-};
-Rule gauss_legendre_01(int n) {
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(n, n);
-  for (int k = 1; k < n; ++k) J(k, k - 1) = J(k - 1, k) = k / std::sqrt(4.0 * k * k - 1.0);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(J);
-  Rule r;
-  for (int k = 0; k < n; ++k) {
-    r.x.push_back(0.5 * (es.eigenvalues()(k) + 1.0));
-    r.w.push_back(es.eigenvectors()(0, k) * es.eigenvectors()(0, k));  // 2·v₀², halved for [0, 1]
-  }
-  return r;
 }
 
 // A radiance that depends linearly on the unknown constant C: a + b·C (W/m²/sr).
@@ -164,7 +147,7 @@ class OccluderIntegrals {
   const SphereTracer& tracer_;
   const SphereSolution& solution_;
   const SceneSpec& scene_;
-  Rule radial_;
+  QuadratureRule radial_;
 };
 
 Vec3 node_point(double R, double theta, double phi) {

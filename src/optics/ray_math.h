@@ -5,21 +5,19 @@
 #include <cmath>
 #include <optional>
 
-namespace polrig {
+#include "polrig/vec3.h"
 
-using Vec3 = std::array<double, 3>;
+namespace polrig {
 
 namespace optics_detail {
 
-inline Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-inline Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-inline Vec3 mul(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-inline Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-inline double norm(const Vec3& a) { return std::sqrt(dot(a, a)); }
-inline Vec3 unit(const Vec3& a) { return mul(a, 1.0 / norm(a)); }
+using vec3::add;
+using vec3::cross;
+using vec3::dot;
+using vec3::mul;
+using vec3::norm;
+using vec3::sub;
+using vec3::unit;
 // The part of v perpendicular to the unit vector k.
 inline Vec3 reject(const Vec3& v, const Vec3& k) { return sub(v, mul(k, dot(v, k))); }
 

@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include "polrig/random.h"
+#include "polrig/vec3.h"
 #include "polrig/statistics.h"
 
 namespace polrig {
@@ -20,23 +21,15 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 mul(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec3 normalized(const Vec3& a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
+using namespace vec3;
 
 // A direction drawn from the cosine-weighted hemisphere around unit normal n (Malley's method).
 Vec3 cosine_direction(const Vec3& n, double u1, double u2) {
-  const Vec3 helper = std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-  const Vec3 t = normalized(cross(helper, n));
-  const Vec3 b = cross(n, t);
+  Vec3 t, b;
+  basis_around(n, t, b);
   const double r = std::sqrt(u1), phi = 2 * kPi * u2;
   // Renormalised: rounding in |d| would otherwise compound from bounce to bounce.
-  return normalized(add(add(mul(t, r * std::cos(phi)), mul(b, r * std::sin(phi))),
+  return unit(add(add(mul(t, r * std::cos(phi)), mul(b, r * std::sin(phi))),
                         mul(n, std::sqrt(std::max(0.0, 1 - u1)))));
 }
 Vec3 uniform_direction(double u1, double u2) {
@@ -210,7 +203,7 @@ SphereTracer::SphereTracer(const SceneSpec& scene) : scene_(scene), impl_(std::m
     if (scene_.lamps[i].radius > 0) m.lamp_of_prim.push_back(static_cast<int>(i));
   if (!m.lamp_of_prim.empty())
     m.lamp_geom = add_user_geometry(m, static_cast<unsigned>(m.lamp_of_prim.size()), m.geom_data);
-  for (const BaffleSpec& b : scene_.baffles) m.baffle_normal.push_back(normalized(b.normal));
+  for (const BaffleSpec& b : scene_.baffles) m.baffle_normal.push_back(unit(b.normal));
   if (!scene_.baffles.empty())
     m.baffle_geom = add_user_geometry(m, static_cast<unsigned>(scene_.baffles.size()), m.geom_data);
   rtcCommitScene(m.scene);
@@ -344,7 +337,7 @@ SphereSolution SphereTracer::trace_photons() const {
             break;
           }
           o = h.point;
-          d = cosine_direction(mul(normalized(h.point), -1.0), u(), u());
+          d = cosine_direction(mul(unit(h.point), -1.0), u(), u());
           continue;
         }
         first = false;
@@ -355,7 +348,7 @@ SphereSolution SphereTracer::trace_photons() const {
             break;
           }
           o = h.point;
-          d = cosine_direction(normalized(sub(h.point, l.position)), u(), u());
+          d = cosine_direction(unit(sub(h.point, l.position)), u(), u());
           continue;
         }
         const BaffleSpec& bf = scene_.baffles[static_cast<std::size_t>(h.index)];
@@ -446,7 +439,7 @@ double SphereTracer::radiance(const SphereSolution& s, const Hit& h) const {
 double SphereTracer::direct_irradiance(const Vec3& wall_point) const {
   // A uniformly emitting Lambertian sphere radiates like a point of intensity Φ/(4π) at its
   // centre (outside it); the wall point sees it when the line to the centre is free.
-  const Vec3 n = mul(normalized(wall_point), -1.0);  // inward normal
+  const Vec3 n = mul(unit(wall_point), -1.0);  // inward normal
   double e = 0;
   for (std::size_t i = 0; i < scene_.lamps.size(); ++i) {
     const LampSpec& l = scene_.lamps[i];

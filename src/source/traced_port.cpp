@@ -7,6 +7,7 @@
 #include "polrig/optics/polarized_ray.h"
 #include "polrig/quadrature.h"
 #include "polrig/random.h"
+#include "polrig/vec3.h"
 #include "polrig/statistics.h"
 #include "polrig/units.h"
 
@@ -17,14 +18,7 @@ constexpr double kPi = std::numbers::pi;
 // The R2 sequence (a rank-1 lattice from the plastic number): low discrepancy in 2-D.
 constexpr double kR2a = 0.7548776662466927, kR2b = 0.5698402909980532;
 
-Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 mul(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec3 unit(const Vec3& a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
+using namespace vec3;
 
 const QuadratureRule& port_radial_rule() {
   static const QuadratureRule r = gauss_legendre_01(48);
@@ -124,7 +118,8 @@ double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const 
   for (std::size_t b = 0; b < sc.baffles.size(); ++b) {
     const BaffleSpec& bf = sc.baffles[b];
     const Vec3 n = unit(bf.normal);
-    const Vec3 t = unit(cross(std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, n)), s = cross(n, t);
+    Vec3 t, s;
+    basis_around(n, t, s);
     for (std::size_t i = 0; i < rule.x.size(); ++i) {
       const double r = bf.radius * std::sqrt(rule.x[i]);
       const double w = 0.5 * bf.radius * bf.radius * rule.w[i] * (2 * kPi / kOccluderAzimuths);
@@ -144,7 +139,8 @@ double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const 
     const Vec3 to = sub(lamp.position, P);
     const double D = std::sqrt(dot(to, to));
     const Vec3 axis = mul(to, 1.0 / D);
-    const Vec3 t = unit(cross(std::abs(axis[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, axis)), s = cross(axis, t);
+    Vec3 t, s;
+    basis_around(axis, t, s);
     const double cos_max = std::sqrt(std::max(0.0, 1 - (lamp.radius / D) * (lamp.radius / D)));
     for (std::size_t i = 0; i < rule.x.size(); ++i) {
       const double cb = cos_max + (1 - cos_max) * rule.x[i], sb = std::sqrt(std::max(0.0, 1 - cb * cb));

@@ -8,26 +8,14 @@
 
 #include "polrig/quadrature.h"
 #include "polrig/source/sphere_tracer.h"
+#include "polrig/vec3.h"
 
 namespace polrig {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-Vec3 add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 mul(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec3 unit(const Vec3& a) { return mul(a, 1.0 / std::sqrt(dot(a, a))); }
-
-// Two unit vectors completing unit n to a right-handed frame.
-void basis_around(const Vec3& n, Vec3& t, Vec3& b) {
-  t = unit(cross(std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0}, n));
-  b = cross(n, t);
-}
+using namespace vec3;
 
 // A radiance that depends linearly on the unknown constant C: a + b·C (W/m²/sr).
 struct Linear {

@@ -12,10 +12,10 @@
 #include <array>
 
 #include "polrig/optics/polarizer.h"
+#include "polrig/vec3.h"
 
 namespace polrig {
 
-using Vec3 = std::array<double, 3>;
 
 struct PolarizedRay {
   Vec3 k;      // unit propagation direction

@@ -9,9 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "polrig/vec3.h"
+
 namespace polrig {
 
-using Vec3 = std::array<double, 3>;
 
 struct SphereSpec {
   double diameter = 500.0;

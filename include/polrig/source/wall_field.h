@@ -15,7 +15,7 @@
 // solve's mean irradiance after the first strike, which the whole sphere's photons measure to
 // ~1e-4; no single bin's photon noise reaches the field.
 //
-// δ is tabulated on a grid uniform in θ (from +z) and φ, and interpolated bilinearly; the
+// δ is tabulated on a grid uniform in θ (from +z) and φ, and interpolated by Catmull–Rom splines; the
 // integrals use Gauss–Legendre × trapezoid rules over each baffle's disk and each lamp's cone.
 #include <vector>
 

@@ -477,29 +477,56 @@ TEST_F(CalibIo, TruthFromGivesARigThatRigToYamlCanWriteAndReload) {
 // calibrate(): data it cannot calibrate
 // ---------------------------------------------------------------------------------------------
 
+// The fit summary of a calibration that must not be usable; a test failure if it is.
+FitSummary failure_of(const std::vector<StopVoltages>& stops, const CalibrationOptions& o) {
+  const CalibrationResult r = calibrate(stops, o);
+  EXPECT_FALSE(r.usable()) << "calibrated: " << r.fit.summary.brief_report();
+  return r.fit.summary;
+}
+
 TEST(CalibrateData, TooFewStops) {
   std::vector<StopVoltages> stops = default_stops();
   stops.resize(5);
   CalibrationOptions o;
   o.method = CalibrationMethod::Section;
   o.d_a = 0.55;
-  const std::string e = error_of<CalibrationError>([&] { calibrate(stops, o); });
-  EXPECT_HAS(e, "5 stops to fit");
-  EXPECT_HAS(e, "at least 6");
+  const FitSummary e = failure_of(stops, o);
+  EXPECT_EQ(e.termination, FitTermination::TooFewObservations);
+  EXPECT_HAS(e.message, "5 stops to fit");
+  EXPECT_HAS(e.message, "at least 6");
   // Paired stops giving 5 CS points: 0..40° and 180..220°.
   std::vector<StopVoltages> all = default_stops(), paired;
   for (std::size_t n : {0, 1, 2, 3, 4, 18, 19, 20, 21, 22}) paired.push_back(all[n]);
   o.method = CalibrationMethod::CentralSymmetry;
-  const std::string c = error_of<CalibrationError>([&] { calibrate(paired, o); });
-  EXPECT_HAS(c, "5 CS points to fit");
-  EXPECT_HAS(c, "at least 6");
-  // Six stops are enough for the count check: the error, if any, is not about the count.
+  const FitSummary c = failure_of(paired, o);
+  EXPECT_EQ(c.termination, FitTermination::TooFewObservations);
+  EXPECT_HAS(c.message, "5 CS points to fit");
+  EXPECT_HAS(c.message, "at least 6");
+  // Six stops are enough for the count check: the outcome, if a failure, is not about the count.
   stops = std::vector<StopVoltages>(all.begin(), all.begin() + 6);
   o.method = CalibrationMethod::Section;
-  try {
-    calibrate(stops, o);
-  } catch (const CalibrationError& x) {
-    EXPECT_EQ(std::string(x.what()).find("at least 6"), std::string::npos) << x.what();
+  const CalibrationResult r = calibrate(stops, o);
+  EXPECT_NE(r.fit.summary.termination, FitTermination::TooFewObservations);
+  EXPECT_EQ(r.fit.summary.message.find("at least 6"), std::string::npos) << r.fit.summary.message;
+}
+
+TEST(CalibrateData, TheFittedMaskFollowsTheRowsNotTheValues) {
+  // Every stop recorded twice: CS points come in identical copies (same angle, same voltages).
+  // Keeping only the 27 steepest per voltage splits a group of four copies, which a mask built
+  // by comparing floats would mark whole (28 per voltage); the mask follows each observation's row.
+  std::vector<StopVoltages> stops = default_stops(), twice = stops;
+  twice.insert(twice.end(), stops.begin(), stops.end());
+  CalibrationOptions o;
+  o.method = CalibrationMethod::CentralSymmetryNoncontinuous;
+  o.d_a = 0.55;
+  o.noncontinuous = {1.0, 27};
+  const CalibrationResult r = calibrate(twice, o);
+  ASSERT_TRUE(r.usable()) << r.fit.summary.brief_report();
+  EXPECT_EQ(r.fit.summary.observations, 81);
+  for (int i = 0; i < 3; ++i) {
+    int fitted = 0;
+    for (bool b : r.fitted[static_cast<std::size_t>(i)]) fitted += b ? 1 : 0;
+    EXPECT_EQ(fitted, 27) << "V" << i + 1;
   }
 }
 
@@ -542,18 +569,27 @@ void expect_too_small(const std::vector<StopVoltages>& stops) {
     CalibrationOptions o;
     o.method = m;
     o.d_a = 0.55;
-    std::string e;
-    try {
-      const CalibrationResult r = calibrate(stops, o);
-      ADD_FAILURE() << "calibrated unpolarized light: kv = " << fmt::format("{}", r.params.kv[0])
-                    << ", " << fmt::format("{}", r.params.kv[1]) << ", "
-                    << fmt::format("{}", r.params.kv[2]) << "; theta_sec accuracy "
-                    << r.accuracy[kThetaSec].accuracy_deg() << " deg";
-      continue;
-    } catch (const CalibrationError& x) {
-      e = x.what();
-    }
-    EXPECT_HAS(e, "too small");
+    const FitSummary s = failure_of(stops, o);
+    EXPECT_EQ(s.termination, FitTermination::RankDeficient);
+    EXPECT_HAS(s.message, "too small");
+    EXPECT_LACKS(s.message, "nan");
+  }
+}
+
+TEST(CalibrateData, ASwingBeyondAnyPolarizationIsNotNan) {
+  // Issue 8 §3.10: volts_per_decade = 1e-300 made 10^(swing/v) overflow, and the message said
+  // "degree of polarization is about -nan". The swing is named instead.
+  for (CalibrationMethod m : kAllMethods) {
+    SCOPED_TRACE(std::string(method_name(m)));
+    CalibrationOptions o;
+    o.method = m;
+    o.d_a = 0.55;
+    o.volts_per_decade = 1e-300;
+    const FitSummary s = failure_of(default_stops(), o);
+    EXPECT_EQ(s.termination, FitTermination::OutsideDomain);
+    EXPECT_HAS(s.message, "more than any degree of polarization below 1 can give");
+    EXPECT_LACKS(s.message, "nan");
+    EXPECT_LACKS(s.brief_report(), "-nan");
   }
 }
 

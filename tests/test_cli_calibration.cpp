@@ -1,6 +1,7 @@
 // End-to-end tests of calibrate, apply and study calibration: each test runs the real polrig
 // executable in a fresh temporary folder and inspects the files it writes (or does not write).
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -110,6 +111,13 @@ TEST_F(CliCalibration, CalibrateCsWritesTheReport) {
   EXPECT_EQ(params["d_a"].as<double>(0), 0.55);  // the dataset rig's d
   EXPECT_EQ(params["d_a_source"].as<std::string>(""), "the rig's device.d");
   EXPECT_EQ(params["fit"]["observations"].as<int>(0), 57);
+  // The fit's summary: how it ended, and the same one-line report on stdout.
+  EXPECT_EQ(params["fit"]["termination"].as<std::string>(""), "converged");
+  EXPECT_TRUE(params["fit"]["usable"].as<bool>(false));
+  EXPECT_GT(params["fit"]["iterations"].as<int>(0), 0);
+  EXPECT_LT(params["fit"]["final_cost_V2"].as<double>(1), params["fit"]["initial_cost_V2"].as<double>(0));
+  EXPECT_HAS(r.out, "fit: " + params["fit"]["brief_report"].as<std::string>(""));
+  EXPECT_HAS(r.out, "fit: converged: ");
   const polrig::LoadedParams loaded = polrig::read_params_yaml(cal / "params.yaml");
   // Close to the rig's truth (Table 2): the CS calibration recovers the device.
   const polrig::CalibrationParams truth = polrig::CalibrationParams::wang2019_indoor();
@@ -379,9 +387,10 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
     EXPECT_LE(std::stod(trials.rows[n][4]), 0.04);
   }
   const Csv summary = read_csv(a / "summary.csv");
-  EXPECT_EQ(summary.header, (std::vector<std::string>{"method", "succeeded", "failed",
-                                                      "median_deg", "p05_deg", "p95_deg",
-                                                      "mean_deg"}));
+  EXPECT_EQ(summary.header, (std::vector<std::string>{
+                                "method", "succeeded", "failed", "median_deg", "p05_deg",
+                                "p95_deg", "mean_deg", "converged", "no_convergence",
+                                "outside_domain", "rank_deficient", "too_few_observations"}));
   ASSERT_EQ(summary.rows.size(), 3u);
   const char* methods[3] = {"section", "cs", "cs-nc"};
   for (int k = 0; k < 3; ++k) {
@@ -389,6 +398,8 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
     EXPECT_EQ(summary.rows[k][0], methods[k]);
     EXPECT_EQ(summary.rows[k][1], "8");
     EXPECT_EQ(summary.rows[k][2], "0");
+    EXPECT_EQ(summary.rows[k][7], "8");  // every fit converged
+    for (std::size_t c = 8; c < 12; ++c) EXPECT_EQ(summary.rows[k][c], "0");
   }
   EXPECT_FALSE(fs::exists(a / "failures.csv"));
   EXPECT_EQ(read_file(a / "trials.csv"), read_file(b / "trials.csv"))
@@ -498,6 +509,29 @@ TEST_F(CliCalibration, UnpolarizedLightIsRefused) {
   expect_refused("calibrate " + shell_quote(tmp / "unpolarized.csv") +
                      " --method cs --d-a 0.55 -o " + shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 3, {"cannot calibrate", "too small"});
+}
+
+TEST_F(CliCalibration, ACorruptedColumnIsRefusedWithTheFitSummary) {
+  // Issue 8 §3.6: V2 replaced by numbers unrelated to the angle. The fit stops within its
+  // limits and says how it ended; nothing is written.
+  const fs::path sim = simulate();
+  const Csv s = read_csv(sim / "stops.csv");
+  std::string text = "theta_R_deg,V1,V2,V3\n";
+  for (std::size_t n = 0; n < s.rows.size(); ++n)
+    text += s.rows[n][s.col("theta_R_deg")] + "," + s.rows[n][s.col("V1")] + "," +
+            fmt::format("{}", 0.4 * std::sin(7.3 * static_cast<double>(n * n))) + "," +
+            s.rows[n][s.col("V3")] + "\n";
+  write_file(tmp / "corrupt.csv", text);
+  for (const char* method : {"section", "cs", "cs-nc"}) {
+    SCOPED_TRACE(method);
+    const Result r = polrig("calibrate " + shell_quote(tmp / "corrupt.csv") + " --method " +
+                            method + " -o " + shell_quote(tmp / "out") + " --no-plots");
+    EXPECT_EQ(r.status, 3) << r.err;
+    EXPECT_HAS(r.err, std::string("method ") + method + ": the fit is not usable: ");
+    EXPECT_HAS(r.err, " iterations, ");
+    EXPECT_LACKS(r.err, "nan");
+    EXPECT_FALSE(fs::exists(tmp / "out"));
+  }
 }
 
 TEST_F(CliCalibration, UnknownMethodIsRefused) {

@@ -84,11 +84,16 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   for (CalibrationMethod m : methods) {
     CalibrationOptions o = settings.options(rig, rig_d);
     o.method = m;
+    CalibrationResult r;
     try {
-      results.push_back(calibrate(data.stops, o));
+      r = calibrate(data.stops, o);
     } catch (const CalibrationError& e) {
       throw CalibrationError(fmt::format("method {}: {}", method_name(m), e.what()));
     }
+    if (!r.usable())
+      throw CalibrationError(fmt::format("method {}: the fit is not usable: {}", method_name(m),
+                                         r.fit.summary.brief_report()));
+    results.push_back(std::move(r));
   }
   Manifest base{command_line(), given ? &*given : nullptr, {}, {data.origin}};
   if (!given && data.rig) base.inputs.push_back(data.rig_origin);
@@ -115,17 +120,18 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   }
   finish(dir);
   for (const CalibrationResult& r : results)
-    if (r.fit.observations <= FitParams::kCount)
+    if (r.fit.summary.observations <= FitParams::kCount)
       std::cerr << fmt::format("polrig: note: {} fitted {} voltages to 18 unknowns: no redundancy, so "
                                "its accuracy on the fitted points and its standard errors say "
-                               "nothing\n", method_name(r.method), r.fit.observations);
+                               "nothing\n", method_name(r.method), r.fit.summary.observations);
   for (const CalibrationResult& r : results)
     std::cout << fmt::format("{:8s} accuracy θ_sec ±{:.5f}°  (θ12 ±{:.5f}, θ13 ±{:.5f}, θ23 ±{:.5f}); "
                              "{} observations, residual RMS {:.4f} mV, d_a = {} ({})\n",
                              method_name(r.method), r.accuracy[kThetaSec].accuracy_deg(),
                              r.accuracy[kTheta12].accuracy_deg(), r.accuracy[kTheta13].accuracy_deg(),
-                             r.accuracy[kTheta23].accuracy_deg(), r.fit.observations,
-                             r.fit.residual_rms_V * 1e3, r.d_a, r.d_a_source);
+                             r.accuracy[kTheta23].accuracy_deg(), r.fit.summary.observations,
+                             r.fit.residual_rms_V * 1e3, r.d_a, r.d_a_source)
+              << fmt::format("{:8s} fit: {}\n", "", r.fit.summary.brief_report());
 }
 
 void run_apply(const std::string& params_path, const std::string& voltages_path,
@@ -225,9 +231,16 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
       const std::vector<Trial> result = calibration_trials(r.rig, s);
       write_manifest(dir.staging(), {command_line(), &r, report_calibration_trials(dir.staging(), result, out->plots())});
       finish(dir);
-      for (const TrialSummary& t : summarize_trials(result))
-        std::cout << fmt::format("{:8s} median ±{:.5f}°  (5%: {:.5f}, 95%: {:.5f}; {} failed)\n",
-                                 method_name(t.method), t.median_deg, t.p05_deg, t.p95_deg, t.failed);
+      for (const TrialSummary& t : summarize_trials(result)) {
+        std::string ends;
+        for (std::size_t k = 0; k < t.terminations.size(); ++k)
+          if (t.terminations[k] > 0)
+            ends += fmt::format("{}{} {}", ends.empty() ? "" : ", ", t.terminations[k],
+                                termination_name(kAllTerminations[k]));
+        std::cout << fmt::format("{:8s} median ±{:.5f}°  (5%: {:.5f}, 95%: {:.5f}; {} failed; fits: {})\n",
+                                 method_name(t.method), t.median_deg, t.p05_deg, t.p95_deg,
+                                 t.failed, ends);
+      }
     }});
   }
   return commands;

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <set>
 #include <stdexcept>
@@ -91,6 +92,19 @@ TEST(Section, EdgesBelongToTheSectionAbove) {
   EXPECT_EQ(section_of(179.999999), 0);
   EXPECT_EQ(section_of(-0.000001), 0);
   EXPECT_EQ(section_of(180.0), 0);
+}
+
+TEST(Section, NonFiniteAnglesAreRefusedWithoutUndefinedBehaviour) {
+  // Issue 8 §3.3: NaN cast to int gave section −2 and read kBad[−2] (UBSan).
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double t : {std::numeric_limits<double>::quiet_NaN(), inf, -inf})
+    EXPECT_THROW(section_of(t), std::invalid_argument) << t;
+  for (int s : {-2, -1, 6, 1000}) EXPECT_THROW(bad_voltage_of(s), std::out_of_range) << s;
+  // Huge but finite angles still have a section: 1e300 is a multiple of 180 in double.
+  EXPECT_EQ(section_of(1e300), section_of(std::fmod(1e300, 180.0)));
+  // Voltages that overflow 10^((V − k)/(kv·v_dec)) give no angle: refused, not −nan.
+  const CalibrationParams t = CalibrationParams::theory(kWang2019FilmAxesDeg);
+  EXPECT_THROW(sensor_angles(t, Electronics{}, {1e300, 0.1, 0.1}), std::invalid_argument);
 }
 
 TEST(Section, BadVoltageHasZeroSlopeAtTheSectionCentre) {
@@ -253,7 +267,8 @@ TEST(Eq15Fit, TooFewObservationsIsAnOutcome) {
   EXPECT_HAS(r.summary.message, "V1 has 5 observation(s)");
   EXPECT_EQ(r.summary.iterations, 0);
   EXPECT_EQ(r.summary.observations, 15);
-  EXPECT_HAS(r.summary.brief_report(), "too_few_observations: 0 iterations");
+  EXPECT_EQ(r.summary.brief_report(),
+            "too_few_observations: not fitted, 15 observations; " + r.summary.message);
 }
 
 TEST(Eq15Fit, AnglesThatCannotSeparateTheParametersAreRankDeficient) {

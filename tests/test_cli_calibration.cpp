@@ -534,6 +534,27 @@ TEST_F(CliCalibration, ACorruptedColumnIsRefusedWithTheFitSummary) {
   }
 }
 
+TEST_F(CliCalibration, AnOverflowingSwingIsNamedNotNan) {
+  // Issue 8 §3.10: two pairs swinging by 1e200 V made 10^(swing/v_dec) overflow and the message
+  // read "the light's degree of polarization is about -nan".
+  const fs::path sim = simulate();
+  std::vector<std::string> l = lines_of(measured_from(sim / "stops.csv"));
+  l[3] = "20,1e200,1e200,0.1";
+  std::string text;
+  for (const std::string& x : l) text += x + "\n";
+  write_file(tmp / "swing.csv", text);
+  for (const char* method : {"section", "cs", "cs-nc"}) {
+    SCOPED_TRACE(method);
+    const Result r = polrig("calibrate " + shell_quote(tmp / "swing.csv") + " --method " + method +
+                            " -o " + shell_quote(tmp / "out") + " --no-plots");
+    EXPECT_EQ(r.status, 3) << r.err;
+    EXPECT_HAS(r.err, "outside_domain: not fitted, ");
+    EXPECT_HAS(r.err, "more than any degree of polarization below 1 can give");
+    EXPECT_LACKS(r.err, "nan");
+    EXPECT_FALSE(fs::exists(tmp / "out"));
+  }
+}
+
 TEST_F(CliCalibration, UnknownMethodIsRefused) {
   const fs::path sim = simulate();
   expect_refused("calibrate " + shell_quote(sim) + " --method bogus -o " +
@@ -558,6 +579,80 @@ TEST_F(CliCalibration, ApplyWithParamsMissingKdIsRefused) {
   expect_refused("apply " + shell_quote(cal / "params.yaml") + " " + shell_quote(tmp / "v.csv") +
                      " -o " + shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 2, {(tmp / "v.csv").string() + ":3: column 'V2'"});
+}
+
+TEST_F(CliCalibration, ApplyRefusesValuesOutsideTheirPhysicalRange) {
+  // Issue 8 §3.3: volts_per_decade = 1e-300 in params.yaml, or a voltage of 1e300, cast NaN to
+  // int in section_of and wrote −nan angles with section −2, exit 0.
+  const fs::path sim = simulate();
+  const fs::path cal = tmp / "cal";
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
+  const std::string params = read_file(cal / "params.yaml");
+  const auto with_line = [&](const std::string& key, const std::string& line) {
+    std::string text;
+    int at = 0, n = 0;
+    for (const std::string& l : lines_of(params)) {
+      ++n;
+      if (l.rfind(key + ":", 0) == 0) {
+        text += line + "\n";
+        at = n;
+      } else {
+        text += l + "\n";
+      }
+    }
+    EXPECT_GT(at, 0) << key;
+    return std::pair{text, at};
+  };
+  write_file(tmp / "v.csv", "V1,V2,V3\n0.1,0.2,0.1\n0.1,0.2,0.1\n");
+  const auto [tiny, tiny_line] = with_line("volts_per_decade", "volts_per_decade: 1e-300");
+  write_file(tmp / "tiny.yaml", tiny);
+  expect_refused("apply " + shell_quote(tmp / "tiny.yaml") + " " + shell_quote(tmp / "v.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {fmt::format("{}:{}: key 'volts_per_decade': expected a value in [0.01, 10]",
+                              (tmp / "tiny.yaml").string(), tiny_line),
+                  "got 1e-300"});
+
+  // A voltage no ADC gives: file, line, column and value.
+  write_file(tmp / "huge.csv", "V1,V2,V3\n0.1,0.2,0.1\n0.1,1e300,0.1\n");
+  expect_refused("apply " + shell_quote(cal / "params.yaml") + " " + shell_quote(tmp / "huge.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {(tmp / "huge.csv").string() + ":3: column 'V2': 1e+300 V is outside any ADC's range"});
+  // Within an ADC's range but hundreds of decades of light ratio at the smallest scale.
+  const auto [small, small_line] = with_line("volts_per_decade", "volts_per_decade: 0.01");
+  write_file(tmp / "small.yaml", small);
+  write_file(tmp / "four.csv", "V1,V2,V3\n0.1,0.2,0.1\n4,-4,4\n");
+  expect_refused("apply " + shell_quote(tmp / "small.yaml") + " " + shell_quote(tmp / "four.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2, {(tmp / "four.csv").string() + ":3: column 'V1': 4 V is ", "decades"});
+  // Parameters under which a row has no finite angle (all films at one angle: the linear
+  // system in d·cos2θ, d·sin2θ is singular).
+  const auto [flat, flat_line] = with_line("alpha_deg", "alpha_deg: [0, 0, 0, 0, 0, 0]");
+  write_file(tmp / "flat.yaml", flat);
+  expect_refused("apply " + shell_quote(tmp / "flat.yaml") + " " + shell_quote(tmp / "v.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {(tmp / "v.csv").string() + ":2: V1 = 0.1, V2 = 0.2, V3 = 0.1 give no finite angle"});
+}
+
+TEST_F(CliCalibration, ParamsWithADuplicateKeyAreRefused) {
+  const fs::path sim = simulate();
+  const fs::path cal = tmp / "cal";
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
+  const std::string params = read_file(cal / "params.yaml");
+  int kv_line = 0, n = 0;
+  for (const std::string& l : lines_of(params)) {
+    ++n;
+    if (l.rfind("kv:", 0) == 0) kv_line = n;
+  }
+  ASSERT_GT(kv_line, 0);
+  write_file(tmp / "dup.yaml", params + "kv: [1, 1, 1]\n");
+  expect_refused("apply " + shell_quote(tmp / "dup.yaml") + " " + shell_quote(sim / "stops.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {fmt::format("{}:{}: key 'kv': duplicate key (first at line {})",
+                              (tmp / "dup.yaml").string(), n + 1, kv_line)});
 }
 
 TEST_F(CliCalibration, DaOutsideTheUnitIntervalIsRejectedByTheParser) {

@@ -117,6 +117,9 @@ std::string_view termination_name(FitTermination t) {
 }
 
 std::string FitSummary::brief_report() const {
+  if (solver_status.empty())
+    return fmt::format("{}: not fitted, {} observations; {}", termination_name(termination),
+                       observations, message);
   return fmt::format("{}: {} iterations, {} evaluations, {} observations, cost {:.6g} -> {:.6g} V^2; {}",
                      termination_name(termination), iterations, evaluations, observations,
                      initial_cost, final_cost, message);

@@ -134,6 +134,45 @@ void run_calibrate(const std::string& input, const std::string& method_text,
               << fmt::format("{:8s} fit: {}\n", "", r.fit.summary.brief_report());
 }
 
+// The largest ADC reference a rig accepts (electronics.vref_V): no converter polrig models
+// reads beyond it.
+constexpr double kMaxAdcVolts = 100.0;
+// 10^x overflows or underflows a double beyond about ±308 decades: a pair's light ratio that
+// large is not light.
+constexpr double kMaxDecades = 300.0;
+
+// The angles of one voltage row; a DataError naming the file, line, column and value for a
+// voltage no ADC can give, one that no light ratio can give, or a row without a finite angle.
+SensorAngles angles_of_row(const StopVoltages& s, const LoadedParams& p, const Electronics& e) {
+  for (int i = 0; i < 3; ++i) {
+    const double v = s.V[static_cast<std::size_t>(i)];
+    if (!(std::abs(v) <= kMaxAdcVolts))
+      throw DataError(fmt::format("{}: column 'V{}': {} V is outside any ADC's range (|V| ≤ {} V)",
+                                  s.label, i + 1, v, kMaxAdcVolts));
+    const double decades = (v - p.params.k_mV[static_cast<std::size_t>(i)] * 1e-3) /
+                           (p.params.kv[static_cast<std::size_t>(i)] * e.volts_per_decade);
+    if (!(std::abs(decades) <= kMaxDecades))
+      throw DataError(fmt::format(
+          "{}: column 'V{}': {} V is {:.3g} decades of light ratio from the pair's offset at {} V "
+          "per decade (kv = {}): no light gives that", s.label, i + 1, v, decades,
+          e.volts_per_decade, p.params.kv[static_cast<std::size_t>(i)]));
+  }
+  const auto refuse = [&] {
+    return DataError(fmt::format("{}: V1 = {}, V2 = {}, V3 = {} give no finite angle with these "
+                                 "parameters", s.label, s.V[0], s.V[1], s.V[2]));
+  };
+  SensorAngles a;
+  try {
+    a = sensor_angles(p.params, e, s.V);
+  } catch (const std::invalid_argument&) {
+    throw refuse();
+  }
+  for (double x : {a.theta12.theta_deg, a.theta13.theta_deg, a.theta23.theta_deg, a.theta_sec_deg,
+                   a.theta12.d, a.theta13.d, a.theta23.d})
+    if (!std::isfinite(x)) throw refuse();
+  return a;
+}
+
 void run_apply(const std::string& params_path, const std::string& voltages_path,
                const OutputOptions& out) {
   const LoadedParams p = read_params_yaml(params_path);
@@ -145,7 +184,7 @@ void run_apply(const std::string& params_path, const std::string& voltages_path,
   std::string text = "row,theta_R_deg,theta12_deg,theta13_deg,theta23_deg,theta_sec_deg,section,d,error_deg\n";
   for (std::size_t n = 0; n < data.stops.size(); ++n) {
     const StopVoltages& s = data.stops[n];
-    const SensorAngles a = sensor_angles(p.params, e, s.V);
+    const SensorAngles a = angles_of_row(s, p, e);
     const double err = have_reference ? axis_difference_deg(a.theta_sec_deg, s.theta_R_deg)
                                       : std::numeric_limits<double>::quiet_NaN();
     // d of the pair the section algorithm used.

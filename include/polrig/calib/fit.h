@@ -67,7 +67,8 @@ struct FitSummary {
   int observations = 0;
 
   bool usable() const { return termination == FitTermination::Converged; }
-  // One line: termination, iterations, evaluations, observations, costs and the message.
+  // One line: termination, iterations, evaluations, observations, costs and the message
+  // ("not fitted" instead of the counts when the solver did not run).
   std::string brief_report() const;
 };
 

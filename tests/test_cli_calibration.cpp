@@ -414,6 +414,31 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
 // bad input writes nothing
 // ---------------------------------------------------------------------------------------------
 
+TEST_F(CliCalibration, StudyCalibrationCountsTerminationTypes) {
+  // Light too weakly polarized for any calibration: every fit ends rank deficient, and the
+  // study says so instead of failing.
+  const fs::path a = tmp / "weak";
+  const Result r = ok("study calibration " + shell_quote(kRig) + " --trials 3 --set device.d=0.015 "
+                      "--d-a 0.5 -o " + shell_quote(a) + " --no-plots");
+  EXPECT_HAS(r.out, "3 failed; fits: 3 rank_deficient");
+  const Csv summary = read_csv(a / "summary.csv");
+  ASSERT_EQ(summary.rows.size(), 3u);
+  for (const auto& row : summary.rows) {
+    SCOPED_TRACE(row[0]);
+    EXPECT_EQ(row[summary.col("failed")], "3");
+    EXPECT_EQ(row[summary.col("rank_deficient")], "3");
+    EXPECT_EQ(row[summary.col("converged")], "0");
+  }
+  const Csv failures = read_csv(a / "failures.csv");
+  EXPECT_EQ(failures.header, (std::vector<std::string>{"trial", "method", "termination",
+                                                       "iterations", "evaluations", "reason"}));
+  ASSERT_EQ(failures.rows.size(), 9u);
+  for (const auto& row : failures.rows) {
+    EXPECT_EQ(row[2], "rank_deficient");
+    EXPECT_HAS(row[5], "too small to calibrate");
+  }
+}
+
 TEST_F(CliCalibration, MissingInputIsRefused) {
   const fs::path none = tmp / "none.csv";
   expect_refused(

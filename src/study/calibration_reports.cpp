@@ -170,7 +170,7 @@ std::vector<DatasetFile> report_calibration_trials(const std::filesystem::path& 
                          "many fits ended in each termination type"}};
   if (any_failure) {
     write_text_file(dir / "failures.csv", failures);
-    files.push_back({"failures.csv", 1, "calibrations whose fit is not usable: termination type, "
+    files.push_back({"failures.csv", 2, "calibrations whose fit is not usable: termination type, "
                                         "iterations, evaluations and the reason"});
   }
 

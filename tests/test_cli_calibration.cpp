@@ -560,14 +560,24 @@ TEST_F(CliCalibration, ACorruptedColumnIsRefusedWithTheFitSummary) {
 }
 
 TEST_F(CliCalibration, AnOverflowingSwingIsNamedNotNan) {
-  // Issue 8 §3.10: two pairs swinging by 1e200 V made 10^(swing/v_dec) overflow and the message
-  // read "the light's degree of polarization is about -nan".
+  // Issue 8 §3.10: a swing so large that 10^(swing/v_dec) overflowed made the message read
+  // "the light's degree of polarization is about -nan". Two pairs swinging by 50 V (100
+  // decades at 0.5 V per decade) give d = 1 in double precision: the swing is named instead.
   const fs::path sim = simulate();
   std::vector<std::string> l = lines_of(measured_from(sim / "stops.csv"));
-  l[3] = "20,1e200,1e200,0.1";
+  l[3] = "20,50,50,0.1";
   std::string text;
   for (const std::string& x : l) text += x + "\n";
   write_file(tmp / "swing.csv", text);
+  // Beyond any ADC's range: refused as input, naming file, line, column and value.
+  l[3] = "20,0.1,1e200,0.1";
+  text.clear();
+  for (const std::string& x : l) text += x + "\n";
+  write_file(tmp / "huge.csv", text);
+  expect_refused("calibrate " + shell_quote(tmp / "huge.csv") + " -o " + shell_quote(tmp / "out") +
+                     " --no-plots",
+                 tmp / "out", 2,
+                 {(tmp / "huge.csv").string() + ":4: column 'V2': 1e+200 V is outside any ADC's range"});
   for (const char* method : {"section", "cs", "cs-nc"}) {
     SCOPED_TRACE(method);
     const Result r = polrig("calibrate " + shell_quote(tmp / "swing.csv") + " --method " + method +

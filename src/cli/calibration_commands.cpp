@@ -58,6 +58,23 @@ struct CalibrationSettings {
   }
 };
 
+// The largest ADC reference a rig accepts (electronics.vref_V): no converter polrig models
+// reads beyond it.
+constexpr double kMaxAdcVolts = 100.0;
+// 10^x overflows or underflows a double beyond about ±308 decades: a pair's light ratio that
+// large is not light.
+constexpr double kMaxDecades = 300.0;
+
+// A DataError naming the file, line, column and value for a voltage no ADC can give.
+void check_adc_range(const StopVoltages& s) {
+  for (int i = 0; i < 3; ++i) {
+    const double v = s.V[static_cast<std::size_t>(i)];
+    if (!(std::abs(v) <= kMaxAdcVolts))
+      throw DataError(fmt::format("{}: column 'V{}': {} V is outside any ADC's range (|V| ≤ {} V)",
+                                  s.label, i + 1, v, kMaxAdcVolts));
+  }
+}
+
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
                    const OutputOptions& out) {
@@ -70,6 +87,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
     throw DataError(fmt::format("--method {}: expected section, cs, cs-nc or all", method_text));
   }
   const MeasuredData data = read_measured(input);
+  for (const StopVoltages& s : data.stops) check_adc_range(s);
   // The sensor description (film axes, amplifier scale): --rig, else the dataset's rig.yaml,
   // else the default rig. d_a: --d-a, else the dataset rig's d.
   std::optional<LoadedRig> given;
@@ -134,21 +152,12 @@ void run_calibrate(const std::string& input, const std::string& method_text,
               << fmt::format("{:8s} fit: {}\n", "", r.fit.summary.brief_report());
 }
 
-// The largest ADC reference a rig accepts (electronics.vref_V): no converter polrig models
-// reads beyond it.
-constexpr double kMaxAdcVolts = 100.0;
-// 10^x overflows or underflows a double beyond about ±308 decades: a pair's light ratio that
-// large is not light.
-constexpr double kMaxDecades = 300.0;
-
 // The angles of one voltage row; a DataError naming the file, line, column and value for a
 // voltage no ADC can give, one that no light ratio can give, or a row without a finite angle.
 SensorAngles angles_of_row(const StopVoltages& s, const LoadedParams& p, const Electronics& e) {
+  check_adc_range(s);
   for (int i = 0; i < 3; ++i) {
     const double v = s.V[static_cast<std::size_t>(i)];
-    if (!(std::abs(v) <= kMaxAdcVolts))
-      throw DataError(fmt::format("{}: column 'V{}': {} V is outside any ADC's range (|V| ≤ {} V)",
-                                  s.label, i + 1, v, kMaxAdcVolts));
     const double decades = (v - p.params.k_mV[static_cast<std::size_t>(i)] * 1e-3) /
                            (p.params.kv[static_cast<std::size_t>(i)] * e.volts_per_decade);
     if (!(std::abs(decades) <= kMaxDecades))

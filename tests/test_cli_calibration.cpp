@@ -1,6 +1,7 @@
 // End-to-end tests of calibrate, apply and study calibration: each test runs the real polrig
 // executable in a fresh temporary folder and inspects the files it writes (or does not write).
 #include <gtest/gtest.h>
+#include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -110,6 +111,13 @@ TEST_F(CliCalibration, CalibrateCsWritesTheReport) {
   EXPECT_EQ(params["d_a"].as<double>(0), 0.55);  // the dataset rig's d
   EXPECT_EQ(params["d_a_source"].as<std::string>(""), "the rig's device.d");
   EXPECT_EQ(params["fit"]["observations"].as<int>(0), 57);
+  // The fit's summary: how it ended, and the same one-line report on stdout.
+  EXPECT_EQ(params["fit"]["termination"].as<std::string>(""), "converged");
+  EXPECT_TRUE(params["fit"]["usable"].as<bool>(false));
+  EXPECT_GT(params["fit"]["iterations"].as<int>(0), 0);
+  EXPECT_LT(params["fit"]["final_cost_V2"].as<double>(1), params["fit"]["initial_cost_V2"].as<double>(0));
+  EXPECT_HAS(r.out, "fit: " + params["fit"]["brief_report"].as<std::string>(""));
+  EXPECT_HAS(r.out, "fit: converged: ");
   const polrig::LoadedParams loaded = polrig::read_params_yaml(cal / "params.yaml");
   // Close to the rig's truth (Table 2): the CS calibration recovers the device.
   const polrig::CalibrationParams truth = polrig::CalibrationParams::wang2019_indoor();
@@ -379,9 +387,10 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
     EXPECT_LE(std::stod(trials.rows[n][4]), 0.04);
   }
   const Csv summary = read_csv(a / "summary.csv");
-  EXPECT_EQ(summary.header, (std::vector<std::string>{"method", "succeeded", "failed",
-                                                      "median_deg", "p05_deg", "p95_deg",
-                                                      "mean_deg"}));
+  EXPECT_EQ(summary.header, (std::vector<std::string>{
+                                "method", "succeeded", "failed", "median_deg", "p05_deg",
+                                "p95_deg", "mean_deg", "converged", "no_convergence",
+                                "outside_domain", "rank_deficient", "too_few_observations"}));
   ASSERT_EQ(summary.rows.size(), 3u);
   const char* methods[3] = {"section", "cs", "cs-nc"};
   for (int k = 0; k < 3; ++k) {
@@ -389,6 +398,8 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
     EXPECT_EQ(summary.rows[k][0], methods[k]);
     EXPECT_EQ(summary.rows[k][1], "8");
     EXPECT_EQ(summary.rows[k][2], "0");
+    EXPECT_EQ(summary.rows[k][7], "8");  // every fit converged
+    for (std::size_t c = 8; c < 12; ++c) EXPECT_EQ(summary.rows[k][c], "0");
   }
   EXPECT_FALSE(fs::exists(a / "failures.csv"));
   EXPECT_EQ(read_file(a / "trials.csv"), read_file(b / "trials.csv"))
@@ -402,6 +413,31 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
 // ---------------------------------------------------------------------------------------------
 // bad input writes nothing
 // ---------------------------------------------------------------------------------------------
+
+TEST_F(CliCalibration, StudyCalibrationCountsTerminationTypes) {
+  // Light too weakly polarized for any calibration: every fit ends rank deficient, and the
+  // study says so instead of failing.
+  const fs::path a = tmp / "weak";
+  const Result r = ok("study calibration " + shell_quote(kRig) + " --trials 3 --set device.d=0.015 "
+                      "--d-a 0.5 -o " + shell_quote(a) + " --no-plots");
+  EXPECT_HAS(r.out, "3 failed; fits: 3 rank_deficient");
+  const Csv summary = read_csv(a / "summary.csv");
+  ASSERT_EQ(summary.rows.size(), 3u);
+  for (const auto& row : summary.rows) {
+    SCOPED_TRACE(row[0]);
+    EXPECT_EQ(row[summary.col("failed")], "3");
+    EXPECT_EQ(row[summary.col("rank_deficient")], "3");
+    EXPECT_EQ(row[summary.col("converged")], "0");
+  }
+  const Csv failures = read_csv(a / "failures.csv");
+  EXPECT_EQ(failures.header, (std::vector<std::string>{"trial", "method", "termination",
+                                                       "iterations", "evaluations", "reason"}));
+  ASSERT_EQ(failures.rows.size(), 9u);
+  for (const auto& row : failures.rows) {
+    EXPECT_EQ(row[2], "rank_deficient");
+    EXPECT_HAS(row[5], "too small to calibrate");
+  }
+}
 
 TEST_F(CliCalibration, MissingInputIsRefused) {
   const fs::path none = tmp / "none.csv";
@@ -500,6 +536,60 @@ TEST_F(CliCalibration, UnpolarizedLightIsRefused) {
                  tmp / "out", 3, {"cannot calibrate", "too small"});
 }
 
+TEST_F(CliCalibration, ACorruptedColumnIsRefusedWithTheFitSummary) {
+  // Issue 8 §3.6: V2 replaced by numbers unrelated to the angle. The fit stops within its
+  // limits and says how it ended; nothing is written.
+  const fs::path sim = simulate();
+  const Csv s = read_csv(sim / "stops.csv");
+  std::string text = "theta_R_deg,V1,V2,V3\n";
+  for (std::size_t n = 0; n < s.rows.size(); ++n)
+    text += s.rows[n][s.col("theta_R_deg")] + "," + s.rows[n][s.col("V1")] + "," +
+            fmt::format("{}", 0.4 * std::sin(7.3 * static_cast<double>(n * n))) + "," +
+            s.rows[n][s.col("V3")] + "\n";
+  write_file(tmp / "corrupt.csv", text);
+  for (const char* method : {"section", "cs", "cs-nc"}) {
+    SCOPED_TRACE(method);
+    const Result r = polrig("calibrate " + shell_quote(tmp / "corrupt.csv") + " --method " +
+                            method + " -o " + shell_quote(tmp / "out") + " --no-plots");
+    EXPECT_EQ(r.status, 3) << r.err;
+    EXPECT_HAS(r.err, std::string("method ") + method + ": the fit is not usable: ");
+    EXPECT_HAS(r.err, " iterations, ");
+    EXPECT_LACKS(r.err, "nan");
+    EXPECT_FALSE(fs::exists(tmp / "out"));
+  }
+}
+
+TEST_F(CliCalibration, AnOverflowingSwingIsNamedNotNan) {
+  // Issue 8 §3.10: a swing so large that 10^(swing/v_dec) overflowed made the message read
+  // "the light's degree of polarization is about -nan". Two pairs swinging by 50 V (100
+  // decades at 0.5 V per decade) give d = 1 in double precision: the swing is named instead.
+  const fs::path sim = simulate();
+  std::vector<std::string> l = lines_of(measured_from(sim / "stops.csv"));
+  l[3] = "20,50,50,0.1";
+  std::string text;
+  for (const std::string& x : l) text += x + "\n";
+  write_file(tmp / "swing.csv", text);
+  // Beyond any ADC's range: refused as input, naming file, line, column and value.
+  l[3] = "20,0.1,1e200,0.1";
+  text.clear();
+  for (const std::string& x : l) text += x + "\n";
+  write_file(tmp / "huge.csv", text);
+  expect_refused("calibrate " + shell_quote(tmp / "huge.csv") + " -o " + shell_quote(tmp / "out") +
+                     " --no-plots",
+                 tmp / "out", 2,
+                 {(tmp / "huge.csv").string() + ":4: column 'V2': 1e+200 V is outside any ADC's range"});
+  for (const char* method : {"section", "cs", "cs-nc"}) {
+    SCOPED_TRACE(method);
+    const Result r = polrig("calibrate " + shell_quote(tmp / "swing.csv") + " --method " + method +
+                            " -o " + shell_quote(tmp / "out") + " --no-plots");
+    EXPECT_EQ(r.status, 3) << r.err;
+    EXPECT_HAS(r.err, "outside_domain: not fitted, ");
+    EXPECT_HAS(r.err, "more than any degree of polarization below 1 can give");
+    EXPECT_LACKS(r.err, "nan");
+    EXPECT_FALSE(fs::exists(tmp / "out"));
+  }
+}
+
 TEST_F(CliCalibration, UnknownMethodIsRefused) {
   const fs::path sim = simulate();
   expect_refused("calibrate " + shell_quote(sim) + " --method bogus -o " +
@@ -524,6 +614,80 @@ TEST_F(CliCalibration, ApplyWithParamsMissingKdIsRefused) {
   expect_refused("apply " + shell_quote(cal / "params.yaml") + " " + shell_quote(tmp / "v.csv") +
                      " -o " + shell_quote(tmp / "out") + " --no-plots",
                  tmp / "out", 2, {(tmp / "v.csv").string() + ":3: column 'V2'"});
+}
+
+TEST_F(CliCalibration, ApplyRefusesValuesOutsideTheirPhysicalRange) {
+  // Issue 8 §3.3: volts_per_decade = 1e-300 in params.yaml, or a voltage of 1e300, cast NaN to
+  // int in section_of and wrote −nan angles with section −2, exit 0.
+  const fs::path sim = simulate();
+  const fs::path cal = tmp / "cal";
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
+  const std::string params = read_file(cal / "params.yaml");
+  const auto with_line = [&](const std::string& key, const std::string& line) {
+    std::string text;
+    int at = 0, n = 0;
+    for (const std::string& l : lines_of(params)) {
+      ++n;
+      if (l.rfind(key + ":", 0) == 0) {
+        text += line + "\n";
+        at = n;
+      } else {
+        text += l + "\n";
+      }
+    }
+    EXPECT_GT(at, 0) << key;
+    return std::pair{text, at};
+  };
+  write_file(tmp / "v.csv", "V1,V2,V3\n0.1,0.2,0.1\n0.1,0.2,0.1\n");
+  const auto [tiny, tiny_line] = with_line("volts_per_decade", "volts_per_decade: 1e-300");
+  write_file(tmp / "tiny.yaml", tiny);
+  expect_refused("apply " + shell_quote(tmp / "tiny.yaml") + " " + shell_quote(tmp / "v.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {fmt::format("{}:{}: key 'volts_per_decade': expected a value in [0.01, 10]",
+                              (tmp / "tiny.yaml").string(), tiny_line),
+                  "got 1e-300"});
+
+  // A voltage no ADC gives: file, line, column and value.
+  write_file(tmp / "huge.csv", "V1,V2,V3\n0.1,0.2,0.1\n0.1,1e300,0.1\n");
+  expect_refused("apply " + shell_quote(cal / "params.yaml") + " " + shell_quote(tmp / "huge.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {(tmp / "huge.csv").string() + ":3: column 'V2': 1e+300 V is outside any ADC's range"});
+  // Within an ADC's range but hundreds of decades of light ratio at the smallest scale.
+  const auto [small, small_line] = with_line("volts_per_decade", "volts_per_decade: 0.01");
+  write_file(tmp / "small.yaml", small);
+  write_file(tmp / "four.csv", "V1,V2,V3\n0.1,0.2,0.1\n4,-4,4\n");
+  expect_refused("apply " + shell_quote(tmp / "small.yaml") + " " + shell_quote(tmp / "four.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2, {(tmp / "four.csv").string() + ":3: column 'V1': 4 V is ", "decades"});
+  // Parameters under which a row has no finite angle (all films at one angle: the linear
+  // system in d·cos2θ, d·sin2θ is singular).
+  const auto [flat, flat_line] = with_line("alpha_deg", "alpha_deg: [0, 0, 0, 0, 0, 0]");
+  write_file(tmp / "flat.yaml", flat);
+  expect_refused("apply " + shell_quote(tmp / "flat.yaml") + " " + shell_quote(tmp / "v.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {(tmp / "v.csv").string() + ":2: V1 = 0.1, V2 = 0.2, V3 = 0.1 give no finite angle"});
+}
+
+TEST_F(CliCalibration, ParamsWithADuplicateKeyAreRefused) {
+  const fs::path sim = simulate();
+  const fs::path cal = tmp / "cal";
+  ok("calibrate " + shell_quote(sim) + " --method cs -o " + shell_quote(cal) + " --no-plots");
+  const std::string params = read_file(cal / "params.yaml");
+  int kv_line = 0, n = 0;
+  for (const std::string& l : lines_of(params)) {
+    ++n;
+    if (l.rfind("kv:", 0) == 0) kv_line = n;
+  }
+  ASSERT_GT(kv_line, 0);
+  write_file(tmp / "dup.yaml", params + "kv: [1, 1, 1]\n");
+  expect_refused("apply " + shell_quote(tmp / "dup.yaml") + " " + shell_quote(sim / "stops.csv") +
+                     " -o " + shell_quote(tmp / "out") + " --no-plots",
+                 tmp / "out", 2,
+                 {fmt::format("{}:{}: key 'kv': duplicate key (first at line {})",
+                              (tmp / "dup.yaml").string(), n + 1, kv_line)});
 }
 
 TEST_F(CliCalibration, DaOutsideTheUnitIntervalIsRejectedByTheParser) {

@@ -53,12 +53,16 @@ PairAngle pair_angle(const CalibrationParams& p, const Electronics& e,
 }
 
 int section_of(double theta_deg) {
+  // A NaN cast to int is undefined behaviour; refuse it before the cast.
+  if (!std::isfinite(theta_deg))
+    throw std::invalid_argument("section_of: the angle is not a finite number");
   const int s = static_cast<int>(std::floor((wrap_axis_deg(theta_deg) + 15.0) / 30.0));
   return s % 6;
 }
 
 int bad_voltage_of(int section) {
   static constexpr int kBad[6] = {0, 2, 1, 0, 2, 1};
+  if (section < 0 || section > 5) throw std::out_of_range("bad_voltage_of: a section is 0..5");
   return kBad[section];
 }
 

@@ -1,5 +1,6 @@
 #include "polrig/calib/fit.h"
 
+#include <array>
 #include <cmath>
 
 #include <Eigen/Dense>
@@ -18,6 +19,55 @@ const char* parameter_name(int x) {
 }
 
 constexpr double kOutsideDomain_V = 1e3;
+
+// Every status Eigen's Levenberg–Marquardt can return, as a termination. MINPACK's statuses 6–8
+// (Ftol/Xtol/GtolTooSmall) say that no further improvement is possible in double precision:
+// the iteration has converged as far as it can.
+struct StatusOutcome {
+  const char* name;
+  FitTermination termination;
+  const char* message;
+};
+StatusOutcome outcome_of(Eigen::LevenbergMarquardtSpace::Status s) {
+  using S = Eigen::LevenbergMarquardtSpace::Status;
+  using T = FitTermination;
+  switch (s) {
+    case S::NotStarted:
+      return {"NotStarted", T::NoConvergence, "the iteration did not start"};
+    case S::Running:
+      return {"Running", T::NoConvergence, "the iteration limit came before convergence"};
+    case S::ImproperInputParameters:
+      return {"ImproperInputParameters", T::TooFewObservations,
+              "fewer observations than unknowns"};
+    case S::RelativeReductionTooSmall:
+      return {"RelativeReductionTooSmall", T::Converged,
+              "the relative reduction of the residual norm is below the function tolerance"};
+    case S::RelativeErrorTooSmall:
+      return {"RelativeErrorTooSmall", T::Converged,
+              "the relative step is below the parameter tolerance"};
+    case S::RelativeErrorAndReductionTooSmall:
+      return {"RelativeErrorAndReductionTooSmall", T::Converged,
+              "the relative reduction and the relative step are below their tolerances"};
+    case S::CosinusTooSmall:
+      return {"CosinusTooSmall", T::Converged,
+              "the residuals are orthogonal to the Jacobian (gradient tolerance)"};
+    case S::TooManyFunctionEvaluation:
+      return {"TooManyFunctionEvaluation", T::NoConvergence,
+              "the evaluation limit came before convergence"};
+    case S::FtolTooSmall:
+      return {"FtolTooSmall", T::Converged,
+              "no further reduction of the residuals is possible in double precision"};
+    case S::XtolTooSmall:
+      return {"XtolTooSmall", T::Converged,
+              "no further improvement of the parameters is possible in double precision"};
+    case S::GtolTooSmall:
+      return {"GtolTooSmall", T::Converged,
+              "the residuals are orthogonal to the Jacobian to double precision"};
+    case S::UserAsked:
+      return {"UserAsked", T::NoConvergence, "the residual function stopped the iteration"};
+  }
+  return {"unknown", T::NoConvergence, "unknown solver status"};
+}
 
 struct Eq15Residuals : Eigen::DenseFunctor<double> {
   Eq15Residuals(const std::vector<Observation>& d, double v_dec)
@@ -55,47 +105,100 @@ Eigen::MatrixXd eq15_jacobian(const std::vector<Observation>& data, const FitPar
   return J;
 }
 
+std::string_view termination_name(FitTermination t) {
+  switch (t) {
+    case FitTermination::Converged: return "converged";
+    case FitTermination::NoConvergence: return "no_convergence";
+    case FitTermination::OutsideDomain: return "outside_domain";
+    case FitTermination::RankDeficient: return "rank_deficient";
+    case FitTermination::TooFewObservations: return "too_few_observations";
+  }
+  return "?";
+}
+
+std::string FitSummary::brief_report() const {
+  if (solver_status.empty())
+    return fmt::format("{}: not fitted, {} observations; {}", termination_name(termination),
+                       observations, message);
+  return fmt::format("{}: {} iterations, {} evaluations, {} observations, cost {:.6g} -> {:.6g} V^2; {}",
+                     termination_name(termination), iterations, evaluations, observations,
+                     initial_cost, final_cost, message);
+}
+
 FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start, double v_dec,
                    const FitOptions& options) {
+  if (!(options.max_iterations > 0 && options.max_evaluations > 0 &&
+        options.function_tolerance >= 0 && options.parameter_tolerance >= 0 &&
+        options.gradient_tolerance >= 0))
+    throw std::invalid_argument("fit_eq15: limits must be positive and tolerances ≥ 0");
+  FitResult result;
+  FitSummary& summary = result.summary;
+  summary.observations = static_cast<int>(data.size());
   std::array<int, 3> per_pair{0, 0, 0};
   for (const Observation& o : data) {
-    if (o.pair < 0 || o.pair > 2) throw CalibrationError("observation of an unknown pair");
+    if (o.pair < 0 || o.pair > 2) throw std::invalid_argument("fit_eq15: observation of an unknown pair");
     if (!std::isfinite(o.volts) || !std::isfinite(o.theta_deg))
-      throw CalibrationError("an observation is not a finite number");
+      throw std::invalid_argument("fit_eq15: an observation is not a finite number");
     ++per_pair[static_cast<std::size_t>(o.pair)];
   }
+  result.params = start;
   for (int i = 0; i < 3; ++i)
-    if (per_pair[static_cast<std::size_t>(i)] < 6)
-      throw CalibrationError(fmt::format(
+    if (per_pair[static_cast<std::size_t>(i)] < 6) {
+      summary.termination = FitTermination::TooFewObservations;
+      summary.message = fmt::format(
           "V{} has {} observation(s); Eq. 15 has 6 unknowns per pair, so at least 6 are needed",
-          i + 1, per_pair[static_cast<std::size_t>(i)]));
+          i + 1, per_pair[static_cast<std::size_t>(i)]);
+      return result;
+    }
 
   Eq15Residuals f(data, v_dec);
   Eigen::LevenbergMarquardt<Eq15Residuals> lm(f);
-  lm.setXtol(options.tolerance);
-  lm.setFtol(options.tolerance);
+  lm.setXtol(options.parameter_tolerance);
+  lm.setFtol(options.function_tolerance);
+  lm.setGtol(options.gradient_tolerance);
   lm.setMaxfev(options.max_evaluations);
   Eigen::VectorXd x = start.vector();
-  const auto status = lm.minimize(x);
   using S = Eigen::LevenbergMarquardtSpace::Status;
-  for (const Observation& o : data)
-    if (!std::isfinite(eq15_voltage(FitParams::from_vector(x), v_dec, o.pair, o.theta_deg)))
-      throw CalibrationError("the fit ended outside Eq. 15's domain ((1 ± c·cos) ≤ 0): the data "
-                             "are not those of this sensor model");
-  if (status == S::TooManyFunctionEvaluation || status == S::ImproperInputParameters)
-    throw CalibrationError(fmt::format("the fit did not converge in {} evaluations",
-                                       options.max_evaluations));
-
-  FitResult result;
+  S status = lm.minimizeInit(x);
+  summary.initial_cost = 0.5 * lm.fvec().squaredNorm();
+  if (status == S::NotStarted) {
+    status = S::Running;
+    while (status == S::Running && lm.njev() < options.max_iterations)
+      status = lm.minimizeOneStep(x);
+  }
+  const StatusOutcome outcome = outcome_of(status);
+  summary.solver_status = outcome.name;
+  summary.iterations = static_cast<int>(lm.njev());
+  summary.evaluations = static_cast<int>(lm.nfev());
   result.params = FitParams::from_vector(x);
+
+  Eigen::VectorXd r(static_cast<Eigen::Index>(data.size()));
+  f(x, r);
+  const double rss = r.squaredNorm();
+  summary.final_cost = 0.5 * rss;
+  result.residual_rms_V = std::sqrt(rss / static_cast<double>(data.size()));
+
+  const auto stop = [&](FitTermination t, std::string message) {
+    summary.termination = t;
+    summary.message = std::move(message);
+    return result;
+  };
+  for (const Observation& o : data)
+    if (!std::isfinite(eq15_voltage(result.params, v_dec, o.pair, o.theta_deg)))
+      return stop(FitTermination::OutsideDomain,
+                  fmt::format("the fit ended outside Eq. 15's domain ((1 ± c·cos) ≤ 0): the data "
+                              "are not those of this sensor model (solver: {})", outcome.message));
   for (int i = 0; i < 3; ++i)
     if (!(result.params.kv[i] > 0.0))
-      throw CalibrationError(fmt::format(
-          "the fit gives kv_{} = {:.3g}, not a log-amplifier gain: the voltages do not vary with the "
-          "angle as Eq. 15 says (is the light polarized?)", i + 1, result.params.kv[i]));
-  result.observations = static_cast<int>(data.size());
-  result.iterations = static_cast<int>(lm.iterations());
-  result.evaluations = static_cast<int>(lm.nfev());
+      return stop(FitTermination::OutsideDomain,
+                  fmt::format("the fit gives kv_{} = {:.3g}, not a log-amplifier gain: the voltages "
+                              "do not vary with the angle as Eq. 15 says (is the light polarized? "
+                              "solver: {})", i + 1, result.params.kv[i], outcome.message));
+  if (outcome.termination != FitTermination::Converged)
+    return stop(outcome.termination,
+                fmt::format("{} ({} iterations, {} evaluations allowed; solver status {})",
+                            outcome.message, options.max_iterations, options.max_evaluations,
+                            outcome.name));
 
   // Identifiability: the Jacobian with unit-norm columns (so units do not matter) must have
   // full rank. The right singular vector of the smallest σ names the undetermined direction.
@@ -103,24 +206,23 @@ FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start,
   const Eigen::VectorXd norms = J.colwise().norm().transpose();
   for (int c = 0; c < FitParams::kCount; ++c)
     if (!(norms(c) > 0))
-      throw CalibrationError(fmt::format("the data cannot determine {} (it has no effect on any "
-                                         "voltage; d may be too small)", parameter_name(c)));
+      return stop(FitTermination::RankDeficient,
+                  fmt::format("the data cannot determine {} (it has no effect on any voltage; d "
+                              "may be too small)", parameter_name(c)));
   const Eigen::MatrixXd Js = J * norms.cwiseInverse().asDiagonal();
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeThinV);
   const Eigen::VectorXd sigma = svd.singularValues();
   if (sigma(sigma.size() - 1) < options.min_singular_ratio * sigma(0)) {
     Eigen::Index worst = 0;
     svd.matrixV().col(sigma.size() - 1).cwiseAbs().maxCoeff(&worst);
-    throw CalibrationError(fmt::format(
-        "the data cannot determine the parameters (rank-deficient Jacobian, σ_min/σ_max = {:.1e}); "
-        "{} is the least determined: measure over a wider range of angles or with more stops",
-        sigma(sigma.size() - 1) / sigma(0), parameter_name(static_cast<int>(worst))));
+    return stop(FitTermination::RankDeficient,
+                fmt::format("the data cannot determine the parameters (rank-deficient Jacobian, "
+                            "σ_min/σ_max = {:.1e}); {} is the least determined: measure over a "
+                            "wider range of angles or with more stops",
+                            sigma(sigma.size() - 1) / sigma(0),
+                            parameter_name(static_cast<int>(worst))));
   }
 
-  Eigen::VectorXd r(static_cast<Eigen::Index>(data.size()));
-  f(x, r);
-  const double rss = r.squaredNorm();
-  result.residual_rms_V = std::sqrt(rss / static_cast<double>(data.size()));
   const int dof = static_cast<int>(data.size()) - FitParams::kCount;
   FitParams::Vector se = FitParams::Vector::Constant(std::numeric_limits<double>::quiet_NaN());
   if (dof > 0) {
@@ -132,7 +234,7 @@ FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start,
       se(c) = std::sqrt(s2 * (V.row(c).cwiseAbs2() * inv_s2)(0)) / norms(c);
   }
   result.standard_error = FitParams::from_vector(se);
-  return result;
+  return stop(FitTermination::Converged, outcome.message);
 }
 
 }  // namespace polrig

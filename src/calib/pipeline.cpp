@@ -29,24 +29,38 @@ namespace {
 
 std::vector<Observation> observations_of(const std::vector<EvalPoint>& points) {
   std::vector<Observation> obs;
-  for (const EvalPoint& p : points)
-    for (int i = 0; i < 3; ++i) obs.push_back({p.theta_ref_deg, i, p.V[i]});
+  for (std::size_t n = 0; n < points.size(); ++n)
+    for (int i = 0; i < 3; ++i) obs.push_back({points[n].theta_ref_deg, i, points[n].V[i], n});
   return obs;
 }
 
 // The start value of c, from how much the voltages swing: an ideal pair spans
 // ±v_dec·log10[(1 + d)/(1 − d)], so half the range of V_i gives d_i = (10^(A/v) − 1)/(10^(A/v) + 1).
 // The median over the three pairs; offsets k_i do not enter, and unpolarized light gives ~0.
-double estimate_d(const std::vector<EvalPoint>& points, const CalibrationOptions& o) {
-  std::array<double, 3> d{};
+// A swing too large for double precision (10^(A/v) overflows) gives d = 1, not NaN.
+struct StartEstimate {
+  double d;
+  int pair;         // the median pair
+  double swing_V;   // its peak-to-peak voltage
+};
+StartEstimate estimate_d(const std::vector<EvalPoint>& points, const CalibrationOptions& o) {
+  std::array<StartEstimate, 3> d{};
   for (int i = 0; i < 3; ++i) {
     double lo = points.front().V[i], hi = lo;
     for (const EvalPoint& p : points) lo = std::min(lo, p.V[i]), hi = std::max(hi, p.V[i]);
     const double a = std::pow(10.0, 0.5 * (hi - lo) / o.volts_per_decade);
-    d[i] = (a - 1.0) / (a + 1.0);
+    d[i] = {std::isinf(a) ? 1.0 : (a - 1.0) / (a + 1.0), i, hi - lo};
   }
-  std::sort(d.begin(), d.end());
+  std::sort(d.begin(), d.end(), [](const auto& x, const auto& y) { return x.d < y.d; });
   return d[1];
+}
+
+FitSummary failed_before_fit(FitTermination t, std::string message, std::size_t observations) {
+  FitSummary s;
+  s.termination = t;
+  s.message = std::move(message);
+  s.observations = static_cast<int>(observations);
+  return s;
 }
 
 }  // namespace
@@ -86,6 +100,9 @@ std::array<AngleAccuracy, 4> accuracy_of(const std::vector<AngleErrors>& errors)
 }
 
 CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const CalibrationOptions& o) {
+  if (!(std::isfinite(o.volts_per_decade) && o.volts_per_decade > 0))
+    throw CalibrationError(fmt::format("volts_per_decade = {}: expected a finite gain > 0",
+                                       o.volts_per_decade));
   CalibrationResult r;
   r.method = o.method;
   if (o.method == CalibrationMethod::Section) {
@@ -93,17 +110,36 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
   } else {
     for (const CsPoint& p : central_symmetry_points(stops)) r.points.push_back({p.theta_R_deg, p.V});
   }
-  if (r.points.size() < 6)
-    throw CalibrationError(fmt::format(
-        "{} {} to fit; Eq. 15 has 6 unknowns per pair, so at least 6 are needed",
-        r.points.size(), o.method == CalibrationMethod::Section ? "stops" : "CS points"));
+  if (r.points.size() < 6) {
+    r.fit.summary = failed_before_fit(
+        FitTermination::TooFewObservations,
+        fmt::format("{} {} to fit; Eq. 15 has 6 unknowns per pair, so at least 6 are needed",
+                    r.points.size(), o.method == CalibrationMethod::Section ? "stops" : "CS points"),
+        3 * r.points.size());
+    return r;
+  }
 
-  const double d0 = estimate_d(r.points, o);
-  if (!(d0 >= 0.02))
-    throw CalibrationError(fmt::format(
-        "the light's degree of polarization is about {:.3g}: too small to calibrate (the angle "
-        "signal vanishes as d → 0; at least 0.02 is needed)", d0));
-  const FitParams start = FitParams::coupled(CalibrationParams::theory(o.film_axis_deg), d0);
+  const StartEstimate d0 = estimate_d(r.points, o);
+  if (!(d0.d < 1.0)) {
+    r.fit.summary = failed_before_fit(
+        FitTermination::OutsideDomain,
+        fmt::format("V{} swings by {:.6g} V, {:.3g} decades of light ratio at {} V per decade: more "
+                    "than any degree of polarization below 1 can give (check the voltage columns "
+                    "and volts_per_decade)",
+                    d0.pair + 1, d0.swing_V, d0.swing_V / o.volts_per_decade, o.volts_per_decade),
+        3 * r.points.size());
+    return r;
+  }
+  if (!(d0.d >= 0.02)) {
+    r.fit.summary = failed_before_fit(
+        FitTermination::RankDeficient,
+        fmt::format("the light's degree of polarization is about {:.3g} (V{} swings by {:.3g} V): "
+                    "too small to calibrate (the angle signal vanishes as d → 0; at least 0.02 is "
+                    "needed)", d0.d, d0.pair + 1, d0.swing_V),
+        3 * r.points.size());
+    return r;
+  }
+  const FitParams start = FitParams::coupled(CalibrationParams::theory(o.film_axis_deg), d0.d);
 
   const std::vector<Observation> all = observations_of(r.points);
   std::vector<Observation> used = all;
@@ -111,15 +147,18 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
     // Slopes from a preliminary fit of all CS points, so that the selection does not depend on
     // how the table zero sits against the port polarizer.
     const FitResult preliminary = fit_eq15(all, start, o.volts_per_decade, o.fit);
+    if (!preliminary.summary.usable()) {
+      r.fit = preliminary;
+      r.fit.summary.message = "the preliminary fit of all CS points: " + r.fit.summary.message;
+      return r;
+    }
     used = select_noncontinuous(all, preliminary.params, o.volts_per_decade, o.noncontinuous);
   }
   r.fit = fit_eq15(used, start, o.volts_per_decade, o.fit);
+  if (!r.fit.summary.usable()) return r;
 
   r.fitted.assign(3, std::vector<bool>(r.points.size(), false));
-  for (const Observation& ob : used)
-    for (std::size_t n = 0; n < r.points.size(); ++n)
-      if (r.points[n].theta_ref_deg == ob.theta_deg && r.points[n].V[ob.pair] == ob.volts)
-        r.fitted[ob.pair][n] = true;
+  for (const Observation& ob : used) r.fitted[static_cast<std::size_t>(ob.pair)][ob.row] = true;
 
   if (o.d_a) {
     r.d_a = *o.d_a;

@@ -58,6 +58,23 @@ struct CalibrationSettings {
   }
 };
 
+// The largest ADC reference a rig accepts (electronics.vref_V): no converter polrig models
+// reads beyond it.
+constexpr double kMaxAdcVolts = 100.0;
+// 10^x overflows or underflows a double beyond about ±308 decades: a pair's light ratio that
+// large is not light.
+constexpr double kMaxDecades = 300.0;
+
+// A DataError naming the file, line, column and value for a voltage no ADC can give.
+void check_adc_range(const StopVoltages& s) {
+  for (int i = 0; i < 3; ++i) {
+    const double v = s.V[static_cast<std::size_t>(i)];
+    if (!(std::abs(v) <= kMaxAdcVolts))
+      throw DataError(fmt::format("{}: column 'V{}': {} V is outside any ADC's range (|V| ≤ {} V)",
+                                  s.label, i + 1, v, kMaxAdcVolts));
+  }
+}
+
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
                    const OutputOptions& out) {
@@ -70,6 +87,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
     throw DataError(fmt::format("--method {}: expected section, cs, cs-nc or all", method_text));
   }
   const MeasuredData data = read_measured(input);
+  for (const StopVoltages& s : data.stops) check_adc_range(s);
   // The sensor description (film axes, amplifier scale): --rig, else the dataset's rig.yaml,
   // else the default rig. d_a: --d-a, else the dataset rig's d.
   std::optional<LoadedRig> given;
@@ -84,11 +102,16 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   for (CalibrationMethod m : methods) {
     CalibrationOptions o = settings.options(rig, rig_d);
     o.method = m;
+    CalibrationResult r;
     try {
-      results.push_back(calibrate(data.stops, o));
+      r = calibrate(data.stops, o);
     } catch (const CalibrationError& e) {
       throw CalibrationError(fmt::format("method {}: {}", method_name(m), e.what()));
     }
+    if (!r.usable())
+      throw CalibrationError(fmt::format("method {}: the fit is not usable: {}", method_name(m),
+                                         r.fit.summary.brief_report()));
+    results.push_back(std::move(r));
   }
   Manifest base{command_line(), given ? &*given : nullptr, {}, {data.origin}};
   if (!given && data.rig) base.inputs.push_back(data.rig_origin);
@@ -115,17 +138,48 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   }
   finish(dir);
   for (const CalibrationResult& r : results)
-    if (r.fit.observations <= FitParams::kCount)
+    if (r.fit.summary.observations <= FitParams::kCount)
       std::cerr << fmt::format("polrig: note: {} fitted {} voltages to 18 unknowns: no redundancy, so "
                                "its accuracy on the fitted points and its standard errors say "
-                               "nothing\n", method_name(r.method), r.fit.observations);
+                               "nothing\n", method_name(r.method), r.fit.summary.observations);
   for (const CalibrationResult& r : results)
     std::cout << fmt::format("{:8s} accuracy θ_sec ±{:.5f}°  (θ12 ±{:.5f}, θ13 ±{:.5f}, θ23 ±{:.5f}); "
                              "{} observations, residual RMS {:.4f} mV, d_a = {} ({})\n",
                              method_name(r.method), r.accuracy[kThetaSec].accuracy_deg(),
                              r.accuracy[kTheta12].accuracy_deg(), r.accuracy[kTheta13].accuracy_deg(),
-                             r.accuracy[kTheta23].accuracy_deg(), r.fit.observations,
-                             r.fit.residual_rms_V * 1e3, r.d_a, r.d_a_source);
+                             r.accuracy[kTheta23].accuracy_deg(), r.fit.summary.observations,
+                             r.fit.residual_rms_V * 1e3, r.d_a, r.d_a_source)
+              << fmt::format("{:8s} fit: {}\n", "", r.fit.summary.brief_report());
+}
+
+// The angles of one voltage row; a DataError naming the file, line, column and value for a
+// voltage no ADC can give, one that no light ratio can give, or a row without a finite angle.
+SensorAngles angles_of_row(const StopVoltages& s, const LoadedParams& p, const Electronics& e) {
+  check_adc_range(s);
+  for (int i = 0; i < 3; ++i) {
+    const double v = s.V[static_cast<std::size_t>(i)];
+    const double decades = (v - p.params.k_mV[static_cast<std::size_t>(i)] * 1e-3) /
+                           (p.params.kv[static_cast<std::size_t>(i)] * e.volts_per_decade);
+    if (!(std::abs(decades) <= kMaxDecades))
+      throw DataError(fmt::format(
+          "{}: column 'V{}': {} V is {:.3g} decades of light ratio from the pair's offset at {} V "
+          "per decade (kv = {}): no light gives that", s.label, i + 1, v, decades,
+          e.volts_per_decade, p.params.kv[static_cast<std::size_t>(i)]));
+  }
+  const auto refuse = [&] {
+    return DataError(fmt::format("{}: V1 = {}, V2 = {}, V3 = {} give no finite angle with these "
+                                 "parameters", s.label, s.V[0], s.V[1], s.V[2]));
+  };
+  SensorAngles a;
+  try {
+    a = sensor_angles(p.params, e, s.V);
+  } catch (const std::invalid_argument&) {
+    throw refuse();
+  }
+  for (double x : {a.theta12.theta_deg, a.theta13.theta_deg, a.theta23.theta_deg, a.theta_sec_deg,
+                   a.theta12.d, a.theta13.d, a.theta23.d})
+    if (!std::isfinite(x)) throw refuse();
+  return a;
 }
 
 void run_apply(const std::string& params_path, const std::string& voltages_path,
@@ -139,7 +193,7 @@ void run_apply(const std::string& params_path, const std::string& voltages_path,
   std::string text = "row,theta_R_deg,theta12_deg,theta13_deg,theta23_deg,theta_sec_deg,section,d,error_deg\n";
   for (std::size_t n = 0; n < data.stops.size(); ++n) {
     const StopVoltages& s = data.stops[n];
-    const SensorAngles a = sensor_angles(p.params, e, s.V);
+    const SensorAngles a = angles_of_row(s, p, e);
     const double err = have_reference ? axis_difference_deg(a.theta_sec_deg, s.theta_R_deg)
                                       : std::numeric_limits<double>::quiet_NaN();
     // d of the pair the section algorithm used.
@@ -225,9 +279,16 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
       const std::vector<Trial> result = calibration_trials(r.rig, s);
       write_manifest(dir.staging(), {command_line(), &r, report_calibration_trials(dir.staging(), result, out->plots())});
       finish(dir);
-      for (const TrialSummary& t : summarize_trials(result))
-        std::cout << fmt::format("{:8s} median ±{:.5f}°  (5%: {:.5f}, 95%: {:.5f}; {} failed)\n",
-                                 method_name(t.method), t.median_deg, t.p05_deg, t.p95_deg, t.failed);
+      for (const TrialSummary& t : summarize_trials(result)) {
+        std::string ends;
+        for (std::size_t k = 0; k < t.terminations.size(); ++k)
+          if (t.terminations[k] > 0)
+            ends += fmt::format("{}{} {}", ends.empty() ? "" : ", ", t.terminations[k],
+                                termination_name(kAllTerminations[k]));
+        std::cout << fmt::format("{:8s} median ±{:.5f}°  (5%: {:.5f}, 95%: {:.5f}; {} failed; fits: {})\n",
+                                 method_name(t.method), t.median_deg, t.p05_deg, t.p95_deg,
+                                 t.failed, ends);
+      }
     }});
   }
   return commands;

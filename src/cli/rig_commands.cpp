@@ -242,6 +242,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         } catch (const CalibrationError& e) {
           throw CalibrationError(fmt::format("calibration type {} of the simulated run: {}", method_name(m), e.what()));
         }
+        if (!calibrations.back().usable())
+          throw CalibrationError(fmt::format("calibration type {} of the simulated run: the fit is "
+                                             "not usable: {}", method_name(m),
+                                             calibrations.back().fit.summary.brief_report()));
       }
       const CsStudy cs = cs_study(r.rig, CsTurn(360));
       std::vector<double> ds;

@@ -137,32 +137,41 @@ std::vector<DatasetFile> report_calibration_trials(const std::filesystem::path& 
                                                    const std::vector<Trial>& trials, bool plots) {
   std::string text =
       "trial,seed,L_IS,alpha_IS,L_S,alpha_S,acc_section_deg,acc_cs_deg,acc_cs_nc_deg\n";
-  std::string failures = "trial,method,reason\n";
+  std::string failures = "trial,method,termination,iterations,evaluations,reason\n";
   bool any_failure = false;
   for (const Trial& t : trials) {
     text += fmt::format("{},{},{},{},{},{},{},{},{}\n", t.index, t.seed, t.eccentricity.L_IS,
                         t.eccentricity.alpha_IS, t.eccentricity.L_S, t.eccentricity.alpha_S,
                         t.accuracy_deg[0], t.accuracy_deg[1], t.accuracy_deg[2]);
     for (std::size_t m = 0; m < 3; ++m)
-      if (!t.failure[m].empty()) {
+      if (!t.fit[m].usable()) {
         any_failure = true;
-        std::string reason = t.failure[m];
+        std::string reason = t.fit[m].message;
         std::replace(reason.begin(), reason.end(), '"', '\'');
-        failures += fmt::format("{},{},\"{}\"\n", t.index, method_name(kAllMethods[m]), reason);
+        failures += fmt::format("{},{},{},{},{},\"{}\"\n", t.index, method_name(kAllMethods[m]),
+                                termination_name(t.fit[m].termination), t.fit[m].iterations,
+                                t.fit[m].evaluations, reason);
       }
   }
   write_text_file(dir / "trials.csv", text);
-  std::string summary = "method,succeeded,failed,median_deg,p05_deg,p95_deg,mean_deg\n";
-  for (const TrialSummary& s : summarize_trials(trials))
-    summary += fmt::format("{},{},{},{},{},{},{}\n", method_name(s.method), s.succeeded, s.failed,
+  std::string summary = "method,succeeded,failed,median_deg,p05_deg,p95_deg,mean_deg";
+  for (FitTermination k : kAllTerminations) summary += fmt::format(",{}", termination_name(k));
+  summary += "\n";
+  for (const TrialSummary& s : summarize_trials(trials)) {
+    summary += fmt::format("{},{},{},{},{},{},{}", method_name(s.method), s.succeeded, s.failed,
                            s.median_deg, s.p05_deg, s.p95_deg, s.mean_deg);
+    for (int count : s.terminations) summary += fmt::format(",{}", count);
+    summary += "\n";
+  }
   write_text_file(dir / "summary.csv", summary);
   std::vector<DatasetFile> files{
       {"trials.csv", 1, "per trial: seed, eccentricity and the θ_sec accuracy of each type"},
-      {"summary.csv", 1, "per type: median, 5% and 95% quantiles and mean of the accuracy"}};
+      {"summary.csv", 1, "per type: median, 5% and 95% quantiles and mean of the accuracy, and how "
+                         "many fits ended in each termination type"}};
   if (any_failure) {
     write_text_file(dir / "failures.csv", failures);
-    files.push_back({"failures.csv", 1, "calibrations that failed, with the reason"});
+    files.push_back({"failures.csv", 2, "calibrations whose fit is not usable: termination type, "
+                                        "iterations, evaluations and the reason"});
   }
 
   // Empirical distribution: each column sorted on its own (failed trials left out).

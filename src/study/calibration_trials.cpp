@@ -32,12 +32,10 @@ Trial run_trial(const Rig& base, const TrialSettings& s, int index) {
   for (std::size_t m = 0; m < kAllMethods.size(); ++m) {
     CalibrationOptions o = s.calibration;
     o.method = kAllMethods[m];
-    try {
-      t.accuracy_deg[m] = calibrate(stops, o).accuracy[kThetaSec].accuracy_deg();
-    } catch (const CalibrationError& e) {
-      t.accuracy_deg[m] = std::numeric_limits<double>::quiet_NaN();
-      t.failure[m] = e.what();
-    }
+    const CalibrationResult r = calibrate(stops, o);
+    t.fit[m] = r.fit.summary;
+    t.accuracy_deg[m] = r.usable() ? r.accuracy[kThetaSec].accuracy_deg()
+                                   : std::numeric_limits<double>::quiet_NaN();
   }
   return t;
 }
@@ -65,8 +63,10 @@ std::vector<TrialSummary> summarize_trials(const std::vector<Trial>& trials) {
     s.method = kAllMethods[m];
     std::vector<double> acc;
     for (const Trial& t : trials) {
-      if (std::isnan(t.accuracy_deg[m])) ++s.failed;
-      else acc.push_back(t.accuracy_deg[m]);
+      if (t.fit[m].usable()) acc.push_back(t.accuracy_deg[m]);
+      else ++s.failed;
+      for (std::size_t k = 0; k < std::size(kAllTerminations); ++k)
+        if (t.fit[m].termination == kAllTerminations[k]) ++s.terminations[k];
     }
     s.succeeded = static_cast<int>(acc.size());
     if (!acc.empty()) {

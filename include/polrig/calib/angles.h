@@ -31,13 +31,16 @@ struct SensorAngles {
   int section;  // 0..5, centred on 0°, 30°, …, 150°
 };
 
-// The section whose centre (a bad point) is nearest θ: ⌊(θ + 15°)/30°⌋ mod 6.
+// The section whose centre (a bad point) is nearest θ: ⌊(θ + 15°)/30°⌋ mod 6. Throws
+// std::invalid_argument for a non-finite θ.
 int section_of(double theta_deg);
 // The voltage (0-based) with zero slope at the centre of a section: V1, V3, V2, V1, V3, V2.
+// Throws std::out_of_range outside 0..5.
 int bad_voltage_of(int section);
 
 // θ12, θ13, θ23 and the section algorithm's θ_sec: θ12 picks the section, θ_sec is the pair
-// that leaves out that section's bad voltage.
+// that leaves out that section's bad voltage. Throws std::invalid_argument when θ12 is not
+// finite (voltages far outside what the parameters can give: 10^((V − k)/(kv·v_dec)) overflows).
 SensorAngles sensor_angles(const CalibrationParams& p, const Electronics& e,
                            const std::array<double, 3>& V,
                            PairInversion method = PairInversion::Atan2);

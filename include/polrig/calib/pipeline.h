@@ -65,10 +65,14 @@ struct CalibrationResult {
   std::vector<std::vector<bool>> fitted;  // fitted[i][n]: V_{i+1} of point n entered the fit
   std::vector<AngleErrors> errors;   // at every point
   std::array<AngleAccuracy, 4> accuracy;  // θ12, θ13, θ23, θ_sec
+  bool usable() const { return fit.summary.usable(); }
 };
 
-// Runs one calibration type on the stops. Throws CalibrationError with the reason when the
-// data cannot be calibrated (unpaired CS stops, too few stops, d too small, no convergence…).
+// Runs one calibration type on the stops. A fit that fails is data: the result's fit.summary
+// says why (too few points, no convergence, outside Eq. 15's domain, rank deficient, d too
+// small), and only when fit.summary.usable() are params, errors and accuracy filled in.
+// Throws CalibrationError when the stops cannot form the points at all (unpaired CS stops) or
+// the decoupling d_a is outside (0, 1).
 CalibrationResult calibrate(const std::vector<StopVoltages>& stops,
                             const CalibrationOptions& options);
 

@@ -2,6 +2,7 @@
 // Monte-Carlo benchmark of central symmetry in calibration terms: many simulated calibration
 // runs, each with its own noise and a random eccentricity, calibrated by all three types.
 #include <array>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,7 @@ struct Trial {
   std::uint64_t seed = 0;  // the trial's noise seed, derived from the rig's seed and the index
   Eccentricity eccentricity;
   std::array<double, 3> accuracy_deg{};  // θ_sec accuracy per type (kAllMethods order); NaN if it failed
-  std::array<std::string, 3> failure;    // why a type failed, empty if it did not
+  std::array<FitSummary, 3> fit;         // how each type's fit ended
 };
 
 // Every trial is a pure function of (rig, settings, index): the result is the same for any
@@ -33,6 +34,7 @@ std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& setti
 struct TrialSummary {
   CalibrationMethod method;
   int succeeded = 0, failed = 0;
+  std::array<int, std::size(kAllTerminations)> terminations{};  // count per kAllTerminations entry
   double median_deg = 0, p05_deg = 0, p95_deg = 0, mean_deg = 0;
 };
 std::vector<TrialSummary> summarize_trials(const std::vector<Trial>& trials);

@@ -334,7 +334,7 @@ TEST_F(Cli, BadInputWritesNothing) {
       {"--set unknown key", "simulate " + shell_quote(kRig) + " --set source.L_0=20",
        "--set source.L_0=20: unknown key 'source.L_0'"},
       {"--set negative distance", "simulate " + shell_quote(kRig) + " --set source.L_o=-1",
-       "--set source.L_o=-1: key 'source.L_o': expected a length > 0"},
+       "--set source.L_o=-1: key 'source.L_o': expected a length in [0.1, 1000] mm, got -1"},
       {"--set without =", "study cs " + shell_quote(kRig) + " --set source.L_o",
        "--set source.L_o: expected key.path=value"},
       {"bad --grid key", "sweep " + shell_quote(kRig) + " --grid eccentricity.L_X=0:1:3",

@@ -319,7 +319,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     auto* app = rig_app->add_subcommand("keys", "print every rig key as a Markdown table");
     commands.push_back({app, [] {
       Rig defaults;
-      std::cout << "| key | unit | default | accepts | meaning |\n|---|---|---|---|---|\n";
+      std::cout << "| key | unit | default | accepts | meaning | why this range |\n"
+                   "|---|---|---|---|---|---|\n";
       for (const RigKey& k : rig_keys()) {
         std::string def;
         using K = RigKey::Kind;
@@ -331,7 +332,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
           case K::RealArray: def = fmt::format("[{}]", fmt::join(k.array(defaults), ", ")); break;
           case K::RealList: def = "(none)"; break;
         }
-        std::cout << fmt::format("| `{}` | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects, k.doc);
+        std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects,
+                                 k.doc, k.why);
       }
     }});
   }

@@ -195,17 +195,18 @@ class RigParser {
       case K::RealArray: {
         std::span<double> dst = k.array(rig);
         if (!n.IsSequence() || n.size() != dst.size())
-          fail(path, fmt::format("expected a list of {}{}, got {}", k.expects,
-                                 k.unit.empty() ? "" : fmt::format(" ({})", k.unit),
+          fail(path, fmt::format("expected a list of {}, got {}", k.expects,
                                  n.IsSequence() ? fmt::format("{} values", n.size())
                                                 : shown(n)));
         for (std::size_t i = 0; i < dst.size(); ++i) dst[i] = read_real(k, path, n[i]);
         return;
       }
       case K::RealList: {
-        if (!n.IsSequence() || n.size() == 0)
+        if (!n.IsSequence() || n.size() == 0 || (k.max_items && n.size() > k.max_items))
           fail(path, fmt::format("expected {}, got {}", k.expects,
-                                 n.IsSequence() ? "an empty list" : shown(n)));
+                                 !n.IsSequence()  ? shown(n)
+                                 : n.size() == 0 ? std::string("an empty list")
+                                                 : fmt::format("{} entries", n.size())));
         std::vector<double>& dst = k.list(rig);
         dst.clear();
         for (std::size_t i = 0; i < n.size(); ++i) dst.push_back(read_real(k, path, n[i]));

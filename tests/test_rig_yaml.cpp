@@ -569,6 +569,41 @@ TEST(RigYamlError, EmptyAnglesList) {
                     "expected a list of 1 to 1e6 angles in [-3600, 3600] deg, got '90'");
 }
 
+// Issue 8: 1.2 million explicit stops were accepted although start/step/stop stop at 1e6. The
+// list is refused with its key and count; a rig built in code is refused by check_rig.
+TEST(RigYamlError, MoreThanAMillionExplicitStops) {
+  std::string text = "schedule:\n  angles_deg: [0";
+  for (int i = 1; i < 1000001; ++i) text += ",0";
+  text += "]\n";
+  expect_file_error(text, 2, "schedule.angles_deg",
+                    "expected a list of 1 to 1e6 angles in [-3600, 3600] deg, got 1000001 entries");
+  Rig r;
+  r.schedule.angles_deg.assign(1000001, 0.0);
+  const auto problem = polrig::check_rig(r);
+  ASSERT_TRUE(problem.has_value());
+  EXPECT_EQ(problem->path, "schedule.angles_deg");
+  EXPECT_EQ(problem->message, "expected at most 1e6 stops, got 1000001");
+  r.schedule.angles_deg.resize(1000000);
+  EXPECT_FALSE(polrig::check_rig(r).has_value());
+}
+
+// Issue 8: nesting deeper than yaml-cpp's guard was reported as "YAML syntax error: bad file".
+TEST(RigYamlError, DeepNestingIsNamedWithFileAndLine) {
+  const std::string flow = "seed: " + std::string(3000, '[') + std::string(3000, ']') + "\n";
+  EXPECT_EQ(rig_error(flow), std::string(kOrigin) + ":1: the YAML nests deeper than the reader's "
+                                                    "limit of 500 levels (a rig file nests 3 levels)");
+  std::string block = "device:\n";
+  for (int i = 1; i < 2000; ++i) block += std::string(2 * static_cast<std::size_t>(i), ' ') + "k:\n";
+  const std::string msg = rig_error(block);
+  EXPECT_STARTS(msg, std::string(kOrigin) + ":");
+  EXPECT_HAS(msg, "the YAML nests deeper than the reader's limit");
+  EXPECT_LACKS(msg, "bad file");
+  const std::string deep_set = "seed=" + std::string(3000, '[');
+  EXPECT_EQ(rig_error("seed: 1\n", sets({deep_set.c_str()})),
+            "--set seed=" + std::string(3000, '[') + ": key 'seed': the value is not valid YAML: the "
+            "YAML nests deeper than the reader's limit of 500 levels (a rig value nests at most 1 level)");
+}
+
 // ---------------------------------------------------------------------------------------------
 // Errors: files
 // ---------------------------------------------------------------------------------------------

@@ -166,7 +166,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     rig->add_to(*app, false);
     out->add_to(*app);
     app->add_option("--d", *d_list, "degrees of polarization: a,b,c or start:stop:count")->capture_default_str();
-    app->add_option("--step", *step, "θ step in degrees")->check(CLI::Range(1e-4, 10.0))->capture_default_str();
+    app->add_option("--step", *step, "θ step in degrees")->check(finite_range(1e-4, 10.0, "deg"))->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       // Electronics and film axes come from the rig; without one, from the default rig.

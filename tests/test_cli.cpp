@@ -1,6 +1,7 @@
 // End-to-end tests of the polrig executable: each test runs the real program in a fresh
 // temporary folder and inspects the files it writes (or does not write).
 #include <gtest/gtest.h>
+#include <yaml-cpp/binary.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cstdlib>
@@ -150,6 +151,43 @@ TEST_F(Cli, ManifestRigTextIsTheFileTextExactly) {
     const YAML::Node m = YAML::LoadFile((out / "manifest.yaml").string());
     EXPECT_EQ(m["rig_text"].as<std::string>("<missing>"), text);
   }
+}
+
+// Issue 8: a NUL byte in a rig comment truncated manifest.yaml, and Latin-1 bytes came back as
+// U+FFFD. The stored text must be the bytes read: as a YAML string when YAML holds them, else
+// in base64 (rig_text_base64); and the dataset still reproduces itself from its rig.yaml.
+TEST_F(Cli, ManifestStoresAnyRigTextByteForByte) {
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"nul.yaml", std::string("# a NUL \0 in a comment\nseed: 5\n", 31)},
+      {"latin1.yaml", "# caf\xe9, \xb5m: Latin-1\nseed: 5\n"},
+      {"control.yaml", "# bell \a, escape \x1b, CR\r\nseed: 5\n"},
+      {"utf8.yaml", "# θ_R in °, µm\nseed: 5\n"},
+  };
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    ASSERT_EQ(text.find("seed: 5"), text.size() - 8);
+    write_file(tmp / name, text);
+    ASSERT_EQ(read_file(tmp / name), text);
+    const fs::path out = tmp / ("out-" + name), again = tmp / ("again-" + name);
+    ok("simulate " + shell_quote(tmp / name) + " -o " + dir_arg(out) + " --no-plots");
+    const std::string manifest = read_file(out / "manifest.yaml");
+    EXPECT_HAS(manifest, "rig_resolved:");  // the manifest is whole
+    const YAML::Node m = YAML::Load(manifest);
+    std::string stored;
+    if (m["rig_text_base64"]) {
+      EXPECT_FALSE(m["rig_text"]) << "both forms";
+      const std::vector<unsigned char> bytes = YAML::DecodeBase64(m["rig_text_base64"].as<std::string>());
+      stored.assign(bytes.begin(), bytes.end());
+    } else {
+      stored = m["rig_text"].as<std::string>("<missing>");
+    }
+    EXPECT_EQ(stored, text);
+    ok("simulate " + shell_quote(out / "rig.yaml") + " -o " + dir_arg(again) + " --no-plots");
+    EXPECT_EQ(read_file(again / "stops.csv"), read_file(out / "stops.csv"));
+  }
+  // Text YAML holds stays readable: rig_text, not base64.
+  EXPECT_TRUE(YAML::LoadFile((tmp / "out-utf8.yaml" / "manifest.yaml").string())["rig_text"]);
+  EXPECT_TRUE(YAML::LoadFile((tmp / "out-latin1.yaml" / "manifest.yaml").string())["rig_text_base64"]);
 }
 
 TEST_F(Cli, RigShowAndRigKeys) {

@@ -358,6 +358,18 @@ TEST_F(Cli, RelativeAndTrailingSlashOutputPaths) {
 
 TEST_F(Cli, BadInputWritesNothing) {
   write_file(tmp / "unknown-key.yaml", "seed: 1\nsource:\n  L_0: 20\n");
+  // The traced rig with one line of its scene (scenes/jf500.yaml) replaced.
+  int scenes = 0;
+  const auto traced_rig = [&](const std::string& from, const std::string& to) {
+    std::string scene = read_file(POLRIG_SOURCE_DIR "/scenes/jf500.yaml");
+    const std::size_t at = scene.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    scene.replace(at, from.size(), to);
+    const std::string n = std::to_string(scenes++);
+    write_file(tmp / ("scene" + n + ".yaml"), scene);
+    write_file(tmp / ("traced" + n + ".yaml"), "source: {model: traced, scene: scene" + n + ".yaml}\n");
+    return tmp / ("traced" + n + ".yaml");
+  };
   struct Case {
     std::string name;
     std::string args;      // without -o
@@ -387,6 +399,28 @@ TEST_F(Cli, BadInputWritesNothing) {
       {"study adc --d 1.5", "study adc --d 1.5",
        "--d 1.5: expected degrees of polarization in (0, 1), got 1.5"},
       {"run with a bad rig", "run " + shell_quote(tmp / "unknown-key.yaml"), "key 'source.L_0'"},
+      // Issue 8 item 4: extremes that wrote NaN or inf with exit 0 are outside the keys' ranges.
+      {"study cs with L_S = 1e300", "study cs " + shell_quote(kRig) + " --set eccentricity.L_S=1e300",
+       "--set eccentricity.L_S=1e300: key 'eccentricity.L_S': expected a length in [0, 100] mm, got 1e300"},
+      {"run with L_IS = 1e300", "run " + shell_quote(kRig) + " --set eccentricity.L_IS=1e300",
+       "key 'eccentricity.L_IS': expected a length in [0, 100] mm, got 1e300"},
+      {"study cs with L_o = 1e-300", "study cs " + shell_quote(kRig) + " --set source.L_o=1e-300",
+       "key 'source.L_o': expected a length in [0.1, 1000] mm, got 1e-300"},
+      {"simulate with volts_per_decade = 1e300",
+       "simulate " + shell_quote(kRig) + " --set electronics.volts_per_decade=1e300",
+       "key 'electronics.volts_per_decade': expected a gain in [0.01, 10] V, got 1e300"},
+      {"sweep over L_photo up to 1e300", "sweep " + shell_quote(kRig) + " --grid device.L_photo=1:1e300:3",
+       "--grid device.L_photo=1:1e300:3: key 'device.L_photo': expected a length in [0.1, 500] mm"},
+      {"run with kv = 1e300", "run " + shell_quote(kRig) + " --set 'device.truth.kv=[1e300, 1, 1]'",
+       "key 'device.truth.kv': expected 3 gains in [0.5, 2], got 1e300"},
+      // Issue 8 item 1: scene values the tracer cannot represent.
+      {"scene sphere 1e20 m", "study cs " + shell_quote(traced_rig("diameter: 500", "diameter: 1e20")),
+       "key 'sphere.diameter': expected a length in [10, 10000] mm, got 1e20"},
+      {"scene lamp of 1e300 W", "study cs " + shell_quote(traced_rig("power: 100", "power: 1e300")),
+       "key 'lamps[0].power': expected a power in [0.001, 10000] W, got 1e300"},
+      {"scene baffle normal of 1e300",
+       "study cs " + shell_quote(traced_rig("normal: [0, 0.399, 0.917]", "normal: [0, 1e300, 0.917]")),
+       "key 'baffles[0].normal': expected a direction of length in [1e-6, 1e6]"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
@@ -404,6 +438,35 @@ TEST_F(Cli, BadInputWritesNothing) {
     EXPECT_EQ(r.out.find("wrote"), std::string::npos) << r.out;
     std::error_code ec;
     fs::remove_all(parent, ec);
+  }
+}
+
+// Issue 8 item 5: nan and inf passed CLI::Range (`study adc --step nan` wrote zeros, exit 0).
+TEST_F(Cli, NumericOptionsRefuseNanAndInfinity) {
+  write_file(tmp / "v.csv", "V1,V2,V3\n0.1,0.2,0.3\n");
+  const std::string rig = shell_quote(kRig);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"study adc --step nan", "--step: expected a finite number in [0.0001, 10] deg, got nan"},
+      {"study adc --step inf", "--step: expected a finite number in [0.0001, 10] deg, got inf"},
+      {"study adc --step -inf", "--step: expected a finite number in [0.0001, 10] deg, got -inf"},
+      {"study calibration " + rig + " --L-IS-max nan", "--L-IS-max: expected a finite number in [0, 100] mm, got nan"},
+      {"study calibration " + rig + " --L-S-max inf", "--L-S-max: expected a finite number in [0, 100] mm, got inf"},
+      {"study calibration " + rig + " --nc-threshold nan", "--nc-threshold: expected a finite number in [0, 1], got nan"},
+      {"calibrate " + shell_quote(tmp / "v.csv") + " --nc-threshold inf", "--nc-threshold: expected a finite number in [0, 1], got inf"},
+      {"calibrate " + shell_quote(tmp / "v.csv") + " --d-a nan", "--d-a: expected a degree of polarization in (0, 1), got nan"},
+      {"study cs " + rig + " --steps nan", "--steps: expected an even number"},
+      {"study calibration " + rig + " --trials nan", "--trials: "},
+      {"--threads inf study adc", "--threads: "},
+      {"study adc --d nan", "--d nan: value: expected a finite number, got 'nan'"},
+  };
+  for (const auto& [args, expected] : cases) {
+    SCOPED_TRACE(args);
+    const fs::path out = tmp / "out";
+    const Result r = polrig(args + " -o " + dir_arg(out) + " --no-plots");
+    EXPECT_NE(r.status, 0);
+    EXPECT_HAS(r.err, expected);
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_TRUE(leftovers(tmp, "out").empty());
   }
 }
 

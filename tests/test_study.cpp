@@ -10,6 +10,7 @@
 #include <limits>
 #include <numbers>
 #include <span>
+#include <stdexcept>
 #include <string>
 
 #include "polrig/calib/angles.h"
@@ -426,6 +427,20 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
     }
   }
   EXPECT_EQ(checked, 2 * 21);  // every real key, both ends
+}
+
+// Past the ranges (a rig built in code), simulate stops on the first non-finite voltage and says
+// where, instead of the ADC's anonymous "non-finite voltage" (issue 8).
+TEST(RigRanges, ANonFiniteVoltageIsNamedByStopAndPair) {
+  Rig rig = short_schedule();
+  rig.device.ring.L_photo = 1e300;  // cos⁴ falls to 0 off the axis: log10(0/0)
+  try {
+    simulate(rig);
+    FAIL() << "simulate accepted L_photo = 1e300";
+  } catch (const std::domain_error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("stop 0 (θ_R = 0°): pair 1's voltage is not finite"), std::string::npos) << msg;
+  }
 }
 
 // The corners where the light is weakest against the strongest gain, and the reverse.

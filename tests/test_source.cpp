@@ -378,6 +378,10 @@ TEST(TracedRigFailure, ASolveThatFailsInsideTheParallelStudyStopsItCleanly) {
       EXPECT_HAS(e.what(), "non-finite ray");
     }
     EXPECT_THROW(rig.source.traced->solve_rays(), std::logic_error);  // the same error again
+    // And from a sweep, whose grid points run the study in parallel, nested.
+    const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0:1:8")};
+    rig.source.traced = std::make_shared<const TracedSource>(s);
+    EXPECT_THROW(sweep(rig, axes, CsTurn(36)), std::logic_error);
   }
 }
 

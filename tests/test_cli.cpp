@@ -1,6 +1,7 @@
 // End-to-end tests of the polrig executable: each test runs the real program in a fresh
 // temporary folder and inspects the files it writes (or does not write).
 #include <gtest/gtest.h>
+#include <yaml-cpp/binary.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cstdlib>
@@ -150,6 +151,43 @@ TEST_F(Cli, ManifestRigTextIsTheFileTextExactly) {
     const YAML::Node m = YAML::LoadFile((out / "manifest.yaml").string());
     EXPECT_EQ(m["rig_text"].as<std::string>("<missing>"), text);
   }
+}
+
+// Issue 8: a NUL byte in a rig comment truncated manifest.yaml, and Latin-1 bytes came back as
+// U+FFFD. The stored text must be the bytes read: as a YAML string when YAML holds them, else
+// in base64 (rig_text_base64); and the dataset still reproduces itself from its rig.yaml.
+TEST_F(Cli, ManifestStoresAnyRigTextByteForByte) {
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"nul.yaml", std::string("# a NUL \0 in a comment\nseed: 5\n", 31)},
+      {"latin1.yaml", "# caf\xe9, \xb5m: Latin-1\nseed: 5\n"},
+      {"control.yaml", "# bell \a, escape \x1b, CR\r\nseed: 5\n"},
+      {"utf8.yaml", "# θ_R in °, µm\nseed: 5\n"},
+  };
+  for (const auto& [name, text] : files) {
+    SCOPED_TRACE(name);
+    ASSERT_EQ(text.find("seed: 5"), text.size() - 8);
+    write_file(tmp / name, text);
+    ASSERT_EQ(read_file(tmp / name), text);
+    const fs::path out = tmp / ("out-" + name), again = tmp / ("again-" + name);
+    ok("simulate " + shell_quote(tmp / name) + " -o " + dir_arg(out) + " --no-plots");
+    const std::string manifest = read_file(out / "manifest.yaml");
+    EXPECT_HAS(manifest, "rig_resolved:");  // the manifest is whole
+    const YAML::Node m = YAML::Load(manifest);
+    std::string stored;
+    if (m["rig_text_base64"]) {
+      EXPECT_FALSE(m["rig_text"]) << "both forms";
+      const std::vector<unsigned char> bytes = YAML::DecodeBase64(m["rig_text_base64"].as<std::string>());
+      stored.assign(bytes.begin(), bytes.end());
+    } else {
+      stored = m["rig_text"].as<std::string>("<missing>");
+    }
+    EXPECT_EQ(stored, text);
+    ok("simulate " + shell_quote(out / "rig.yaml") + " -o " + dir_arg(again) + " --no-plots");
+    EXPECT_EQ(read_file(again / "stops.csv"), read_file(out / "stops.csv"));
+  }
+  // Text YAML holds stays readable: rig_text, not base64.
+  EXPECT_TRUE(YAML::LoadFile((tmp / "out-utf8.yaml" / "manifest.yaml").string())["rig_text"]);
+  EXPECT_TRUE(YAML::LoadFile((tmp / "out-latin1.yaml" / "manifest.yaml").string())["rig_text_base64"]);
 }
 
 TEST_F(Cli, RigShowAndRigKeys) {
@@ -320,6 +358,18 @@ TEST_F(Cli, RelativeAndTrailingSlashOutputPaths) {
 
 TEST_F(Cli, BadInputWritesNothing) {
   write_file(tmp / "unknown-key.yaml", "seed: 1\nsource:\n  L_0: 20\n");
+  // The traced rig with one line of its scene (scenes/jf500.yaml) replaced.
+  int scenes = 0;
+  const auto traced_rig = [&](const std::string& from, const std::string& to) {
+    std::string scene = read_file(POLRIG_SOURCE_DIR "/scenes/jf500.yaml");
+    const std::size_t at = scene.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    scene.replace(at, from.size(), to);
+    const std::string n = std::to_string(scenes++);
+    write_file(tmp / ("scene" + n + ".yaml"), scene);
+    write_file(tmp / ("traced" + n + ".yaml"), "source: {model: traced, scene: scene" + n + ".yaml}\n");
+    return tmp / ("traced" + n + ".yaml");
+  };
   struct Case {
     std::string name;
     std::string args;      // without -o
@@ -334,7 +384,7 @@ TEST_F(Cli, BadInputWritesNothing) {
       {"--set unknown key", "simulate " + shell_quote(kRig) + " --set source.L_0=20",
        "--set source.L_0=20: unknown key 'source.L_0'"},
       {"--set negative distance", "simulate " + shell_quote(kRig) + " --set source.L_o=-1",
-       "--set source.L_o=-1: key 'source.L_o': expected a length > 0"},
+       "--set source.L_o=-1: key 'source.L_o': expected a length in [0.1, 1000] mm, got -1"},
       {"--set without =", "study cs " + shell_quote(kRig) + " --set source.L_o",
        "--set source.L_o: expected key.path=value"},
       {"bad --grid key", "sweep " + shell_quote(kRig) + " --grid eccentricity.L_X=0:1:3",
@@ -349,6 +399,28 @@ TEST_F(Cli, BadInputWritesNothing) {
       {"study adc --d 1.5", "study adc --d 1.5",
        "--d 1.5: expected degrees of polarization in (0, 1), got 1.5"},
       {"run with a bad rig", "run " + shell_quote(tmp / "unknown-key.yaml"), "key 'source.L_0'"},
+      // Issue 8 item 4: extremes that wrote NaN or inf with exit 0 are outside the keys' ranges.
+      {"study cs with L_S = 1e300", "study cs " + shell_quote(kRig) + " --set eccentricity.L_S=1e300",
+       "--set eccentricity.L_S=1e300: key 'eccentricity.L_S': expected a length in [0, 100] mm, got 1e300"},
+      {"run with L_IS = 1e300", "run " + shell_quote(kRig) + " --set eccentricity.L_IS=1e300",
+       "key 'eccentricity.L_IS': expected a length in [0, 100] mm, got 1e300"},
+      {"study cs with L_o = 1e-300", "study cs " + shell_quote(kRig) + " --set source.L_o=1e-300",
+       "key 'source.L_o': expected a length in [0.1, 1000] mm, got 1e-300"},
+      {"simulate with volts_per_decade = 1e300",
+       "simulate " + shell_quote(kRig) + " --set electronics.volts_per_decade=1e300",
+       "key 'electronics.volts_per_decade': expected a gain in [0.01, 10] V, got 1e300"},
+      {"sweep over L_photo up to 1e300", "sweep " + shell_quote(kRig) + " --grid device.L_photo=1:1e300:3",
+       "--grid device.L_photo=1:1e300:3: key 'device.L_photo': expected a length in [0.1, 500] mm"},
+      {"run with kv = 1e300", "run " + shell_quote(kRig) + " --set 'device.truth.kv=[1e300, 1, 1]'",
+       "key 'device.truth.kv': expected 3 gains in [0.5, 2], got 1e300"},
+      // Issue 8 item 1: scene values the tracer cannot represent.
+      {"scene sphere 1e20 m", "study cs " + shell_quote(traced_rig("diameter: 500", "diameter: 1e20")),
+       "key 'sphere.diameter': expected a length in [10, 10000] mm, got 1e20"},
+      {"scene lamp of 1e300 W", "study cs " + shell_quote(traced_rig("power: 100", "power: 1e300")),
+       "key 'lamps[0].power': expected a power in [0.001, 10000] W, got 1e300"},
+      {"scene baffle normal of 1e300",
+       "study cs " + shell_quote(traced_rig("normal: [0, 0.399, 0.917]", "normal: [0, 1e300, 0.917]")),
+       "key 'baffles[0].normal': expected a direction of length in [1e-6, 1e6]"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
@@ -366,6 +438,35 @@ TEST_F(Cli, BadInputWritesNothing) {
     EXPECT_EQ(r.out.find("wrote"), std::string::npos) << r.out;
     std::error_code ec;
     fs::remove_all(parent, ec);
+  }
+}
+
+// Issue 8 item 5: nan and inf passed CLI::Range (`study adc --step nan` wrote zeros, exit 0).
+TEST_F(Cli, NumericOptionsRefuseNanAndInfinity) {
+  write_file(tmp / "v.csv", "V1,V2,V3\n0.1,0.2,0.3\n");
+  const std::string rig = shell_quote(kRig);
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"study adc --step nan", "--step: expected a finite number in [0.0001, 10] deg, got nan"},
+      {"study adc --step inf", "--step: expected a finite number in [0.0001, 10] deg, got inf"},
+      {"study adc --step -inf", "--step: expected a finite number in [0.0001, 10] deg, got -inf"},
+      {"study calibration " + rig + " --L-IS-max nan", "--L-IS-max: expected a finite number in [0, 100] mm, got nan"},
+      {"study calibration " + rig + " --L-S-max inf", "--L-S-max: expected a finite number in [0, 100] mm, got inf"},
+      {"study calibration " + rig + " --nc-threshold nan", "--nc-threshold: expected a finite number in [0, 1], got nan"},
+      {"calibrate " + shell_quote(tmp / "v.csv") + " --nc-threshold inf", "--nc-threshold: expected a finite number in [0, 1], got inf"},
+      {"calibrate " + shell_quote(tmp / "v.csv") + " --d-a nan", "--d-a: expected a degree of polarization in (0, 1), got nan"},
+      {"study cs " + rig + " --steps nan", "--steps: expected an even number"},
+      {"study calibration " + rig + " --trials nan", "--trials: "},
+      {"--threads inf study adc", "--threads: "},
+      {"study adc --d nan", "--d nan: value: expected a finite number, got 'nan'"},
+  };
+  for (const auto& [args, expected] : cases) {
+    SCOPED_TRACE(args);
+    const fs::path out = tmp / "out";
+    const Result r = polrig(args + " -o " + dir_arg(out) + " --no-plots");
+    EXPECT_NE(r.status, 0);
+    EXPECT_HAS(r.err, expected);
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_TRUE(leftovers(tmp, "out").empty());
   }
 }
 

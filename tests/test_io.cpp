@@ -1,7 +1,10 @@
 // Output plumbing: CSV text, folders that appear whole or not at all, manifests.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
+#include <limits>
+#include <stdexcept>
 #include <string>
 
 #include "polrig/io/csv.h"
@@ -27,6 +30,31 @@ TEST(Csv, WritesShortestExactNumbers) {
   EXPECT_EQ(t.text(), "a,b,c\n1,0.1,0.3333333333333333\n-2.5e-07,360,0.30000000000000004\n");
   EXPECT_EQ(t.rows(), 2u);
   EXPECT_THROW(t.add_row({1.0}), std::logic_error);
+}
+
+// The writers' last guard: no NaN or infinity leaves in a CSV, except NaN in a column declared
+// to mean "not defined"; the message names the column, the row and the value.
+TEST(Csv, RefusesNonFiniteValuesNamingTheColumnAndRow) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  CsvTable t({"pair", "bsd_mV", "ratio_pct"});
+  t.add_row({1, 0.5, 2});
+  for (double bad : {inf, -inf, nan}) {
+    try {
+      t.add_row({2, bad, 1});
+      FAIL() << "accepted " << bad;
+    } catch (const std::runtime_error& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find("column 'bsd_mV' of row 2 (pair = 2) is "), std::string::npos) << msg;
+      EXPECT_NE(msg.find(std::isnan(bad) ? "is nan" : bad > 0 ? "is inf" : "is -inf"), std::string::npos) << msg;
+    }
+  }
+  EXPECT_EQ(t.rows(), 1u);  // a refused row is not kept
+  EXPECT_THROW(t.add_row({2, 1, nan}), std::runtime_error);
+  t.allow_undefined("ratio_pct");
+  t.add_row({2, 1, nan});
+  EXPECT_THROW(t.add_row({3, 1, inf}), std::runtime_error);  // undefined is NaN, never infinity
+  EXPECT_EQ(t.text(), "pair,bsd_mV,ratio_pct\n1,0.5,2\n2,1,nan\n");
 }
 
 TEST(OutputDir, AppearsOnlyOnCommit) {

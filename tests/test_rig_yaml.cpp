@@ -329,14 +329,14 @@ TEST(RigYamlError, StringWhereNumberExpected) {
   expect_file_error("device:\n  d: high\n", 2, "device.d",
                     "expected a degree of polarization in (0, 1), got 'high'");
   expect_file_error("seed: 1\nelectronics:\n  vref_V: 0.6V\n", 3, "electronics.vref_V",
-                    "expected a voltage > 0, got '0.6V'");
+                    "expected a voltage in [0.01, 100] V, got '0.6V'");
   expect_file_error("device:\n  beta_deg: [0, -60, x, -180, -240, -300]\n", 2, "device.beta_deg",
-                    "expected 6 finite angles, got 'x'");
+                    "expected 6 angles in [-360, 360] deg, got 'x'");
 }
 
 TEST(RigYamlError, ListOrMappingWhereScalarExpected) {
   expect_file_error("source:\n  L_o: [20, 30]\n", 2, "source.L_o",
-                    "expected a length > 0 (at 0 the cos⁴ law gives no light off-axis), got a list");
+                    "expected a length in [0.1, 1000] mm, got a list");
   expect_file_error("device:\n  d: [0.5]\n", 2, "device.d",
                     "expected a degree of polarization in (0, 1), got a list");
   expect_file_error("electronics:\n  adc_bits: [16]\n", 2, "electronics.adc_bits",
@@ -358,13 +358,13 @@ TEST(RigYamlError, ScalarWhereSectionExpected) {
 
 TEST(RigYamlError, ListOfWrongLength) {
   expect_file_error("device:\n  truth:\n    kv: [1.0, 1.0]\n", 3, "device.truth.kv",
-                    "expected a list of 3 gains > 0");
+                    "expected a list of 3 gains in [0.5, 2]");
   expect_file_error("device:\n  truth:\n    kv: [1.0, 1.0]\n", 3, "device.truth.kv",
                     "got 2 values");
   expect_file_error("device:\n  film_axes_deg: [0, 90, 60, 150, 120, 210, 0]\n", 2,
-                    "device.film_axes_deg", "expected a list of 6 finite angles (deg), got 7 values");
+                    "device.film_axes_deg", "expected a list of 6 angles in [-360, 360] deg, got 7 values");
   expect_file_error("device:\n  truth:\n    kv: 1\n", 3, "device.truth.kv",
-                    "expected a list of 3 gains > 0");
+                    "expected a list of 3 gains in [0.5, 2]");
   expect_file_error("device:\n  truth:\n    kv: 1\n", 3, "device.truth.kv", "got '1'");
 }
 
@@ -407,16 +407,16 @@ TEST(RigYamlError, SourceModelOtherThanCos4OrTraced) {
 
 TEST(RigYamlError, NegativeLength) {
   expect_file_error("eccentricity:\n  L_IS: -1\n", 2, "eccentricity.L_IS",
-                    "expected a length ≥ 0, got -1");
+                    "expected a length in [0, 100] mm, got -1");
   expect_file_error("seed: 1\neccentricity:\n  L_IS: 0.05\n  L_S: -0.5\n", 4, "eccentricity.L_S",
-                    "expected a length ≥ 0, got -0.5");
-  expect_file_error("device:\n  L_photo: 0\n", 2, "device.L_photo", "expected a length > 0, got 0");
+                    "expected a length in [0, 100] mm, got -0.5");
+  expect_file_error("device:\n  L_photo: 0\n", 2, "device.L_photo", "expected a length in [0.1, 500] mm, got 0");
 }
 
 TEST(RigYamlError, ZeroSourceDistance) {
   expect_file_error("source:\n  L_o: 0\n", 2, "source.L_o",
-                    "expected a length > 0 (at 0 the cos⁴ law gives no light off-axis), got 0");
-  expect_file_error("source:\n  E_0: -3\n", 2, "source.E_0", "expected an irradiance > 0, got -3");
+                    "expected a length in [0.1, 1000] mm, got 0");
+  expect_file_error("source:\n  E_0: -3\n", 2, "source.E_0", "expected an irradiance in [0.001, 100000] W/m^2, got -3");
 }
 
 TEST(RigYamlError, DegreeOfPolarizationOutsideOpenUnitInterval) {
@@ -429,34 +429,34 @@ TEST(RigYamlError, DegreeOfPolarizationOutsideOpenUnitInterval) {
 
 TEST(RigYamlError, PolarizerCoefficientOutOfRange) {
   expect_file_error("device:\n  truth:\n    kd: [0, 0, 0.01, 0, 0, 0]\n", 3, "device.truth.kd",
-                    "expected 6 values in (−1, 0], got 0.01");
+                    "expected 6 values in (-1, 0], got 0.01");
   expect_file_error("device:\n  truth:\n    kd: [0, 0, 0, 0, 0, -1]\n", 3, "device.truth.kd",
-                    "expected 6 values in (−1, 0], got -1");
+                    "expected 6 values in (-1, 0], got -1");
 }
 
 TEST(RigYamlError, NonPositiveGain) {
   expect_file_error("device:\n  truth:\n    kv: [1, 0, 1]\n", 3, "device.truth.kv",
-                    "expected 3 gains > 0, got 0");
+                    "expected 3 gains in [0.5, 2], got 0");
   expect_file_error("device:\n  truth:\n    kv: [1, 1, -1.02]\n", 3, "device.truth.kv",
-                    "expected 3 gains > 0, got -1.02");
+                    "expected 3 gains in [0.5, 2], got -1.02");
 }
 
 TEST(RigYamlError, NonPositiveStep) {
   expect_file_error("schedule:\n  step_deg: 0\n", 2, "schedule.step_deg",
-                    "expected a step > 0, got 0");
+                    "expected a step in (0, 360] deg, got 0");
   expect_file_error("schedule:\n  step_deg: -10\n", 2, "schedule.step_deg",
-                    "expected a step > 0, got -10");
+                    "expected a step in (0, 360] deg, got -10");
 }
 
 TEST(RigYamlError, ElectronicsOutOfRange) {
   expect_file_error("electronics:\n  noise_sigma_V: -1e-4\n", 2, "electronics.noise_sigma_V",
-                    "expected a standard deviation ≥ 0, got -1e-4");
+                    "expected a standard deviation in [0, 1] V, got -1e-4");
   expect_file_error("electronics:\n  vref_V: 0\n", 2, "electronics.vref_V",
-                    "expected a voltage > 0, got 0");
+                    "expected a voltage in [0.01, 100] V, got 0");
   expect_file_error("electronics:\n  vref_V: -0.6\n", 2, "electronics.vref_V",
-                    "expected a voltage > 0, got -0.6");
+                    "expected a voltage in [0.01, 100] V, got -0.6");
   expect_file_error("electronics:\n  volts_per_decade: 0\n", 2, "electronics.volts_per_decade",
-                    "expected a gain > 0, got 0");
+                    "expected a gain in [0.01, 10] V, got 0");
   for (const char* bits : {"1", "32", "0", "-16", "64"}) {
     SCOPED_TRACE(bits);
     expect_file_error(std::string("electronics:\n  adc_bits: ") + bits + "\n", 2,
@@ -473,17 +473,17 @@ TEST(RigYamlError, NanAndInfinityAreRejected) {
   for (const char* v : {".nan", ".NaN", "nan", ".inf", "-.inf", "inf", "1e999"}) {
     SCOPED_TRACE(v);
     expect_file_error(std::string("source:\n  L_o: ") + v + "\n", 2, "source.L_o",
-                      std::string("expected a length > 0 (at 0 the cos⁴ law gives no light off-axis), got '") +
+                      std::string("expected a length in [0.1, 1000] mm, got '") +
                           v + "'");
     // Keys that accept any angle still require a finite one.
     expect_file_error(std::string("eccentricity:\n  alpha_IS: ") + v + "\n", 2,
-                      "eccentricity.alpha_IS", std::string("expected a finite angle, got '") + v +
+                      "eccentricity.alpha_IS", std::string("expected an angle in [-360, 360] deg, got '") + v +
                                                    "'");
   }
   expect_file_error("device:\n  beta_deg: [0, .nan, -120, -180, -240, -300]\n", 2,
-                    "device.beta_deg", "expected 6 finite angles, got '.nan'");
+                    "device.beta_deg", "expected 6 angles in [-360, 360] deg, got '.nan'");
   expect_file_error("schedule:\n  angles_deg: [0, .inf]\n", 2, "schedule.angles_deg",
-                    "expected a non-empty list of finite angles, got '.inf'");
+                    "expected a list of 1 to 1e6 angles in [-3600, 3600] deg, got '.inf'");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -564,9 +564,44 @@ TEST(RigYamlError, AnglesListTogetherWithStartStepStop) {
 
 TEST(RigYamlError, EmptyAnglesList) {
   expect_file_error("schedule:\n  angles_deg: []\n", 2, "schedule.angles_deg",
-                    "expected a non-empty list of finite angles, got an empty list");
+                    "expected a list of 1 to 1e6 angles in [-3600, 3600] deg, got an empty list");
   expect_file_error("schedule:\n  angles_deg: 90\n", 2, "schedule.angles_deg",
-                    "expected a non-empty list of finite angles, got '90'");
+                    "expected a list of 1 to 1e6 angles in [-3600, 3600] deg, got '90'");
+}
+
+// Issue 8: 1.2 million explicit stops were accepted although start/step/stop stop at 1e6. The
+// list is refused with its key and count; a rig built in code is refused by check_rig.
+TEST(RigYamlError, MoreThanAMillionExplicitStops) {
+  std::string text = "schedule:\n  angles_deg: [0";
+  for (int i = 1; i < 1000001; ++i) text += ",0";
+  text += "]\n";
+  expect_file_error(text, 2, "schedule.angles_deg",
+                    "expected a list of 1 to 1e6 angles in [-3600, 3600] deg, got 1000001 entries");
+  Rig r;
+  r.schedule.angles_deg.assign(1000001, 0.0);
+  const auto problem = polrig::check_rig(r);
+  ASSERT_TRUE(problem.has_value());
+  EXPECT_EQ(problem->path, "schedule.angles_deg");
+  EXPECT_EQ(problem->message, "expected at most 1e6 stops, got 1000001");
+  r.schedule.angles_deg.resize(1000000);
+  EXPECT_FALSE(polrig::check_rig(r).has_value());
+}
+
+// Issue 8: nesting deeper than yaml-cpp's guard was reported as "YAML syntax error: bad file".
+TEST(RigYamlError, DeepNestingIsNamedWithFileAndLine) {
+  const std::string flow = "seed: " + std::string(3000, '[') + std::string(3000, ']') + "\n";
+  EXPECT_EQ(rig_error(flow), std::string(kOrigin) + ":1: the YAML nests deeper than the reader's "
+                                                    "limit of 500 levels (a rig file nests 3 levels)");
+  std::string block = "device:\n";
+  for (int i = 1; i < 2000; ++i) block += std::string(2 * static_cast<std::size_t>(i), ' ') + "k:\n";
+  const std::string msg = rig_error(block);
+  EXPECT_STARTS(msg, std::string(kOrigin) + ":");
+  EXPECT_HAS(msg, "the YAML nests deeper than the reader's limit");
+  EXPECT_LACKS(msg, "bad file");
+  const std::string deep_set = "seed=" + std::string(3000, '[');
+  EXPECT_EQ(rig_error("seed: 1\n", sets({deep_set.c_str()})),
+            "--set seed=" + std::string(3000, '[') + ": key 'seed': the value is not valid YAML: the "
+            "YAML nests deeper than the reader's limit of 500 levels (a rig value nests at most 1 level)");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -604,8 +639,8 @@ TEST(RigYamlFile, ErrorsInAFileNameThePathAndLine) {
     FAIL() << "load_rig accepted L_o = -2";
   } catch (const RigError& e) {
     EXPECT_EQ(std::string(e.what()),
-              file.string() + ":5: key 'source.L_o': expected a length > 0 (at 0 the cos⁴ "
-                              "law gives no light off-axis), got -2");
+              file.string() + ":5: key 'source.L_o': expected a length in [0.1, 1000] mm, "
+                              "got -2");
   }
   // load_rig applies overrides, and the error then names the --set.
   write_file(file, "seed: 1\n");
@@ -631,7 +666,7 @@ TEST(RigYamlOverrideError, WrongTypeNamesTheSetNotTheFileLine) {
 
   const std::string msg2 = rig_error("seed: 1\n", sets({"device.truth.kv=[1, 1]"}));
   EXPECT_STARTS(msg2, "--set device.truth.kv=[1, 1]: key 'device.truth.kv': expected a list of "
-                      "3 gains > 0");
+                      "3 gains in [0.5, 2]");
   EXPECT_HAS(msg2, "got 2 values");
 
   const std::string msg3 = rig_error("seed: 1\n", sets({"schedule.samples_per_stop=3.5"}));
@@ -639,8 +674,8 @@ TEST(RigYamlOverrideError, WrongTypeNamesTheSetNotTheFileLine) {
                   "expected an integer in [1, 100000], got '3.5'");
 
   const std::string msg4 = rig_error("seed: 1\n", sets({"source.L_o=-1"}));
-  EXPECT_EQ(msg4, "--set source.L_o=-1: key 'source.L_o': expected a length > 0 (at 0 the cos⁴ law "
-            "gives no light off-axis), got -1");
+  EXPECT_EQ(msg4, "--set source.L_o=-1: key 'source.L_o': expected a length in [0.1, 1000] mm, "
+            "got -1");
 
   const std::string msg5 = rig_error("seed: 1\n", sets({"source.model=fisheye"}));
   EXPECT_EQ(msg5, "--set source.model=fisheye: key 'source.model': expected \"cos4\" or "
@@ -718,9 +753,9 @@ TEST(RigToYaml, RoundTripIsExactForAwkwardNumbers) {
   r.electronics.noise_sigma_V = 1.234567890123e-9;
   r.eccentricity.alpha_S = 1.0 / 3.0;
   r.eccentricity.L_IS = 1e-300;
-  r.source.cos4.E_0 = 1e300;
+  r.source.cos4.E_0 = 1e5 / 3.0;
   r.source.polarizer_deg = -0.0;
-  r.device.truth.k_mV = {-1.0 / 7.0, 2.0 / 3.0, 123456.789};
+  r.device.truth.k_mV = {-1.0 / 7.0, 2.0 / 3.0, 999.999999999};
   r.seed = std::numeric_limits<std::uint64_t>::max();
   r.electronics.adc_bits = 31;
   const std::string text = polrig::rig_to_yaml(r);

@@ -5,6 +5,9 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+
+#include <tbb/global_control.h>
 
 #include "polrig/io/rig_yaml.h"
 #include "polrig/io/scene_yaml.h"
@@ -15,6 +18,7 @@
 #include "polrig/study/sweep.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
+#include "polrig/source/traced_source.h"
 #include "support.h"
 
 namespace polrig {
@@ -281,8 +285,8 @@ TEST(SceneFile, BadScenesAreRejectedWithFileLineAndKey) {
   expect_scene_error("sphere:\n  diameter: [1\n", "scenes/test.yaml:3:1: YAML syntax error");
   expect_scene_error("sphere:\n  diametre: 500\n", "scenes/test.yaml:2: key 'sphere.diametre': unknown key");
   expect_scene_error("sphere:\n  reflectance: 1.0\n",
-                     "scenes/test.yaml:2: key 'sphere.reflectance': expected a reflectance in [0, 1), got 1.0");
-  expect_scene_error("sphere:\n  diameter: -5\n", "scenes/test.yaml:2: key 'sphere.diameter': expected a length > 0, got -5");
+                     "scenes/test.yaml:2: key 'sphere.reflectance': expected a reflectance in [0, 0.999], got 1.0");
+  expect_scene_error("sphere:\n  diameter: -5\n", "scenes/test.yaml:2: key 'sphere.diameter': expected a length in [10, 10000] mm, got -5");
   expect_scene_error("port:\n  diameter: 600\n",
                      "scenes/test.yaml:2: key 'port.diameter': expected a port smaller than the sphere (500 mm), got 600");
   expect_scene_error("lamps:\n  - position: [0, 0, 245]\n",
@@ -293,9 +297,92 @@ TEST(SceneFile, BadScenesAreRejectedWithFileLineAndKey) {
   expect_scene_error("sensor:\n  geometry: fisheye\n",
                      "scenes/test.yaml:2: key 'sensor.geometry': expected \"bare\" or \"lensed\", got 'fisheye'");
   expect_scene_error("sensor:\n  lens_index: 0.9\n",
-                     "scenes/test.yaml:2: key 'sensor.lens_index': expected a refractive index > 1, got 0.9");
+                     "scenes/test.yaml:2: key 'sensor.lens_index': expected a refractive index in (1, 3], got 0.9");
   expect_scene_error("trace:\n  photons: 1500.5\n",
                      "scenes/test.yaml:2: key 'trace.photons': expected an integer in [1000, 100000000000], got 1500.5");
+}
+
+// Issue 8: values the tracer cannot represent passed every check, then Embree aborted
+// (diameter 1e20), the trace stopped on a non-finite ray (1e200, a baffle normal of 1e300) or
+// inf/NaN was written (a lamp of 1e300 W). Each is refused with file, line, key and value.
+TEST(SceneFile, ValuesBeyondWhatTheTracerRepresentsAreRefused) {
+  expect_scene_error("sphere:\n  diameter: 1e20\n",
+                     "scenes/test.yaml:2: key 'sphere.diameter': expected a length in [10, 10000] mm, got 1e20");
+  expect_scene_error("sphere:\n  diameter: 1e200\n",
+                     "scenes/test.yaml:2: key 'sphere.diameter': expected a length in [10, 10000] mm, got 1e200");
+  expect_scene_error("baffles:\n  - {centre: [0, 0, 90], normal: [0, 1e300, 0.917], radius: 25}\n",
+                     "scenes/test.yaml:2: key 'baffles[0].normal': expected a direction of length in [1e-6, 1e6] "
+                     "(only its direction counts), got [0, 1e+300, 0.917] of length 1e+300");
+  expect_scene_error("baffles:\n  - {centre: [0, 0, 0], normal: [1e200, 0, 0], radius: 25}\n",
+                     "key 'baffles[0].normal': expected a direction of length in [1e-6, 1e6]");
+  expect_scene_error("baffles:\n  - {centre: [0, 0, 90], normal: [0, 0, 0], radius: 25}\n",
+                     "key 'baffles[0].normal': expected a direction of length in [1e-6, 1e6]");
+  expect_scene_error("baffles:\n  - {centre: [0, 0, 90], normal: [0, 0, 1], radius: 1e-300}\n",
+                     "key 'baffles[0].radius': expected a length in [0.1, 10000] mm, got 1e-300");
+  expect_scene_error("lamps:\n  - {position: [0, 0, 0], radius: 10, power: 1e300}\n",
+                     "scenes/test.yaml:2: key 'lamps[0].power': expected a power in [0.001, 10000] W, got 1e300");
+  expect_scene_error("lamps:\n  - {position: [0, 0, 0], radius: 1e-300, power: 100}\n",
+                     "key 'lamps[0].radius': expected a length of 0 (a point lamp) or in [0.1, 10000] mm, got 1e-300");
+  expect_scene_error("lamps:\n  - {position: [1e300, 0, 0], radius: 1, power: 100}\n",
+                     "key 'lamps[0].position': expected a lamp inside the sphere");
+  expect_scene_error("port:\n  diameter: 1e-300\n",
+                     "scenes/test.yaml:2: key 'port.diameter': expected a length in [1, 10000] mm, got 1e-300");
+  expect_scene_error("port:\n  polarizer: {tau_M: 1e-300, tau_m: 0}\n",
+                     "key 'port.polarizer.tau_M': expected a transmittance in [0.01, 1], got 1e-300");
+  expect_scene_error("sensor:\n  filter_transmittance: 0\n",
+                     "key 'sensor.filter_transmittance': expected a transmittance in [0.01, 1], got 0");
+  expect_scene_error("sensor:\n  lens_focal_length: 1e300\n",
+                     "key 'sensor.lens_focal_length': expected a length in [1, 1000] mm, got 1e300");
+  std::string deep = "sphere: ";
+  for (int i = 0; i < 3000; ++i) deep += "{a: ";
+  expect_scene_error(deep + std::string(3000, '}') + "\n",
+                     "scenes/test.yaml:1: the YAML nests deeper than the reader's limit of 500 levels "
+                     "(a scene file nests 3 levels)");
+  std::string lamps = "lamps:\n";
+  for (int i = 0; i < 101; ++i) lamps += "  - {position: [0, 0, 0], radius: 0}\n";
+  expect_scene_error(lamps, "scenes/test.yaml:2: key 'lamps': expected at most 100 entries, got 101");
+  // Both ends of the ranges load.
+  EXPECT_EQ(parse_scene("sphere: {diameter: 10}\nport: {diameter: 1}\nlamps: [{position: [0, 0, 0], radius: 0}]\n"
+                        "baffles: []\n", "t").sphere.diameter, 10.0);
+  EXPECT_EQ(parse_scene("sphere: {diameter: 10000, reflectance: 0.999}\n", "t").sphere.reflectance, 0.999);
+}
+
+// A tracer given a normal it cannot normalise (past the scene file's checks) refuses it.
+TEST(SphereTracerInput, ADegenerateBaffleNormalIsRefused) {
+  SceneSpec s = theory_sphere(1000);
+  s.baffles = {BaffleSpec{{0, 0, 0}, {1e200, 0, 0}, 25, 0.9}};
+  EXPECT_THROW(SphereTracer{s}, std::invalid_argument);
+  s.baffles[0].normal = {0, 0, 0};
+  EXPECT_THROW(SphereTracer{s}, std::invalid_argument);
+}
+
+// Issue 8: a solve that fails inside the CS study's parallel loop crashed with two threads
+// (another thread re-ran the once-only solve in the loop's cancelled context, whose nested
+// parallel_for returned without tracing, and read the empty tallies). The error must come out
+// of the study for any thread count, every time the solution is asked for.
+TEST(TracedRigFailure, ASolveThatFailsInsideTheParallelStudyStopsItCleanly) {
+  for (int repeat = 0; repeat < 50; ++repeat)  // the race is rare: repeat it
+  for (int threads : {1, 2, 4, 8}) {
+    SCOPED_TRACE(threads);
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    SceneSpec s = theory_sphere(16000);
+    s.sphere.diameter = 1e200;  // past the file checks: the rays overflow (non-finite ray)
+    s.port.diameter = 100;
+    Rig rig;
+    rig.source.model = "traced";
+    rig.source.traced = std::make_shared<const TracedSource>(s);
+    try {
+      cs_study(rig, CsTurn(36));
+      FAIL() << "the study did not stop";
+    } catch (const std::logic_error& e) {
+      EXPECT_HAS(e.what(), "non-finite ray");
+    }
+    EXPECT_THROW(rig.source.traced->solve_rays(), std::logic_error);  // the same error again
+    // And from a sweep, whose grid points run the study in parallel, nested.
+    const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0:1:8")};
+    rig.source.traced = std::make_shared<const TracedSource>(s);
+    EXPECT_THROW(sweep(rig, axes, CsTurn(36)), std::logic_error);
+  }
 }
 
 TEST(SceneFile, AMissingFileIsNamed) {

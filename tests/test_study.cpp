@@ -7,9 +7,14 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <limits>
 #include <numbers>
+#include <span>
+#include <stdexcept>
+#include <string>
 
 #include "polrig/calib/angles.h"
+#include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
 #include "polrig/study/cs.h"
@@ -357,6 +362,103 @@ TEST(Sweep, IsBitIdenticalForAnyThreadCount) {
       EXPECT_EQ(one.summaries[p][i].asd_mV, two.summaries[p][i].asd_mV);
       EXPECT_EQ(one.summaries[p][i].mean_mr_mV, two.summaries[p][i].mean_mr_mV);
     }
+}
+
+}  // namespace
+}  // namespace polrig
+
+namespace polrig {
+namespace {
+
+bool all_finite(std::span<const double> v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+}
+
+// What `simulate` and `study cs` would write for this rig is finite; returns the first
+// quantity that is not, or "".
+std::string first_non_finite(const Rig& rig) {
+  const Simulation sim = simulate(rig);
+  for (const Stop& s : sim.stops) {
+    if (!all_finite(s.light.E_Wm2)) return "E";
+    for (const auto* v : {&s.V_ideal, &s.V_ecc, &s.V_mean, &s.V_std})
+      if (!all_finite(*v)) return "V";
+  }
+  const CsStudy cs = cs_study(rig, CsTurn(36));
+  for (int i = 0; i < 3; ++i) {
+    if (!all_finite(cs.dv_br_V[i]) || !all_finite(cs.dv_mr_V[i])) return "CS deviations";
+    const CsPairSummary& p = cs.summary[i];
+    for (double x : {p.bsd_mV, p.asd_mV, p.mean_br_mV, p.mean_mr_mV, p.eq6_mV})
+      if (!std::isfinite(x)) return "CS summary";
+  }
+  return "";
+}
+
+Rig short_schedule() {
+  Rig rig;
+  rig.schedule.start_deg = 0;
+  rig.schedule.step_deg = 30;
+  rig.schedule.stop_deg = 360;
+  rig.schedule.samples_per_stop = 4;
+  return rig;
+}
+
+// Every real rig key at either end of its range (an open end nudged one ulp inside): the
+// simulation and the CS study stay finite, so no value a rig may hold makes them write NaN or
+// infinity (issue 8: L_S = 1e300, L_o = 1e-300, kv = 1e300 … did).
+TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
+  const double inf = std::numeric_limits<double>::infinity();
+  int checked = 0;
+  for (const RigKey& k : rig_keys()) {
+    if (k.kind != RigKey::Kind::Real && k.kind != RigKey::Kind::RealArray) continue;
+    ASSERT_TRUE(k.range.has_value()) << k.path << " has no range";
+    for (bool upper : {false, true}) {
+      double v = upper ? k.range->hi : k.range->lo;
+      if (upper ? k.range->hi_open : k.range->lo_open) v = std::nextafter(v, upper ? -inf : inf);
+      ASSERT_TRUE(std::isfinite(v)) << k.path;
+      Rig rig = short_schedule();
+      if (k.kind == RigKey::Kind::Real) k.real(rig) = v;
+      else for (double& x : k.array(rig)) x = v;
+      if (k.path == "schedule.start_deg" || k.path == "schedule.stop_deg")
+        rig.schedule.start_deg = rig.schedule.stop_deg = v;  // one stop there
+      if (k.path == "schedule.step_deg" && !upper) rig.schedule.stop_deg = 0;
+      ASSERT_FALSE(check_rig(rig).has_value()) << k.path << " = " << v << ": " << check_rig(rig)->message;
+      EXPECT_EQ(first_non_finite(rig), "") << k.path << " = " << v;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, 2 * 21);  // every real key, both ends
+}
+
+// Past the ranges (a rig built in code), simulate stops on the first non-finite voltage and says
+// where, instead of the ADC's anonymous "non-finite voltage" (issue 8).
+TEST(RigRanges, ANonFiniteVoltageIsNamedByStopAndPair) {
+  Rig rig = short_schedule();
+  rig.device.ring.L_photo = 1e300;  // cos⁴ falls to 0 off the axis: log10(0/0)
+  try {
+    simulate(rig);
+    FAIL() << "simulate accepted L_photo = 1e300";
+  } catch (const std::domain_error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("stop 0 (θ_R = 0°): pair 1's voltage is not finite"), std::string::npos) << msg;
+  }
+}
+
+// The corners where the light is weakest against the strongest gain, and the reverse.
+TEST(RigRanges, ExtremeCornersGiveFiniteResults) {
+  Rig dim = short_schedule();
+  dim.source.cos4 = {0.1, 1e-3};  // L_o, E_0
+  dim.device.ring.L_photo = 500;
+  dim.eccentricity = {100, 0, 100, 180};
+  dim.electronics.volts_per_decade = 10;
+  dim.device.truth.kv = {2, 2, 2};
+  dim.device.truth.k_mV = {1000, -1000, 1000};
+  EXPECT_EQ(first_non_finite(dim), "");
+  Rig bright = short_schedule();
+  bright.source.cos4 = {1000, 1e5};
+  bright.device.ring.L_photo = 0.1;
+  bright.electronics = {0.01, 2, 0.01, 1.0};  // volts_per_decade, adc_bits, vref_V, noise_sigma_V
+  bright.device.truth.kv = {0.5, 0.5, 0.5};
+  EXPECT_EQ(first_non_finite(bright), "");
 }
 
 }  // namespace

@@ -40,7 +40,7 @@ struct CalibrationSettings {
             "(0, 1)"));
     app.add_option("--nc-threshold", nc_threshold,
                    "noncontinuous rule: keep a voltage where |dV/dθ| ≥ this × its largest slope")
-        ->check(CLI::Range(0.0, 1.0))
+        ->check(finite_range(0.0, 1.0))
         ->capture_default_str();
     app.add_option("--nc-min-points", nc_min_points,
                    "noncontinuous rule: keep at least this many points per voltage")
@@ -263,9 +263,9 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
     app->add_option("--trials", *trials, "number of simulated calibration runs")
         ->check(CLI::Range(1, 10000000))->capture_default_str();
     app->add_option("--L-IS-max", *L_IS_max, "largest port offset drawn, mm (default: 2 × the rig's L_IS)")
-        ->check(CLI::Range(0.0, 1e3));
+        ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
     app->add_option("--L-S-max", *L_S_max, "largest sensor offset drawn, mm (default: 2 × the rig's L_S)")
-        ->check(CLI::Range(0.0, 1e3));
+        ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
     settings->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {

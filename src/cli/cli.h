@@ -40,6 +40,10 @@ struct RigInput {
 };
 
 void add_threads_option(CLI::App& app, int& threads);
+
+// A check for a real-valued option: a finite number in [lo, hi] ("nan" and "inf", which
+// CLI::Range lets through, are refused). `unit` is shown after the range.
+CLI::Validator finite_range(double lo, double hi, const std::string& unit = "");
 void finish(OutputDir& out);
 
 // Command registration; each returns the function to run when the command was chosen.

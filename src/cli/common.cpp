@@ -1,3 +1,4 @@
+#include <cmath>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -53,6 +54,18 @@ LoadedRig RigInput::load() const {
   for (const std::string& s : sets) overrides.push_back(RigOverride::parse(s));
   if (path.empty()) return parse_rig("", "(default rig)", overrides);
   return load_rig(path, overrides);
+}
+
+CLI::Validator finite_range(double lo, double hi, const std::string& unit) {
+  const std::string range = fmt::format("[{}, {}]{}{}", lo, hi, unit.empty() ? "" : " ", unit);
+  return CLI::Validator(
+      [=](const std::string& s) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(s, v) || !std::isfinite(v) || v < lo || v > hi)
+          return fmt::format("expected a finite number in {}, got {}", range, s);
+        return {};
+      },
+      range);
 }
 
 void add_threads_option(CLI::App& app, int& threads) {

@@ -166,7 +166,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     rig->add_to(*app, false);
     out->add_to(*app);
     app->add_option("--d", *d_list, "degrees of polarization: a,b,c or start:stop:count")->capture_default_str();
-    app->add_option("--step", *step, "θ step in degrees")->check(CLI::Range(1e-4, 10.0))->capture_default_str();
+    app->add_option("--step", *step, "θ step in degrees")->check(finite_range(1e-4, 10.0, "deg"))->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       // Electronics and film axes come from the rig; without one, from the default rig.
@@ -323,7 +323,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     auto* app = rig_app->add_subcommand("keys", "print every rig key as a Markdown table");
     commands.push_back({app, [] {
       Rig defaults;
-      std::cout << "| key | unit | default | accepts | meaning |\n|---|---|---|---|---|\n";
+      std::cout << "| key | unit | default | accepts | meaning | why this range |\n"
+                   "|---|---|---|---|---|---|\n";
       for (const RigKey& k : rig_keys()) {
         std::string def;
         using K = RigKey::Kind;
@@ -335,7 +336,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
           case K::RealArray: def = fmt::format("[{}]", fmt::join(k.array(defaults), ", ")); break;
           case K::RealList: def = "(none)"; break;
         }
-        std::cout << fmt::format("| `{}` | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects, k.doc);
+        std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects,
+                                 k.doc, k.why);
       }
     }});
   }

@@ -1,5 +1,6 @@
 #include "polrig/io/csv.h"
 
+#include <cmath>
 #include <fstream>
 #include <stdexcept>
 
@@ -7,12 +8,25 @@
 
 namespace polrig {
 
-CsvTable::CsvTable(std::vector<std::string> header) : header_(std::move(header)) {}
+CsvTable::CsvTable(std::vector<std::string> header)
+    : header_(std::move(header)), may_be_nan_(header_.size(), false) {}
+
+CsvTable& CsvTable::allow_undefined(std::string_view column) {
+  for (std::size_t c = 0; c < header_.size(); ++c)
+    if (header_[c] == column) may_be_nan_[c] = true;
+  return *this;
+}
 
 void CsvTable::add_row(const std::vector<double>& values) {
   if (values.size() != header_.size())
     throw std::logic_error(fmt::format("CSV row has {} values for {} columns", values.size(),
                                        header_.size()));
+  for (std::size_t c = 0; c < values.size(); ++c)
+    if (!std::isfinite(values[c]) && !(std::isnan(values[c]) && may_be_nan_[c]))
+      throw std::runtime_error(fmt::format(
+          "a result is not finite: column '{}' of row {} ({} = {}) is {}; the inputs are beyond "
+          "what the model can represent, and nothing was written",
+          header_[c], rows_ + 1, header_[0], values[0], values[c]));
   for (std::size_t c = 0; c < values.size(); ++c)
     fmt::format_to(std::back_inserter(body_), "{}{}", c ? "," : "", values[c]);
   body_ += '\n';

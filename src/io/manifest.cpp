@@ -1,5 +1,9 @@
 #include "polrig/io/manifest.h"
 
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <yaml-cpp/binary.h>
 #include <yaml-cpp/yaml.h>
 
 #include "polrig/io/csv.h"
@@ -15,6 +19,33 @@ bool literal_block_is_exact(const std::string& t) {
   if (t.size() >= 2 && t[t.size() - 2] == '\n') return false;
   if (t.front() == ' ' || t.front() == '\n') return false;
   return t.find_first_of("\r\t") == std::string::npos;
+}
+
+// True if `text`, written as a YAML string in `style`, reads back byte for byte. It does not for
+// bytes that are not UTF-8 (the emitter replaces them with U+FFFD) or for a NUL.
+bool reads_back_exactly(const std::string& text, YAML::EMITTER_MANIP style) {
+  YAML::Emitter out;
+  out << YAML::BeginMap << YAML::Key << "t" << YAML::Value << style << text << YAML::EndMap;
+  if (!out.good()) return false;
+  try {
+    return YAML::Load(std::string(out.c_str(), out.size()))["t"].as<std::string>() == text;
+  } catch (const YAML::Exception&) {
+    return false;
+  }
+}
+
+// The rig file's text exactly as read: a literal block when that reproduces it, else a
+// double-quoted string when that does, else (invalid UTF-8, a NUL) its bytes in base64 under
+// rig_text_base64.
+void emit_rig_text(YAML::Emitter& out, const std::string& text) {
+  if (literal_block_is_exact(text) && reads_back_exactly(text, YAML::Literal)) {
+    out << YAML::Key << "rig_text" << YAML::Value << YAML::Literal << text;
+  } else if (reads_back_exactly(text, YAML::DoubleQuoted)) {
+    out << YAML::Key << "rig_text" << YAML::Value << YAML::DoubleQuoted << text;
+  } else {
+    out << YAML::Key << "rig_text_base64" << YAML::Value
+        << YAML::EncodeBase64(reinterpret_cast<const unsigned char*>(text.data()), text.size());
+  }
 }
 }  // namespace
 
@@ -61,15 +92,14 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
   }
   out << YAML::EndMap;
   if (m.rig) {
-    out << YAML::Key << "rig_text" << YAML::Value;
-    if (literal_block_is_exact(m.rig->text))
-      out << YAML::Literal << m.rig->text;
-    else
-      out << YAML::DoubleQuoted << m.rig->text;
+    emit_rig_text(out, m.rig->text);
     out << YAML::Key << "rig_resolved" << YAML::Value << YAML::Literal << resolved;
   }
   out << YAML::EndMap;
-  write_text_file(dir / "manifest.yaml", std::string(out.c_str()) + "\n");
+  if (!out.good())
+    throw std::runtime_error(fmt::format("{}: cannot write the manifest: {}",
+                                         (dir / "manifest.yaml").string(), out.GetLastError()));
+  write_text_file(dir / "manifest.yaml", std::string(out.c_str(), out.size()) + "\n");
   if (m.rig) write_text_file(dir / "rig.yaml", resolved);
 }
 

@@ -13,6 +13,7 @@
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/scene_yaml.h"
 #include "polrig/rig/keys.h"
+#include "yaml_load.h"
 
 namespace polrig {
 namespace {
@@ -28,13 +29,7 @@ class RigParser {
       : file_(origin), overrides_(overrides) {}
 
   Rig parse(std::string_view text) {
-    YAML::Node root;
-    try {
-      root = YAML::Load(std::string(text));
-    } catch (const YAML::Exception& e) {
-      throw RigError(fmt::format("{}:{}:{}: YAML syntax error: {}", file_, e.mark.line + 1,
-                                 e.mark.column + 1, e.msg));
-    }
+    YAML::Node root = load_yaml(std::string(text), file_, "a rig file nests 3 levels");
     if (!root.IsMap() && !root.IsNull())
       throw RigError(fmt::format("{}: expected a mapping of rig sections (device, source, "
                                  "eccentricity, schedule, electronics, seed)", file_));
@@ -92,10 +87,13 @@ class RigParser {
                                  "keys)", o.text(), o.path));
     YAML::Node value;
     try {
-      value = YAML::Load(o.value);
-    } catch (const YAML::Exception& e) {
+      value = load_yaml(o.value, "value", "a rig value nests at most 1 level");
+    } catch (const RigError& e) {  // "value:1:2: YAML syntax error: why" → "why"
+      std::string_view why = e.what();
+      why.remove_prefix(why.find(": ") + 2);
+      if (why.starts_with("YAML syntax error: ")) why.remove_prefix(19);
       throw RigError(fmt::format("{}: key '{}': the value is not valid YAML: {}", o.text(),
-                                 o.path, e.msg));
+                                 o.path, why));
     }
     std::vector<std::string> parts;
     std::stringstream ss(o.path);
@@ -195,17 +193,18 @@ class RigParser {
       case K::RealArray: {
         std::span<double> dst = k.array(rig);
         if (!n.IsSequence() || n.size() != dst.size())
-          fail(path, fmt::format("expected a list of {}{}, got {}", k.expects,
-                                 k.unit.empty() ? "" : fmt::format(" ({})", k.unit),
+          fail(path, fmt::format("expected a list of {}, got {}", k.expects,
                                  n.IsSequence() ? fmt::format("{} values", n.size())
                                                 : shown(n)));
         for (std::size_t i = 0; i < dst.size(); ++i) dst[i] = read_real(k, path, n[i]);
         return;
       }
       case K::RealList: {
-        if (!n.IsSequence() || n.size() == 0)
+        if (!n.IsSequence() || n.size() == 0 || (k.max_items && n.size() > k.max_items))
           fail(path, fmt::format("expected {}, got {}", k.expects,
-                                 n.IsSequence() ? "an empty list" : shown(n)));
+                                 !n.IsSequence()  ? shown(n)
+                                 : n.size() == 0 ? std::string("an empty list")
+                                                 : fmt::format("{} entries", n.size())));
         std::vector<double>& dst = k.list(rig);
         dst.clear();
         for (std::size_t i = 0; i < n.size(); ++i) dst.push_back(read_real(k, path, n[i]));

@@ -9,6 +9,9 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "polrig/rig/keys.h"
+#include "yaml_load.h"
+
 namespace polrig {
 namespace {
 
@@ -34,6 +37,21 @@ class MapReader {
       fail(n, key, fmt::format("expected {}, got {}", expects, shown(n)));
     }
     if (!ok(v)) fail(n, key, fmt::format("expected {}, got {}", expects, n.Scalar()));
+    return v;
+  }
+  // A value in a range: "expected a length in [10, 10000] mm, got …".
+  double real(const char* key, double def, const RealRange& r, const char* noun, const char* unit) {
+    const std::string expects = fmt::format("{} in {}{}{}", noun, r.text(), *unit ? " " : "", unit);
+    const YAML::Node n = take(key);
+    if (!n) return def;
+    double v = 0;
+    try {
+      if (!n.IsScalar()) throw YAML::Exception(n.Mark(), "");
+      v = parse_finite_number(n.Scalar(), key);
+    } catch (const std::exception&) {
+      fail(n, key, fmt::format("expected {}, got {}", expects, shown(n)));
+    }
+    if (!r.contains(v)) fail(n, key, fmt::format("expected {}, got {}", expects, n.Scalar()));
     return v;
   }
   long long integer(const char* key, long long def, long long lo, long long hi) {
@@ -120,12 +138,18 @@ class MapReader {
   }
 };
 
-bool positive(double v) { return v > 0; }
-bool non_negative(double v) { return v >= 0; }
-bool any(double) { return true; }
-bool reflectance(double v) { return v >= 0 && v < 1; }
-bool transmittance(double v) { return v >= 0 && v <= 1; }
-bool index(double v) { return v > 1; }
+// Ranges of scene values: physical bounds of a laboratory sphere, inside what the tracer (Embree's
+// single-precision rays, |coordinate| < 1.8e18) and the irradiance formulas can represent.
+constexpr RealRange kSphereDiameter{10, 10000};  // 1 cm to 10 m
+constexpr RealRange kPortDiameter{1, 10000};     // and smaller than the sphere
+constexpr RealRange kReflectance{0, 0.999};      // a photon makes ~1/(1 − ρ) bounces
+constexpr RealRange kTransmittance{0, 1};
+constexpr RealRange kFilmTransmittance{0.01, 1};  // at 0 no light reaches the sensor
+constexpr RealRange kTurn{-360, 360};
+constexpr RealRange kLampPower{1e-3, 1e4};        // 1 mW to 10 kW
+constexpr RealRange kBaffleRadius{0.1, 10000};    // its irradiance divides by its area
+
+bool lamp_radius(double v) { return v == 0 || (v >= 0.1 && v <= 10000); }
 
 double norm(const Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
@@ -133,13 +157,7 @@ double norm(const Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] *
 
 SceneSpec parse_scene(std::string_view text, std::string_view origin) {
   const std::string file(origin);
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(text));
-  } catch (const YAML::Exception& e) {
-    throw RigError(fmt::format("{}:{}:{}: YAML syntax error: {}", file, e.mark.line + 1,
-                               e.mark.column + 1, e.msg));
-  }
+  const YAML::Node root = load_yaml(std::string(text), file, "a scene file nests 3 levels");
   if (!root.IsMap() && !root.IsNull())
     throw RigError(fmt::format("{}: expected a mapping of scene sections (sphere, port, lamps, "
                                "baffles, sensor, trace)", file));
@@ -147,20 +165,20 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
   MapReader top(file, root, "");
 
   MapReader sphere(file, top.section("sphere"), "sphere");
-  s.sphere.diameter = sphere.real("diameter", s.sphere.diameter, positive, "a length > 0");
-  s.sphere.reflectance = sphere.real("reflectance", s.sphere.reflectance, reflectance, "a reflectance in [0, 1)");
+  s.sphere.diameter = sphere.real("diameter", s.sphere.diameter, kSphereDiameter, "a length", "mm");
+  s.sphere.reflectance = sphere.real("reflectance", s.sphere.reflectance, kReflectance, "a reflectance", "");
   sphere.finish();
 
   MapReader port(file, top.section("port"), "port");
-  s.port.diameter = port.real("diameter", s.port.diameter, positive, "a length > 0");
+  s.port.diameter = port.real("diameter", s.port.diameter, kPortDiameter, "a length", "mm");
   if (s.port.diameter >= s.sphere.diameter)
     port.fail_key("diameter", fmt::format("expected a port smaller than the sphere ({} mm), got {}",
                                           s.sphere.diameter, s.port.diameter));
   {
     MapReader film(file, port.section("polarizer"), "port.polarizer");
-    s.port.polarizer.axis_deg = film.real("axis_deg", s.port.polarizer.axis_deg, any, "a finite angle");
-    s.port.polarizer.tau_M = film.real("tau_M", s.port.polarizer.tau_M, transmittance, "a transmittance in [0, 1]");
-    s.port.polarizer.tau_m = film.real("tau_m", s.port.polarizer.tau_m, transmittance, "a transmittance in [0, 1]");
+    s.port.polarizer.axis_deg = film.real("axis_deg", s.port.polarizer.axis_deg, kTurn, "an angle", "deg");
+    s.port.polarizer.tau_M = film.real("tau_M", s.port.polarizer.tau_M, kFilmTransmittance, "a transmittance", "");
+    s.port.polarizer.tau_m = film.real("tau_m", s.port.polarizer.tau_m, kTransmittance, "a transmittance", "");
     if (!(s.port.polarizer.tau_m < s.port.polarizer.tau_M))
       film.fail_key("tau_m", fmt::format("expected tau_m < tau_M ({}), got {}", s.port.polarizer.tau_M,
                                          s.port.polarizer.tau_m));
@@ -169,11 +187,16 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
   port.finish();
 
   const double R = s.sphere.radius();
-  const auto read_list = [&](const char* key, auto& out, auto read_one) {
+  // At most `most` entries: every lamp is evaluated at every point of the wall field, every baffle
+  // is an Embree primitive and a tally.
+  const auto read_list = [&](const char* key, std::size_t most, auto& out, auto read_one) {
     const YAML::Node n = top.section(key);
     if (!n) return;
     if (!n.IsSequence())
       throw RigError(fmt::format("{}:{}: key '{}': expected a list", file, n.Mark().line + 1, key));
+    if (n.size() > most)
+      throw RigError(fmt::format("{}:{}: key '{}': expected at most {} entries, got {}", file,
+                                 n.Mark().line + 1, key, most, n.size()));
     out.clear();
     for (std::size_t i = 0; i < n.size(); ++i) {
       MapReader r(file, n[i], fmt::format("{}[{}]", key, i));
@@ -181,24 +204,30 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
       r.finish();
     }
   };
-  read_list("lamps", s.lamps, [&](MapReader& r) {
+  read_list("lamps", 100, s.lamps, [&](MapReader& r) {
     LampSpec l;
     l.position = r.vec3("position", l.position);
-    l.radius = r.real("radius", l.radius, non_negative, "a length ≥ 0");
-    l.power = r.real("power", l.power, positive, "a power > 0 (W)");
-    l.reflectance = r.real("reflectance", l.reflectance, reflectance, "a reflectance in [0, 1)");
+    l.radius = r.real("radius", l.radius, lamp_radius, "a length of 0 (a point lamp) or in [0.1, 10000] mm");
+    l.power = r.real("power", l.power, kLampPower, "a power", "W");
+    l.reflectance = r.real("reflectance", l.reflectance, kReflectance, "a reflectance", "");
     if (norm(l.position) + l.radius >= R)
       r.fail_key("position", fmt::format("expected a lamp inside the sphere (|position| + radius < {} mm)", R));
     return l;
   });
   if (s.lamps.empty()) throw RigError(fmt::format("{}: key 'lamps': expected at least one lamp", file));
-  read_list("baffles", s.baffles, [&](MapReader& r) {
+  read_list("baffles", 1000, s.baffles, [&](MapReader& r) {
     BaffleSpec b;
     b.centre = r.vec3("centre", b.centre);
     b.normal = r.vec3("normal", b.normal);
-    b.radius = r.real("radius", b.radius, positive, "a length > 0");
-    b.reflectance = r.real("reflectance", b.reflectance, reflectance, "a reflectance in [0, 1)");
-    if (norm(b.normal) == 0) r.fail_key("normal", "expected a non-zero vector");
+    b.radius = r.real("radius", b.radius, kBaffleRadius, "a length", "mm");
+    b.reflectance = r.real("reflectance", b.reflectance, kReflectance, "a reflectance", "");
+    // Only the direction counts; the tracer normalises it, which a length outside this range
+    // (0, or one whose square overflows or underflows) would turn into NaN.
+    const double length = std::hypot(b.normal[0], b.normal[1], b.normal[2]);
+    if (!(length >= 1e-6 && length <= 1e6))
+      r.fail_key("normal", fmt::format("expected a direction of length in [1e-6, 1e6] (only its "
+                                       "direction counts), got [{}, {}, {}] of length {}",
+                                       b.normal[0], b.normal[1], b.normal[2], length));
     if (norm(b.centre) + b.radius >= R)
       r.fail_key("centre", fmt::format("expected a baffle inside the sphere (|centre| + radius < {} mm)", R));
     return b;
@@ -207,17 +236,17 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
   MapReader sensor(file, top.section("sensor"), "sensor");
   SensorOpticsSpec& o = s.sensor;
   o.geometry = sensor.text("geometry", o.geometry, {"bare", "lensed"});
-  o.L_o = sensor.real("L_o", o.L_o, positive, "a length > 0");
-  o.photodiode_size = sensor.real("photodiode_size", o.photodiode_size, positive, "a length > 0");
-  o.filter_transmittance = sensor.real("filter_transmittance", o.filter_transmittance, transmittance, "a transmittance in [0, 1]");
-  o.top_distance = sensor.real("top_distance", o.top_distance, positive, "a length > 0");
-  o.housing_height = sensor.real("housing_height", o.housing_height, positive, "a length > 0");
-  o.film_to_lens = sensor.real("film_to_lens", o.film_to_lens, non_negative, "a length ≥ 0");
-  o.lens_focal_length = sensor.real("lens_focal_length", o.lens_focal_length, positive, "a length > 0");
-  o.lens_diameter = sensor.real("lens_diameter", o.lens_diameter, positive, "a length > 0");
-  o.lens_thickness = sensor.real("lens_thickness", o.lens_thickness, positive, "a length > 0");
-  o.lens_index = sensor.real("lens_index", o.lens_index, index, "a refractive index > 1");
-  o.lens_to_photodiode = sensor.real("lens_to_photodiode", o.lens_to_photodiode, positive, "a length > 0");
+  o.L_o = sensor.real("L_o", o.L_o, RealRange{0.1, 1000}, "a length", "mm");
+  o.photodiode_size = sensor.real("photodiode_size", o.photodiode_size, RealRange{0.01, 100}, "a length", "mm");
+  o.filter_transmittance = sensor.real("filter_transmittance", o.filter_transmittance, kFilmTransmittance, "a transmittance", "");
+  o.top_distance = sensor.real("top_distance", o.top_distance, RealRange{0.1, 1000}, "a length", "mm");
+  o.housing_height = sensor.real("housing_height", o.housing_height, RealRange{1, 1000}, "a length", "mm");
+  o.film_to_lens = sensor.real("film_to_lens", o.film_to_lens, RealRange{0, 100}, "a length", "mm");
+  o.lens_focal_length = sensor.real("lens_focal_length", o.lens_focal_length, RealRange{1, 1000}, "a length", "mm");
+  o.lens_diameter = sensor.real("lens_diameter", o.lens_diameter, RealRange{1, 100}, "a length", "mm");
+  o.lens_thickness = sensor.real("lens_thickness", o.lens_thickness, RealRange{0.1, 100}, "a length", "mm");
+  o.lens_index = sensor.real("lens_index", o.lens_index, RealRange{1, 3, true, false}, "a refractive index", "");
+  o.lens_to_photodiode = sensor.real("lens_to_photodiode", o.lens_to_photodiode, RealRange{0.1, 1000}, "a length", "mm");
   sensor.finish();
 
   MapReader trace(file, top.section("trace"), "trace");

@@ -5,65 +5,96 @@
 #include <fmt/format.h>
 
 namespace polrig {
+
+std::string RealRange::text() const {
+  return fmt::format("{}{}, {}{}", lo_open ? "(" : "[", lo, hi, hi_open ? ")" : "]");
+}
+
 namespace {
 
 using K = RigKey::Kind;
 
-bool positive(double v) { return v > 0.0; }
-bool non_negative(double v) { return v >= 0.0; }
-bool any_angle(double) { return true; }
-bool open_unit(double v) { return v > 0.0 && v < 1.0; }
-bool polarizer_kd(double v) { return v > -1.0 && v <= 0.0; }
+template <RealRange R>
+bool within(double v) { return R.contains(v); }
 
-RigKey real(std::string_view path, std::string_view unit, std::string_view expects,
-            std::string_view doc, double& (*ref)(Rig&), bool (*ok)(double)) {
-  RigKey k{path, K::Real, unit, expects, doc};
+std::string expects_text(std::string_view noun, const RealRange& r, std::string_view unit) {
+  return fmt::format("{} in {}{}{}", noun, r.text(), unit.empty() ? "" : " ", unit);
+}
+
+// A real key: `noun` names what it is ("a length"), R is its range in `unit`, `why` says why.
+template <RealRange R>
+RigKey real(std::string_view path, std::string_view unit, std::string_view noun,
+            std::string_view doc, std::string_view why, double& (*ref)(Rig&)) {
+  RigKey k{path, K::Real, unit, expects_text(noun, R, unit), doc, why};
   k.real = ref;
-  k.valid_real = ok;
+  k.range = R;
+  k.valid_real = &within<R>;
   return k;
 }
-RigKey array(std::string_view path, std::string_view unit, std::string_view expects,
-             std::string_view doc, std::span<double> (*ref)(Rig&), bool (*ok)(double)) {
-  RigKey k{path, K::RealArray, unit, expects, doc};
+template <RealRange R>
+RigKey array(std::string_view path, std::string_view unit, std::string_view noun,
+             std::string_view doc, std::string_view why, std::span<double> (*ref)(Rig&)) {
+  RigKey k{path, K::RealArray, unit, expects_text(noun, R, unit), doc, why};
   k.array = ref;
-  k.valid_real = ok;
+  k.range = R;
+  k.valid_real = &within<R>;
   return k;
 }
+
+// Ranges shared by several keys.
+constexpr RealRange kTurn{-360.0, 360.0};          // an orientation: one turn either way
+constexpr RealRange kTableAngle{-3600.0, 3600.0};  // a table stop: ten turns either way
+constexpr RealRange kOffset{0.0, 100.0};           // an eccentricity, mm
+constexpr std::string_view kTurnWhy = "an orientation: one turn either way gives every orientation";
+constexpr std::string_view kOffsetWhy =
+    "the paper's offsets are 0.01–2 mm; beyond 100 mm (the JF-500's port diameter) the sensor "
+    "no longer sits under the port";
+constexpr std::string_view kTableWhy = "ten turns of the table either way";
 
 std::vector<RigKey> make_keys() {
   std::vector<RigKey> keys;
   // --- device -------------------------------------------------------------------------
-  keys.push_back(real("device.L_photo", "mm", "a length > 0",
-                      "radius of the photodiode ring around the sensor centre O_S",
-                      [](Rig& r) -> double& { return r.device.ring.L_photo; }, positive));
-  keys.push_back(array("device.beta_deg", "deg", "6 finite angles",
-                       "angle β_m of photodiode m on the ring, rig frame at θ_R = 0 "
-                       "(x-axis from O_S through photodiode 1)",
-                       [](Rig& r) { return std::span<double>(r.device.ring.beta_deg); },
-                       any_angle));
-  keys.push_back(array("device.film_axes_deg", "deg", "6 finite angles",
-                       "nominal film axes in the sensor frame; they define the theory "
-                       "parameters α_j = −2f_j, α_h = 180° − 2f_h",
-                       [](Rig& r) { return std::span<double>(r.device.film_axis_deg); },
-                       any_angle));
-  keys.push_back(real("device.d", "", "a degree of polarization in (0, 1)",
-                      "degree of linear polarization of the light reaching the sensor",
-                      [](Rig& r) -> double& { return r.device.d; }, open_unit));
-  keys.push_back(array("device.truth.alpha_deg", "deg", "6 finite angles",
-                       "true installation angles α_m, doubled-angle domain (Eq. 15)",
-                       [](Rig& r) { return std::span<double>(r.device.truth.alpha_deg); },
-                       any_angle));
-  keys.push_back(array("device.truth.k_mV", "mV", "3 finite offsets",
-                       "true additive offsets k_i of the pair voltages (Eq. 15)",
-                       [](Rig& r) { return std::span<double>(r.device.truth.k_mV); },
-                       any_angle));
-  keys.push_back(array("device.truth.kv", "", "3 gains > 0",
-                       "true log-amplifier reference deviations kv_i (Eq. 15)",
-                       [](Rig& r) { return std::span<double>(r.device.truth.kv); }, positive));
-  keys.push_back(array("device.truth.kd", "", "6 values in (−1, 0]",
-                       "true polarizer coefficients kd_m = (τM−τm)/(τM+τm) − 1 (Eq. 15)",
-                       [](Rig& r) { return std::span<double>(r.device.truth.kd); },
-                       polarizer_kd));
+  keys.push_back(real<RealRange{0.1, 500.0}>(
+      "device.L_photo", "mm", "a length",
+      "radius of the photodiode ring around the sensor centre O_S",
+      "the seed sensor's ring is 14 mm; a ring of more than 0.5 m is no sensor under a port",
+      [](Rig& r) -> double& { return r.device.ring.L_photo; }));
+  keys.push_back(array<kTurn>("device.beta_deg", "deg", "6 angles",
+                              "angle β_m of photodiode m on the ring, rig frame at θ_R = 0 "
+                              "(x-axis from O_S through photodiode 1)",
+                              kTurnWhy,
+                              [](Rig& r) { return std::span<double>(r.device.ring.beta_deg); }));
+  keys.push_back(array<kTurn>("device.film_axes_deg", "deg", "6 angles",
+                              "nominal film axes in the sensor frame; they define the theory "
+                              "parameters α_j = −2f_j, α_h = 180° − 2f_h",
+                              kTurnWhy,
+                              [](Rig& r) { return std::span<double>(r.device.film_axis_deg); }));
+  keys.push_back(real<RealRange{0.0, 1.0, true, true}>(
+      "device.d", "", "a degree of polarization",
+      "degree of linear polarization of the light reaching the sensor",
+      "0 is unpolarized light (no angle to measure), 1 the limit of a perfect polarizer",
+      [](Rig& r) -> double& { return r.device.d; }));
+  keys.push_back(array<RealRange{-720.0, 720.0}>(
+      "device.truth.alpha_deg", "deg", "6 angles",
+      "true installation angles α_m, doubled-angle domain (Eq. 15)",
+      "doubled angles (α = −2f): one turn of the film either way",
+      [](Rig& r) { return std::span<double>(r.device.truth.alpha_deg); }));
+  keys.push_back(array<RealRange{-1000.0, 1000.0}>(
+      "device.truth.k_mV", "mV", "3 offsets",
+      "true additive offsets k_i of the pair voltages (Eq. 15)",
+      "the paper's offsets are ±10 mV; beyond ±1 V an offset exceeds a log amplifier's output",
+      [](Rig& r) { return std::span<double>(r.device.truth.k_mV); }));
+  keys.push_back(array<RealRange{0.5, 2.0}>(
+      "device.truth.kv", "", "3 gains",
+      "true log-amplifier reference deviations kv_i (Eq. 15)",
+      "the amplifier's scale against nominal: Table 2's are 1.008–1.022; a factor of 2 either "
+      "way is another amplifier",
+      [](Rig& r) { return std::span<double>(r.device.truth.kv); }));
+  keys.push_back(array<RealRange{-1.0, 0.0, true, false}>(
+      "device.truth.kd", "", "6 values",
+      "true polarizer coefficients kd_m = (τM−τm)/(τM+τm) − 1 (Eq. 15)",
+      "kd = −1 is a film that does not polarize, 0 a perfect one",
+      [](Rig& r) { return std::span<double>(r.device.truth.kd); }));
   {
     RigKey k{"device.truth_from", K::Text, "", "a path to a params.yaml",
              "load device.truth from a calibration's params.yaml (path relative to the rig "
@@ -89,41 +120,53 @@ std::vector<RigKey> make_keys() {
     k.valid_text = [](std::string_view v) { return !v.empty(); };
     keys.push_back(k);
   }
-  keys.push_back(real("source.L_o", "mm", "a length > 0 (at 0 the cos⁴ law gives no light off-axis)",
-                      "distance from the port plane down to the photosensitive plane",
-                      [](Rig& r) -> double& { return r.source.cos4.L_o; }, positive));
-  keys.push_back(real("source.E_0", "W/m^2", "an irradiance > 0",
-                      "irradiance on the port axis at the photosensitive plane",
-                      [](Rig& r) -> double& { return r.source.cos4.E_0; }, positive));
-  keys.push_back(real("source.polarizer_deg", "deg", "a finite angle",
-                      "axis ψ_P of the port polarizer in the rig frame; θ = θ_R − ψ_P",
-                      [](Rig& r) -> double& { return r.source.polarizer_deg; }, any_angle));
+  keys.push_back(real<RealRange{0.1, 1000.0}>(
+      "source.L_o", "mm", "a length",
+      "distance from the port plane down to the photosensitive plane",
+      "the paper's is 20 mm; at 0 the cos⁴ law gives no light off-axis, beyond 1 m the port is "
+      "a point",
+      [](Rig& r) -> double& { return r.source.cos4.L_o; }));
+  keys.push_back(real<RealRange{1e-3, 1e5}>(
+      "source.E_0", "W/m^2", "an irradiance",
+      "irradiance on the port axis at the photosensitive plane",
+      "from dim laboratory light to a hundred suns",
+      [](Rig& r) -> double& { return r.source.cos4.E_0; }));
+  keys.push_back(real<kTurn>("source.polarizer_deg", "deg", "an angle",
+                             "axis ψ_P of the port polarizer in the rig frame; θ = θ_R − ψ_P",
+                             kTurnWhy, [](Rig& r) -> double& { return r.source.polarizer_deg; }));
   // --- eccentricity -------------------------------------------------------------------
-  keys.push_back(real("eccentricity.L_IS", "mm", "a length ≥ 0",
-                      "offset of the port centre O_IS from the table centre O_R",
-                      [](Rig& r) -> double& { return r.eccentricity.L_IS; }, non_negative));
-  keys.push_back(real("eccentricity.alpha_IS", "deg", "a finite angle",
-                      "direction of the port centre's offset",
-                      [](Rig& r) -> double& { return r.eccentricity.alpha_IS; }, any_angle));
-  keys.push_back(real("eccentricity.L_S", "mm", "a length ≥ 0",
-                      "offset of the sensor centre O_S from O_R at θ_R = 0",
-                      [](Rig& r) -> double& { return r.eccentricity.L_S; }, non_negative));
-  keys.push_back(real("eccentricity.alpha_S", "deg", "a finite angle",
-                      "direction of the sensor centre's offset at θ_R = 0",
-                      [](Rig& r) -> double& { return r.eccentricity.alpha_S; }, any_angle));
+  keys.push_back(real<kOffset>("eccentricity.L_IS", "mm", "a length",
+                               "offset of the port centre O_IS from the table centre O_R",
+                               kOffsetWhy, [](Rig& r) -> double& { return r.eccentricity.L_IS; }));
+  keys.push_back(real<kTurn>("eccentricity.alpha_IS", "deg", "an angle",
+                             "direction of the port centre's offset", kTurnWhy,
+                             [](Rig& r) -> double& { return r.eccentricity.alpha_IS; }));
+  keys.push_back(real<kOffset>("eccentricity.L_S", "mm", "a length",
+                               "offset of the sensor centre O_S from O_R at θ_R = 0", kOffsetWhy,
+                               [](Rig& r) -> double& { return r.eccentricity.L_S; }));
+  keys.push_back(real<kTurn>("eccentricity.alpha_S", "deg", "an angle",
+                             "direction of the sensor centre's offset at θ_R = 0", kTurnWhy,
+                             [](Rig& r) -> double& { return r.eccentricity.alpha_S; }));
   // --- schedule -----------------------------------------------------------------------
-  keys.push_back(real("schedule.start_deg", "deg", "a finite angle", "first table stop",
-                      [](Rig& r) -> double& { return r.schedule.start_deg; }, any_angle));
-  keys.push_back(real("schedule.step_deg", "deg", "a step > 0", "table step between stops",
-                      [](Rig& r) -> double& { return r.schedule.step_deg; }, positive));
-  keys.push_back(real("schedule.stop_deg", "deg", "an angle ≥ schedule.start_deg",
-                      "last table stop (included when reached by whole steps)",
-                      [](Rig& r) -> double& { return r.schedule.stop_deg; }, any_angle));
+  keys.push_back(real<kTableAngle>("schedule.start_deg", "deg", "an angle", "first table stop",
+                                   kTableWhy,
+                                   [](Rig& r) -> double& { return r.schedule.start_deg; }));
+  keys.push_back(real<RealRange{0.0, 360.0, true, false}>(
+      "schedule.step_deg", "deg", "a step", "table step between stops",
+      "at most one turn; the stops between start and stop may number at most 1e6",
+      [](Rig& r) -> double& { return r.schedule.step_deg; }));
+  keys.push_back(real<kTableAngle>("schedule.stop_deg", "deg", "an angle ≥ schedule.start_deg",
+                                   "last table stop (included when reached by whole steps)",
+                                   kTableWhy, [](Rig& r) -> double& { return r.schedule.stop_deg; }));
   {
-    RigKey k{"schedule.angles_deg", K::RealList, "deg", "a non-empty list of finite angles",
-             "explicit table stops; replaces start/step/stop (give one or the other)"};
+    RigKey k{"schedule.angles_deg", K::RealList, "deg",
+             expects_text("a list of 1 to 1e6 angles", kTableAngle, "deg"),
+             "explicit table stops; replaces start/step/stop (give one or the other)",
+             "ten turns of the table either way; at most 1e6 stops, as for start/step/stop"};
     k.list = [](Rig& r) -> std::vector<double>& { return r.schedule.angles_deg; };
-    k.valid_real = any_angle;
+    k.range = kTableAngle;
+    k.max_items = kMaxStops;
+    k.valid_real = &within<kTableAngle>;
     keys.push_back(k);
   }
   {
@@ -134,10 +177,10 @@ std::vector<RigKey> make_keys() {
     keys.push_back(k);
   }
   // --- electronics --------------------------------------------------------------------
-  keys.push_back(real("electronics.volts_per_decade", "V", "a gain > 0",
-                      "log-amplifier scale (the 0.5 of Eq. 1)",
-                      [](Rig& r) -> double& { return r.electronics.volts_per_decade; },
-                      positive));
+  keys.push_back(real<RealRange{0.01, 10.0}>(
+      "electronics.volts_per_decade", "V", "a gain", "log-amplifier scale (the 0.5 of Eq. 1)",
+      "log amplifiers give tens to thousands of mV per decade (the paper's: 500 mV)",
+      [](Rig& r) -> double& { return r.electronics.volts_per_decade; }));
   {
     RigKey k{"electronics.adc_bits", K::Integer, "", "an integer in [2, 31]",
              "resolution of the signed ADC (Eq. 3 uses 2^(bits−1))"};
@@ -145,12 +188,15 @@ std::vector<RigKey> make_keys() {
     k.valid_integer = [](long long v) { return v >= 2 && v <= 31; };
     keys.push_back(k);
   }
-  keys.push_back(real("electronics.vref_V", "V", "a voltage > 0", "ADC reference voltage",
-                      [](Rig& r) -> double& { return r.electronics.vref_V; }, positive));
-  keys.push_back(real("electronics.noise_sigma_V", "V", "a standard deviation ≥ 0",
-                      "Gaussian noise on each pair voltage, per sample, before the ADC",
-                      [](Rig& r) -> double& { return r.electronics.noise_sigma_V; },
-                      non_negative));
+  keys.push_back(real<RealRange{0.01, 100.0}>(
+      "electronics.vref_V", "V", "a voltage", "ADC reference voltage",
+      "ADC references span tens of mV to tens of volts (the paper's: 0.6 V)",
+      [](Rig& r) -> double& { return r.electronics.vref_V; }));
+  keys.push_back(real<RealRange{0.0, 1.0}>(
+      "electronics.noise_sigma_V", "V", "a standard deviation",
+      "Gaussian noise on each pair voltage, per sample, before the ADC",
+      "noise of more than 1 V buries any log amplifier's signal (our rigs: 0.1 mV)",
+      [](Rig& r) -> double& { return r.electronics.noise_sigma_V; }));
   // --- seed ---------------------------------------------------------------------------
   {
     RigKey k{"seed", K::Seed, "", "an unsigned 64-bit integer",
@@ -176,14 +222,19 @@ const RigKey* find_rig_key(std::string_view path) {
 
 std::optional<RigProblem> check_rig(const Rig& rig) {
   const Schedule& s = rig.schedule;
+  if (s.angles_deg.size() > kMaxStops)
+    return RigProblem{"schedule.angles_deg",
+                      fmt::format("expected at most 1e6 stops, got {}", s.angles_deg.size())};
   if (s.angles_deg.empty()) {
     if (s.stop_deg < s.start_deg)
       return RigProblem{"schedule.stop_deg",
                         fmt::format("expected an angle ≥ schedule.start_deg ({}), got {}",
                                     s.start_deg, s.stop_deg),
                         "schedule.start_deg"};
-    if ((s.stop_deg - s.start_deg) / s.step_deg > 1e6)
-      return RigProblem{"schedule.step_deg", "expected at most 1e6 stops"};
+    if ((s.stop_deg - s.start_deg) / s.step_deg > kMaxStops)
+      return RigProblem{"schedule.step_deg",
+                        fmt::format("expected at most 1e6 stops, got {:.0f}",
+                                    std::floor((s.stop_deg - s.start_deg) / s.step_deg) + 1)};
   }
   for (int m = 0; m < 6; ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.

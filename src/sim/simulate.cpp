@@ -1,6 +1,9 @@
 #include "polrig/sim/simulate.h"
 
 #include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 #include <tbb/parallel_for.h>
 
@@ -69,6 +72,16 @@ Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg,
   const Electronics& el = rig.electronics;
   s.V_ideal = pair_voltages(truth, el, ideal_irradiance(rig, theta_R_deg), s.light.theta_deg, s.light.d);
   s.V_ecc = pair_voltages(truth, el, s.light.E_Wm2, s.light.theta_deg, s.light.d);
+  // The keys' ranges keep these finite; should a combination of values escape them, say where,
+  // rather than let the ADC refuse an anonymous voltage.
+  for (int i = 0; i < 3; ++i)
+    if (!std::isfinite(s.V_ecc[i]) || !std::isfinite(s.V_ideal[i]))
+      throw std::domain_error(fmt::format(
+          "stop {} (θ_R = {}°): pair {}'s voltage is not finite (V_ecc = {}, V_ideal = {}, "
+          "irradiances E{} = {} and E{} = {} W/m²); the rig's values are beyond what the model "
+          "represents", index, theta_R_deg, i + 1, s.V_ecc[i], s.V_ideal[i], pair_j(i) + 1,
+          s.light.E_Wm2[static_cast<std::size_t>(pair_j(i))], pair_h(i) + 1,
+          s.light.E_Wm2[static_cast<std::size_t>(pair_h(i))]));
 
   const int n = rig.schedule.samples_per_stop;
   for (int i = 0; i < 3; ++i) {

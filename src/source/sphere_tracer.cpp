@@ -6,6 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
+#include <string>
 #include <numbers>
 #include <stdexcept>
 
@@ -61,6 +63,12 @@ struct GeomData {
 }  // namespace
 
 struct SphereTracer::Impl {
+  std::mutex embree_error_mutex;
+  std::string embree_error;  // the first error Embree reported, empty if none
+  void throw_on_embree_error() {
+    const std::lock_guard lock(embree_error_mutex);
+    if (!embree_error.empty()) throw std::runtime_error("Embree: " + embree_error);
+  }
   std::vector<GeomData> geom_data;  // user data of the Embree geometries; reserved, never moves
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
@@ -96,6 +104,25 @@ struct SphereTracer::Impl {
 };
 
 namespace {
+
+const char* embree_error_text(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+    default: return "unknown error";
+  }
+}
+
+void record_embree_error(void* user, RTCError code, const char* message) {
+  auto& m = *static_cast<SphereTracer::Impl*>(user);
+  const std::lock_guard lock(m.embree_error_mutex);
+  if (m.embree_error.empty())
+    m.embree_error = fmt::format("{}{}{}", embree_error_text(code), message ? ": " : "", message ? message : "");
+}
 
 // Embree callbacks. Rays arrive in single precision; `RayContext` carries the double-precision
 // ray so that user geometry can intersect exactly.
@@ -194,7 +221,12 @@ SphereTracer::SphereTracer(const SceneSpec& scene) : scene_(scene), impl_(std::m
   m.port_z = scene_.port_plane_z();
   // No "threads=N" config: Embree would cap the process-wide TBB parallelism with it.
   m.device = rtcNewDevice(nullptr);
-  if (!m.device) throw std::runtime_error("Embree: cannot create a device");
+  if (!m.device)
+    throw std::runtime_error(fmt::format("Embree: cannot create a device ({})",
+                                         embree_error_text(rtcGetDeviceError(nullptr))));
+  // Embree reports errors through this callback (and otherwise only through polling); they are
+  // kept and turned into an exception after each step that builds the scene.
+  rtcSetDeviceErrorFunction(m.device, record_embree_error, &m);
   m.scene = rtcNewScene(m.device);
   rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST);
   m.geom_data.reserve(3);
@@ -203,10 +235,18 @@ SphereTracer::SphereTracer(const SceneSpec& scene) : scene_(scene), impl_(std::m
     if (scene_.lamps[i].radius > 0) m.lamp_of_prim.push_back(static_cast<int>(i));
   if (!m.lamp_of_prim.empty())
     m.lamp_geom = add_user_geometry(m, static_cast<unsigned>(m.lamp_of_prim.size()), m.geom_data);
-  for (const BaffleSpec& b : scene_.baffles) m.baffle_normal.push_back(unit(b.normal));
+  for (const BaffleSpec& b : scene_.baffles) {
+    m.baffle_normal.push_back(unit(b.normal));
+    const Vec3& n = m.baffle_normal.back();
+    if (!(std::abs(dot(n, n) - 1) < 1e-9))  // a zero, or a length whose square over/underflows
+      throw std::invalid_argument(fmt::format("baffle normal [{}, {}, {}] has no direction the "
+                                              "tracer can represent", b.normal[0], b.normal[1],
+                                              b.normal[2]));
+  }
   if (!scene_.baffles.empty())
     m.baffle_geom = add_user_geometry(m, static_cast<unsigned>(scene_.baffles.size()), m.geom_data);
   rtcCommitScene(m.scene);
+  m.throw_on_embree_error();
 }
 
 SphereTracer::~SphereTracer() {
@@ -409,6 +449,7 @@ SphereSolution SphereTracer::trace_photons() const {
 SphereSolution SphereTracer::solve() const {
   const auto t0 = std::chrono::steady_clock::now();
   SphereSolution sol = trace_photons();
+  impl_->throw_on_embree_error();
   const int steps = static_cast<int>(std::lround(180.0 / scene_.trace.field_step_deg));
   sol.field = compute_wall_field(*this, sol, steps + 1, 2 * steps);
   sol.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

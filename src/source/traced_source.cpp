@@ -2,6 +2,11 @@
 
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include "polrig/optics/lens.h"
 #include "polrig/optics/polarized_ray.h"
@@ -19,9 +24,27 @@ TracedSource::~TracedSource() = default;
 
 const SphereSolution& TracedSource::solution() const {
   std::call_once(solved_, [&] {
-    solution_ = std::make_unique<SphereSolution>(tracer_->solve());
-    L_ref_ = mean_port_radiance(*tracer_, *solution_, scene_.sensor.L_o);
+    // The first caller solves for all, usually from inside a parallel loop. Isolated, so that
+    // while this thread waits in the solve's own loops it takes no other task of the caller's
+    // loop (which would ask for the solution again, on this thread: a deadlock); in its own task
+    // group context, so that a failure elsewhere in the caller's loop cannot cancel it halfway
+    // (TBB returns from a cancelled nested loop as if it had finished). Its own error is kept and
+    // given to every caller, rather than tried again by each thread.
+    try {
+      tbb::task_group_context own(tbb::task_group_context::isolated);
+      tbb::this_task_arena::isolate([&] {
+        tbb::parallel_for(0, 1, [&](int) {
+          auto sol = std::make_unique<SphereSolution>(tracer_->solve());
+          L_ref_ = mean_port_radiance(*tracer_, *sol, scene_.sensor.L_o);
+          solution_ = std::move(sol);
+        }, own);
+      });
+      if (!solution_) throw std::runtime_error("the sphere solve was cancelled");
+    } catch (...) {
+      solve_failure_ = std::current_exception();
+    }
   });
+  if (solve_failure_) std::rethrow_exception(solve_failure_);
   return *solution_;
 }
 

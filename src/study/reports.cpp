@@ -76,6 +76,7 @@ std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const
                           "coaxial_bsd_mV", "coaxial_asd_mV", "coaxial_mean_br_mV"})
       columns.emplace_back(c);
   CsvTable summary(columns);
+  if (study.traced) summary.allow_undefined("eq6_mV");  // Eq. 6 has no meaning for a traced source
   for (int i = 0; i < 3; ++i) {
     const CsPairSummary& s = study.summary[i];
     std::vector<double> row{static_cast<double>(i + 1), s.bsd_mV, s.asd_mV, s.mean_br_mV, s.mean_mr_mV, s.eq6_mV};
@@ -124,6 +125,9 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
                           "eq6_mV", "eq6_dev_pct"})
       header.push_back(fmt::format("pair{}_{}", i, c));
   CsvTable table(header);
+  for (int i = 1; i <= 3; ++i)  // ratios over a zero denominator; Eq. 6 of a traced source
+    for (const char* c : {"asd_bsd_pct", "eq6_mV", "eq6_dev_pct"})
+      table.allow_undefined(fmt::format("pair{}_{}", i, c));
   for (std::size_t p = 0; p < sw.points(); ++p) {
     std::vector<double> row;
     const std::vector<int> idx = sw.indices(p);

@@ -3,13 +3,19 @@
 // back to the same doubles and is byte-identical for identical results.
 #include <filesystem>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace polrig {
 
+// Every value must be finite: add_row throws std::runtime_error naming the column and row of a
+// NaN or infinity, so that no result leaves as one. A column whose NaN is documented to mean
+// "not defined" (a ratio over a zero denominator) is declared with allow_undefined; it may hold
+// NaN, never infinity.
 class CsvTable {
  public:
   explicit CsvTable(std::vector<std::string> header);
+  CsvTable& allow_undefined(std::string_view column);
   void add_row(const std::vector<double>& values);
   std::size_t columns() const { return header_.size(); }
   std::size_t rows() const { return rows_; }
@@ -17,6 +23,7 @@ class CsvTable {
 
  private:
   std::vector<std::string> header_;
+  std::vector<bool> may_be_nan_;
   std::string body_;
   std::size_t rows_ = 0;
 };

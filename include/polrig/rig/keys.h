@@ -12,13 +12,27 @@
 
 namespace polrig {
 
+// The most table stops a schedule may give (start/step/stop or an explicit list).
+inline constexpr std::size_t kMaxStops = 1000000;
+
+// A closed or open interval of real values; every real rig key has one.
+struct RealRange {
+  double lo, hi;
+  bool lo_open = false, hi_open = false;
+  constexpr bool contains(double v) const {
+    return (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+  }
+  std::string text() const;  // "[0, 100]", "(0, 1)"
+};
+
 struct RigKey {
   enum class Kind { Real, Integer, Seed, Text, RealArray, RealList };
   std::string_view path;     // "eccentricity.L_IS"
   Kind kind;
   std::string_view unit;     // "mm", "deg", "V", "" …
-  std::string_view expects;  // what a valid value is, for error messages: "a length ≥ 0"
+  std::string expects;       // what a valid value is, for error messages: "a length in [0, 100] mm"
   std::string_view doc;
+  std::string_view why = {};  // why the range is what it is (a physical bound, or what the model can represent)
 
   // Accessors; the one matching `kind` is set.
   double& (*real)(Rig&) = nullptr;
@@ -27,6 +41,8 @@ struct RigKey {
   std::string& (*text)(Rig&) = nullptr;
   std::span<double> (*array)(Rig&) = nullptr;          // fixed length
   std::vector<double>& (*list)(Rig&) = nullptr;        // any length
+  std::optional<RealRange> range = {};  // real keys (Real, RealArray, RealList)
+  std::size_t max_items = 0;             // RealList: the most entries it may hold
   // Value check; returns false when the value is outside what `expects` says.
   bool (*valid_real)(double) = nullptr;
   bool (*valid_integer)(long long) = nullptr;

@@ -7,6 +7,7 @@
 // independent random shifts gives a complete estimate, so studies run once per shift and report
 // the spread of the shifts as standard errors.
 #include <filesystem>
+#include <exception>
 #include <memory>
 #include <mutex>
 #include <vector>
@@ -73,6 +74,7 @@ class TracedSource {
   mutable std::unique_ptr<SphereSolution> solution_;
   mutable double L_ref_ = 0;  // mean radiance seen through the port: the control variate
   mutable std::once_flag solved_;
+  mutable std::exception_ptr solve_failure_;  // the solve's error, rethrown to every caller
 };
 
 }  // namespace polrig

@@ -5,7 +5,9 @@
 
 #include <cmath>
 #include <numbers>
+#include <queue>
 
+#include "polrig/calib/angles.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/io/scene_yaml.h"
 #include "polrig/sim/simulate.h"
@@ -331,22 +333,134 @@ TEST(PortIrradiance, MatchesTheExactDiskViewFactor) {
   }
 }
 
-TEST(PortIrradiance, TheFixedPortRuleIntegratesAUniformPortExactly) {
-  // With L_ref = L the uniform part carries everything (a Gauss rule over the port) and the
-  // sampled part nothing: the disk view factor to 1e-9, where the integrand is smooth.
-  const SceneSpec s = theory_sphere(1000);
-  const SphereTracer tracer(s);
-  const double L = 1000.0, a = s.port.radius(), zp = s.port_plane_z();
-  const SphereSolution sol = uniform_wall(s, L);
-  const TracedPort port(tracer, sol, L);
-  const RayTransmission one = [](const Vec3&) { return 1.0; };
-  for (double h : {10.0, 20.0, 40.0})
-    for (double r : {0.0, 14.0, 30.0}) {
-      const Vec3 P{r, 0, zp - h};
-      EXPECT_NEAR(port.uniform_part(P, one), disk_irradiance(L, a, h, r), 1e-9 * disk_irradiance(L, a, h, r)) << h << " " << r;
-      EXPECT_NEAR(port.sampled_part(P, one, 1024, 0), 0.0, 1e-9 * L);
-      EXPECT_EQ(port.occluder_part(P, one), 0.0);
+// A scene whose port sees a tilted baffle and a lamp, some points' view clipped by the port's
+// rim, over a wall whose light after the first strike varies (a hand-made field: C plus a smooth
+// δ) besides the lamp's first strike with the baffle's hard shadow.
+SceneSpec occluded_port_scene() {
+  SceneSpec s;
+  s.lamps = {LampSpec{{-60, 30, 0}, 15.0, 2.0, 0.5}};
+  s.baffles = {BaffleSpec{{20, 10, -100}, {0.3, 0.0, 1.0}, 30.0, 0.9}};
+  return s;
+}
+SphereSolution occluded_port_solution(const SceneSpec& s) {
+  SphereSolution sol;
+  WallField& f = sol.field;
+  f.C = 3000;
+  f.R = s.sphere.radius();
+  f.n_theta = 91;
+  f.n_phi = 180;
+  for (int i = 0; i < f.n_theta; ++i)
+    for (int j = 0; j < f.n_phi; ++j) {
+      const double th = kPi * i / (f.n_theta - 1), ph = 2 * kPi * j / f.n_phi;
+      f.delta.push_back(400 * std::cos(th) + 300 * std::sin(th) * std::cos(ph - 0.5) +
+                        200 * std::sin(th) * std::sin(th) * std::cos(2 * ph));
     }
+  sol.baffle_E = {{2000.0, 1500.0}};
+  return sol;
+}
+
+// ∫_port L(first surface seen from P through Q)·T·cos θ_P cos θ_Q/|Q − P|² dA_Q by global adaptive
+// cubature written here: cells in (ρ, φ), each estimated by 3 × 3 Gauss points, starting from a
+// 48 × 128 grid whose points are closer than any occluder's image on the port. A cell
+// whose points all see the same surface has the error |3 × 3 − 2 × 2 Gauss|; one whose points
+// see different surfaces (an outline or a shadow's edge crosses it) has (max − min)·area, a
+// bound. The cell with
+// the largest error is split in four until the errors sum to less than `tolerance`; the sum is
+// returned in `error`. Rays start at P.
+double adaptive_port_integral(const SphereTracer& tracer, const SphereSolution& sol, const Vec3& P,
+                              const RayTransmission& T, double tolerance, double& error) {
+  const double a = tracer.scene().port.radius(), zp = tracer.scene().port_plane_z();
+  struct Sample {
+    double value;
+    int surface;
+  };
+  const auto F = [&](double rho, double phi) {
+    const Vec3 d{rho * std::cos(phi) - P[0], rho * std::sin(phi) - P[1], zp - P[2]};
+    const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2], r = std::sqrt(r2);
+    const Vec3 up{d[0] / r, d[1] / r, d[2] / r};
+    const SphereTracer::Hit h = tracer.first_hit(P, up);
+    const double L = tracer.radiance(sol, h);
+    // dA = ρ dρ dφ
+    // A wall point in a shadow is a surface of its own: the first strike jumps at its edge.
+    const bool shadow = h.kind == SphereTracer::Hit::Wall && tracer.direct_irradiance(h.point) == 0;
+    return Sample{L * T({-up[0], -up[1], -up[2]}) * d[2] * d[2] / (r2 * r2) * rho, 16 * h.kind + h.index + 8 * shadow};
+  };
+  struct Cell {
+    double s0, s1, p0, p1, value, error;
+    bool operator<(const Cell& o) const { return error < o.error; }
+  };
+  const double g2 = 0.5 / std::sqrt(3.0), g3 = 0.5 * std::sqrt(0.6);
+  const auto estimate = [&](double s0, double s1, double p0, double p1) {
+    const double cs = 0.5 * (s0 + s1), cp = 0.5 * (p0 + p1), ds = s1 - s0, dp = p1 - p0;
+    double two = 0, three = 0, lo = 1e300, hi = -1e300;
+    bool mixed = false;
+    int surface = -1;
+    const auto add = [&](double& sum, double w, double u, double v) {
+      const Sample f = F(cs + u * ds, cp + v * dp);
+      sum += w * f.value;
+      lo = std::min(lo, f.value);
+      hi = std::max(hi, f.value);
+      mixed |= surface >= 0 && f.surface != surface;
+      surface = f.surface;
+    };
+    for (double u : {-g2, g2})
+      for (double v : {-g2, g2}) add(two, 0.25, u, v);
+    const double x3[3] = {-g3, 0, g3}, w3[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) add(three, w3[i] * w3[j], x3[i], x3[j]);
+    return Cell{s0, s1, p0, p1, three * ds * dp, (mixed ? hi - lo : std::abs(three - two)) * ds * dp};
+  };
+  std::priority_queue<Cell> cells;
+  double value = 0;
+  error = 0;
+  for (int i = 0; i < 48; ++i)
+    for (int j = 0; j < 128; ++j) {
+      const Cell c = estimate(a * i / 48, a * (i + 1) / 48, 2 * kPi * j / 128, 2 * kPi * (j + 1) / 128);
+      value += c.value;
+      error += c.error;
+      cells.push(c);
+    }
+  while (error > tolerance && cells.size() < 1000000) {
+    const Cell c = cells.top();
+    cells.pop();
+    value -= c.value;
+    error -= c.error;
+    const double sm = 0.5 * (c.s0 + c.s1), pm = 0.5 * (c.p0 + c.p1);
+    for (const Cell& q : {estimate(c.s0, sm, c.p0, pm), estimate(sm, c.s1, c.p0, pm), estimate(c.s0, sm, pm, c.p1),
+                          estimate(sm, c.s1, pm, c.p1)}) {
+      value += q.value;
+      error += q.error;
+      cells.push(q);
+    }
+  }
+  return value;
+}
+
+TEST(PortIrradiance, ItsSplitMatchesAnAdaptiveIntegralPastOccluders) {
+  // TracedPort splits the port integral into a fixed rule for a uniform L_ref, quasi-random
+  // points for the wall's rest and fixed rules over each occluder. Here the port sees a baffle
+  // and a lamp (clipped by the rim for some points), a non-uniform wall and the baffle's hard
+  // shadow, through a direction-dependent transmission: at each point the sum must equal an
+  // adaptive cubature of the whole integrand written here, within 5 of the shifts' standard
+  // errors plus 5 times the cubature's error estimate (an outline's sliver between a cell's
+  // points escapes the estimate: tightened tenfold, the cubature moved by up to 2.6 estimates),
+  // with L_ref = 0 or near the port's mean. The occluders must matter: their part is over 2 %
+  // of E at the port's centre.
+  const SceneSpec s = occluded_port_scene();
+  const SphereTracer tracer(s);
+  const SphereSolution sol = occluded_port_solution(s);
+  const RayTransmission T = [](const Vec3& k) { return 0.7 + 0.2 * k[0] - 0.1 * k[1] * k[1]; };
+  const TracedPort plain(tracer, sol), controlled(tracer, sol, 950.0);
+  const Vec3 centre{0, 0, s.port_plane_z() - 20};
+  EXPECT_LT(plain.occluder_part(centre, T), -0.02 * plain.irradiance(0, 0, 20, T, 1024, 1)[0]);
+  for (const auto& [x, y, h] : {std::array<double, 3>{0, 0, 20}, {35, -10, 20}, {-45, 20, 20}, {70, 0, 40}, {10, 60, 10}}) {
+    double error = 0;
+    const double ref = adaptive_port_integral(tracer, sol, {x, y, s.port_plane_z() - h}, T, 1e-5 * 3000, error);
+    for (const TracedPort* port : {&plain, &controlled}) {
+      const MeanAndSpread e = mean_and_standard_error(port->irradiance(x, y, h, T, 4096, 8));
+      EXPECT_NEAR(e.mean, ref, 5 * e.sd + 5 * error) << x << " " << y << " " << h;
+    }
+  }
 }
 
 TEST(PortIrradiance, SmallPortGivesCosineToTheFourth) {
@@ -557,20 +671,63 @@ TEST(TracedRig, SimulateRunsWithTheFilmsPolarization) {
   EXPECT_EQ(r.rig.device.d, sim.stops[0].light.d);  // the rig's d is the film's
 }
 
+// Eq. 15's pair voltages for light at θ (sensor frame) of degree d, written out from
+// docs/physics.md §3 with the device's parameters and equal irradiances.
+std::array<double, 3> equation15_volts(const CalibrationParams& p, double theta_deg, double d) {
+  std::array<double, 3> V{};
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t j = static_cast<std::size_t>(2 * i), h = j + 1;
+    const double num = 1 + (1 + p.kd[j]) * d * std::cos((2 * theta_deg + p.alpha_deg[j]) * kPi / 180);
+    const double den = 1 - (1 + p.kd[h]) * d * std::cos((2 * theta_deg + p.alpha_deg[h]) * kPi / 180);
+    V[static_cast<std::size_t>(i)] = p.kv[static_cast<std::size_t>(i)] * 0.5 * std::log10(num / den) + p.k_mV[static_cast<std::size_t>(i)] * 1e-3;
+  }
+  return V;
+}
+
 TEST(TracedRig, SceneAnglesAreMirroredIntoTheRigFrame) {
-  // The scene is seen from above, the rig from below: a port film at +30° in the scene is at
-  // −30° in the rig frame, so the sensor sees θ = θ_R + 30°.
+  // The traced signal, not the formula: a 1 mm port, photodiodes 0.3 mm from the axis, a coaxial
+  // rig, the port film at 0°, +30° and −30° in the scene. The scene is seen from above, the rig
+  // from below, so a film at ψ in the scene is at ψ_P = −ψ in the rig frame and the sensor sees
+  // θ = θ_R − ψ_P = θ_R + ψ (docs/physics.md §1, §7). The traced voltages (made of the traced
+  // channel signals alone: the effective irradiance's bracket cancels in Eq. 15) must be Eq. 15
+  // at that θ, and the angle the sensor reads from them must be that θ. Rays reach the
+  // photodiodes at most t = 0.8/20 rad off the normal: the films' oblique corrections are O(t²)
+  // of the bracket, below kv·v_dec/ln10·2t²·(1 + d)/(1 − d) ≈ 2.4 mV in a pair voltage and t² rad in the
+  // angle (measured: 35 µV, 0.003°). A wrong frame sign (θ = θ_R − ψ) misses by 380–420 mV.
   const test::TempDir dir("polrig_test_traced_");
-  const std::string path = (dir.path() / "film30.yaml").string();
-  test::write_file(path,
-                   "port: {polarizer: {axis_deg: 30, tau_M: 0.62, tau_m: 0.18}}\n"
-                   "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\nbaffles: []\n"
-                   "trace: {photons: 20000, plane_samples: 64}\n");
-  LoadedRig r = parse_rig("source: {model: traced, scene: " + path +
-                              "}\nschedule: {angles_deg: [0, 100]}\n", "inline");
-  const Simulation sim = simulate(r.rig);
-  EXPECT_NEAR(sim.stops[0].light.theta_deg, 30.0, 1e-12);
-  EXPECT_NEAR(sim.stops[1].light.theta_deg, 130.0, 1e-12);
+  for (double psi : {0.0, 30.0, -30.0}) {
+    const std::string path = (dir.path() / "film.yaml").string();
+    test::write_file(path, "port: {diameter: 1, polarizer: {axis_deg: " + std::to_string(psi) +
+                               ", tau_M: 0.62, tau_m: 0.18}}\n"
+                               "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\nbaffles: []\n"
+                               "sensor: {photodiode_size: 0.2}\n"
+                               "trace: {photons: 20000, plane_samples: 64}\n");
+    LoadedRig r = parse_rig("source: {model: traced, scene: " + path +
+                                "}\ndevice: {L_photo: 0.3}\neccentricity: {L_IS: 0, L_S: 0}\n"
+                                "schedule: {angles_deg: [0, 25, 100, 155]}\n",
+                            "inline");
+    const Simulation sim = simulate(r.rig);
+    const CalibrationParams& truth = r.rig.device.truth;
+    const double t = 0.8 / 20, d = 0.55;  // the port's radius + photodiode's reach, over L_o
+    double bound = 0;
+    for (double kv : truth.kv) bound = std::max(bound, kv * 0.5 / std::log(10.0) * 2 * t * t * (1 + d) / (1 - d));
+    for (const Stop& stop : sim.stops) {
+      const double theta = stop.theta_R_deg + psi;
+      EXPECT_NEAR(std::remainder(stop.light.theta_deg - theta, 180.0), 0.0, 1e-9) << "ψ=" << psi;
+      const std::array<double, 3> V = equation15_volts(truth, theta, d);
+      const std::array<double, 3> V_flipped = equation15_volts(truth, stop.theta_R_deg - psi, d);
+      double flipped_miss = 0;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(stop.V_ecc[static_cast<std::size_t>(i)], V[static_cast<std::size_t>(i)], bound)
+            << "ψ=" << psi << " θ_R=" << stop.theta_R_deg << " pair " << i + 1;
+        flipped_miss = std::max(flipped_miss, std::abs(stop.V_ecc[static_cast<std::size_t>(i)] - V_flipped[static_cast<std::size_t>(i)]));
+      }
+      if (psi != 0) EXPECT_GT(flipped_miss, 0.1) << "ψ=" << psi << " θ_R=" << stop.theta_R_deg;
+      const SensorAngles read = sensor_angles(truth, r.rig.electronics, stop.V_ecc);
+      EXPECT_NEAR(std::remainder(read.theta_sec_deg - theta, 180.0), 0.0, t * t * 180 / kPi)
+          << "ψ=" << psi << " θ_R=" << stop.theta_R_deg;
+    }
+  }
 }
 
 TEST(TracedRig, ItsEffectiveRigLoadsBack) {

@@ -576,37 +576,58 @@ std::string write_theory_scene(const test::TempDir& dir) {
   return path;
 }
 
-// The signal of an O-type film pair on a bare photodiode at P under a uniform port of radiance
-// 1, by a closed form independent of the Mueller code: unpolarized light through films with
-// unpolarized gains g₁, g₂ and efficiencies d₁, d₂ passes g₁g₂·[1 + d₁d₂·cos 2χ], χ the angle
-// between their transmitted fields e ∝ k × m (m = z × axis, the absorption axis), divided by
-// g₁g₂; integrated by a Gauss rule over the port (polar, area-uniform radius).
-double film_pair_signal(const Vec3& P, double a, double zp, double psi, double beta, double d1, double d2) {
-  static const QuadratureRule rule = gauss_legendre_01(48);
-  const auto e_of = [](const Eigen::Vector3d& k, double axis) {
-    const Eigen::Vector3d m = Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(std::cos(axis), std::sin(axis), 0));
-    return k.cross(m).normalized();
-  };
-  const int azimuths = 96;
-  double e = 0;
-  for (std::size_t i = 0; i < rule.x.size(); ++i)
-    for (int j = 0; j < azimuths; ++j) {
-      const double w = rule.w[i], rho = a * std::sqrt(rule.x[i]), phi = 2 * kPi * (j + 0.5) / azimuths;
-      const Eigen::Vector3d d(rho * std::cos(phi) - P[0], rho * std::sin(phi) - P[1], zp - P[2]);
-      const Eigen::Vector3d k = -d.normalized();
-      const double c = e_of(k, psi).dot(e_of(k, beta));
-      e += w * (1 + d1 * d2 * (2 * c * c - 1)) * d.z() * d.z() / std::pow(d.squaredNorm(), 2);
+// n-point Gauss–Legendre nodes and weights on [0, 1], by Newton's iteration on P_n (the
+// textbook route, apart from the code's Golub–Welsch rule).
+QuadratureRule legendre_by_newton(int n) {
+  QuadratureRule r;
+  for (int i = 1; i <= n; ++i) {
+    double x = std::cos(kPi * (i - 0.25) / (n + 0.5)), dp = 0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1, p1 = x;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      dp = n * (x * p1 - p0) / (x * x - 1);
+      const double dx = p1 / dp;
+      x -= dx;
+      if (std::abs(dx) < 1e-16) break;
     }
-  return e * 0.5 * a * a * 2 * kPi / azimuths;
+    r.x.push_back(0.5 * (1 - x));
+    r.w.push_back(1.0 / ((1 - x * x) * dp * dp));
+  }
+  return r;
+}
+
+// What unpolarized light of unit radiance, travelling along k, passes through two O-type sheet
+// films lying in the horizontal plane, by Jones vectors in 3-D: each film keeps √τ_M of the
+// field along e_t = unit(k × m) (m = z × axis, the absorbed direction) and √τ_m along k × e_t;
+// unpolarized light is the mean of two orthogonal fields. Divided by the films' gains for
+// unpolarized light. (No Mueller matrix, no code helper.)
+double two_films(const Eigen::Vector3d& k, double axis1, double tM1, double tm1, double axis2, double tM2, double tm2) {
+  const auto film = [&k](const Eigen::Vector3d& E, double axis, double tM, double tm) {
+    const Eigen::Vector3d m = Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(std::cos(axis), std::sin(axis), 0));
+    const Eigen::Vector3d et = k.cross(m).normalized(), ea = k.cross(et);
+    return Eigen::Vector3d(std::sqrt(tM) * E.dot(et) * et + std::sqrt(tm) * E.dot(ea) * ea);
+  };
+  const Eigen::Vector3d u = k.cross(Eigen::Vector3d::UnitX()).normalized(), v = k.cross(u);
+  double I = 0;
+  for (const Eigen::Vector3d& E : {u, v}) I += 0.5 * film(film(E, axis1, tM1, tm1), axis2, tM2, tm2).squaredNorm();
+  return I / (0.25 * (tM1 + tm1) * (tM2 + tm2));
 }
 
 TEST(SlowTracedRig, BareChannelsFollowTheFilmsAtObliqueIncidenceUnderAUniformPort) {
   // A lamp at the centre and no baffle: the port is a uniform disk. The sensor is off by L_S, the
-  // port centred. Every ΔV_br is kv·v_dec·log10 of the ratio of the pair's effective
-  // irradiances, signal/bracket, with the signal of film_pair_signal over the photodiode
-  // (2 × 2 Gauss points, as the source does): the traced study's mean and spread of ΔV_br must
-  // match within 5 standard errors. The obliquity matters: normal-incidence films (the bracket
-  // times the disk view factor) miss by far more.
+  // port centred. ΔV_br of pair i at a pose is kv_i·v_dec·log10 of the ratio of its channels'
+  // signals, less the same for the coaxial rig (the normal-incidence bracket cancels). The
+  // reference is built here from docs/physics.md alone: photodiode positions (§1), the film
+  // axes from α (§3), the scene's mirror and the films turned by −θ_R (§7), Jones vectors for
+  // the films, its own quadrature (Gauss–Legendre in ρ by Newton × 128 azimuths over the port,
+  // 3 × 3 Gauss points over the photodiode). The traced study's mean and spread of ΔV_br must
+  // match within 5 standard errors (measured: within 3.7). Normal-incidence films (the disk's
+  // irradiance alone) would miss the traced mean of pair 1 by 9 % of theirs (docs/validation.md;
+  // measured 9.03 %): that number within its rounding, ±0.5 %.
   const test::TempDir dir("polrig_test_traced_");
   const std::string scene = write_theory_scene(dir);
   LoadedRig r = parse_rig("source:\n  model: traced\n  scene: " + scene +
@@ -617,42 +638,55 @@ TEST(SlowTracedRig, BareChannelsFollowTheFilmsAtObliqueIncidenceUnderAUniformPor
   const int n = 36;
   const CsStudy s = cs_study(rig, CsTurn(n));
   EXPECT_TRUE(s.traced);
-  const SceneSpec sc = rig.source.traced->scene();
-  const double a = sc.port.radius(), zp = sc.port_plane_z(), h = rig.source.cos4.L_o, g = 0.5 * 1.3 / std::sqrt(3.0);
-  const double d = 0.55;
+  const double a = 50.0, h = 20.0, L_photo = 14.0, half = 0.65;  // port radius; L_o; ring; photodiode
+  const double L_S = 0.5, alpha_S = 70 * kPi / 180;
   const CalibrationParams& truth = rig.device.truth;
-  // log10(E_j/E_h) of pair i at a pose: closed-form films, or the disk view factor alone.
-  const auto log_ratio = [&](const Rig& rg, int i, double theta_R, bool films) {
-    const auto p = photodiode_positions(rg.device.ring, rg.eccentricity, theta_R);
-    const double theta = sensor_polarization_angle_deg(theta_R, 0.0);
-    double E[2];
+  const QuadratureRule radial = legendre_by_newton(40), square = legendre_by_newton(3);
+  const int azimuths = 128;
+  // The port integral at scene point (x, y), h below the port plane, through the films or bare.
+  const auto port_integral = [&](double x, double y, double analyzer, double efficiency, bool films) {
+    double e = 0;
+    for (std::size_t i = 0; i < radial.x.size(); ++i)
+      for (int j = 0; j < azimuths; ++j) {
+        const double rho = a * radial.x[i], phi = 2 * kPi * (j + 0.25) / azimuths;
+        const Eigen::Vector3d d(rho * std::cos(phi) - x, rho * std::sin(phi) - y, h);
+        const double r2 = d.squaredNorm();
+        const double T = films ? two_films(-d / std::sqrt(r2), 0.0, 0.62, 0.18, analyzer, 1.0, (1 - efficiency) / (1 + efficiency)) : 1.0;
+        e += radial.w[i] * a * rho * T * h * h / (r2 * r2);
+      }
+    return e * 2 * kPi / azimuths;
+  };
+  // log10(S_j/S_h) of pair i at table angle θ_R, for a sensor centre L (mm) off the axis.
+  const auto log_ratio = [&](int i, double theta_R_deg, double L, bool films) {
+    const double tR = theta_R_deg * kPi / 180;
+    double S[2];
     for (int c = 0; c < 2; ++c) {
       const int m = 2 * i + c;
-      const Point2 q = to_scene(p[static_cast<std::size_t>(m)] - port_centre(rg.eccentricity));
-      const double beta = (film_axis_from_alpha_deg(truth, m) - theta_R) * kPi / 180;
-      E[c] = 0;
-      for (int j = 0; j < 4; ++j) {
-        const Vec3 P{q.x() + ((j & 1) ? g : -g), q.y() + ((j & 2) ? g : -g), zp - h};
-        E[c] += 0.25 * (films ? film_pair_signal(P, a, zp, 0.0, beta, d, 1 + truth.kd[static_cast<std::size_t>(m)]) /
-                                    channel_response(truth, m, theta, d)
-                              : disk_irradiance(1.0, a, h, std::hypot(P[0], P[1])));
-      }
+      const double beta = -60.0 * m * kPi / 180;
+      const double x0 = L * std::cos(alpha_S) + L_photo * std::cos(beta), y0 = L * std::sin(alpha_S) + L_photo * std::sin(beta);
+      const double x = std::cos(tR) * x0 - std::sin(tR) * y0, y = std::sin(tR) * x0 + std::cos(tR) * y0;  // rig frame
+      const double axis_sensor = c == 0 ? -0.5 * truth.alpha_deg[static_cast<std::size_t>(m)] : 90 - 0.5 * truth.alpha_deg[static_cast<std::size_t>(m)];
+      const double analyzer = (axis_sensor - theta_R_deg) * kPi / 180, efficiency = 1 + truth.kd[static_cast<std::size_t>(m)];
+      S[c] = 0;
+      for (std::size_t u = 0; u < square.x.size(); ++u)
+        for (std::size_t v = 0; v < square.x.size(); ++v)
+          S[c] += square.w[u] * square.w[v] *
+                  port_integral(x + half * (2 * square.x[u] - 1), -(y + half * (2 * square.x[v] - 1)), analyzer, efficiency, films);
     }
-    return std::log10(E[0] / E[1]);
+    return std::log10(S[0] / S[1]);
   };
-  const Rig centred = coaxial(rig);
   for (int i = 0; i < 3; ++i) {
     std::vector<double> br(n), br_normal(n);
     for (int k = 0; k < n; ++k) {
-      const double theta_R = 360.0 * k / n, v = truth.kv[i] * 0.5 * 1e3;
-      br[static_cast<std::size_t>(k)] = v * (log_ratio(rig, i, theta_R, true) - log_ratio(centred, i, theta_R, true));
-      br_normal[static_cast<std::size_t>(k)] = v * (log_ratio(rig, i, theta_R, false) - log_ratio(centred, i, theta_R, false));
+      const double theta_R = 360.0 * k / n, v = truth.kv[static_cast<std::size_t>(i)] * 0.5 * 1e3;
+      br[static_cast<std::size_t>(k)] = v * (log_ratio(i, theta_R, L_S, true) - log_ratio(i, theta_R, 0, true));
+      br_normal[static_cast<std::size_t>(k)] = v * (log_ratio(i, theta_R, L_S, false) - log_ratio(i, theta_R, 0, false));
     }
     const MeanAndSpread expected = mean_and_population_sd(br), normal = mean_and_population_sd(br_normal);
-    const CsPairSummary& got = s.summary[i];
+    const CsPairSummary& got = s.summary[static_cast<std::size_t>(i)];
     EXPECT_NEAR(got.mean_br_mV, expected.mean, 5 * got.mean_br_se_mV + 1e-6) << "pair " << i + 1;
     EXPECT_NEAR(got.bsd_mV, expected.sd, 5 * got.bsd_se_mV + 1e-6) << "pair " << i + 1;
-    EXPECT_GT(std::abs(got.mean_br_mV - normal.mean), 5 * got.mean_br_se_mV) << "pair " << i + 1;
+    if (i == 0) EXPECT_NEAR(got.mean_br_mV / normal.mean - 1, 0.09, 0.005) << normal.mean;  // measured 9.03 %
   }
 }
 

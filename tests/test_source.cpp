@@ -313,6 +313,25 @@ SphereSolution uniform_wall(const SceneSpec& s, double L) {
   return sol;
 }
 
+// The irradiance below a uniform Lambertian disk (radiance L, radius a) at depth h and offset r,
+// written here, not taken from the code: π·L times the view factor from a plane element to a
+// parallel coaxial-offset disk (Howell's catalogue of configuration factors),
+// F = ½·[1 − (h² + r² − a²)/√((h² + r² + a²)² − 4a²r²)].
+double disk_view_irradiance(double L, double a, double h, double r) {
+  const double H2 = h * h + r * r;
+  return kPi * L * 0.5 * (1 - (H2 - a * a) / std::sqrt((H2 + a * a) * (H2 + a * a) - 4 * a * a * r * r));
+}
+
+TEST(PortIrradiance, TheDiskFormulaHasItsLimits) {
+  // On the axis the view factor is the textbook a²/(a² + h²); far off it the disk is a small
+  // source: πa²·L·h²/(h² + r²)² (cos θ·cos θ'/d²·area).
+  for (double h : {5.0, 20.0, 40.0}) {
+    EXPECT_NEAR(disk_view_irradiance(1, 50, h, 0), kPi * 2500 / (2500 + h * h), 1e-12);
+    const double r = 1e4;
+    EXPECT_NEAR(disk_view_irradiance(1, 50, h, r) / (kPi * 2500 * h * h / std::pow(h * h + r * r, 2)), 1.0, 1e-4);
+  }
+}
+
 TEST(PortIrradiance, MatchesTheExactDiskViewFactor) {
   // Uniform radiance L behind the port (its film passes g_up of it): E at height h, offset r, against
   // E = πL/2·[1 − (h² + r² − a²)/√((h² + r² + a²)² − 4a²r²)]. Quasi-random error from 8 shifts;
@@ -326,7 +345,7 @@ TEST(PortIrradiance, MatchesTheExactDiskViewFactor) {
   for (double h : {5.0, 20.0, 40.0}) {
     for (double r : {0.0, 10.0, 30.0, 49.0, 60.0, 90.0}) {
       const StokesIrradiance e = port.plane_stokes(r, 0.0, h, 4096, 8);
-      const double exact = g_up * disk_irradiance(L, s.port.radius(), h, r);
+      const double exact = g_up * disk_view_irradiance(L, s.port.radius(), h, r);
       EXPECT_NEAR(e.S0, exact, 5 * e.S0_se + 1e-9 * exact) << "h=" << h << " r=" << r;
       EXPECT_LT(e.S0_se, 1e-2 * exact + 1e-9) << "h=" << h << " r=" << r;  // resolves 1%
     }
@@ -478,7 +497,7 @@ TEST(PortIrradiance, SmallPortGivesCosineToTheFourth) {
   for (double r : {5.0, 10.0, 20.0, 30.0}) {
     const StokesIrradiance e = port.plane_stokes(r, 0, h, 4096, 8);
     const double cos4 = std::pow(h * h / (h * h + r * r), 2);
-    const double exact = disk_irradiance(1, a, h, r) / disk_irradiance(1, a, h, 0);
+    const double exact = disk_view_irradiance(1, a, h, r) / disk_view_irradiance(1, a, h, 0);
     EXPECT_LT(std::abs(exact / cos4 - 1), 2e-3) << "r=" << r;
     const double ratio = e.S0 / e0.S0;
     const double se = ratio * std::hypot(e.S0_se / e.S0, e0.S0_se / e0.S0);

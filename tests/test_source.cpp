@@ -292,8 +292,10 @@ TEST(SlowSphereSolve, TheFiniteLampsFirstStrikeIsTheHardShadowOutsideItsPenumbra
   // The JF-500 scene as it is, its 10 mm lamp: the hard shadow leaves out the penumbra, a band
   // where part of the lamp is hidden. Outside it (every point of a bin and its neighbours sees
   // all of the lamp or none), each bin's first strikes are Poisson about the computed term,
-  // as in DirectIrradianceMatchesTheTalliedFirstStrike. Inside it the miss is recorded
-  // (penumbra_chi2_per_bin); it is not the direct term's claim.
+  // as in DirectIrradianceMatchesTheTalliedFirstStrike. On this map that is the lit wall (the
+  // umbra lies in the port's bins and the penumbra's neighbours): the finite lamp's unshadowed
+  // term; the shadow itself is DirectIrradianceMatchesTheTalliedFirstStrike's. Inside the
+  // penumbra the miss is recorded (penumbra_*); it is not the direct term's claim.
   SceneSpec s = load_scene(POLRIG_SOURCE_DIR "/scenes/jf500.yaml");
   s.trace.photons = 1000000;
   s.trace.wall_bins_theta = 16;

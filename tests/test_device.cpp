@@ -6,6 +6,7 @@
 #include "polrig/calib/params.h"
 #include "polrig/device/electronics.h"
 #include "polrig/device/sensor.h"
+#include "polrig/random.h"
 
 namespace polrig {
 namespace {
@@ -102,7 +103,18 @@ TEST(Adc, QuantizationErrorIsAtMostHalfAnLsb) {
 }
 
 TEST(Noise, IsAPureFunctionOfItsCounters) {
-  EXPECT_EQ(standard_normal(1, 2, 3, 4), standard_normal(1, 2, 3, 4));
+  // Values from an implementation outside polrig (Python, integers mod 2⁶⁴) of random.h's
+  // algorithm: SplitMix64 (its mixer checked there against Vigna's published first output for
+  // state 1234567, 6457827717110365317), the counters mixed in order, a 53-bit uniform in (0, 1]
+  // and Box–Muller. Bit-identical results on every platform need exactly these numbers; libm's
+  // log and cos may differ in the last place, hence 1e-15 for the normal deviates.
+  EXPECT_EQ(uniform_unit(1, 2, 3, 4), 0.8345914937343463);
+  EXPECT_EQ(uniform_unit(20190806, 0, 0, 0), 0.6973096687204471);
+  EXPECT_EQ(uniform_unit(7, 123456, 2, 39), 0.12004825914324735);
+  EXPECT_NEAR(standard_normal(1, 2, 3, 4), -0.586190786834022, 1e-15);
+  EXPECT_NEAR(standard_normal(20190806, 0, 0, 0), 0.8491444661752259, 1e-15);
+  EXPECT_NEAR(standard_normal(7, 123456, 2, 39), -1.3157646201309343, 1e-15);
+  // Each counter matters.
   EXPECT_NE(standard_normal(1, 2, 3, 4), standard_normal(1, 2, 3, 5));
   EXPECT_NE(standard_normal(1, 2, 3, 4), standard_normal(1, 2, 4, 4));
   EXPECT_NE(standard_normal(1, 2, 3, 4), standard_normal(1, 3, 3, 4));

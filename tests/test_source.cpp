@@ -5,10 +5,12 @@
 
 #include <cmath>
 #include <numbers>
+#include <queue>
 #include <stdexcept>
 
 #include <tbb/global_control.h>
 
+#include "polrig/calib/angles.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/io/scene_yaml.h"
 #include "polrig/sim/simulate.h"
@@ -38,6 +40,12 @@ SceneSpec theory_sphere(long long photons) {
   return s;
 }
 
+// The theory sphere solved once with 400 000 photons, shared by the sphere-theory tests.
+const SphereSolution& theory_solution() {
+  static const SphereSolution sol = SphereTracer(theory_sphere(400000)).solve();
+  return sol;
+}
+
 // Port fraction of the sphere: cap area 2πRh over 4πR², h = R − √(R² − a²). From the centre the
 // cap subtends the same fraction of directions.
 double port_fraction(const SceneSpec& s) {
@@ -45,18 +53,67 @@ double port_fraction(const SceneSpec& s) {
   return (R - std::sqrt(R * R - a * a)) / (2 * R);
 }
 
+// The power crossing the port plane upwards-looking, ∫_port dA ∫_hemisphere L·cos θ dω, with L the
+// solution's radiance of the first surface seen from each port point: the flux that leaves
+// through the port. Gauss rules in area-uniform radius and in sin²θ (cos θ dω = ½ d(sin²θ) dφ),
+// trapezoid in the azimuths; the integrand is nearly uniform (an integrating sphere).
+double port_flux_W(const SphereTracer& tracer, const SphereSolution& sol) {
+  const SceneSpec& s = tracer.scene();
+  const double a = s.port.radius(), zp = s.port_plane_z();
+  const QuadratureRule rq = gauss_legendre_01(6), rv = gauss_legendre_01(32);
+  const int nq = 12, nd = 64;
+  double flux = 0;
+  for (std::size_t i = 0; i < rq.x.size(); ++i)
+    for (int j = 0; j < nq; ++j) {
+      const double rho = a * std::sqrt(rq.x[i]), phi = 2 * kPi * (j + 0.25) / nq;
+      const Vec3 Q{rho * std::cos(phi), rho * std::sin(phi), zp};
+      double E = 0;  // irradiance of the port plane at Q, from above
+      for (std::size_t k = 0; k < rv.x.size(); ++k)
+        for (int l = 0; l < nd; ++l) {
+          const double st = std::sqrt(rv.x[k]), ct = std::sqrt(1 - rv.x[k]), az = 2 * kPi * (l + 0.5) / nd;
+          const Vec3 up{st * std::cos(az), st * std::sin(az), ct};
+          E += rv.w[k] * tracer.radiance(sol, tracer.first_hit(Q, up, 0.0));
+        }
+      E *= 0.5 * 2 * kPi / nd;  // W/m²
+      flux += rq.w[i] * E * kPi * a * a * 1e-6 / nq;
+    }
+  return flux;
+}
+
 TEST(SphereSolve, EnergyBookkeepingClosesAndNothingLeaks) {
-  SceneSpec s;  // the default scene: lamp, baffle
+  // The power balance of the default scene (lamp, baffle). Each strike on the wall is absorbed
+  // with probability 1 − ρ, independently: the wall's absorbed photons are binomial in the
+  // photons that struck it, which the tallies count (Σ E·A / photon power). The same for the
+  // baffle. The photons that escaped are binomial in those launched, and their power must be
+  // the port integral of the solution's radiance (computed field, first strike, baffle faces),
+  // within the binomial error and the photon error of the field's constant C. 5 standard errors.
+  SceneSpec s;
   s.trace.photons = 200000;
-  const SphereSolution sol = SphereTracer(s).solve();
+  const SphereTracer tracer(s);
+  const SphereSolution sol = tracer.solve();
   const EnergyLedger& L = sol.ledger;
   EXPECT_EQ(L.launched, 200000);
-  EXPECT_EQ(L.ended(), L.launched);  // exact: every photon ends once
+  EXPECT_EQ(L.ended(), L.launched);
   EXPECT_EQ(L.leaked, 0);
-  EXPECT_GT(L.escaped, 0);
-  EXPECT_GT(L.absorbed_baffles, 0);
-  EXPECT_GT(L.absorbed_lamps, 0);
-  EXPECT_GT(L.rays, L.launched);
+  const double N = static_cast<double>(L.launched), photon_W = sol.power_W / N;
+
+  double wall_W = 0;
+  for (std::size_t b = 0; b < sol.wall.E.size(); ++b) wall_W += sol.wall.E[b] * sol.wall.wall_area_mm2[b] * 1e-6;
+  const double wall_strikes = wall_W / photon_W, rho = s.sphere.reflectance;
+  EXPECT_NEAR(static_cast<double>(L.absorbed_wall), (1 - rho) * wall_strikes,
+              5 * std::sqrt(wall_strikes * rho * (1 - rho)));
+  const BaffleSpec& bf = s.baffles[0];
+  const double baffle_strikes =
+      (sol.baffle_E[0][0] + sol.baffle_E[0][1]) * kPi * bf.radius * bf.radius * 1e-6 / photon_W;
+  EXPECT_NEAR(static_cast<double>(L.absorbed_baffles), (1 - bf.reflectance) * baffle_strikes,
+              5 * std::sqrt(baffle_strikes * bf.reflectance * (1 - bf.reflectance)));
+
+  const double p = static_cast<double>(L.escaped) / N, escaped_W = static_cast<double>(L.escaped) * photon_W;
+  const MeanAndSpread indirect = mean_and_standard_error(sol.batch_indirect_W);
+  const double flux = port_flux_W(tracer, sol);
+  const double se = std::hypot(std::sqrt(N * p * (1 - p)) * photon_W, flux * indirect.sd / indirect.mean);
+  EXPECT_NEAR(escaped_W, flux, 5 * se);
+  EXPECT_LT(se, 0.01 * flux);  // resolves 1 %
 }
 
 TEST(SphereSolve, EscapeFractionMatchesSphereTheory) {
@@ -64,7 +121,7 @@ TEST(SphereSolve, EscapeFractionMatchesSphereTheory) {
   // reflection (probability ρ) with probability f: P = f + (1 − f)·ρf/(1 − ρ(1 − f)).
   // Binomial standard error √(P(1 − P)/N); allow 5.
   const SceneSpec s = theory_sphere(400000);
-  const SphereSolution sol = SphereTracer(s).solve();
+  const SphereSolution& sol = theory_solution();
   const double f = port_fraction(s), rho = s.sphere.reflectance;
   const double P = f + (1 - f) * rho * f / (1 - rho * (1 - f));
   const double N = static_cast<double>(sol.ledger.launched);
@@ -75,7 +132,7 @@ TEST(SphereSolve, MeanWallIrradianceMatchesSphereTheory) {
   // Design: E = Φ·ρ/(A_s·(1 − ρ(1 − f))), first strike excluded, where Φ is the flux that first
   // strikes the wall: Φ(1 − f) for a lamp at the centre. Batch standard error; allow 5.
   const SceneSpec s = theory_sphere(400000);
-  const SphereSolution sol = SphereTracer(s).solve();
+  const SphereSolution& sol = theory_solution();
   const double R = s.sphere.radius(), f = port_fraction(s), rho = s.sphere.reflectance;
   const double A_s = 4 * kPi * R * R * 1e-6, A_wall = A_s * (1 - f);
   const double theory = 100.0 * (1 - f) * rho / (A_s * (1 - rho * (1 - f)));
@@ -98,22 +155,183 @@ TEST(SphereSolve, MeanWallIrradianceMatchesSphereTheory) {
   EXPECT_EQ(outliers, 0);
 }
 
-TEST(SphereSolve, DirectIrradianceMatchesTheTalliedFirstStrike) {
-  // The first strike is computed, not sampled: Φ/(4π)·cos θ/D². For a lamp at the centre it is
-  // Φ/(4πR²) everywhere; the tallied first-strike map must agree bin by bin within 5 standard
-  // errors.
-  const SceneSpec s = theory_sphere(400000);
-  const SphereTracer tracer(s);
-  const SphereSolution sol = tracer.solve();
-  const double R = s.sphere.radius(), expected = 100.0 / (4 * kPi * R * R) * 1e6;
-  EXPECT_NEAR(tracer.direct_irradiance({0, 0, R}), expected, 1e-9 * expected);
-  EXPECT_NEAR(tracer.direct_irradiance({R * 0.6, 0, -R * 0.8}), expected, 1e-9 * expected);
-  int outliers = 0;
-  for (std::size_t i = 0; i < sol.wall.E_first.size(); ++i) {
-    if (sol.wall.wall_area_mm2[i] < 0.5 * sol.wall.wall_area_mm2[0]) continue;
-    outliers += std::abs(sol.wall.E_first[i] - expected) > 5 * sol.wall.E_first_se[i];
+// The computed first strike averaged over each full bin of the wall map: a k × k midpoint rule
+// in cos θ and φ (the map's bins are uniform in both, so equal points are equal areas); 96 × 96
+// in the bins at a shadow's edge (a bin or a neighbour with both lit and dark points), where the
+// mean is that of a step.
+std::vector<double> direct_bin_means(const SphereTracer& tracer, const WallMap& w) {
+  const double R = tracer.scene().sphere.radius();
+  struct Bin {
+    double mean = -1;
+    bool lit = false, dark = false;
+  };
+  const auto average = [&](int it, int ip, int k) {
+    Bin r{0, false, false};
+    for (int i = 0; i < k; ++i)
+      for (int j = 0; j < k; ++j) {
+        const double mu = 1.0 - 2.0 * (it + (i + 0.5) / k) / w.n_theta;
+        const double phi = 2 * kPi * (ip + (j + 0.5) / k) / w.n_phi, st = std::sqrt(1 - mu * mu);
+        const double e = tracer.direct_irradiance({R * st * std::cos(phi), R * st * std::sin(phi), R * mu});
+        (e > 0 ? r.lit : r.dark) = true;
+        r.mean += e / (k * k);
+      }
+    return r;
+  };
+  std::vector<Bin> bins(w.E.size());
+  const auto full = [&](int it, int ip) {
+    return w.wall_area_mm2[static_cast<std::size_t>(w.bin(it, ip))] >= 0.999 * w.wall_area_mm2[0];
+  };
+  for (int it = 0; it < w.n_theta; ++it)
+    for (int ip = 0; ip < w.n_phi; ++ip)
+      if (full(it, ip)) bins[static_cast<std::size_t>(w.bin(it, ip))] = average(it, ip, 16);
+  std::vector<double> mean(w.E.size(), -1.0);
+  for (int it = 0; it < w.n_theta; ++it)
+    for (int ip = 0; ip < w.n_phi; ++ip) {
+      if (!full(it, ip)) continue;
+      bool lit = false, dark = false;
+      for (int di = -1; di <= 1; ++di)
+        for (int dj = -1; dj <= 1; ++dj) {
+          const int i = it + di, j = (ip + dj + w.n_phi) % w.n_phi;
+          if (i < 0 || i >= w.n_theta) continue;
+          lit |= bins[static_cast<std::size_t>(w.bin(i, j))].lit;
+          dark |= bins[static_cast<std::size_t>(w.bin(i, j))].dark;
+        }
+      const std::size_t b = static_cast<std::size_t>(w.bin(it, ip));
+      mean[b] = lit && dark ? average(it, ip, 96).mean : bins[b].mean;
+    }
+  return mean;
+}
+
+// Photon counts of the first strikes in each full bin, against the computed direct term's
+// expected counts (bin mean × area / photon power): Pearson's χ² with Poisson variances, and the
+// largest pull.
+struct FirstStrikeAgreement {
+  double chi2 = 0, max_pull = 0;
+  int bins = 0, lit = 0, dark = 0;
+};
+FirstStrikeAgreement first_strike_against_direct(const SphereTracer& tracer, const SphereSolution& sol) {
+  const std::vector<double> direct = direct_bin_means(tracer, sol.wall);
+  const double photon_W = sol.power_W / static_cast<double>(sol.ledger.launched);
+  FirstStrikeAgreement a;
+  for (std::size_t b = 0; b < direct.size(); ++b) {
+    if (direct[b] < 0) continue;  // a port-cut bin
+    const double area_m2 = sol.wall.wall_area_mm2[b] * 1e-6;
+    const double counted = std::round(sol.wall.E_first[b] * area_m2 / photon_W), expected = direct[b] * area_m2 / photon_W;
+    ++a.bins;
+    if (expected == 0) {  // in the shadow: no photon may arrive
+      ++a.dark;
+      a.max_pull = std::max(a.max_pull, counted > 0 ? 1e9 : 0.0);
+      continue;
+    }
+    ++a.lit;
+    const double pull = (counted - expected) / std::sqrt(expected);
+    a.chi2 += pull * pull;
+    a.max_pull = std::max(a.max_pull, std::abs(pull));
   }
-  EXPECT_EQ(outliers, 0);
+  return a;
+}
+
+TEST(SphereSolve, DirectIrradianceMatchesTheTalliedFirstStrike) {
+  // The JF-500 scene's off-axis lamp and baffle, the lamp made a point: the hard shadow is then
+  // the exact first strike, and each bin's count of first strikes is Poisson about the computed
+  // direct term's. χ²/bin must be 1 within 5 of its standard deviations √(2/bins), every pull
+  // below 5 (about 1e-4 of such maps would fail by chance), no photon in a bin the baffle hides
+  // entirely. The baffle's shadow must cover part of the map.
+  SceneSpec s = load_scene(POLRIG_SOURCE_DIR "/scenes/jf500.yaml");
+  s.lamps[0].radius = 0;
+  s.trace.photons = 1000000;
+  s.trace.wall_bins_theta = 16;
+  s.trace.wall_bins_phi = 32;
+  const SphereTracer tracer(s);
+  const SphereSolution sol = tracer.trace_photons();
+  const FirstStrikeAgreement a = first_strike_against_direct(tracer, sol);
+  EXPECT_NEAR(a.chi2 / a.lit, 1.0, 5 * std::sqrt(2.0 / a.lit)) << a.lit << " lit bins";
+  EXPECT_LT(a.max_pull, 5.0);
+  EXPECT_GE(a.dark, 10) << "the baffle's shadow";
+}
+
+// Bins (and their neighbours) where some point sees part of a finite lamp: the lamp's centre and
+// eight points of its outline as seen from the point (8 × 8 points per bin) do not agree.
+std::vector<bool> penumbra_bins(const SphereTracer& tracer, const WallMap& w) {
+  using namespace vec3;
+  const SceneSpec& sc = tracer.scene();
+  const double R = sc.sphere.radius();
+  std::vector<bool> partial(w.E.size(), false);
+  for (int it = 0; it < w.n_theta; ++it)
+    for (int ip = 0; ip < w.n_phi; ++ip)
+      for (int i = 0; i < 8 && !partial[static_cast<std::size_t>(w.bin(it, ip))]; ++i)
+        for (int j = 0; j < 8; ++j) {
+          const double mu = 1.0 - 2.0 * (it + (i + 0.5) / 8) / w.n_theta, phi = 2 * kPi * (ip + (j + 0.5) / 8) / w.n_phi;
+          const double st = std::sqrt(1 - mu * mu);
+          const Vec3 W{R * st * std::cos(phi), R * st * std::sin(phi), R * mu};
+          for (std::size_t l = 0; l < sc.lamps.size(); ++l) {
+            const LampSpec& lamp = sc.lamps[l];
+            const Vec3 to = sub(lamp.position, W);
+            const double D = norm(to), sb = lamp.radius / D, cb = std::sqrt(1 - sb * sb);
+            Vec3 t, b;
+            basis_around(mul(to, 1 / D), t, b);
+            int seen = 0;
+            for (int k = 0; k < 9; ++k) {
+              const double az = 2 * kPi * k / 8, s2 = k == 8 ? 0.0 : 0.999 * sb;
+              const Vec3 dir = unit(add(mul(to, cb / D), add(mul(t, s2 * std::cos(az)), mul(b, s2 * std::sin(az)))));
+              const SphereTracer::Hit h = tracer.first_hit(W, dir);
+              seen += h.kind == SphereTracer::Hit::Lamp && h.index == static_cast<int>(l);
+            }
+            if (seen != 0 && seen != 9) partial[static_cast<std::size_t>(w.bin(it, ip))] = true;
+          }
+        }
+  std::vector<bool> near(w.E.size(), false);
+  for (int it = 0; it < w.n_theta; ++it)
+    for (int ip = 0; ip < w.n_phi; ++ip)
+      for (int di = -1; di <= 1; ++di)
+        for (int dj = -1; dj <= 1; ++dj) {
+          const int i = it + di, j = (ip + dj + w.n_phi) % w.n_phi;
+          if (i >= 0 && i < w.n_theta && partial[static_cast<std::size_t>(w.bin(i, j))])
+            near[static_cast<std::size_t>(w.bin(it, ip))] = true;
+        }
+  return near;
+}
+
+TEST(SlowSphereSolve, TheFiniteLampsFirstStrikeIsTheHardShadowOutsideItsPenumbra) {
+  // The JF-500 scene as it is, its 10 mm lamp: the hard shadow leaves out the penumbra, a band
+  // where part of the lamp is hidden. Outside it (every point of a bin and its neighbours sees
+  // all of the lamp or none), each bin's first strikes are Poisson about the computed term,
+  // as in DirectIrradianceMatchesTheTalliedFirstStrike. On this map that is the lit wall (the
+  // umbra lies in the port's bins and the penumbra's neighbours): the finite lamp's unshadowed
+  // term; the shadow itself is DirectIrradianceMatchesTheTalliedFirstStrike's. Inside the
+  // penumbra the miss is recorded (penumbra_*); it is not the direct term's claim.
+  SceneSpec s = load_scene(POLRIG_SOURCE_DIR "/scenes/jf500.yaml");
+  s.trace.photons = 1000000;
+  s.trace.wall_bins_theta = 16;
+  s.trace.wall_bins_phi = 32;
+  const SphereTracer tracer(s);
+  const SphereSolution sol = tracer.trace_photons();
+  const std::vector<double> direct = direct_bin_means(tracer, sol.wall);
+  const std::vector<bool> penumbra = penumbra_bins(tracer, sol.wall);
+  const double photon_W = sol.power_W / static_cast<double>(sol.ledger.launched);
+  double chi2 = 0, max_pull = 0, chi2_pen = 0, worst_pen_Wm2 = 0;
+  int bins = 0, bins_pen = 0;
+  for (std::size_t b = 0; b < direct.size(); ++b) {
+    if (direct[b] < 0) continue;
+    const double area_m2 = sol.wall.wall_area_mm2[b] * 1e-6;
+    const double counted = std::round(sol.wall.E_first[b] * area_m2 / photon_W), expected = direct[b] * area_m2 / photon_W;
+    const double pull = (counted - expected) / std::sqrt(std::max(expected, 1.0));
+    if (penumbra[b]) {
+      chi2_pen += pull * pull;
+      ++bins_pen;
+      worst_pen_Wm2 = std::max(worst_pen_Wm2, std::abs(sol.wall.E_first[b] - direct[b]));
+      continue;
+    }
+    chi2 += pull * pull;
+    max_pull = std::max(max_pull, std::abs(pull));
+    ++bins;
+  }
+  RecordProperty("penumbra_bins", bins_pen);
+  RecordProperty("penumbra_chi2_per_bin", std::to_string(chi2_pen / std::max(bins_pen, 1)));
+  RecordProperty("penumbra_worst_miss_Wm2", std::to_string(worst_pen_Wm2));
+  EXPECT_NEAR(chi2 / bins, 1.0, 5 * std::sqrt(2.0 / bins)) << bins << " bins";
+  EXPECT_LT(max_pull, 5.0);
+  EXPECT_GT(bins, 200);  // most of the wall
 }
 
 // χ² of the photon map's light after the first strike against the computed field, over the
@@ -157,16 +375,20 @@ TEST(SlowWallField, TheComputedFieldMatchesThePhotonMap) {
 }
 
 TEST(WallField, WithoutOccludersItIsSphereTheorysConstant) {
-  // A point lamp and no baffles: nothing inside the sphere, so δ = 0 and C is the photon mean.
-  const SceneSpec s = theory_sphere(20000);
-  const SphereSolution sol = SphereTracer(s).solve();
-  double mean = 0;
-  for (double w : sol.batch_indirect_W) mean += w / static_cast<double>(sol.batch_indirect_W.size());
-  const double R = s.sphere.radius(), f = port_fraction(s);
-  mean /= 4 * kPi * R * R * 1e-6 * (1 - f);
-  EXPECT_NEAR(sol.field.C, mean, 1e-9 * mean);
-  for (const Vec3& p : {Vec3{0, 0, R}, Vec3{R, 0, 0}, Vec3{0, -R * 0.6, R * 0.8}})
-    EXPECT_NEAR(sol.field.after_first_strike(p), mean, 1e-9 * mean);
+  // A point lamp and no baffles: nothing inside the sphere, so the field is uniform, and its
+  // constant must be sphere theory's E = ρΦ(1 − f)/(A_s(1 − ρ(1 − f))) within the photon
+  // standard error of C (the spread of the batches' power after the first strike); allow 5.
+  const SceneSpec s = theory_sphere(400000);
+  const SphereSolution& sol = theory_solution();
+  const double R = s.sphere.radius(), f = port_fraction(s), rho = s.sphere.reflectance;
+  const double A_s = 4 * kPi * R * R * 1e-6;
+  const double theory = rho * 100.0 * (1 - f) / (A_s * (1 - rho * (1 - f)));
+  const MeanAndSpread batches = mean_and_standard_error(sol.batch_indirect_W);
+  const double se = theory * batches.sd / batches.mean;
+  EXPECT_NEAR(sol.field.C, theory, 5 * se);
+  EXPECT_LT(se, 0.01 * theory);  // resolves 1 %
+  for (const Vec3& p : {Vec3{0, 0, R}, Vec3{R, 0, 0}, Vec3{0, -R * 0.6, R * 0.8}, Vec3{0, R * 0.1, -R * 0.99}})
+    EXPECT_NEAR(sol.field.after_first_strike(p), theory, 5 * se);
 }
 
 // A solution whose wall has the same radiance L everywhere, to test the port integrals alone.
@@ -177,6 +399,25 @@ SphereSolution uniform_wall(const SceneSpec& s, double L) {
   const std::size_t n = static_cast<std::size_t>(sol.wall.n_theta * sol.wall.n_phi);
   sol.wall.E.assign(n, kPi * L / s.sphere.reflectance);
   return sol;
+}
+
+// The irradiance below a uniform Lambertian disk (radiance L, radius a) at depth h and offset r,
+// written here, not taken from the code: π·L times the view factor from a plane element to a
+// parallel coaxial-offset disk (Howell's catalogue of configuration factors),
+// F = ½·[1 − (h² + r² − a²)/√((h² + r² + a²)² − 4a²r²)].
+double disk_view_irradiance(double L, double a, double h, double r) {
+  const double H2 = h * h + r * r;
+  return kPi * L * 0.5 * (1 - (H2 - a * a) / std::sqrt((H2 + a * a) * (H2 + a * a) - 4 * a * a * r * r));
+}
+
+TEST(PortIrradiance, TheDiskFormulaHasItsLimits) {
+  // On the axis the view factor is the textbook a²/(a² + h²); far off it the disk is a small
+  // source: πa²·L·h²/(h² + r²)² (cos θ·cos θ'/d²·area).
+  for (double h : {5.0, 20.0, 40.0}) {
+    EXPECT_NEAR(disk_view_irradiance(1, 50, h, 0), kPi * 2500 / (2500 + h * h), 1e-12);
+    const double r = 1e4;
+    EXPECT_NEAR(disk_view_irradiance(1, 50, h, r) / (kPi * 2500 * h * h / std::pow(h * h + r * r, 2)), 1.0, 1e-4);
+  }
 }
 
 TEST(PortIrradiance, MatchesTheExactDiskViewFactor) {
@@ -192,29 +433,141 @@ TEST(PortIrradiance, MatchesTheExactDiskViewFactor) {
   for (double h : {5.0, 20.0, 40.0}) {
     for (double r : {0.0, 10.0, 30.0, 49.0, 60.0, 90.0}) {
       const StokesIrradiance e = port.plane_stokes(r, 0.0, h, 4096, 8);
-      const double exact = g_up * disk_irradiance(L, s.port.radius(), h, r);
+      const double exact = g_up * disk_view_irradiance(L, s.port.radius(), h, r);
       EXPECT_NEAR(e.S0, exact, 5 * e.S0_se + 1e-9 * exact) << "h=" << h << " r=" << r;
       EXPECT_LT(e.S0_se, 1e-2 * exact + 1e-9) << "h=" << h << " r=" << r;  // resolves 1%
     }
   }
 }
 
-TEST(PortIrradiance, TheFixedPortRuleIntegratesAUniformPortExactly) {
-  // With L_ref = L the uniform part carries everything (a Gauss rule over the port) and the
-  // sampled part nothing: the disk view factor to 1e-9, where the integrand is smooth.
-  const SceneSpec s = theory_sphere(1000);
-  const SphereTracer tracer(s);
-  const double L = 1000.0, a = s.port.radius(), zp = s.port_plane_z();
-  const SphereSolution sol = uniform_wall(s, L);
-  const TracedPort port(tracer, sol, L);
-  const RayTransmission one = [](const Vec3&) { return 1.0; };
-  for (double h : {10.0, 20.0, 40.0})
-    for (double r : {0.0, 14.0, 30.0}) {
-      const Vec3 P{r, 0, zp - h};
-      EXPECT_NEAR(port.uniform_part(P, one), disk_irradiance(L, a, h, r), 1e-9 * disk_irradiance(L, a, h, r)) << h << " " << r;
-      EXPECT_NEAR(port.sampled_part(P, one, 1024, 0), 0.0, 1e-9 * L);
-      EXPECT_EQ(port.occluder_part(P, one), 0.0);
+// A scene whose port sees a tilted baffle and a lamp, some points' view clipped by the port's
+// rim, over a wall whose light after the first strike varies (a hand-made field: C plus a smooth
+// δ) besides the lamp's first strike with the baffle's hard shadow.
+SceneSpec occluded_port_scene() {
+  SceneSpec s;
+  s.lamps = {LampSpec{{-60, 30, 0}, 15.0, 2.0, 0.5}};
+  s.baffles = {BaffleSpec{{20, 10, -100}, {0.3, 0.0, 1.0}, 30.0, 0.9}};
+  return s;
+}
+SphereSolution occluded_port_solution(const SceneSpec& s) {
+  SphereSolution sol;
+  WallField& f = sol.field;
+  f.C = 3000;
+  f.R = s.sphere.radius();
+  f.n_theta = 91;
+  f.n_phi = 180;
+  for (int i = 0; i < f.n_theta; ++i)
+    for (int j = 0; j < f.n_phi; ++j) {
+      const double th = kPi * i / (f.n_theta - 1), ph = 2 * kPi * j / f.n_phi;
+      f.delta.push_back(400 * std::cos(th) + 300 * std::sin(th) * std::cos(ph - 0.5) +
+                        200 * std::sin(th) * std::sin(th) * std::cos(2 * ph));
     }
+  sol.baffle_E = {{2000.0, 1500.0}};
+  return sol;
+}
+
+// ∫_port L(first surface seen from P through Q)·T·cos θ_P cos θ_Q/|Q − P|² dA_Q by global adaptive
+// cubature written here: cells in (ρ, φ), each estimated by 3 × 3 Gauss points, starting from a
+// 48 × 128 grid whose points are closer than any occluder's image on the port. A cell
+// whose points all see the same surface has the error |3 × 3 − 2 × 2 Gauss|; one whose points
+// see different surfaces (an outline or a shadow's edge crosses it) has (max − min)·area, a
+// bound. The cell with
+// the largest error is split in four until the errors sum to less than `tolerance`; the sum is
+// returned in `error`. Rays start at P.
+double adaptive_port_integral(const SphereTracer& tracer, const SphereSolution& sol, const Vec3& P,
+                              const RayTransmission& T, double tolerance, double& error) {
+  const double a = tracer.scene().port.radius(), zp = tracer.scene().port_plane_z();
+  struct Sample {
+    double value;
+    int surface;
+  };
+  const auto F = [&](double rho, double phi) {
+    const Vec3 d{rho * std::cos(phi) - P[0], rho * std::sin(phi) - P[1], zp - P[2]};
+    const double r2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2], r = std::sqrt(r2);
+    const Vec3 up{d[0] / r, d[1] / r, d[2] / r};
+    const SphereTracer::Hit h = tracer.first_hit(P, up);
+    const double L = tracer.radiance(sol, h);
+    // dA = ρ dρ dφ
+    // A wall point in a shadow is a surface of its own: the first strike jumps at its edge.
+    const bool shadow = h.kind == SphereTracer::Hit::Wall && tracer.direct_irradiance(h.point) == 0;
+    return Sample{L * T({-up[0], -up[1], -up[2]}) * d[2] * d[2] / (r2 * r2) * rho, 16 * h.kind + h.index + 8 * shadow};
+  };
+  struct Cell {
+    double s0, s1, p0, p1, value, error;
+    bool operator<(const Cell& o) const { return error < o.error; }
+  };
+  const double g2 = 0.5 / std::sqrt(3.0), g3 = 0.5 * std::sqrt(0.6);
+  const auto estimate = [&](double s0, double s1, double p0, double p1) {
+    const double cs = 0.5 * (s0 + s1), cp = 0.5 * (p0 + p1), ds = s1 - s0, dp = p1 - p0;
+    double two = 0, three = 0, lo = 1e300, hi = -1e300;
+    bool mixed = false;
+    int surface = -1;
+    const auto add = [&](double& sum, double w, double u, double v) {
+      const Sample f = F(cs + u * ds, cp + v * dp);
+      sum += w * f.value;
+      lo = std::min(lo, f.value);
+      hi = std::max(hi, f.value);
+      mixed |= surface >= 0 && f.surface != surface;
+      surface = f.surface;
+    };
+    for (double u : {-g2, g2})
+      for (double v : {-g2, g2}) add(two, 0.25, u, v);
+    const double x3[3] = {-g3, 0, g3}, w3[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) add(three, w3[i] * w3[j], x3[i], x3[j]);
+    return Cell{s0, s1, p0, p1, three * ds * dp, (mixed ? hi - lo : std::abs(three - two)) * ds * dp};
+  };
+  std::priority_queue<Cell> cells;
+  double value = 0;
+  error = 0;
+  for (int i = 0; i < 48; ++i)
+    for (int j = 0; j < 128; ++j) {
+      const Cell c = estimate(a * i / 48, a * (i + 1) / 48, 2 * kPi * j / 128, 2 * kPi * (j + 1) / 128);
+      value += c.value;
+      error += c.error;
+      cells.push(c);
+    }
+  while (error > tolerance && cells.size() < 1000000) {
+    const Cell c = cells.top();
+    cells.pop();
+    value -= c.value;
+    error -= c.error;
+    const double sm = 0.5 * (c.s0 + c.s1), pm = 0.5 * (c.p0 + c.p1);
+    for (const Cell& q : {estimate(c.s0, sm, c.p0, pm), estimate(sm, c.s1, c.p0, pm), estimate(c.s0, sm, pm, c.p1),
+                          estimate(sm, c.s1, pm, c.p1)}) {
+      value += q.value;
+      error += q.error;
+      cells.push(q);
+    }
+  }
+  return value;
+}
+
+TEST(PortIrradiance, ItsSplitMatchesAnAdaptiveIntegralPastOccluders) {
+  // TracedPort splits the port integral into a fixed rule for a uniform L_ref, quasi-random
+  // points for the wall's rest and fixed rules over each occluder. Here the port sees a baffle
+  // and a lamp (clipped by the rim for some points), a non-uniform wall and the baffle's hard
+  // shadow, through a direction-dependent transmission: at each point the sum must equal an
+  // adaptive cubature of the whole integrand written here, within 5 of the shifts' standard
+  // errors plus 5 times the cubature's error estimate (an outline's sliver between a cell's
+  // points escapes the estimate: tightened tenfold, the cubature moved by up to 2.6 estimates),
+  // with L_ref = 0 or near the port's mean. The occluders must matter: their part is over 2 %
+  // of E at the port's centre.
+  const SceneSpec s = occluded_port_scene();
+  const SphereTracer tracer(s);
+  const SphereSolution sol = occluded_port_solution(s);
+  const RayTransmission T = [](const Vec3& k) { return 0.7 + 0.2 * k[0] - 0.1 * k[1] * k[1]; };
+  const TracedPort plain(tracer, sol), controlled(tracer, sol, 950.0);
+  const Vec3 centre{0, 0, s.port_plane_z() - 20};
+  EXPECT_LT(plain.occluder_part(centre, T), -0.02 * plain.irradiance(0, 0, 20, T, 1024, 1)[0]);
+  for (const auto& [x, y, h] : {std::array<double, 3>{0, 0, 20}, {35, -10, 20}, {-45, 20, 20}, {70, 0, 40}, {10, 60, 10}}) {
+    double error = 0;
+    const double ref = adaptive_port_integral(tracer, sol, {x, y, s.port_plane_z() - h}, T, 1e-5 * 3000, error);
+    for (const TracedPort* port : {&plain, &controlled}) {
+      const MeanAndSpread e = mean_and_standard_error(port->irradiance(x, y, h, T, 4096, 8));
+      EXPECT_NEAR(e.mean, ref, 5 * e.sd + 5 * error) << x << " " << y << " " << h;
+    }
+  }
 }
 
 TEST(PortIrradiance, SmallPortGivesCosineToTheFourth) {
@@ -232,7 +585,7 @@ TEST(PortIrradiance, SmallPortGivesCosineToTheFourth) {
   for (double r : {5.0, 10.0, 20.0, 30.0}) {
     const StokesIrradiance e = port.plane_stokes(r, 0, h, 4096, 8);
     const double cos4 = std::pow(h * h / (h * h + r * r), 2);
-    const double exact = disk_irradiance(1, a, h, r) / disk_irradiance(1, a, h, 0);
+    const double exact = disk_view_irradiance(1, a, h, r) / disk_view_irradiance(1, a, h, 0);
     EXPECT_LT(std::abs(exact / cos4 - 1), 2e-3) << "r=" << r;
     const double ratio = e.S0 / e0.S0;
     const double se = ratio * std::hypot(e.S0_se / e.S0, e0.S0_se / e0.S0);
@@ -413,37 +766,58 @@ std::string write_theory_scene(const test::TempDir& dir) {
   return path;
 }
 
-// The signal of an O-type film pair on a bare photodiode at P under a uniform port of radiance
-// 1, by a closed form independent of the Mueller code: unpolarized light through films with
-// unpolarized gains g₁, g₂ and efficiencies d₁, d₂ passes g₁g₂·[1 + d₁d₂·cos 2χ], χ the angle
-// between their transmitted fields e ∝ k × m (m = z × axis, the absorption axis), divided by
-// g₁g₂; integrated by a Gauss rule over the port (polar, area-uniform radius).
-double film_pair_signal(const Vec3& P, double a, double zp, double psi, double beta, double d1, double d2) {
-  static const QuadratureRule rule = gauss_legendre_01(48);
-  const auto e_of = [](const Eigen::Vector3d& k, double axis) {
-    const Eigen::Vector3d m = Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(std::cos(axis), std::sin(axis), 0));
-    return k.cross(m).normalized();
-  };
-  const int azimuths = 96;
-  double e = 0;
-  for (std::size_t i = 0; i < rule.x.size(); ++i)
-    for (int j = 0; j < azimuths; ++j) {
-      const double w = rule.w[i], rho = a * std::sqrt(rule.x[i]), phi = 2 * kPi * (j + 0.5) / azimuths;
-      const Eigen::Vector3d d(rho * std::cos(phi) - P[0], rho * std::sin(phi) - P[1], zp - P[2]);
-      const Eigen::Vector3d k = -d.normalized();
-      const double c = e_of(k, psi).dot(e_of(k, beta));
-      e += w * (1 + d1 * d2 * (2 * c * c - 1)) * d.z() * d.z() / std::pow(d.squaredNorm(), 2);
+// n-point Gauss–Legendre nodes and weights on [0, 1], by Newton's iteration on P_n (the
+// textbook route, apart from the code's Golub–Welsch rule).
+QuadratureRule legendre_by_newton(int n) {
+  QuadratureRule r;
+  for (int i = 1; i <= n; ++i) {
+    double x = std::cos(kPi * (i - 0.25) / (n + 0.5)), dp = 0;
+    for (int it = 0; it < 100; ++it) {
+      double p0 = 1, p1 = x;
+      for (int k = 2; k <= n; ++k) {
+        const double p2 = ((2 * k - 1) * x * p1 - (k - 1) * p0) / k;
+        p0 = p1;
+        p1 = p2;
+      }
+      dp = n * (x * p1 - p0) / (x * x - 1);
+      const double dx = p1 / dp;
+      x -= dx;
+      if (std::abs(dx) < 1e-16) break;
     }
-  return e * 0.5 * a * a * 2 * kPi / azimuths;
+    r.x.push_back(0.5 * (1 - x));
+    r.w.push_back(1.0 / ((1 - x * x) * dp * dp));
+  }
+  return r;
+}
+
+// What unpolarized light of unit radiance, travelling along k, passes through two O-type sheet
+// films lying in the horizontal plane, by Jones vectors in 3-D: each film keeps √τ_M of the
+// field along e_t = unit(k × m) (m = z × axis, the absorbed direction) and √τ_m along k × e_t;
+// unpolarized light is the mean of two orthogonal fields. Divided by the films' gains for
+// unpolarized light. (No Mueller matrix, no code helper.)
+double two_films(const Eigen::Vector3d& k, double axis1, double tM1, double tm1, double axis2, double tM2, double tm2) {
+  const auto film = [&k](const Eigen::Vector3d& E, double axis, double tM, double tm) {
+    const Eigen::Vector3d m = Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(std::cos(axis), std::sin(axis), 0));
+    const Eigen::Vector3d et = k.cross(m).normalized(), ea = k.cross(et);
+    return Eigen::Vector3d(std::sqrt(tM) * E.dot(et) * et + std::sqrt(tm) * E.dot(ea) * ea);
+  };
+  const Eigen::Vector3d u = k.cross(Eigen::Vector3d::UnitX()).normalized(), v = k.cross(u);
+  double I = 0;
+  for (const Eigen::Vector3d& E : {u, v}) I += 0.5 * film(film(E, axis1, tM1, tm1), axis2, tM2, tm2).squaredNorm();
+  return I / (0.25 * (tM1 + tm1) * (tM2 + tm2));
 }
 
 TEST(SlowTracedRig, BareChannelsFollowTheFilmsAtObliqueIncidenceUnderAUniformPort) {
   // A lamp at the centre and no baffle: the port is a uniform disk. The sensor is off by L_S, the
-  // port centred. Every ΔV_br is kv·v_dec·log10 of the ratio of the pair's effective
-  // irradiances, signal/bracket, with the signal of film_pair_signal over the photodiode
-  // (2 × 2 Gauss points, as the source does): the traced study's mean and spread of ΔV_br must
-  // match within 5 standard errors. The obliquity matters: normal-incidence films (the bracket
-  // times the disk view factor) miss by far more.
+  // port centred. ΔV_br of pair i at a pose is kv_i·v_dec·log10 of the ratio of its channels'
+  // signals, less the same for the coaxial rig (the normal-incidence bracket cancels). The
+  // reference is built here from docs/physics.md alone: photodiode positions (§1), the film
+  // axes from α (§3), the scene's mirror and the films turned by −θ_R (§7), Jones vectors for
+  // the films, its own quadrature (Gauss–Legendre in ρ by Newton × 128 azimuths over the port,
+  // 3 × 3 Gauss points over the photodiode). The traced study's mean and spread of ΔV_br must
+  // match within 5 standard errors (measured: within 3.7). Normal-incidence films (the disk's
+  // irradiance alone) would miss the traced mean of pair 1 by 9 % of theirs (docs/validation.md;
+  // measured 9.03 %): that number within its rounding, ±0.5 %.
   const test::TempDir dir("polrig_test_traced_");
   const std::string scene = write_theory_scene(dir);
   LoadedRig r = parse_rig("source:\n  model: traced\n  scene: " + scene +
@@ -454,42 +828,55 @@ TEST(SlowTracedRig, BareChannelsFollowTheFilmsAtObliqueIncidenceUnderAUniformPor
   const int n = 36;
   const CsStudy s = cs_study(rig, CsTurn(n));
   EXPECT_TRUE(s.traced);
-  const SceneSpec sc = rig.source.traced->scene();
-  const double a = sc.port.radius(), zp = sc.port_plane_z(), h = rig.source.cos4.L_o, g = 0.5 * 1.3 / std::sqrt(3.0);
-  const double d = 0.55;
+  const double a = 50.0, h = 20.0, L_photo = 14.0, half = 0.65;  // port radius; L_o; ring; photodiode
+  const double L_S = 0.5, alpha_S = 70 * kPi / 180;
   const CalibrationParams& truth = rig.device.truth;
-  // log10(E_j/E_h) of pair i at a pose: closed-form films, or the disk view factor alone.
-  const auto log_ratio = [&](const Rig& rg, int i, double theta_R, bool films) {
-    const auto p = photodiode_positions(rg.device.ring, rg.eccentricity, theta_R);
-    const double theta = sensor_polarization_angle_deg(theta_R, 0.0);
-    double E[2];
+  const QuadratureRule radial = legendre_by_newton(40), square = legendre_by_newton(3);
+  const int azimuths = 128;
+  // The port integral at scene point (x, y), h below the port plane, through the films or bare.
+  const auto port_integral = [&](double x, double y, double analyzer, double efficiency, bool films) {
+    double e = 0;
+    for (std::size_t i = 0; i < radial.x.size(); ++i)
+      for (int j = 0; j < azimuths; ++j) {
+        const double rho = a * radial.x[i], phi = 2 * kPi * (j + 0.25) / azimuths;
+        const Eigen::Vector3d d(rho * std::cos(phi) - x, rho * std::sin(phi) - y, h);
+        const double r2 = d.squaredNorm();
+        const double T = films ? two_films(-d / std::sqrt(r2), 0.0, 0.62, 0.18, analyzer, 1.0, (1 - efficiency) / (1 + efficiency)) : 1.0;
+        e += radial.w[i] * a * rho * T * h * h / (r2 * r2);
+      }
+    return e * 2 * kPi / azimuths;
+  };
+  // log10(S_j/S_h) of pair i at table angle θ_R, for a sensor centre L (mm) off the axis.
+  const auto log_ratio = [&](int i, double theta_R_deg, double L, bool films) {
+    const double tR = theta_R_deg * kPi / 180;
+    double S[2];
     for (int c = 0; c < 2; ++c) {
       const int m = 2 * i + c;
-      const Point2 q = to_scene(p[static_cast<std::size_t>(m)] - port_centre(rg.eccentricity));
-      const double beta = (film_axis_from_alpha_deg(truth, m) - theta_R) * kPi / 180;
-      E[c] = 0;
-      for (int j = 0; j < 4; ++j) {
-        const Vec3 P{q.x() + ((j & 1) ? g : -g), q.y() + ((j & 2) ? g : -g), zp - h};
-        E[c] += 0.25 * (films ? film_pair_signal(P, a, zp, 0.0, beta, d, 1 + truth.kd[static_cast<std::size_t>(m)]) /
-                                    channel_response(truth, m, theta, d)
-                              : disk_irradiance(1.0, a, h, std::hypot(P[0], P[1])));
-      }
+      const double beta = -60.0 * m * kPi / 180;
+      const double x0 = L * std::cos(alpha_S) + L_photo * std::cos(beta), y0 = L * std::sin(alpha_S) + L_photo * std::sin(beta);
+      const double x = std::cos(tR) * x0 - std::sin(tR) * y0, y = std::sin(tR) * x0 + std::cos(tR) * y0;  // rig frame
+      const double axis_sensor = c == 0 ? -0.5 * truth.alpha_deg[static_cast<std::size_t>(m)] : 90 - 0.5 * truth.alpha_deg[static_cast<std::size_t>(m)];
+      const double analyzer = (axis_sensor - theta_R_deg) * kPi / 180, efficiency = 1 + truth.kd[static_cast<std::size_t>(m)];
+      S[c] = 0;
+      for (std::size_t u = 0; u < square.x.size(); ++u)
+        for (std::size_t v = 0; v < square.x.size(); ++v)
+          S[c] += square.w[u] * square.w[v] *
+                  port_integral(x + half * (2 * square.x[u] - 1), -(y + half * (2 * square.x[v] - 1)), analyzer, efficiency, films);
     }
-    return std::log10(E[0] / E[1]);
+    return std::log10(S[0] / S[1]);
   };
-  const Rig centred = coaxial(rig);
   for (int i = 0; i < 3; ++i) {
     std::vector<double> br(n), br_normal(n);
     for (int k = 0; k < n; ++k) {
-      const double theta_R = 360.0 * k / n, v = truth.kv[i] * 0.5 * 1e3;
-      br[static_cast<std::size_t>(k)] = v * (log_ratio(rig, i, theta_R, true) - log_ratio(centred, i, theta_R, true));
-      br_normal[static_cast<std::size_t>(k)] = v * (log_ratio(rig, i, theta_R, false) - log_ratio(centred, i, theta_R, false));
+      const double theta_R = 360.0 * k / n, v = truth.kv[static_cast<std::size_t>(i)] * 0.5 * 1e3;
+      br[static_cast<std::size_t>(k)] = v * (log_ratio(i, theta_R, L_S, true) - log_ratio(i, theta_R, 0, true));
+      br_normal[static_cast<std::size_t>(k)] = v * (log_ratio(i, theta_R, L_S, false) - log_ratio(i, theta_R, 0, false));
     }
     const MeanAndSpread expected = mean_and_population_sd(br), normal = mean_and_population_sd(br_normal);
-    const CsPairSummary& got = s.summary[i];
+    const CsPairSummary& got = s.summary[static_cast<std::size_t>(i)];
     EXPECT_NEAR(got.mean_br_mV, expected.mean, 5 * got.mean_br_se_mV + 1e-6) << "pair " << i + 1;
     EXPECT_NEAR(got.bsd_mV, expected.sd, 5 * got.bsd_se_mV + 1e-6) << "pair " << i + 1;
-    EXPECT_GT(std::abs(got.mean_br_mV - normal.mean), 5 * got.mean_br_se_mV) << "pair " << i + 1;
+    if (i == 0) EXPECT_NEAR(got.mean_br_mV / normal.mean - 1, 0.09, 0.005) << normal.mean;  // measured 9.03 %
   }
 }
 
@@ -508,20 +895,63 @@ TEST(TracedRig, SimulateRunsWithTheFilmsPolarization) {
   EXPECT_EQ(r.rig.device.d, sim.stops[0].light.d);  // the rig's d is the film's
 }
 
+// Eq. 15's pair voltages for light at θ (sensor frame) of degree d, written out from
+// docs/physics.md §3 with the device's parameters and equal irradiances.
+std::array<double, 3> equation15_volts(const CalibrationParams& p, double theta_deg, double d) {
+  std::array<double, 3> V{};
+  for (int i = 0; i < 3; ++i) {
+    const std::size_t j = static_cast<std::size_t>(2 * i), h = j + 1;
+    const double num = 1 + (1 + p.kd[j]) * d * std::cos((2 * theta_deg + p.alpha_deg[j]) * kPi / 180);
+    const double den = 1 - (1 + p.kd[h]) * d * std::cos((2 * theta_deg + p.alpha_deg[h]) * kPi / 180);
+    V[static_cast<std::size_t>(i)] = p.kv[static_cast<std::size_t>(i)] * 0.5 * std::log10(num / den) + p.k_mV[static_cast<std::size_t>(i)] * 1e-3;
+  }
+  return V;
+}
+
 TEST(TracedRig, SceneAnglesAreMirroredIntoTheRigFrame) {
-  // The scene is seen from above, the rig from below: a port film at +30° in the scene is at
-  // −30° in the rig frame, so the sensor sees θ = θ_R + 30°.
+  // The traced signal, not the formula: a 1 mm port, photodiodes 0.3 mm from the axis, a coaxial
+  // rig, the port film at 0°, +30° and −30° in the scene. The scene is seen from above, the rig
+  // from below, so a film at ψ in the scene is at ψ_P = −ψ in the rig frame and the sensor sees
+  // θ = θ_R − ψ_P = θ_R + ψ (docs/physics.md §1, §7). The traced voltages (made of the traced
+  // channel signals alone: the effective irradiance's bracket cancels in Eq. 15) must be Eq. 15
+  // at that θ, and the angle the sensor reads from them must be that θ. Rays reach the
+  // photodiodes at most t = 0.8/20 rad off the normal: the films' oblique corrections are O(t²)
+  // of the bracket, below kv·v_dec/ln10·2t²·(1 + d)/(1 − d) ≈ 2.4 mV in a pair voltage and t² rad in the
+  // angle (measured: 35 µV, 0.003°). A wrong frame sign (θ = θ_R − ψ) misses by 380–420 mV.
   const test::TempDir dir("polrig_test_traced_");
-  const std::string path = (dir.path() / "film30.yaml").string();
-  test::write_file(path,
-                   "port: {polarizer: {axis_deg: 30, tau_M: 0.62, tau_m: 0.18}}\n"
-                   "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\nbaffles: []\n"
-                   "trace: {photons: 20000, plane_samples: 64}\n");
-  LoadedRig r = parse_rig("source: {model: traced, scene: " + path +
-                              "}\nschedule: {angles_deg: [0, 100]}\n", "inline");
-  const Simulation sim = simulate(r.rig);
-  EXPECT_NEAR(sim.stops[0].light.theta_deg, 30.0, 1e-12);
-  EXPECT_NEAR(sim.stops[1].light.theta_deg, 130.0, 1e-12);
+  for (double psi : {0.0, 30.0, -30.0}) {
+    const std::string path = (dir.path() / "film.yaml").string();
+    test::write_file(path, "port: {diameter: 1, polarizer: {axis_deg: " + std::to_string(psi) +
+                               ", tau_M: 0.62, tau_m: 0.18}}\n"
+                               "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\nbaffles: []\n"
+                               "sensor: {photodiode_size: 0.2}\n"
+                               "trace: {photons: 20000, plane_samples: 64}\n");
+    LoadedRig r = parse_rig("source: {model: traced, scene: " + path +
+                                "}\ndevice: {L_photo: 0.3}\neccentricity: {L_IS: 0, L_S: 0}\n"
+                                "schedule: {angles_deg: [0, 25, 100, 155]}\n",
+                            "inline");
+    const Simulation sim = simulate(r.rig);
+    const CalibrationParams& truth = r.rig.device.truth;
+    const double t = 0.8 / 20, d = 0.55;  // the port's radius + photodiode's reach, over L_o
+    double bound = 0;
+    for (double kv : truth.kv) bound = std::max(bound, kv * 0.5 / std::log(10.0) * 2 * t * t * (1 + d) / (1 - d));
+    for (const Stop& stop : sim.stops) {
+      const double theta = stop.theta_R_deg + psi;
+      EXPECT_NEAR(std::remainder(stop.light.theta_deg - theta, 180.0), 0.0, 1e-9) << "ψ=" << psi;
+      const std::array<double, 3> V = equation15_volts(truth, theta, d);
+      const std::array<double, 3> V_flipped = equation15_volts(truth, stop.theta_R_deg - psi, d);
+      double flipped_miss = 0;
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_NEAR(stop.V_ecc[static_cast<std::size_t>(i)], V[static_cast<std::size_t>(i)], bound)
+            << "ψ=" << psi << " θ_R=" << stop.theta_R_deg << " pair " << i + 1;
+        flipped_miss = std::max(flipped_miss, std::abs(stop.V_ecc[static_cast<std::size_t>(i)] - V_flipped[static_cast<std::size_t>(i)]));
+      }
+      if (psi != 0) EXPECT_GT(flipped_miss, 0.1) << "ψ=" << psi << " θ_R=" << stop.theta_R_deg;
+      const SensorAngles read = sensor_angles(truth, r.rig.electronics, stop.V_ecc);
+      EXPECT_NEAR(std::remainder(read.theta_sec_deg - theta, 180.0), 0.0, t * t * 180 / kPi)
+          << "ψ=" << psi << " θ_R=" << stop.theta_R_deg;
+    }
+  }
 }
 
 TEST(TracedRig, ItsEffectiveRigLoadsBack) {

@@ -404,6 +404,32 @@ TEST_F(Cli, FailureAfterStagingLeavesNothing) {
   EXPECT_TRUE(leftovers(tmp, "keep").empty());
 }
 
+TEST_F(Cli, BadOutputNamesGetClearMessagesAndLeaveNothing) {
+  const std::string cmd = "study adc --no-plots -o ";
+  Result r = polrig(cmd + "''");
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "polrig: error: -o/--out '': expected the output folder's name");
+  EXPECT_LACKS(r.err, "filesystem error");
+
+  fs::create_symlink(tmp / "missing-target", tmp / "dangling");
+  r = polrig(cmd + dir_arg(tmp / "dangling"));
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "-o/--out " + (tmp / "dangling").string() + ": ");
+  EXPECT_HAS(r.err, "the output folder exists (a symbolic link to '" +
+                        (tmp / "missing-target").string() + "', which does not exist)");
+  EXPECT_LACKS(r.err, "filesystem error");
+  EXPECT_TRUE(fs::is_symlink(tmp / "dangling"));
+  EXPECT_TRUE(leftovers(tmp, "dangling").empty());
+
+  // 245 bytes: a legal folder name whose staging folder name is too long. The parents it
+  // would need are not created.
+  const fs::path out = tmp / "new" / "deeper" / std::string(245, 'n');
+  r = polrig(cmd + dir_arg(out));
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "the folder name is 245 bytes long; at most");
+  EXPECT_FALSE(fs::exists(tmp / "new")) << "a parent folder was left behind";
+}
+
 TEST_F(Cli, ExistingOutputFolderNeedsForce) {
   const fs::path out = tmp / "existing";
   fs::create_directories(out / "sub");

@@ -430,6 +430,24 @@ TEST_F(Cli, BadOutputNamesGetClearMessagesAndLeaveNothing) {
   EXPECT_FALSE(fs::exists(tmp / "new")) << "a parent folder was left behind";
 }
 
+TEST_F(Cli, AnInterruptedRunLeavesNothing) {
+  // Ctrl-C (SIGINT) or a kill (SIGTERM) during a long sweep: the staging folder and the parent
+  // folders polrig created are removed, and the process ends by the signal.
+  for (const char* sig : {"INT", "TERM"}) {
+    SCOPED_TRACE(sig);
+    const fs::path parent = tmp / "made" / "for";
+    const std::string script =
+        kPolrigExe + " sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0:1:1000000 -o " +
+        shell_quote(parent / "out") + " --no-plots 2>/dev/null & pid=$!; "
+        "for i in $(seq 200); do ls -a " + shell_quote(parent) + " 2>/dev/null | grep -q partial && break; "
+        "sleep 0.05; done; kill -" + sig + " $pid; wait $pid; exit $?";
+    const int rc = std::system(("sh -c " + shell_quote(script)).c_str());
+    ASSERT_TRUE(WIFEXITED(rc));
+    EXPECT_GT(WEXITSTATUS(rc), 128) << "polrig did not end by the signal";
+    EXPECT_FALSE(fs::exists(tmp / "made")) << "the staging folder or its parents were left behind";
+  }
+}
+
 TEST_F(Cli, ExistingOutputFolderNeedsForce) {
   const fs::path out = tmp / "existing";
   fs::create_directories(out / "sub");

@@ -2,13 +2,18 @@
 
 #include <fcntl.h>
 #include <limits.h>
+#include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <mutex>
+#include <set>
 #include <stdexcept>
+#include <thread>
 
 #include <fmt/format.h>
 
@@ -24,6 +29,17 @@ int rename_exchange(const fs::path& a, const fs::path& b) noexcept {
 }
 
 namespace {
+
+// The folders a signal must clean up. The lock is held while a folder is created, committed or
+// removed, so the signal thread never sees one half made.
+std::mutex& open_dirs_mutex() {
+  static std::mutex m;
+  return m;
+}
+std::set<OutputDir*>& open_dirs() {
+  static std::set<OutputDir*> dirs;
+  return dirs;
+}
 
 std::runtime_error error(const fs::path& p, const std::string& what) {
   return std::runtime_error(fmt::format("{}: {}", p.string(), what));
@@ -126,6 +142,7 @@ OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
                                  p.filename().string().size(), name_max));
 
   staging_ = destination_.parent_path() / staging_name;
+  const std::lock_guard lock(open_dirs_mutex());
   try {
     for (const fs::path& p : missing) {
       if (!fs::create_directory(p, ec) && ec)
@@ -137,6 +154,7 @@ OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
       throw error(staging_, fmt::format("cannot create the staging folder: {}",
                                         ec ? ec.message() : std::string("it exists")));
     probe_atomic_renames(staging_, replace_);
+    open_dirs().insert(this);
   } catch (...) {
     remove_staging_and_parents();
     throw;
@@ -144,6 +162,7 @@ OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
 }
 
 void OutputDir::commit() {
+  const std::lock_guard lock(open_dirs_mutex());
   // Three tries cover another process creating or removing the destination in between.
   for (int attempt = 0; attempt < 3; ++attempt) {
     int err = rename_no_replace(staging_, destination_);
@@ -174,13 +193,41 @@ void OutputDir::commit() {
 
 void OutputDir::remove_staging_and_parents() noexcept {
   std::error_code ec;
-  if (!staging_.empty()) fs::remove_all(staging_, ec);
+  // A few tries: on a signal, another thread may still be writing into the staging folder.
+  for (int attempt = 0; attempt < 10 && !staging_.empty() && fs::exists(staging_, ec); ++attempt)
+    fs::remove_all(staging_, ec);
+  if (committed_) return;  // the parents now hold the destination
   for (auto it = created_parents_.rbegin(); it != created_parents_.rend(); ++it)
     fs::remove(*it, ec);  // only removes a folder that is still empty
 }
 
 OutputDir::~OutputDir() {
+  const std::lock_guard lock(open_dirs_mutex());
+  open_dirs().erase(this);
   if (!committed_) remove_staging_and_parents();
+}
+
+void clean_up_outputs_on_signals() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, sig);
+  if (pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
+  std::thread([signals] {
+    int sig = 0;
+    if (sigwait(&signals, &sig) != 0) return;
+    {
+      const std::lock_guard lock(open_dirs_mutex());  // held until the process ends
+      for (OutputDir* d : open_dirs()) d->remove_staging_and_parents();
+      // Ends by the signal itself, so that a shell sees how the command stopped.
+      ::signal(sig, SIG_DFL);
+      sigset_t one;
+      sigemptyset(&one);
+      sigaddset(&one, sig);
+      pthread_sigmask(SIG_UNBLOCK, &one, nullptr);
+      ::raise(sig);
+      ::_exit(128 + sig);
+    }
+  }).detach();
 }
 
 }  // namespace polrig

@@ -30,13 +30,21 @@ class OutputDir {
   // was; the staging folder is removed by the destructor).
   void commit();
 
- private:
+  // Removes the staging folder, and the parents the constructor created unless committed.
   void remove_staging_and_parents() noexcept;
+
+ private:
 
   std::filesystem::path destination_, staging_;
   std::vector<std::filesystem::path> created_parents_;
   bool replace_ = false, committed_ = false;
 };
+
+// On SIGINT, SIGTERM or SIGHUP: removes the staging folder and created parents of every
+// OutputDir not yet committed, then ends the process by the same signal. Call at the start of
+// main, before any other thread exists (it blocks these signals and waits for them in a thread
+// of its own, so the cleanup runs as ordinary code, not in a signal handler).
+void clean_up_outputs_on_signals();
 
 // Renames `from` to `to` only if `to` does not exist, atomically (renameat2 RENAME_NOREPLACE).
 // Returns 0 or the errno: EEXIST when `to` exists, EINVAL when the file system cannot do it.

@@ -105,9 +105,9 @@ OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
   if (ec) throw error(destination, fmt::format("cannot resolve the output folder: {}", ec.message()));
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
   // Replacing a folder that holds the working directory would delete the user's work.
-  const fs::path cwd = fs::current_path().lexically_normal();
+  const fs::path cwd = fs::current_path(ec).lexically_normal();  // empty if it was deleted
   const auto [d_end, c_it] = std::mismatch(destination_.begin(), destination_.end(), cwd.begin(), cwd.end());
-  if (d_end == destination_.end() || destination_ == destination_.root_path())
+  if ((!cwd.empty() && d_end == destination_.end()) || destination_ == destination_.root_path())
     throw error(destination_, "refusing to write an output folder that contains the current directory");
 
   const fs::file_type there = type_of(destination_);

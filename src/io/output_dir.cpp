@@ -145,9 +145,10 @@ OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
   const std::lock_guard lock(open_dirs_mutex());
   try {
     for (const fs::path& p : missing) {
-      if (!fs::create_directory(p, ec) && ec)
+      if (fs::create_directory(p, ec))
+        created_parents_.push_back(p);  // not one that another process made meanwhile
+      else if (ec)
         throw error(p, fmt::format("cannot create the folder: {}", ec.message()));
-      created_parents_.push_back(p);
     }
     fs::remove_all(staging_, ec);  // left by a killed run that had our process id
     if (!fs::create_directory(staging_, ec))

@@ -1,8 +1,11 @@
 // Angles from voltages (Eq. 2, Eqs. 16–19) and the section algorithm.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <numbers>
 #include <set>
 #include <stdexcept>
@@ -453,6 +456,85 @@ TEST(CentralSymmetry, AnUnpairedStopIsNamed) {
     EXPECT_NE(std::string(e.what()).find("stop at 45 (theta_R = 45°) has no partner"),
               std::string::npos) << e.what();
   }
+}
+
+// The definition, pair by pair (the former O(N²) code): every a < b whose angles differ by 180°
+// mod 360° within tol.
+std::vector<std::pair<std::size_t, std::size_t>> cs_pairs_by_definition(
+    const std::vector<StopVoltages>& stops, double tol) {
+  std::vector<std::pair<std::size_t, std::size_t>> out;
+  for (std::size_t a = 0; a < stops.size(); ++a)
+    for (std::size_t b = a + 1; b < stops.size(); ++b) {
+      double gap = std::fmod(stops[b].theta_R_deg - stops[a].theta_R_deg - 180.0, 360.0);
+      if (gap > 180.0) gap -= 360.0;
+      if (gap < -180.0) gap += 360.0;
+      if (std::abs(gap) <= tol) out.emplace_back(a, b);
+    }
+  return out;
+}
+
+TEST(CentralSymmetry, SortedPairingFindsExactlyThePairsOfTheDefinition) {
+  // Distinct angles over several turns, both signs, across 0°/360°, each with a partner inside
+  // the tolerance; every other one also has a near miss just outside it (which has a partner of
+  // its own). Rows in shuffled order.
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> inside(-0.9e-6, 0.9e-6), outside(1.05e-6, 3e-6);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<StopVoltages> stops;
+    for (int k = 0; k < 300; ++k) {
+      const double base = 0.25 * static_cast<int>(rng() % 1440) - 720.0 + 1e-5 * k;
+      const double v = static_cast<double>(k);
+      const auto turns = [&] { return 180.0 * (2 * static_cast<int>(rng() % 3) - 1); };  // −180°, 180°, 540°
+      stops.push_back({base, {v, 2 * v, 3 * v}, "base"});
+      stops.push_back({base + turns() + inside(rng), {-v, v, 0}, "partner"});
+      if (k % 2 == 0) continue;
+      const double miss = base + 180.0 + (rng() % 2 ? 1 : -1) * outside(rng);
+      stops.push_back({miss, {v, v, v}, "near miss"});
+      stops.push_back({miss - turns(), {0, v, v}, "its partner"});
+    }
+    std::shuffle(stops.begin(), stops.end(), rng);
+    const auto expected = cs_pairs_by_definition(stops, 1e-6);
+    std::vector<std::pair<std::size_t, std::size_t>> got;
+    for (const CsPoint& p : central_symmetry_points(stops, 1e-6)) {
+      got.emplace_back(p.first, p.second);
+      EXPECT_EQ(p.theta_R_deg, stops[p.first].theta_R_deg);
+      for (int i = 0; i < 3; ++i) EXPECT_EQ(p.V[i], 0.5 * (stops[p.first].V[i] + stops[p.second].V[i]));
+    }
+    EXPECT_EQ(got, expected) << "trial " << trial;
+    EXPECT_GE(got.size(), 450u);
+  }
+}
+
+TEST(CentralSymmetry, RepeatedStopsAreAveragedBeforePairing) {
+  // Three samples at 10°, two at 190°, one at 370°: one stop each, so two CS points.
+  const std::vector<StopVoltages> stops{
+      {10, {1, 0, 0}, "r0"},   {190, {10, 0, 0}, "r1"}, {10, {2, 0, 0}, "r2"},
+      {370, {7, 0, 0}, "r3"},  {190, {20, 0, 0}, "r4"}, {10, {6, 0, 0}, "r5"}};
+  const auto pts = central_symmetry_points(stops);
+  ASSERT_EQ(pts.size(), 2u);
+  EXPECT_EQ(pts[0].first, 0u);
+  EXPECT_EQ(pts[0].second, 1u);
+  EXPECT_EQ(pts[0].V[0], 0.5 * (3.0 + 15.0));  // means 3 at 10°, 15 at 190°
+  EXPECT_EQ(pts[1].first, 1u);
+  EXPECT_EQ(pts[1].second, 3u);
+  EXPECT_EQ(pts[1].theta_R_deg, 190.0);
+  EXPECT_EQ(pts[1].V[0], 0.5 * (15.0 + 7.0));
+}
+
+TEST(CentralSymmetry, AFineTurnAndManySamplesPairQuickly) {
+  // 57,601 stops (0.00625° steps) and 37 stops × 400 samples: the former all-pairs code took
+  // seconds and gigabytes; sorted pairing takes milliseconds.
+  std::vector<StopVoltages> fine;
+  for (int k = 0; k <= 57600; ++k) fine.push_back({0.00625 * k, {1, 2, 3}, "s"});
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(central_symmetry_points(fine).size(), 28801u);
+  std::vector<StopVoltages> samples;
+  for (int stop = 0; stop <= 36; ++stop)
+    for (int s = 0; s < 400; ++s) samples.push_back({10.0 * stop, {0.001 * s, 0, 0}, "s"});
+  const auto pts = central_symmetry_points(samples);
+  EXPECT_EQ(pts.size(), 19u);
+  EXPECT_DOUBLE_EQ(pts[0].V[0], 0.001 * 399 / 2);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 2.0);
 }
 
 TEST(Noncontinuous, SlopeIsEquationTenForTheTheoryDevice) {

@@ -505,6 +505,50 @@ TEST_F(Cli, FailureAfterStagingLeavesNothing) {
   EXPECT_TRUE(leftovers(tmp, "keep").empty());
 }
 
+TEST_F(Cli, BadOutputNamesGetClearMessagesAndLeaveNothing) {
+  const std::string cmd = "study adc --no-plots -o ";
+  Result r = polrig(cmd + "''");
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "polrig: error: -o/--out '': expected the output folder's name");
+  EXPECT_LACKS(r.err, "filesystem error");
+
+  fs::create_symlink(tmp / "missing-target", tmp / "dangling");
+  r = polrig(cmd + dir_arg(tmp / "dangling"));
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "-o/--out " + (tmp / "dangling").string() + ": ");
+  EXPECT_HAS(r.err, "the output folder exists (a symbolic link to '" +
+                        (tmp / "missing-target").string() + "', which does not exist)");
+  EXPECT_LACKS(r.err, "filesystem error");
+  EXPECT_TRUE(fs::is_symlink(tmp / "dangling"));
+  EXPECT_TRUE(leftovers(tmp, "dangling").empty());
+
+  // 245 bytes: a legal folder name whose staging folder name is too long. The parents it
+  // would need are not created.
+  const fs::path out = tmp / "new" / "deeper" / std::string(245, 'n');
+  r = polrig(cmd + dir_arg(out));
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "the folder name is 245 bytes long; at most");
+  EXPECT_FALSE(fs::exists(tmp / "new")) << "a parent folder was left behind";
+}
+
+TEST_F(Cli, AnInterruptedRunLeavesNothing) {
+  // Ctrl-C (SIGINT) or a kill (SIGTERM) during a long sweep: the staging folder and the parent
+  // folders polrig created are removed, and the process ends by the signal.
+  for (const char* sig : {"INT", "TERM"}) {
+    SCOPED_TRACE(sig);
+    const fs::path parent = tmp / "made" / "for";
+    const std::string script =
+        kPolrigExe + " sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0:1:1000000 -o " +
+        shell_quote(parent / "out") + " --no-plots 2>/dev/null & pid=$!; "
+        "for i in $(seq 200); do ls -a " + shell_quote(parent) + " 2>/dev/null | grep -q partial && break; "
+        "sleep 0.05; done; kill -" + sig + " $pid; wait $pid; exit $?";
+    const int rc = std::system(("sh -c " + shell_quote(script)).c_str());
+    ASSERT_TRUE(WIFEXITED(rc));
+    EXPECT_GT(WEXITSTATUS(rc), 128) << "polrig did not end by the signal";
+    EXPECT_FALSE(fs::exists(tmp / "made")) << "the staging folder or its parents were left behind";
+  }
+}
+
 TEST_F(Cli, ExistingOutputFolderNeedsForce) {
   const fs::path out = tmp / "existing";
   fs::create_directories(out / "sub");

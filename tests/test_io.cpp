@@ -2,12 +2,15 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <atomic>
 #include <filesystem>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "polrig/io/csv.h"
+#include "polrig/io/exr.h"
 #include "polrig/io/manifest.h"
 #include "polrig/io/output_dir.h"
 #include "support.h"
@@ -102,6 +105,142 @@ TEST(OutputDir, RefusesToReplaceWithoutForce) {
   EXPECT_FALSE(fs::exists(dest / "old.txt"));
   EXPECT_EQ(read_file(dest / "new.txt"), "new");
   fs::remove_all(base);
+}
+
+// The message of the std::runtime_error `f` throws ("" if it throws none).
+template <class F>
+std::string error_of(F&& f) {
+  try {
+    f();
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(OutputDir, NeverReplacesAFolderThatAppearedDuringTheRun) {
+  const fs::path base = fresh_dir("race");
+  const fs::path dest = base / "new" / "out";
+  {
+    OutputDir out(dest, false);
+    write_text_file(out.staging() / "result.csv", "x\n1\n");
+    // Another run (or the user) creates the folder while this one computes.
+    fs::create_directories(dest);
+    write_text_file(dest / "theirs.txt", "theirs");
+    const std::string msg = error_of([&] { out.commit(); });
+    EXPECT_NE(msg.find(dest.string() + ": the output folder appeared while polrig was computing"),
+              std::string::npos) << msg;
+  }
+  EXPECT_EQ(read_file(dest / "theirs.txt"), "theirs");
+  EXPECT_FALSE(fs::exists(dest / "result.csv"));
+  for (const auto& e : fs::directory_iterator(dest.parent_path()))
+    EXPECT_EQ(e.path().filename(), "out") << "the staging folder was left behind";
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, ForceReplacesAFolderThatAppearedDuringTheRun) {
+  const fs::path base = fresh_dir("race-force");
+  const fs::path dest = base / "out";
+  {
+    OutputDir out(dest, true);
+    write_text_file(out.staging() / "result.csv", "x\n1\n");
+    fs::create_directories(dest / "sub");
+    write_text_file(dest / "sub" / "theirs.txt", "theirs");
+    out.commit();
+  }
+  EXPECT_EQ(read_file(dest / "result.csv"), "x\n1\n");
+  EXPECT_FALSE(fs::exists(dest / "sub"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(base), fs::directory_iterator()), 1);
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, RenameExchangeSwapsTwoFoldersAndNoReplaceRefuses) {
+  const fs::path base = fresh_dir("exchange");
+  fs::create_directories(base / "a");
+  fs::create_directories(base / "b");
+  write_text_file(base / "a" / "f", "A");
+  write_text_file(base / "b" / "f", "B");
+  EXPECT_EQ(rename_no_replace(base / "a", base / "b"), EEXIST);
+  EXPECT_EQ(read_file(base / "b" / "f"), "B");
+  ASSERT_EQ(rename_exchange(base / "a", base / "b"), 0);
+  EXPECT_EQ(read_file(base / "a" / "f"), "B");
+  EXPECT_EQ(read_file(base / "b" / "f"), "A");
+  EXPECT_EQ(rename_exchange(base / "a", base / "missing"), ENOENT);
+  EXPECT_EQ(rename_no_replace(base / "a", base / "c"), 0);
+  EXPECT_EQ(read_file(base / "c" / "f"), "B");
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, ForcedReplacementLeavesTheFolderPresentAtEveryInstant) {
+  // A watcher looks for the folder as fast as it can while it is replaced 200 times; two
+  // renames (old away, new in) would leave a moment without it.
+  const fs::path base = fresh_dir("always");
+  const fs::path dest = base / "out";
+  fs::create_directories(dest);
+  std::atomic<bool> stop{false};
+  std::atomic<long> looks{0}, missing{0};
+  std::thread watcher([&] {
+    while (!stop) {
+      if (::access(dest.c_str(), F_OK) != 0) ++missing;
+      ++looks;
+    }
+  });
+  for (int k = 0; k < 200; ++k) {
+    OutputDir out(dest, true);
+    write_text_file(out.staging() / "k.txt", std::to_string(k));
+    out.commit();
+  }
+  stop = true;
+  watcher.join();
+  EXPECT_EQ(missing, 0) << "the folder was missing in " << missing << " of " << looks << " looks";
+  EXPECT_GT(looks, 200);
+  EXPECT_EQ(read_file(dest / "k.txt"), "199");
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, BadNamesFailClearlyAndLeaveNoParentsBehind) {
+  const fs::path base = fresh_dir("names");
+  fs::create_directories(base);
+  // 245 bytes fit a folder but not its staging folder ".NAME.partial-PID".
+  const std::string long_name(245, 'a');
+  std::string msg = error_of([&] { OutputDir(base / "p" / "q" / long_name, false); });
+  EXPECT_NE(msg.find("the folder name is 245 bytes long; at most"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(base / "p")) << "a parent folder was created";
+  // A parent whose name is too long: the parents created before it are removed again.
+  msg = error_of([&] { OutputDir(base / "p" / std::string(300, 'b') / "out", false); });
+  EXPECT_NE(msg.find("the file system allows"), std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(base / "p"));
+  // A parent that exists only as a dangling symbolic link cannot hold the folder.
+  fs::create_symlink(base / "nowhere", base / "dangling");
+  msg = error_of([&] { OutputDir(base / "dangling" / "x" / "out", false); });
+  EXPECT_NE(msg.find("a symbolic link to '" + (base / "nowhere").string() + "', which does not exist"),
+            std::string::npos) << msg;
+  EXPECT_FALSE(fs::exists(base / "nowhere"));
+  // A dangling symbolic link as the destination is an existing path: refused without force.
+  msg = error_of([&] { OutputDir(base / "dangling", false); });
+  EXPECT_NE(msg.find("the output folder exists (a symbolic link to"), std::string::npos) << msg;
+  EXPECT_TRUE(fs::is_symlink(base / "dangling"));
+  msg = error_of([&] { OutputDir(fs::path(), false); });
+  EXPECT_NE(msg.find("the output folder's name is empty"), std::string::npos) << msg;
+  EXPECT_EQ(std::distance(fs::directory_iterator(base), fs::directory_iterator()), 1);
+  fs::remove_all(base);
+}
+
+TEST(TextFile, AFullDiskIsReportedWithTheSystemsReason) {
+  const std::string msg = error_of([] { write_text_file("/dev/full", std::string(100000, 'x')); });
+  EXPECT_NE(msg.find("/dev/full: cannot write the file: No space left on device"), std::string::npos)
+      << msg;
+  // A small file fails only when it is flushed at close.
+  const std::string small = error_of([] { write_text_file("/dev/full", "x\n"); });
+  EXPECT_NE(small.find("No space left on device"), std::string::npos) << small;
+  const std::string exr = error_of([] {
+    write_exr("/dev/full", 64, 64, {{"Y", std::vector<float>(64 * 64, 1.0f)}});
+  });
+  EXPECT_NE(exr.find("/dev/full: cannot write the EXR image"), std::string::npos) << exr;
+  EXPECT_NE(exr.find("No space left on device"), std::string::npos) << exr;
+  const std::string missing = error_of([] { write_text_file("/nonexistent-polrig/x.csv", "x"); });
+  EXPECT_NE(missing.find("/nonexistent-polrig/x.csv: cannot create the file: No such file or directory"),
+            std::string::npos) << missing;
 }
 
 TEST(Manifest, NamesEveryFileWithItsSchema) {

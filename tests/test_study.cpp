@@ -9,15 +9,19 @@
 #include <complex>
 #include <limits>
 #include <numbers>
+#include <random>
 #include <span>
 #include <stdexcept>
 #include <string>
+
+#include <fmt/format.h>
 
 #include "polrig/calib/angles.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
 #include "polrig/study/cs.h"
+#include "polrig/io/rig_yaml.h"
 #include "polrig/study/sweep.h"
 #include "polrig/units.h"
 
@@ -343,6 +347,98 @@ TEST(Sweep, GridValuesIncludeBothEndsAndOrderIsRowMajor) {
   rig.eccentricity.L_IS = 0.1;
   const CsStudy s = cs_study(rig, CsTurn(36));
   EXPECT_EQ(r.summaries[4][2].asd_mV, s.summary[2].asd_mV);
+}
+
+TEST(Sweep, GridValuesAreRoundedExactlyAsTheirFifteenDigitText) {
+  // The former definition of a grid value: format with 15 significant digits and parse back.
+  const auto by_text = [](double v) { return std::strtod(fmt::format("{:.15g}", v).c_str(), nullptr); };
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> decade(-12.0, 18.0);
+  long mismatches = 0;
+  const auto check = [&](double v) {
+    const double fast = round_to_15_digits(v), slow = by_text(v);
+    if (fast != slow || std::signbit(fast) != std::signbit(slow))
+      if (mismatches++ < 5) ADD_FAILURE() << fmt::format("{}: {} but the text gives {}", v, fast, slow);
+  };
+  for (double v : {0.0, -0.0, 0.5, 1.5, 2.5, 100000000000000.5, 100000000000001.5, 999999999999999.5,
+                   0.15000000000000002, 1e-8, 9.99999999999999e-9, 1e15, 1e22, 5e-324})
+    check(v);
+  for (int k = 0; k < 300000; ++k) {
+    check((rng() % 2 ? 1 : -1) * std::pow(10.0, decade(rng)));
+    const double a = static_cast<double>(rng() % 1000) * 0.001;
+    const double b = a + static_cast<double>(rng() % 100000) * 0.01;
+    const int count = 2 + static_cast<int>(rng() % 1000);
+    const int i = static_cast<int>(rng() % static_cast<std::uint64_t>(count));
+    check((a * (count - 1 - i) + b * i) / (count - 1));
+    check((1e14 + static_cast<double>(rng() % 800000000000000ULL)) + 0.5);  // exact halves
+  }
+  EXPECT_EQ(mismatches, 0);
+}
+
+TEST(Sweep, AHundredMillionValuesAreCheckedWithoutText) {
+  // Every value goes through the key's check: the first bad one is the last, named exactly.
+  try {
+    GridAxis::parse("eccentricity.L_S=1:-1e-8:1e8");
+    FAIL() << "expected RigError";
+  } catch (const RigError& e) {
+    EXPECT_NE(std::string(e.what()).find("key 'eccentricity.L_S': expected a length ≥ 0, got -1e-08"),
+              std::string::npos) << e.what();
+  }
+  const GridAxis a{find_rig_key("eccentricity.L_S"), 0.0, 1.0, 100000000};
+  EXPECT_EQ(a.value(50000000), 0.500000005);
+  EXPECT_EQ(a.value(99999999), 1.0);
+}
+
+TEST(Sweep, StreamsBlocksInGridOrderWithBoundedMemory) {
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:250")};
+  const CsTurn turn(8);
+  const SweepResult whole = sweep(Rig{}, axes, turn);
+  std::size_t next = 0, largest = 0, calls = 0, progress_calls = 0;
+  std::vector<double> scratch;
+  sweep(Rig{}, axes, turn,
+        [&](std::size_t first, std::span<const CsSummary> block) {
+          EXPECT_EQ(first, next);
+          for (std::size_t k = 0; k < block.size(); ++k)
+            EXPECT_EQ(block[k][0].asd_mV, cs_summary([&] {
+                        Rig r;
+                        const std::vector<int> idx = grid_indices(axes, first + k);
+                        r.eccentricity.L_S = axes[0].value(idx[0]);
+                        r.eccentricity.alpha_S = axes[1].value(idx[1]);
+                        return r;
+                      }(), turn, scratch).front().asd_mV) << first + k;
+          next += block.size();
+          largest = std::max(largest, block.size());
+          ++calls;
+        },
+        [&](std::size_t done, std::size_t total) {
+          EXPECT_EQ(done, next);
+          EXPECT_EQ(total, 75000u);
+          ++progress_calls;
+        });
+  EXPECT_EQ(next, 75000u);
+  EXPECT_LE(largest, 32768u) << "a block holds more than 32768 points";
+  EXPECT_GT(calls, 1u);
+  EXPECT_EQ(progress_calls, calls);
+  EXPECT_EQ(whole.points(), 75000u);
+}
+
+TEST(Sweep, AnInteriorPointThatBreaksARuleIsNamedBeforeItIsComputed) {
+  // Thirteen varying axes: too many corners to check up front, so the rule is found while
+  // sweeping, at the first bad point in grid order.
+  std::vector<GridAxis> axes;
+  for (int k = 0; k < 12; ++k) axes.push_back(GridAxis::parse("eccentricity.alpha_S=0:1:2"));
+  axes.push_back(GridAxis::parse("schedule.start_deg=0:400:2"));
+  bool sunk = false;
+  try {
+    sweep(Rig{}, axes, CsTurn(4), [&](std::size_t, std::span<const CsSummary>) { sunk = true; });
+    FAIL() << "expected RigError";
+  } catch (const RigError& e) {
+    EXPECT_NE(std::string(e.what()).find("eccentricity.alpha_S=0, schedule.start_deg=400): key "
+                                         "'schedule.stop_deg'"),
+              std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(sunk) << "a block with a bad point was handed on";
 }
 
 TEST(Sweep, IsBitIdenticalForAnyThreadCount) {

@@ -38,7 +38,12 @@ OutputDir OutputOptions::open(bool plots_needed) const {
     throw std::runtime_error(
         "gnuplot is needed for the PNG plots and was not found; install it "
         "(scripts/setup-deps.sh) or pass --no-plots");
-  return OutputDir(out, force);
+  if (out.empty()) throw std::runtime_error("-o/--out '': expected the output folder's name");
+  try {
+    return OutputDir(out, force);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(fmt::format("-o/--out {}: {}", out, e.what()));
+  }
 }
 
 void RigInput::add_to(CLI::App& app, bool required) {

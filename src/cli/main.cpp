@@ -8,11 +8,13 @@
 #include "cli.h"
 #include "polrig/calib/fit.h"
 #include "polrig/io/measured.h"
+#include "polrig/io/output_dir.h"
 #include "polrig/version.h"
 
 using namespace polrig;
 
 int main(int argc, char** argv) {
+  clean_up_outputs_on_signals();  // first: before any other thread exists
   cli::set_command_line(argc, argv);
   CLI::App app{"polrig: simulator and calibration toolkit for polarization-sensor calibration rigs"};
   app.set_version_flag("--version", fmt::format("polrig {} ({})", POLRIG_VERSION, POLRIG_GIT_REVISION));

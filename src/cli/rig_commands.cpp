@@ -207,7 +207,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       const bool tty = ::isatty(2);
       const auto t0 = std::chrono::steady_clock::now();
       auto last = t0;
-      const SweepResult result = sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t done, std::size_t total) {
+      SweepReport report(dir.staging(), axes);
+      sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t first, std::span<const CsSummary> block) {
+        report.write(first, block);
+      }, [&](std::size_t done, std::size_t total) {
         const auto now = std::chrono::steady_clock::now();
         if (done < total && now - last < std::chrono::milliseconds(500)) return;
         last = now;
@@ -216,7 +219,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                      std::chrono::duration<double>(now - t0).count(),
                      (tty && done < total) ? "" : "\n");
       });
-      write_manifest(dir.staging(), {command_line(), &r, report_sweep(dir.staging(), result, out->plots())});
+      write_manifest(dir.staging(), {command_line(), &r, report.finish(out->plots())});
       finish(dir);
     }});
   }

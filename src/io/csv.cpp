@@ -1,6 +1,8 @@
 #include "polrig/io/csv.h"
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <stdexcept>
 
@@ -33,18 +35,61 @@ void CsvTable::add_row(const std::vector<double>& values) {
   ++rows_;
 }
 
-std::string CsvTable::text() const {
+std::string CsvTable::header_line() const {
   std::string out;
   for (std::size_t c = 0; c < header_.size(); ++c) out += (c ? "," : "") + header_[c];
-  out += '\n';
-  return out + body_;
+  return out + '\n';
+}
+
+std::string CsvTable::text() const { return header_line() + body_; }
+
+std::string CsvTable::take_body() {
+  std::string body;
+  body.swap(body_);
+  return body;
+}
+
+TextFileWriter::TextFileWriter(const std::filesystem::path& path) : path_(path) {
+  file_ = std::fopen(path.c_str(), "wb");
+  if (!file_) fail("cannot create the file", errno);
+}
+
+TextFileWriter::~TextFileWriter() {
+  if (file_) std::fclose(file_);
+}
+
+void TextFileWriter::fail(const char* what, int err) {
+  if (file_) std::fclose(file_);
+  file_ = nullptr;
+  throw std::runtime_error(fmt::format("{}: {}: {}", path_.string(), what, std::strerror(err)));
+}
+
+void TextFileWriter::write(std::string_view text) {
+  if (!file_) throw std::logic_error(fmt::format("{}: written after close", path_.string()));
+  errno = 0;
+  if (std::fwrite(text.data(), 1, text.size(), file_) != text.size())
+    fail("cannot write the file", errno ? errno : EIO);
+}
+
+void TextFileWriter::close() {
+  if (!file_) return;
+  errno = 0;
+  const bool flushed = std::fflush(file_) == 0;
+  const int err = errno;
+  std::FILE* f = file_;
+  file_ = nullptr;
+  errno = 0;
+  const bool closed = std::fclose(f) == 0;
+  if (!flushed || !closed) {
+    throw std::runtime_error(fmt::format("{}: cannot write the file: {}", path_.string(),
+                                         std::strerror(!flushed && err ? err : errno ? errno : EIO)));
+  }
 }
 
 void write_text_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(text.data(), static_cast<std::streamsize>(text.size()));
+  TextFileWriter out(path);
+  out.write(text);
   out.close();
-  if (!out) throw std::runtime_error(fmt::format("{}: cannot write the file", path.string()));
 }
 
 }  // namespace polrig

@@ -1,15 +1,62 @@
 #include "polrig/io/exr.h"
 
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <fmt/format.h>
 
 namespace polrig {
+
+namespace {
+// OpenEXR's own file stream does not check its writes, and OutputFile writes its offset table
+// in its destructor, where errors are swallowed: this stream remembers the first error (a full
+// disk…) so that close() can report it with the system's reason.
+class CheckedOStream : public Imf::OStream {
+ public:
+  explicit CheckedOStream(const std::filesystem::path& path)
+      : Imf::OStream(path.c_str()), file_(std::fopen(path.c_str(), "wb")) {
+    if (!file_) fail("cannot create the file");
+  }
+  ~CheckedOStream() override {
+    if (file_) std::fclose(file_);
+  }
+  void write(const char c[], int n) override {
+    if (std::fwrite(c, 1, static_cast<std::size_t>(n), file_) != static_cast<std::size_t>(n)) fail("cannot write the file");
+  }
+  uint64_t tellp() override {
+    const off_t p = ::ftello(file_);
+    if (p < 0) fail("cannot tell the position");
+    return static_cast<uint64_t>(p);
+  }
+  void seekp(uint64_t pos) override {
+    if (::fseeko(file_, static_cast<off_t>(pos), SEEK_SET) != 0) fail("cannot seek");
+  }
+  // Throws the first error seen, or the one of flushing and closing.
+  void close() {
+    std::FILE* f = file_;
+    file_ = nullptr;
+    if (std::fflush(f) != 0 && !error_) error_ = errno ? errno : EIO;
+    if (std::fclose(f) != 0 && !error_) error_ = errno ? errno : EIO;
+    if (error_) throw std::runtime_error(std::strerror(error_));
+  }
+
+ private:
+  [[noreturn]] void fail(const char* what) {
+    if (!error_) error_ = errno ? errno : EIO;
+    throw std::runtime_error(fmt::format("{}: {}", what, std::strerror(error_)));
+  }
+  std::FILE* file_;
+  int error_ = 0;
+};
+}  // namespace
 
 void write_exr(const std::filesystem::path& path, int width, int height,
                const std::vector<ExrChannel>& channels) {
@@ -24,9 +71,13 @@ void write_exr(const std::filesystem::path& path, int width, int height,
       fb.insert(c.name, Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(c.pixels.data())),
                                    sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
     }
-    Imf::OutputFile file(path.string().c_str(), header);
-    file.setFrameBuffer(fb);
-    file.writePixels(height);
+    CheckedOStream stream(path);
+    {
+      Imf::OutputFile file(stream, header);
+      file.setFrameBuffer(fb);
+      file.writePixels(height);
+    }
+    stream.close();
   } catch (const std::logic_error&) {
     throw;
   } catch (const std::exception& e) {

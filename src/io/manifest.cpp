@@ -57,8 +57,10 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
   out << YAML::Key << "version" << YAML::Value << POLRIG_VERSION;
   out << YAML::Key << "git_revision" << YAML::Value << POLRIG_GIT_REVISION;
   out << YAML::Key << "command" << YAML::Value << m.command;
+  std::error_code ec;
+  const std::filesystem::path cwd = std::filesystem::current_path(ec);
   out << YAML::Key << "working_directory" << YAML::Value
-      << std::filesystem::current_path().string();
+      << (ec ? "(unavailable: " + ec.message() + ")" : cwd.string());
   if (!m.inputs.empty()) {
     out << YAML::Key << "inputs" << YAML::Value << YAML::BeginSeq;
     for (const std::string& in : m.inputs) out << in;

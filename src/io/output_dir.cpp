@@ -1,64 +1,234 @@
 #include "polrig/io/output_dir.h"
 
+#include <fcntl.h>
+#include <limits.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
+#include <set>
 #include <stdexcept>
+#include <thread>
 
 #include <fmt/format.h>
 
 namespace polrig {
 namespace fs = std::filesystem;
 
-OutputDir::OutputDir(fs::path destination, bool replace)
-    : destination_(fs::absolute(std::move(destination)).lexically_normal()), replace_(replace) {
+int rename_no_replace(const fs::path& from, const fs::path& to) noexcept {
+  return ::renameat2(AT_FDCWD, from.c_str(), AT_FDCWD, to.c_str(), RENAME_NOREPLACE) == 0 ? 0 : errno;
+}
+
+int rename_exchange(const fs::path& a, const fs::path& b) noexcept {
+  return ::renameat2(AT_FDCWD, a.c_str(), AT_FDCWD, b.c_str(), RENAME_EXCHANGE) == 0 ? 0 : errno;
+}
+
+namespace {
+
+// The folders a signal must clean up. The lock is held while a folder is created, committed or
+// removed, so the signal thread never sees one half made.
+std::mutex& open_dirs_mutex() {
+  static std::mutex m;
+  return m;
+}
+std::set<OutputDir*>& open_dirs() {
+  static std::set<OutputDir*> dirs;
+  return dirs;
+}
+
+std::runtime_error error(const fs::path& p, const std::string& what) {
+  return std::runtime_error(fmt::format("{}: {}", p.string(), what));
+}
+
+// The type of `p` itself (a symbolic link is not followed); not_found when nothing is there.
+fs::file_type type_of(const fs::path& p) {
+  std::error_code ec;
+  const fs::file_status st = fs::symlink_status(p, ec);
+  if (st.type() == fs::file_type::not_found) return st.type();
+  if (ec) throw error(p, fmt::format("cannot look at the path: {}", ec.message()));
+  return st.type();
+}
+
+std::string what_is_there(const fs::path& p, fs::file_type t) {
+  if (t != fs::file_type::symlink) return t == fs::file_type::directory ? "a folder" : "a file";
+  std::error_code ec;
+  const fs::path target = fs::read_symlink(p, ec);
+  if (!fs::exists(p, ec)) return fmt::format("a symbolic link to '{}', which does not exist", target.string());
+  return fmt::format("a symbolic link to '{}'", target.string());
+}
+
+long name_max_at(const fs::path& existing_folder) {
+  errno = 0;
+  const long n = ::pathconf(existing_folder.c_str(), _PC_NAME_MAX);
+  return n > 0 ? n : NAME_MAX;
+}
+
+// Checks, inside `folder`, that the file system does the renames commit() relies on: a
+// no-replace rename and, to replace, an exchange.
+void probe_atomic_renames(const fs::path& folder, bool exchange) {
+  const fs::path a = folder / ".rename-probe-a", b = folder / ".rename-probe-b";
+  std::error_code ec;
+  for (bool swap : {false, true}) {
+    if (swap && !exchange) break;
+    for (const fs::path& p : {a, b})
+      if (p == a || swap)
+        if (!fs::create_directory(p, ec))
+          throw error(p, fmt::format("cannot create a folder in the staging folder: {}", ec.message()));
+    const int err = swap ? rename_exchange(a, b) : rename_no_replace(a, b);
+    fs::remove(a, ec);
+    fs::remove(b, ec);
+    const char* flag = swap ? "RENAME_EXCHANGE" : "RENAME_NOREPLACE";
+    if (err == EINVAL || err == ENOSYS)
+      throw error(folder.parent_path(),
+                  fmt::format("the file system does not support atomic {} renames (renameat2 {}: "
+                              "{}), which polrig needs to {}; write the output elsewhere",
+                              swap ? "exchanging" : "no-replace", flag, std::strerror(err),
+                              swap ? "replace an output folder without a moment where it is missing"
+                                   : "never replace an existing output folder"));
+    if (err)
+      throw error(folder, fmt::format("cannot rename inside the staging folder (renameat2 {}): {}",
+                                      flag, std::strerror(err)));
+  }
+}
+
+}  // namespace
+
+OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
+  if (destination.empty()) throw std::runtime_error("the output folder's name is empty");
+  std::error_code ec;
+  destination_ = fs::absolute(destination, ec).lexically_normal();
+  if (ec) throw error(destination, fmt::format("cannot resolve the output folder: {}", ec.message()));
   if (destination_.filename().empty()) destination_ = destination_.parent_path();
   // Replacing a folder that holds the working directory would delete the user's work.
-  const fs::path cwd = fs::current_path().lexically_normal();
+  const fs::path cwd = fs::current_path(ec).lexically_normal();  // empty if it was deleted
   const auto [d_end, c_it] = std::mismatch(destination_.begin(), destination_.end(), cwd.begin(), cwd.end());
-  if (d_end == destination_.end() || destination_ == destination_.root_path())
-    throw std::runtime_error(fmt::format(
-        "{}: refusing to write an output folder that contains the current directory",
-        destination_.string()));
-  if (fs::exists(destination_) && !replace_)
-    throw std::runtime_error(fmt::format(
-        "{}: the output folder exists; choose another or pass --force to replace it",
-        destination_.string()));
-  for (fs::path p = destination_.parent_path(); !p.empty() && !fs::exists(p); p = p.parent_path())
-    created_parents_.insert(created_parents_.begin(), p);
-  std::error_code ec;
-  for (const fs::path& p : created_parents_) {
-    if (!fs::create_directory(p, ec) && ec)
-      throw std::runtime_error(fmt::format("{}: cannot create the folder: {}", p.string(),
-                                           ec.message()));
+  if ((!cwd.empty() && d_end == destination_.end()) || destination_ == destination_.root_path())
+    throw error(destination_, "refusing to write an output folder that contains the current directory");
+
+  const fs::file_type there = type_of(destination_);
+  if (there != fs::file_type::not_found && !replace_)
+    throw error(destination_, fmt::format("the output folder exists ({}); choose another or pass "
+                                          "--force to replace it",
+                                          what_is_there(destination_, there)));
+
+  // The nearest existing ancestor must be a folder; the ones below it are created.
+  fs::path existing = destination_.parent_path();
+  std::vector<fs::path> missing;
+  for (; !existing.empty() && type_of(existing) == fs::file_type::not_found; existing = existing.parent_path())
+    missing.insert(missing.begin(), existing);
+  if (!fs::is_directory(existing, ec))
+    throw error(existing, fmt::format("cannot create the output folder inside it: it is {}",
+                                      what_is_there(existing, type_of(existing))));
+
+  const std::string staging_name =
+      fmt::format(".{}.partial-{}", destination_.filename().string(), ::getpid());
+  const long name_max = name_max_at(existing);
+  const std::size_t overhead = staging_name.size() - destination_.filename().string().size();
+  if (static_cast<long>(staging_name.size()) > name_max)
+    throw error(destination_, fmt::format("the folder name is {} bytes long; at most {} fit here "
+                                          "(the file system allows {} and the staging folder "
+                                          "'.NAME.partial-{}' adds {})",
+                                          destination_.filename().string().size(),
+                                          name_max - static_cast<long>(overhead), name_max,
+                                          ::getpid(), overhead));
+  for (const fs::path& p : missing)
+    if (p.filename().string().size() > static_cast<std::size_t>(name_max))
+      throw error(p, fmt::format("the folder name is {} bytes long; the file system allows {}",
+                                 p.filename().string().size(), name_max));
+
+  staging_ = destination_.parent_path() / staging_name;
+  const std::lock_guard lock(open_dirs_mutex());
+  try {
+    for (const fs::path& p : missing) {
+      if (fs::create_directory(p, ec))
+        created_parents_.push_back(p);  // not one that another process made meanwhile
+      else if (ec)
+        throw error(p, fmt::format("cannot create the folder: {}", ec.message()));
+    }
+    fs::remove_all(staging_, ec);  // left by a killed run that had our process id
+    if (!fs::create_directory(staging_, ec))
+      throw error(staging_, fmt::format("cannot create the staging folder: {}",
+                                        ec ? ec.message() : std::string("it exists")));
+    probe_atomic_renames(staging_, replace_);
+    open_dirs().insert(this);
+  } catch (...) {
+    remove_staging_and_parents();
+    throw;
   }
-  staging_ = destination_.parent_path() /
-             fmt::format(".{}.partial-{}", destination_.filename().string(), ::getpid());
-  fs::remove_all(staging_, ec);
-  if (!fs::create_directory(staging_, ec))
-    throw std::runtime_error(fmt::format("{}: cannot create the output folder: {}",
-                                         staging_.string(), ec.message()));
 }
 
 void OutputDir::commit() {
-  std::error_code ec;
-  fs::path old;
-  if (fs::exists(destination_)) {
-    old = destination_.parent_path() /
-          fmt::format(".{}.old-{}", destination_.filename().string(), ::getpid());
-    fs::rename(destination_, old);
+  const std::lock_guard lock(open_dirs_mutex());
+  // Three tries cover another process creating or removing the destination in between.
+  for (int attempt = 0; attempt < 3; ++attempt) {
+    int err = rename_no_replace(staging_, destination_);
+    if (err == 0) {
+      committed_ = true;
+      return;
+    }
+    if (err != EEXIST)
+      throw error(destination_, fmt::format("cannot move the finished output into place: {}",
+                                            std::strerror(err)));
+    if (!replace_)
+      throw error(destination_, "the output folder appeared while polrig was computing; it was "
+                                "left as it was and nothing was written (choose another or pass "
+                                "--force to replace it)");
+    err = rename_exchange(staging_, destination_);
+    if (err == 0) {
+      committed_ = true;
+      std::error_code ec;
+      fs::remove_all(staging_, ec);  // now the old destination
+      return;
+    }
+    if (err != ENOENT)
+      throw error(destination_, fmt::format("cannot swap the finished output into place: {}",
+                                            std::strerror(err)));
   }
-  fs::rename(staging_, destination_);
-  committed_ = true;
-  if (!old.empty()) fs::remove_all(old, ec);
+  throw error(destination_, "the output folder kept appearing and disappearing; nothing was written");
+}
+
+void OutputDir::remove_staging_and_parents() noexcept {
+  std::error_code ec;
+  // A few tries: on a signal, another thread may still be writing into the staging folder.
+  for (int attempt = 0; attempt < 10 && !staging_.empty() && fs::exists(staging_, ec); ++attempt)
+    fs::remove_all(staging_, ec);
+  if (committed_) return;  // the parents now hold the destination
+  for (auto it = created_parents_.rbegin(); it != created_parents_.rend(); ++it)
+    fs::remove(*it, ec);  // only removes a folder that is still empty
 }
 
 OutputDir::~OutputDir() {
-  if (committed_) return;
-  std::error_code ec;
-  fs::remove_all(staging_, ec);
-  for (auto it = created_parents_.rbegin(); it != created_parents_.rend(); ++it)
-    fs::remove(*it, ec);  // only removes a folder that is still empty
+  const std::lock_guard lock(open_dirs_mutex());
+  open_dirs().erase(this);
+  if (!committed_) remove_staging_and_parents();
+}
+
+void clean_up_outputs_on_signals() {
+  sigset_t signals;
+  sigemptyset(&signals);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, sig);
+  if (pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
+  std::thread([signals] {
+    int sig = 0;
+    if (sigwait(&signals, &sig) != 0) return;
+    {
+      const std::lock_guard lock(open_dirs_mutex());  // held until the process ends
+      for (OutputDir* d : open_dirs()) d->remove_staging_and_parents();
+      // Ends by the signal itself, so that a shell sees how the command stopped.
+      ::signal(sig, SIG_DFL);
+      sigset_t one;
+      sigemptyset(&one);
+      sigaddset(&one, sig);
+      pthread_sigmask(SIG_UNBLOCK, &one, nullptr);
+      ::raise(sig);
+      ::_exit(128 + sig);
+    }
+  }).detach();
 }
 
 }  // namespace polrig

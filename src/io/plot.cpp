@@ -73,7 +73,15 @@ void render_plots(const fs::path& dir, const std::string& script_name,
     // gnuplot echoes the whole plot command; its last lines say what went wrong.
     std::string text = msg.str();
     if (text.size() > 400) text = "…" + text.substr(text.size() - 400);
+    if (text.empty()) text = fmt::format("it exited with status {} and left no message", rc);
     throw std::runtime_error(fmt::format("gnuplot failed on {}: {}", script_name, text));
+  }
+  // gnuplot does not always notice a failed write (a full disk): every PNG must be there.
+  for (const Plot& p : plots) {
+    const fs::path png = dir / p.png;
+    if (fs::file_size(png, ec) == 0 || ec)
+      throw std::runtime_error(fmt::format("{}: gnuplot did not write the plot{}", png.string(),
+                                           ec ? ": " + ec.message() : std::string(" (empty file)")));
   }
 }
 

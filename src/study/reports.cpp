@@ -114,25 +114,38 @@ std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const
   return files;
 }
 
-std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const SweepResult& sw,
-                                      bool plots) {
+namespace {
+constexpr int kSweepColumnsPerPair = 7;
+
+std::vector<std::string> sweep_header(const std::vector<GridAxis>& axes) {
   std::vector<std::string> header;
-  for (const GridAxis& a : sw.axes) header.emplace_back(a.key->path);
-  const std::size_t first_pair_column = header.size() + 1;  // 1-based for gnuplot
-  constexpr int kPerPair = 7;
+  for (const GridAxis& a : axes) header.emplace_back(a.key->path);
   for (int i = 1; i <= 3; ++i)
     for (const char* c : {"bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV",
                           "eq6_mV", "eq6_dev_pct"})
       header.push_back(fmt::format("pair{}_{}", i, c));
-  CsvTable table(header);
+  return header;
+}
+}  // namespace
+
+SweepReport::SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes)
+    : dir_(dir), axes_(std::move(axes)), table_(sweep_header(axes_)), file_(dir / "sweep.csv") {
   for (int i = 1; i <= 3; ++i)  // ratios over a zero denominator; Eq. 6 of a traced source
     for (const char* c : {"asd_bsd_pct", "eq6_mV", "eq6_dev_pct"})
-      table.allow_undefined(fmt::format("pair{}_{}", i, c));
-  for (std::size_t p = 0; p < sw.points(); ++p) {
-    std::vector<double> row;
-    const std::vector<int> idx = sw.indices(p);
-    for (std::size_t a = 0; a < sw.axes.size(); ++a) row.push_back(sw.axes[a].value(idx[a]));
-    for (const CsPairSummary& s : sw.summaries[p]) {
+      table_.allow_undefined(fmt::format("pair{}_{}", i, c));
+  file_.write(table_.header_line());
+}
+
+void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
+  if (first != rows_)
+    throw std::logic_error(fmt::format("sweep.csv: block at point {} after {} rows", first, rows_));
+  std::vector<double> row;
+  for (std::size_t k = 0; k < block.size(); ++k) {
+    row.clear();
+    const std::vector<int> idx = grid_indices(axes_, first + k);
+    for (std::size_t a = 0; a < axes_.size(); ++a) row.push_back(axes_[a].value(idx[a]));
+    for (int i = 0; i < 3; ++i) {
+      const CsPairSummary& s = block[k][static_cast<std::size_t>(i)];
       const double nan = std::numeric_limits<double>::quiet_NaN();
       // Ratios only where the denominator is above rounding (1e-9 mV; a centred rig's
       // deviations are ~1e-14 mV of rounding), else NaN.
@@ -142,20 +155,27 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
                   std::abs(s.mean_mr_mV) > kRounding_mV
                       ? 100.0 * (s.eq6_mV - s.mean_mr_mV) / s.mean_mr_mV
                       : nan});
+      ratio_defined_[static_cast<std::size_t>(i)] |= s.bsd_mV > kRounding_mV;
     }
-    table.add_row(row);
+    table_.add_row(row);
   }
-  write_text_file(dir / "sweep.csv", table.text());
+  file_.write(table_.take_body());
+  rows_ += block.size();
+}
+
+std::vector<DatasetFile> SweepReport::finish(bool plots) {
+  file_.close();
   std::vector<DatasetFile> files{
       {"sweep.csv", 1, "one row per grid point: the grid values and the CS summary of each pair"}};
-  if (!plots || sw.axes.empty() || sw.axes.size() > 2) return files;
+  if (!plots || axes_.empty() || axes_.size() > 2) return files;
 
+  const std::size_t first_pair_column = axes_.size() + 1;  // 1-based for gnuplot
   const auto col = [&](int pair, int offset) {
-    return first_pair_column + static_cast<std::size_t>(pair * kPerPair + offset);
+    return first_pair_column + static_cast<std::size_t>(pair * kSweepColumnsPerPair + offset);
   };
   std::vector<Plot> figures;
-  if (sw.axes.size() == 1) {
-    const std::string x = axis_label(sw.axes[0]);
+  if (axes_.size() == 1) {
+    const std::string x = axis_label(axes_[0]);
     Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)", x, "ASD (mV)",
              "ASD/BSD (%)"};
     Plot mean{"sweep_expectation.png",
@@ -165,9 +185,7 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
       asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 1)),
                             fmt::format("ASD pair {}", i + 1), line_style(i)});
       // gnuplot refuses a series with no defined point: the ratio is NaN where BSD is zero.
-      const bool ratio_defined = std::any_of(sw.summaries.begin(), sw.summaries.end(),
-                                             [&](const CsSummary& s) { return s[i].bsd_mV > kRounding_mV; });
-      if (ratio_defined)
+      if (ratio_defined_[static_cast<std::size_t>(i)])
         asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 2)),
                               fmt::format("ASD/BSD pair {}", i + 1), line_style(i, "dt 2"), true});
       mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 4)),
@@ -182,8 +200,8 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
     figures = {asd, mean};
   } else {
     // Two keys: pair 1 against the second key, one curve per value of the first (at most 6).
-    const GridAxis& outer = sw.axes[0];
-    const std::string x = axis_label(sw.axes[1]);
+    const GridAxis& outer = axes_[0];
+    const std::string x = axis_label(axes_[1]);
     Plot asd{"sweep_asd.png", fmt::format("Pair 1 ASD after CS, one curve per {}", outer.key->path),
              x, "ASD (mV)"};
     Plot mean{"sweep_expectation.png",
@@ -200,7 +218,7 @@ std::vector<DatasetFile> report_sweep(const std::filesystem::path& dir, const Sw
     }
     figures = {asd, mean};
   }
-  render_plots(dir, "plots.gp", figures);
+  render_plots(dir_, "plots.gp", figures);
   files.push_back({"sweep_asd.png", 1, "ASD and ASD/BSD against the swept key (Figs. 11a, 12a)"});
   files.push_back({"sweep_expectation.png", 1,
                    "expectation after CS and Eq. 6 against the swept key (Figs. 10, 11b, 12b)"});

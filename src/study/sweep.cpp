@@ -1,6 +1,11 @@
 #include "polrig/study/sweep.h"
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cstdint>
+#include <cmath>
+#include <cstdlib>
 #include <string>
 
 #include <fmt/format.h>
@@ -40,11 +45,67 @@ GridAxis GridAxis::parse(std::string_view arg) {
   }
   if (axis.count == 1 && axis.start != axis.stop)
     return fail("a single point needs start = stop");
-  for (int i = 0; i < axis.count; ++i)
-    if (axis.key->valid_real && !axis.key->valid_real(axis.value(i)))
+  // Every value through the key's own check, computed (no text), in parallel; the first bad
+  // value in grid order is named.
+  if (axis.key->valid_real) {
+    std::atomic<int> first_bad{axis.count};
+    tbb::parallel_for(tbb::blocked_range<int>(0, axis.count, 65536), [&](const tbb::blocked_range<int>& r) {
+      for (int i = r.begin(); i != r.end() && i < first_bad.load(std::memory_order_relaxed); ++i)
+        if (!axis.key->valid_real(axis.value(i))) {
+          int seen = first_bad.load();
+          while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
+          }
+          return;
+        }
+    });
+    if (first_bad < axis.count)
       return fail(fmt::format("key '{}': expected {}, got {}", path, axis.key->expects,
-                              axis.value(i)));
+                              axis.value(first_bad)));
+  }
   return axis;
+}
+
+double round_to_15_digits(double v) {
+  static constexpr double kPow10[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                      1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                      1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  const auto by_text = [](double x) { return std::strtod(fmt::format("{:.15g}", x).c_str(), nullptr); };
+  if (v == 0.0 || !std::isfinite(v)) return v;
+  const double a = std::abs(v);
+  const int binary_exponent = static_cast<int>((std::bit_cast<std::uint64_t>(a) >> 52) & 0x7ff) - 1023;
+  int e = (binary_exponent * 78913) >> 18;  // ≈ floor(log10 a), corrected below
+  for (int tries = 0; tries < 3; ++tries) {
+    // a·10^k in [1e14, 1e15): its integer part holds the 15 digits. 10^k is exact for k ≤ 22,
+    // and the product is kept exactly as hi + lo (Dekker's product).
+    const int k = 14 - e;
+    if (k < 0 || k > 22) return by_text(v);
+    const double s = kPow10[k];
+    const double hi = a * s;
+    const auto split = [](double x, double& h, double& l) {
+      const double c = 134217729.0 * x;  // 2^27 + 1
+      h = c - (c - x);
+      l = x - h;
+    };
+    double ah, al, sh, sl;
+    split(a, ah, al);
+    split(s, sh, sl);
+    const double lo = ((ah * sh - hi) + ah * sl + al * sh) + al * sl;
+    if (hi < 1e14 || (hi == 1e14 && lo < 0)) {
+      --e;
+      continue;
+    }
+    if (hi > 1e15 || (hi == 1e15 && lo >= 0)) {
+      ++e;
+      continue;
+    }
+    // Round hi + lo to an integer, halves to even (as {fmt} does); hi − floor(hi) is exact.
+    const auto whole = static_cast<std::int64_t>(hi);  // hi < 2^50: truncation is floor
+    const double above_half = (hi - static_cast<double>(whole)) - 0.5;
+    std::int64_t m = whole;
+    if (above_half > -lo || (above_half == -lo && (whole & 1) != 0)) m = whole + 1;
+    return std::copysign(static_cast<double>(m) / s, v);  // correctly rounded, as strtod gives
+  }
+  return by_text(v);
 }
 
 double GridAxis::value(int index) const {
@@ -53,15 +114,20 @@ double GridAxis::value(int index) const {
   // Weighted form, exact at both ends; then rounded to 15 significant digits, so that a decimal
   // grid such as 0.05:0.95:19 gives 0.15 and not 0.15000000000000002.
   const double n = count - 1;
-  const double v = (start * (n - index) + stop * index) / n;
-  return std::stod(fmt::format("{:.15g}", v));
+  return round_to_15_digits((start * (n - index) + stop * index) / n);
 }
 
 std::string GridAxis::text() const {
   return fmt::format("{}={}:{}:{}", key->path, start, stop, count);
 }
 
-std::vector<int> SweepResult::indices(std::size_t p) const {
+std::size_t grid_points(const std::vector<GridAxis>& axes) {
+  std::size_t total = 1;
+  for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
+  return total;
+}
+
+std::vector<int> grid_indices(const std::vector<GridAxis>& axes, std::size_t p) {
   std::vector<int> idx(axes.size());
   for (std::size_t a = axes.size(); a-- > 0;) {
     idx[a] = static_cast<int>(p % static_cast<std::size_t>(axes[a].count));
@@ -71,62 +137,88 @@ std::vector<int> SweepResult::indices(std::size_t p) const {
 }
 
 namespace {
-Rig rig_at(const Rig& base, const SweepResult& r, std::size_t p) {
+Rig rig_at(const Rig& base, const std::vector<GridAxis>& axes, const std::vector<int>& idx) {
   Rig rig = base;
-  const std::vector<int> idx = r.indices(p);
-  for (std::size_t a = 0; a < r.axes.size(); ++a) r.axes[a].key->real(rig) = r.axes[a].value(idx[a]);
+  for (std::size_t a = 0; a < axes.size(); ++a) axes[a].key->real(rig) = axes[a].value(idx[a]);
   return rig;
+}
+
+RigError point_error(const std::vector<GridAxis>& axes, const std::vector<int>& idx,
+                     const RigProblem& problem) {
+  std::string where;
+  for (std::size_t a = 0; a < axes.size(); ++a)
+    where += fmt::format("{}{}={}", a ? ", " : "", axes[a].key->path, axes[a].value(idx[a]));
+  return RigError(fmt::format("--grid point ({}): key '{}': {}", where, problem.path, problem.message));
 }
 }  // namespace
 
 void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
-  SweepResult r;
-  r.axes = axes;
   double points = 1;
   for (const GridAxis& a : axes) points *= a.count;
   if (points > 1e9)
     throw RigError(fmt::format("--grid: {:.3g} grid points; at most 1e9 (a summary row each)", points));
-  std::size_t total = 1;
-  for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
   if (base.source.traced)
     for (const GridAxis& a : axes)
       if (a.key->path == "device.d" || a.key->path == "source.E_0" || a.key->path == "source.polarizer_deg")
         throw RigError(fmt::format("--grid {}: a traced source's light comes from its scene; '{}' "
                                    "cannot be swept", a.text(), a.key->path));
-  for (std::size_t p = 0; p < total; ++p) {
-    if (auto problem = check_rig(rig_at(base, r, p))) {
-      std::string where;
-      const std::vector<int> idx = r.indices(p);
-      for (std::size_t a = 0; a < axes.size(); ++a)
-        where += fmt::format("{}{}={}", a ? ", " : "", axes[a].key->path, axes[a].value(idx[a]));
-      throw RigError(fmt::format("--grid point ({}): key '{}': {}", where, problem->path,
-                                 problem->message));
+  // The corners: the cross-key rules are monotone in each key, so a grid that breaks one
+  // usually does at a corner, and is stopped before any computation. sweep() checks every point.
+  std::size_t varying = 0;
+  for (const GridAxis& a : axes) varying += a.count > 1;
+  if (varying > 12) return;
+  for (std::size_t corner = 0; corner < (std::size_t{1} << varying); ++corner) {
+    std::vector<int> idx(axes.size(), 0);
+    std::size_t bit = 0;
+    for (std::size_t a = 0; a < axes.size(); ++a)
+      if (axes[a].count > 1 && ((corner >> bit++) & 1u)) idx[a] = axes[a].count - 1;
+    if (auto problem = check_rig(rig_at(base, axes, idx))) throw point_error(axes, idx, *problem);
+  }
+}
+
+void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
+           const SweepSink& sink, const SweepProgress& progress) {
+  check_grid(base, axes);
+  const std::size_t total = grid_points(axes);
+  // Blocks in turn, each in parallel: bounded memory, and progress between them.
+  const std::size_t block = std::clamp<std::size_t>(total / 100, 4096, 32768);
+  std::vector<CsSummary> summaries(std::min(block, total));
+  tbb::enumerable_thread_specific<std::vector<double>> scratch;
+  for (std::size_t begin = 0; begin < total; begin += block) {
+    const std::size_t end = std::min(total, begin + block);
+    std::atomic<std::size_t> first_bad{total};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        std::vector<double>& s = scratch.local();
+                        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+                          const Rig rig = rig_at(base, axes, grid_indices(axes, p));
+                          if (check_rig(rig)) {
+                            std::size_t seen = first_bad.load();
+                            while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {
+                            }
+                            continue;
+                          }
+                          summaries[p - begin] = cs_summary(rig, turn, s);
+                        }
+                      });
+    if (first_bad < total) {
+      const std::vector<int> idx = grid_indices(axes, first_bad);
+      throw point_error(axes, idx, *check_rig(rig_at(base, axes, idx)));
     }
+    sink(begin, std::span<const CsSummary>(summaries.data(), end - begin));
+    if (progress) progress(end, total);
   }
 }
 
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                   const SweepProgress& progress) {
-  check_grid(base, axes);
   SweepResult result;
   result.axes = axes;
-  std::size_t total = 1;
-  for (const GridAxis& a : axes) total *= static_cast<std::size_t>(a.count);
-  result.summaries.resize(total);
-
-  tbb::enumerable_thread_specific<std::vector<double>> scratch;
-  // Chunks of the grid in turn, each in parallel, so progress can be told between them.
-  const std::size_t chunk = std::max<std::size_t>(4096, total / 100);
-  for (std::size_t begin = 0; begin < total; begin += chunk) {
-    const std::size_t end = std::min(total, begin + chunk);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        std::vector<double>& s = scratch.local();
-                        for (std::size_t p = r.begin(); p != r.end(); ++p)
-                          result.summaries[p] = cs_summary(rig_at(base, result, p), turn, s);
-                      });
-    if (progress) progress(end, total);
-  }
+  sweep(base, axes, turn,
+        [&](std::size_t, std::span<const CsSummary> block) {
+          result.summaries.insert(result.summaries.end(), block.begin(), block.end());
+        },
+        progress);
   return result;
 }
 

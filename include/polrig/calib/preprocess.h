@@ -26,8 +26,10 @@ struct CsPoint {
 };
 
 // Every pair a < b of stops 180° apart (within tol_deg). The paper's 0°:10°:360° schedule gives
-// 19 points (a stop may belong to two pairs: 180° pairs with 0° and with 360°). Throws
-// CalibrationError naming any stop that has no partner.
+// 19 points (a stop may belong to two pairs: 180° pairs with 0° and with 360°). Rows with the
+// same θ_R (exactly) are repeated measurements of one stop, e.g. a samples.csv: they are
+// averaged into one stop first, which keeps its first row's index. O(N log N): the stops are
+// sorted by their angle mod 360°. Throws CalibrationError naming any stop that has no partner.
 std::vector<CsPoint> central_symmetry_points(const std::vector<StopVoltages>& stops,
                                              double tol_deg = 1e-6);
 

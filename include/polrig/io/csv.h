@@ -1,6 +1,7 @@
 #pragma once
 // CSV output. Numbers are written in their shortest exact form ({fmt}'s "{}"), so a CSV reads
 // back to the same doubles and is byte-identical for identical results.
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -20,6 +21,9 @@ class CsvTable {
   std::size_t columns() const { return header_.size(); }
   std::size_t rows() const { return rows_; }
   std::string text() const;
+  std::string header_line() const;
+  // The rows added so far, then forgets them (for tables written as they are computed).
+  std::string take_body();
 
  private:
   std::vector<std::string> header_;
@@ -28,7 +32,24 @@ class CsvTable {
   std::size_t rows_ = 0;
 };
 
-// Writes a whole file or throws std::runtime_error naming the path.
+// A file written piece by piece. Every failure (a full disk, a missing folder…) throws
+// std::runtime_error naming the path and the system's reason (strerror).
+class TextFileWriter {
+ public:
+  explicit TextFileWriter(const std::filesystem::path& path);
+  ~TextFileWriter();  // closes without checking: call close() to know the file is whole
+  TextFileWriter(const TextFileWriter&) = delete;
+  TextFileWriter& operator=(const TextFileWriter&) = delete;
+  void write(std::string_view text);
+  void close();
+
+ private:
+  [[noreturn]] void fail(const char* what, int err);
+  std::filesystem::path path_;
+  std::FILE* file_ = nullptr;
+};
+
+// Writes a whole file or throws std::runtime_error naming the path and the reason.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
 }  // namespace polrig

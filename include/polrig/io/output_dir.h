@@ -1,7 +1,14 @@
 #pragma once
 // An output folder that appears whole or not at all: files are written into a staging folder
 // beside the destination, which is renamed into place by commit(). Without commit() (an error,
-// an exception) the staging folder is removed and the destination is left as it was.
+// an exception) the staging folder and any parent folders the constructor created are removed,
+// and the destination is left as it was.
+//
+// commit() never replaces an existing destination unless `replace` was given, even one that
+// appeared while polrig was computing (renameat2 RENAME_NOREPLACE). With `replace` it swaps the
+// two folders atomically (RENAME_EXCHANGE), so the destination exists at every instant, then
+// removes the old one. A file system without these renames is refused when the folder is
+// opened, before any computation.
 #include <filesystem>
 #include <vector>
 
@@ -9,7 +16,9 @@ namespace polrig {
 
 class OutputDir {
  public:
-  // Throws std::runtime_error if `destination` exists and `replace` is false.
+  // Throws std::runtime_error, naming the path and leaving nothing behind, if `destination` is
+  // empty, exists (even as a dangling symbolic link) and `replace` is false, has a name too long
+  // for its staging folder, or cannot be created.
   OutputDir(std::filesystem::path destination, bool replace);
   ~OutputDir();
   OutputDir(const OutputDir&) = delete;
@@ -17,12 +26,30 @@ class OutputDir {
 
   const std::filesystem::path& staging() const { return staging_; }
   const std::filesystem::path& destination() const { return destination_; }
+  // Throws std::runtime_error if the destination appeared without `replace` (it is left as it
+  // was; the staging folder is removed by the destructor).
   void commit();
 
+  // Removes the staging folder, and the parents the constructor created unless committed.
+  void remove_staging_and_parents() noexcept;
+
  private:
+
   std::filesystem::path destination_, staging_;
   std::vector<std::filesystem::path> created_parents_;
   bool replace_ = false, committed_ = false;
 };
+
+// On SIGINT, SIGTERM or SIGHUP: removes the staging folder and created parents of every
+// OutputDir not yet committed, then ends the process by the same signal. Call at the start of
+// main, before any other thread exists (it blocks these signals and waits for them in a thread
+// of its own, so the cleanup runs as ordinary code, not in a signal handler).
+void clean_up_outputs_on_signals();
+
+// Renames `from` to `to` only if `to` does not exist, atomically (renameat2 RENAME_NOREPLACE).
+// Returns 0 or the errno: EEXIST when `to` exists, EINVAL when the file system cannot do it.
+int rename_no_replace(const std::filesystem::path& from, const std::filesystem::path& to) noexcept;
+// Swaps two existing paths atomically (renameat2 RENAME_EXCHANGE). Returns 0 or the errno.
+int rename_exchange(const std::filesystem::path& a, const std::filesystem::path& b) noexcept;
 
 }  // namespace polrig

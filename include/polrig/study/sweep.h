@@ -2,6 +2,7 @@
 // Sweeps of the CS study over a grid of rig keys (paper Figs. 10–12).
 #include <cstddef>
 #include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -11,33 +12,50 @@
 
 namespace polrig {
 
-// One `--grid key=start:stop:count`: count values linearly spaced, both ends included.
+// One `--grid key=start:stop:count`: count values linearly spaced, both ends included. A value
+// type: the values are computed on demand, never stored.
 struct GridAxis {
   const RigKey* key = nullptr;  // a real-valued rig key
   double start = 0, stop = 0;
   int count = 1;
 
-  static GridAxis parse(std::string_view arg);  // throws RigError naming the argument
+  // Throws RigError naming the argument, also when a value is outside the key's range (each
+  // value is computed and given to the key's own check).
+  static GridAxis parse(std::string_view arg);
   double value(int index) const;
   std::string text() const;
 };
 
+// v rounded to 15 significant decimal digits: the double nearest to {fmt}'s "{:.15g}" of v,
+// computed without text (exactly, for |v| in [1e-8, 1e15); by formatting outside).
+double round_to_15_digits(double v);
+
+// The grid of the axes in row-major order (the last axis varies fastest).
+std::size_t grid_points(const std::vector<GridAxis>& axes);
+std::vector<int> grid_indices(const std::vector<GridAxis>& axes, std::size_t point);
+
+// A whole sweep in memory, for small grids (tests, benchmarks). Commands stream instead.
 struct SweepResult {
   std::vector<GridAxis> axes;
-  // Grid points in row-major order: the last axis varies fastest.
-  std::vector<CsSummary> summaries;
+  std::vector<CsSummary> summaries;  // grid order
   std::size_t points() const { return summaries.size(); }
-  // The index of each axis at grid point p.
-  std::vector<int> indices(std::size_t p) const;
+  std::vector<int> indices(std::size_t p) const { return grid_indices(axes, p); }
 };
 
 using SweepProgress = std::function<void(std::size_t done, std::size_t total)>;
+// Receives the summaries of grid points first, first + 1, …, in grid order, a block at a time.
+using SweepSink = std::function<void(std::size_t first, std::span<const CsSummary> block)>;
 
-// Checks every grid point against the rig's rules; throws RigError naming the first bad point.
+// The checks that need no computation: the grid's size, what a traced rig cannot sweep, and the
+// rig's cross-key rules (check_rig) at every corner of the grid. Throws RigError.
 void check_grid(const Rig& base, const std::vector<GridAxis>& axes);
 
-// Checks the grid (check_grid), then runs the CS study at each point in parallel. Results do not
-// depend on the thread count.
+// Runs the CS study at every grid point, in blocks computed in parallel and handed to `sink` in
+// grid order, so memory does not grow with the grid. check_grid first; each point is checked
+// against check_rig before it is computed, and the first bad point (in grid order) throws
+// RigError naming it. Results do not depend on the thread count.
+void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
+           const SweepSink& sink, const SweepProgress& progress = {});
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                   const SweepProgress& progress = {});
 

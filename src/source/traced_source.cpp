@@ -45,6 +45,12 @@ struct FilmPair {
     tau_m = (1 - a.efficiency) / (1 + a.efficiency);
     gains = p.g_up() * 0.5 * (tau_M + tau_m);
   }
+  // The same two films as one closed form (S0 alone, for the bare sensor).
+  SheetPolarizerPair sheets() const {
+    const double psi = deg2rad(port.axis_deg), beta = deg2rad(analyzer.axis_deg);
+    return {{0, 0, 1}, {std::cos(psi), std::sin(psi), 0}, port.tau_M, port.tau_m,
+            {std::cos(beta), std::sin(beta), 0}, tau_M, tau_m};
+  }
   PolarizedRay through(const Vec3& k) const {
     const Vec3 z{0, 0, 1};
     const double psi = deg2rad(port.axis_deg), beta = deg2rad(analyzer.axis_deg);
@@ -109,7 +115,8 @@ std::vector<double> TracedSource::lensed_signal(const Point2& p, double top, con
 
 std::vector<double> TracedSource::bare_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const {
   const FilmPair films(scene_.port.polarizer, film);
-  const RayTransmission T = [&films](const Vec3& k) { return films.through(k).S[0] / films.gains; };
+  const SheetPolarizerPair sheets = films.sheets();
+  const RayTransmission T = [&](const Vec3& k) { return sheets.transmittance(k) / films.gains; };
   const SphereSolution& sol = solution();
   const TracedPort port(*tracer_, sol, L_ref_);
   const long long samples = std::max<long long>(16, scene_.trace.plane_samples / 4);

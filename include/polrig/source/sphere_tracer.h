@@ -80,9 +80,15 @@ class SphereTracer {
   // the line to it (a hard shadow; the penumbra of a finite lamp is not modelled).
   double direct_irradiance(const Vec3& wall_point) const;
 
-  // For benchmarks: `count` plain rtcIntersect1 calls on this scene with the rays a photon
-  // tracer casts (from wall points in cosine-weighted directions). Returns the hits counted.
-  long long plain_intersections(long long count, std::uint64_t seed) const;
+  // For benchmarks. `count` rays such as a photon tracer casts: from wall points in
+  // cosine-weighted directions.
+  struct Ray {
+    Vec3 origin, dir;
+  };
+  std::vector<Ray> wall_rays(long long count, std::uint64_t seed) const;
+  // One plain rtcIntersect1 call on this scene for each ray, nothing else (the reference of
+  // the tracer's speed). Returns the hits counted.
+  long long plain_intersections(const std::vector<Ray>& rays) const;
 
   struct Impl;
 

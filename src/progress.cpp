@@ -33,11 +33,13 @@ struct Progress::State {
   long long total = 0;
   std::atomic<long long> done{0};
   Clock::time_point start, last;
+  bool shown = false;  // a stage that ends before its first report stays silent
 
   void report(bool final) {
     const Clock::time_point now = Clock::now();
-    if (!final && std::chrono::duration<double>(now - last).count() < interval_s) return;
+    if (final ? !shown : std::chrono::duration<double>(now - last).count() < interval_s) return;
     last = now;
+    shown = true;
     ProgressReport r;
     r.stage = stage;
     const long long d = final ? total : std::min(done.load(std::memory_order_relaxed), total);
@@ -60,9 +62,8 @@ void Progress::begin(std::string stage, long long total) const {
   state_->stage = std::move(stage);
   state_->total = total;
   state_->done.store(0);
-  state_->start = Clock::now();
-  state_->last = state_->start - std::chrono::hours(1);
-  state_->report(false);
+  state_->start = state_->last = Clock::now();
+  state_->shown = false;
 }
 
 void Progress::advance(long long units) const {

@@ -24,8 +24,9 @@ std::string format_progress(const ProgressReport& r);
 using ProgressSink = std::function<void(const ProgressReport&)>;
 
 // A shared handle (copies report to the same sink). advance() may be called from any thread;
-// begin() and finish() from the thread that runs the stage. Reports are rate-limited to one per
-// `interval_s`, plus one when a stage begins and one when it finishes.
+// begin() and finish() from the thread that runs the stage. The first report comes `interval_s`
+// after begin(), then at most one per `interval_s`, and a last one at finish(); a stage that
+// ends sooner is not reported at all, so quick commands stay quiet.
 class Progress {
  public:
   Progress() = default;

@@ -5,6 +5,7 @@
 #include <tbb/parallel_for.h>
 
 #include "polrig/device/sensor.h"
+#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
@@ -94,17 +95,21 @@ Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg,
 
 }  // namespace
 
-Simulation simulate(const Rig& rig, bool keep_samples) {
+Simulation simulate(const Rig& rig, bool keep_samples, const Progress& progress) {
   const std::vector<double> angles = rig.schedule.table_angles_deg();
   Simulation sim;
   sim.samples_per_stop = rig.schedule.samples_per_stop;
   sim.stops.resize(angles.size());
   if (keep_samples) sim.samples.resize(angles.size() * static_cast<std::size_t>(sim.samples_per_stop));
+  if (rig.source.traced) rig.source.traced->solve(progress);
+  progress.begin("simulate: stops", static_cast<long long>(angles.size()));
   tbb::parallel_for(std::size_t{0}, angles.size(), [&](std::size_t s) {
     std::array<double, 3>* out =
         keep_samples ? &sim.samples[s * static_cast<std::size_t>(sim.samples_per_stop)] : nullptr;
     sim.stops[s] = simulate_stop(rig, s, angles[s], out);
+    progress.advance();
   });
+  progress.finish();
   return sim;
 }
 

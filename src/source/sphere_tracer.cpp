@@ -265,7 +265,7 @@ struct BatchTally {
 
 }  // namespace
 
-SphereSolution SphereTracer::trace_photons() const {
+SphereSolution SphereTracer::trace_photons(const Progress& progress) const {
   const Impl& m = *impl_;
   const TraceSettings& ts = scene_.trace;
   const auto t0 = std::chrono::steady_clock::now();
@@ -295,6 +295,8 @@ SphereSolution SphereTracer::trace_photons() const {
   const double photon_W = sol.power_W / static_cast<double>(per_batch * B);
 
   std::vector<BatchTally> tally(static_cast<std::size_t>(B));
+  progress.begin("sphere solve: photons", per_batch * B);
+  constexpr long long kReportEvery = 4096;
   tbb::parallel_for(0, B, [&](int b) {
     BatchTally& t = tally[static_cast<std::size_t>(b)];
     t.wall_W.assign(bins, 0.0);
@@ -306,6 +308,7 @@ SphereSolution SphereTracer::trace_photons() const {
       const UniformStream stream(ts.seed, photon, 0x5AB1);
       const auto u = [&]() { return stream(draw++); };
       ++t.ledger.launched;
+      if ((k + 1) % kReportEvery == 0) progress.advance(kReportEvery);
       // Emission: a lamp by power, a point on its surface, a cosine-weighted direction.
       const double pick = u() * sol.power_W;
       const std::size_t li = static_cast<std::size_t>(std::lower_bound(lamp_cdf.begin(), lamp_cdf.end(), pick) - lamp_cdf.begin());
@@ -365,7 +368,9 @@ SphereSolution SphereTracer::trace_photons() const {
         d = cosine_direction(n, u(), u());
       }
     }
+    progress.advance(per_batch % kReportEvery);
   });
+  progress.finish();
 
   // Combine batches in order: means and standard errors of the per-batch estimates.
   const auto combine = [&](auto get, std::size_t n, double area_of(std::size_t, const WallMap&, const SceneSpec&),
@@ -409,11 +414,11 @@ SphereSolution SphereTracer::trace_photons() const {
   return sol;
 }
 
-SphereSolution SphereTracer::solve() const {
+SphereSolution SphereTracer::solve(const Progress& progress) const {
   const auto t0 = std::chrono::steady_clock::now();
-  SphereSolution sol = trace_photons();
+  SphereSolution sol = trace_photons(progress);
   const int steps = static_cast<int>(std::lround(180.0 / scene_.trace.field_step_deg));
-  sol.field = compute_wall_field(*this, sol, steps + 1, 2 * steps);
+  sol.field = compute_wall_field(*this, sol, steps + 1, 2 * steps, progress);
   sol.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
 }

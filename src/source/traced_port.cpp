@@ -173,12 +173,8 @@ StokesIrradiance TracedPort::plane_stokes(double x, double y, double h, long lon
   const RayTransmission through_film = [&](const Vec3&) { return film.g_up(); };
   const auto analyzer = [&](double beta_deg) -> RayTransmission {
     const Vec3 axis{std::cos(deg2rad(beta_deg)), std::sin(deg2rad(beta_deg)), 0};
-    return [=, &film](const Vec3& k) {
-      PolarizedRay ray = unpolarized_ray(k, 1.0);
-      pass_sheet_polarizer(ray, z, port_axis, film.tau_M, film.tau_m);
-      pass_sheet_polarizer(ray, z, axis, 1.0, 0.0);
-      return ray.S[0];
-    };
+    const SheetPolarizerPair films(z, port_axis, film.tau_M, film.tau_m, axis, 1.0, 0.0);
+    return [films](const Vec3& k) { return films.transmittance(k); };
   };
   const std::vector<double> s0 = irradiance(x, y, h, through_film, samples, shifts);
   std::vector<double> s1 = irradiance(x, y, h, analyzer(0), samples, shifts), s2 = irradiance(x, y, h, analyzer(45), samples, shifts);

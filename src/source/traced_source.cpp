@@ -17,11 +17,15 @@ TracedSource::TracedSource(const SceneSpec& scene)
 
 TracedSource::~TracedSource() = default;
 
-const SphereSolution& TracedSource::solution() const {
+void TracedSource::solve(const Progress& progress) const {
   std::call_once(solved_, [&] {
-    solution_ = std::make_unique<SphereSolution>(tracer_->solve());
+    solution_ = std::make_unique<SphereSolution>(tracer_->solve(progress));
     L_ref_ = mean_port_radiance(*tracer_, *solution_, scene_.sensor.L_o);
   });
+}
+
+const SphereSolution& TracedSource::solution() const {
+  solve({});
   return *solution_;
 }
 

@@ -182,7 +182,7 @@ double WallField::after_first_strike(const Vec3& p) const {
 }
 
 WallField compute_wall_field(const SphereTracer& tracer, const SphereSolution& solution, int n_theta,
-                             int n_phi) {
+                             int n_phi, const Progress& progress) {
   const SceneSpec& scene = tracer.scene();
   WallField f;
   f.R = scene.sphere.radius();
@@ -191,6 +191,7 @@ WallField compute_wall_field(const SphereTracer& tracer, const SphereSolution& s
   const std::size_t nodes = static_cast<std::size_t>(f.n_theta) * static_cast<std::size_t>(f.n_phi);
   std::vector<Linear> delta(nodes);
   const OccluderIntegrals integrals(tracer, solution);
+  progress.begin("sphere solve: wall field", f.n_theta);
   tbb::parallel_for(0, f.n_theta, [&](int i) {
     const double theta = kPi * i / (f.n_theta - 1);
     const bool pole = i == 0 || i == f.n_theta - 1;
@@ -199,7 +200,9 @@ WallField compute_wall_field(const SphereTracer& tracer, const SphereSolution& s
       delta[k] = pole && j > 0 ? delta[k - static_cast<std::size_t>(j)]
                                : integrals.delta(node_point(f.R, theta, 2 * kPi * j / f.n_phi));
     }
+    progress.advance();
   });
+  progress.finish();
 
   // C from energy: the wall's mean of C + δ = the photon solve's mean after the first strike.
   // Wall means by the midpoint rule over the grid's cells, the port cap left out.

@@ -4,6 +4,7 @@
 #include <array>
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/rig/rig.h"
 
 namespace polrig {
@@ -54,6 +55,7 @@ struct Simulation {
 
 // Runs every stop in parallel (TBB); the result does not depend on the thread count, since
 // each noise value is a pure function of (seed, stop, channel, sample).
-Simulation simulate(const Rig& rig, bool keep_samples = false);
+// A traced rig reports the sphere solve and the stops to `progress`.
+Simulation simulate(const Rig& rig, bool keep_samples = false, const Progress& progress = {});
 
 }  // namespace polrig

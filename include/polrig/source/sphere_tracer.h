@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/source/scene.h"
 #include "polrig/source/wall_field.h"
 
@@ -52,10 +53,10 @@ class SphereTracer {
 
   // Traces scene.trace.photons photons in scene.trace.batches batches (in parallel; the result
   // does not depend on the thread count).
-  // Then computes the wall field (wall_field.h) from them.
-  SphereSolution solve() const;
+  // Then computes the wall field (wall_field.h) from them. Reports both stages to `progress`.
+  SphereSolution solve(const Progress& progress = {}) const;
   // The photons alone: the solution without its wall field (for benchmarks of the tracer).
-  SphereSolution trace_photons() const;
+  SphereSolution trace_photons(const Progress& progress = {}) const;
 
   struct Hit {
     enum Kind { None, Wall, Lamp, Baffle } kind = None;

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/rig/geometry.h"
 #include "polrig/source/scene.h"
 
@@ -56,6 +57,10 @@ class TracedSource {
   // mirrored: −axis_deg).
   double degree_of_polarization() const { return scene_.port.polarizer.degree_of_polarization(); }
   double polarizer_axis_rig_deg() const { return -scene_.port.polarizer.axis_deg; }
+
+  // Solves the sphere now (once; later calls return at once), reporting to `progress`. Otherwise
+  // the first signal solves it, silently.
+  void solve(const Progress& progress) const;
 
   // Rays traced by the sphere solve, and its time (for speed reports).
   long long solve_rays() const;

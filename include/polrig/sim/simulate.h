@@ -6,6 +6,7 @@
 
 #include "polrig/progress.h"
 #include "polrig/rig/rig.h"
+#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
@@ -35,6 +36,15 @@ std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg);
 // bracket, reproduces the traced signal, obliquity effects included. The channel's analyzer is
 // the film its truth α_m and kd_m stand for, turned with the table.
 std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m);
+
+// What traced_effective_irradiance computes channel m's signal from: the photodiode (or lens
+// axis) in the scene frame, the analyzer film turned with the table, and Eq. 15's bracket.
+struct TracedChannel {
+  Point2 p_scene;
+  AnalyzerFilm film;
+  double bracket = 1;
+};
+TracedChannel traced_channel(const Rig& rig, double theta_R_deg, int m);
 
 struct Stop {
   double theta_R_deg;

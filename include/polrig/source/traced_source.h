@@ -52,6 +52,10 @@ class TracedSource {
   // below the port (2 × 2 Gauss points over its square). Lensed: the film is L_o below the port,
   // then film_to_lens, the plano-convex lens and lens_to_photodiode.
   std::vector<double> channel_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const;
+  // channel_signal for several films at one point, [film][shift], each bit-identical to its
+  // channel_signal; bare, the port's rays and radiance are computed once for all films.
+  std::vector<std::vector<double>> channel_signals(const Point2& p, double L_o,
+                                                   const std::vector<AnalyzerFilm>& films) const;
 
   // The port film: degree of polarization, and its axis in the rig frame (the scene's axis,
   // mirrored: −axis_deg).
@@ -69,7 +73,8 @@ class TracedSource {
  private:
   // The sphere is solved on first use, once, whichever thread asks first.
   const SphereSolution& solution() const;
-  std::vector<double> bare_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const;
+  std::vector<std::vector<double>> bare_signals(const Point2& p, double L_o,
+                                                const std::vector<AnalyzerFilm>& films) const;
   std::vector<double> lensed_signal(const Point2& p, double top, const AnalyzerFilm& film) const;
 
   SceneSpec scene_;

@@ -1,6 +1,10 @@
 // Google Benchmark cases for polrig. Speed is reported as ratios against references measured in
-// the same run (bench/README.md): a bare loop of the same number of log10 calls that one CS
-// study must make, so the ratio says how close the study is to its arithmetic floor.
+// the same run (docs/validation.md): a bare loop of the same number of log10 calls that one CS
+// study must make, so the ratio says how close the study is to its arithmetic floor; a QR of the
+// fit's size; and, for the sphere tracer, rtcIntersect1 alone on stored rays of the kind the
+// tracer casts. Compare rays/s of BM_Tracer_SphereSolve with BM_Reference_EmbreeIntersect1:
+//   build/bench/polrig_bench --benchmark_filter='EmbreeIntersect1|Tracer'
+// (items_per_second is per CPU second; both run on one thread).
 #include <cmath>
 #include <vector>
 

@@ -6,12 +6,7 @@
 namespace polrig {
 namespace {
 
-constexpr std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
+using detail::splitmix64;
 
 std::uint64_t mix(std::uint64_t seed, std::uint64_t a, std::uint64_t b, std::uint64_t c) {
   std::uint64_t h = splitmix64(seed);
@@ -26,10 +21,6 @@ double unit_interval(std::uint64_t bits) {
 }
 
 }  // namespace
-
-double uniform_unit(std::uint64_t seed, std::uint64_t a, std::uint64_t b, std::uint64_t c) {
-  return unit_interval(mix(seed, a, b, c));
-}
 
 double standard_normal(std::uint64_t seed, std::uint64_t stop, std::uint64_t channel,
                        std::uint64_t sample) {

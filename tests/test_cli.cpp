@@ -299,6 +299,33 @@ TEST_F(Cli, SweepWritesTheGridAndIsIndependentOfThreadCount) {
       << "sweep.csv differs between 1 and 2 threads";
 }
 
+// A sweep long enough for several progress reports (200,000 grid points on one thread, seconds).
+const std::string kLongSweep = " --grid eccentricity.L_S=0.001:1:400 --grid eccentricity.L_IS=0.001:1:500 --no-plots --threads 1";
+
+TEST_F(Cli, NoProgressLineWhenStderrIsNotATerminal) {
+  // ok() sends stderr to a file: nothing may appear there but errors and notes.
+  const Result r = ok("sweep " + shell_quote(kRig) + kLongSweep + " -o " + dir_arg(tmp / "sw"));
+  EXPECT_EQ(r.err, "");
+  EXPECT_EQ(r.out, "wrote " + (tmp / "sw").string() + "\n");
+}
+
+TEST_F(Cli, ProgressLineOnATerminalUnlessQuiet) {
+  // `script` gives the program a pseudo-terminal as stdin, stdout and stderr.
+  if (std::system("command -v script >/dev/null 2>&1") != 0) GTEST_SKIP() << "no `script` to make a terminal";
+  const auto on_terminal = [&](const std::string& args, const fs::path& log) {
+    const std::string cmd = "script -qec " + shell_quote(shell_quote(kPolrigExe) + " " + args) + " /dev/null > " + shell_quote(log);
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    return read_file(log);
+  };
+  const std::string shown = on_terminal("sweep " + shell_quote(kRig) + kLongSweep + " -o " + dir_arg(tmp / "a"), tmp / "a.log");
+  EXPECT_HAS(shown, "\rpolrig: sweep: grid points  100 %");  // the last report, with the time taken
+  EXPECT_HAS(shown, "wrote " + (tmp / "a").string());
+  const std::string quiet = on_terminal("sweep " + shell_quote(kRig) + kLongSweep + " --quiet -o " + dir_arg(tmp / "b"), tmp / "b.log");
+  EXPECT_EQ(quiet.find("polrig: sweep"), std::string::npos) << quiet;
+  EXPECT_HAS(quiet, "wrote " + (tmp / "b").string());
+  EXPECT_EQ(read_file(tmp / "a" / "sweep.csv"), read_file(tmp / "b" / "sweep.csv"));
+}
+
 TEST_F(Cli, StudyAdcWritesAccuracyLimits) {
   const fs::path out = tmp / "adc";
   ok("study adc --d 0.05,0.5 -o " + dir_arg(out) + " --no-plots");

@@ -246,6 +246,24 @@ TEST(PolarizedRay, ParallelFilmsFollowMalusWithBothTaus) {
   }
 }
 
+TEST(PolarizedRay, SheetPairClosedFormIsTheMuellerChain) {
+  // The closed form a1·a2 + b1·b2·cos 2χ against the two frame rotations and diattenuators of
+  // pass_sheet_polarizer, at oblique incidence up to 75°, any axes, partial polarizers.
+  const auto axis = [](double deg) { return Vec3{std::cos(rad(deg)), std::sin(rad(deg)), 0}; };
+  for (std::uint64_t i = 0; i < 200; ++i) {
+    const double psi = 180 * uniform_unit(17, i, 0, 0), beta = 360 * uniform_unit(17, i, 1, 0);
+    const double M1 = 0.5 + 0.5 * uniform_unit(17, i, 2, 0), m1 = 0.3 * uniform_unit(17, i, 3, 0);
+    const double M2 = 1.0, m2 = 0.5 * uniform_unit(17, i, 4, 0);
+    const Vec3 d = direction(75 * uniform_unit(17, i, 5, 0), 360 * uniform_unit(17, i, 6, 0));
+    const Vec3 k{d[0], d[1], -d[2]};
+    PolarizedRay ray = unpolarized_ray(k, 1.0);
+    pass_sheet_polarizer(ray, {0, 0, 1}, axis(psi), M1, m1);
+    pass_sheet_polarizer(ray, {0, 0, 1}, axis(beta), M2, m2);
+    const SheetPolarizerPair pair({0, 0, 1}, axis(psi), M1, m1, axis(beta), M2, m2);
+    EXPECT_NEAR(pair.transmittance(k), ray.S(0), kTight) << i;
+  }
+}
+
 TEST(PolarizedRay, RefractionOfUnpolarizedLightIsFresnelAndSnell) {
   for (const auto& [n1, n2] : {std::pair{1.0, 1.5168}, std::pair{1.5168, 1.0}})
     for (double theta : {0.0, 10.0, 30.0, 40.0})  // below the critical 41.25° for glass → air

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -17,6 +18,7 @@
 #include <fmt/format.h>
 
 #include "polrig/calib/angles.h"
+#include "polrig/progress.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
@@ -458,6 +460,51 @@ TEST(Sweep, IsBitIdenticalForAnyThreadCount) {
       EXPECT_EQ(one.summaries[p][i].asd_mV, two.summaries[p][i].asd_mV);
       EXPECT_EQ(one.summaries[p][i].mean_mr_mV, two.summaries[p][i].mean_mr_mV);
     }
+}
+
+// ---- Progress reports ---------------------------------------------------------------------
+
+TEST(Progress, FormatsStageFractionAndEta) {
+  EXPECT_EQ(format_duration(0), "0:00");
+  EXPECT_EQ(format_duration(59.4), "0:59");
+  EXPECT_EQ(format_duration(59.6), "1:00");
+  EXPECT_EQ(format_duration(754), "12:34");
+  EXPECT_EQ(format_duration(3723), "1:02:03");
+  EXPECT_EQ(format_duration(-1), "0:00");
+  EXPECT_EQ(format_progress({"study cs: poses", 0.421, 5.0, 13.2}), "study cs: poses   42 %  ETA 0:13");
+  EXPECT_EQ(format_progress({"trace", 0.999, 5.0, 0.1}), "trace   99 %  ETA 0:00");  // never "100 %" early
+  EXPECT_EQ(format_progress({"trace", 0.0, 0.1, -1}), "trace    0 %  ETA ?");
+  EXPECT_EQ(format_progress({"trace", 1.0, 75.0, 0}), "trace  100 %  1:15");  // done: the time taken
+}
+
+TEST(Progress, ReportsFromManyThreadsEndAtTheWholeStage) {
+  std::vector<ProgressReport> seen;
+  const Progress p([&](const ProgressReport& r) { seen.push_back(r); }, 0.0);  // every advance
+  p.begin("stage", 1000);
+  tbb::parallel_for(0, 1000, [&](int) { p.advance(); });
+  p.finish();
+  ASSERT_FALSE(seen.empty());
+  for (std::size_t k = 1; k < seen.size(); ++k) EXPECT_LE(seen[k - 1].fraction, seen[k].fraction);
+  EXPECT_EQ(seen.back().stage, "stage");
+  EXPECT_EQ(seen.back().fraction, 1.0);
+  for (const ProgressReport& r : seen) {
+    EXPECT_GE(r.fraction, 0.0);
+    EXPECT_LE(r.fraction, 1.0);
+  }
+}
+
+TEST(Progress, AQuickStageAndTheDefaultHandleAreSilent) {
+  int reports = 0;
+  const Progress p([&](const ProgressReport&) { ++reports; }, 3600.0);
+  p.begin("quick", 10);
+  p.advance(10);
+  p.finish();
+  EXPECT_EQ(reports, 0);
+  const Progress none;
+  EXPECT_FALSE(static_cast<bool>(none));
+  none.begin("x", 1);  // no sink: nothing to call
+  none.advance();
+  none.finish();
 }
 
 }  // namespace

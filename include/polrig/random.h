@@ -7,8 +7,35 @@
 
 namespace polrig {
 
+namespace detail {
+constexpr std::uint64_t splitmix64(std::uint64_t x) {
+  x += 0x9E3779B97F4A7C15ull;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+  return x ^ (x >> 31);
+}
+}  // namespace detail
+
+// The uniform deviates uniform_unit(seed, a, b, c) for c = 0, 1, 2 …, with the part of the hash
+// that depends on (seed, a, b) computed once: a photon's stream in the sphere tracer.
+class UniformStream {
+ public:
+  constexpr UniformStream(std::uint64_t seed, std::uint64_t a, std::uint64_t b)
+      : prefix_(detail::splitmix64(detail::splitmix64(detail::splitmix64(seed) ^ a) ^ (b + 0x632BE59BD9B4E019ull))) {}
+  // (0, 1]: never 0, so log() is finite.
+  constexpr double operator()(std::uint64_t c) const {
+    const std::uint64_t bits = detail::splitmix64(prefix_ ^ (c + 0x8CB92BA72F3D8DD7ull));
+    return static_cast<double>((bits >> 11) + 1) * 0x1.0p-53;
+  }
+
+ private:
+  std::uint64_t prefix_;
+};
+
 // A uniform deviate in (0, 1].
-double uniform_unit(std::uint64_t seed, std::uint64_t a, std::uint64_t b, std::uint64_t c);
+inline double uniform_unit(std::uint64_t seed, std::uint64_t a, std::uint64_t b, std::uint64_t c) {
+  return UniformStream(seed, a, b)(c);
+}
 
 // A standard normal deviate; the noise of (stop, channel, sample) under a rig's seed.
 double standard_normal(std::uint64_t seed, std::uint64_t stop, std::uint64_t channel,

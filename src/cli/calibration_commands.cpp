@@ -276,7 +276,7 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
       s.L_S_max = L_S_max->value_or(2.0 * r.rig.eccentricity.L_S);
       s.calibration = settings->options(r.rig, r.rig.device.d);
       OutputDir dir = out->open();
-      const std::vector<Trial> result = calibration_trials(r.rig, s);
+      const std::vector<Trial> result = calibration_trials(r.rig, s, progress());
       write_manifest(dir.staging(), {command_line(), &r, report_calibration_trials(dir.staging(), result, out->plots())});
       finish(dir);
       for (const TrialSummary& t : summarize_trials(result)) {

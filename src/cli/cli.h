@@ -11,6 +11,7 @@
 #include "polrig/io/manifest.h"
 #include "polrig/io/output_dir.h"
 #include "polrig/io/rig_yaml.h"
+#include "polrig/progress.h"
 
 namespace polrig::cli {
 
@@ -44,6 +45,13 @@ void add_threads_option(CLI::App& app, int& threads);
 // A check for a real-valued option: a finite number in [lo, hi] ("nan" and "inf", which
 // CLI::Range lets through, are refused). `unit` is shown after the range.
 CLI::Validator finite_range(double lo, double hi, const std::string& unit = "");
+// --quiet on `app` and every command below it: no progress line.
+void add_quiet_option(CLI::App& app);
+// Where the library reports progress: a line on stderr, rewritten in place, when stderr is a
+// terminal and --quiet was not given; otherwise nowhere.
+Progress progress();
+// Ends an unfinished progress line, so that the next message starts on its own line.
+void end_progress_line();
 void finish(OutputDir& out);
 
 // Command registration; each returns the function to run when the command was chosen.

@@ -1,4 +1,7 @@
+#include <unistd.h>
+
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 
 #include <fmt/format.h>
@@ -9,6 +12,8 @@
 namespace polrig::cli {
 namespace {
 std::string g_command_line;
+bool g_quiet = false;
+bool g_line_open = false;  // a progress line without its newline yet
 
 std::string shell_word(const std::string& w) {
   if (!w.empty() && w.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
@@ -79,7 +84,29 @@ void add_threads_option(CLI::App& app, int& threads) {
       ->check(CLI::Range(1, 1024));
 }
 
+void add_quiet_option(CLI::App& app) {
+  app.add_flag("--quiet", g_quiet, "no progress line on stderr (there is none when stderr is not a terminal)");
+  for (CLI::App* sub : app.get_subcommands({})) add_quiet_option(*sub);
+}
+
+Progress progress() {
+  if (g_quiet || !::isatty(2)) return {};
+  return Progress([](const ProgressReport& r) {
+    const bool done = r.fraction >= 1;
+    std::fprintf(stderr, "\rpolrig: %s\033[K%s", format_progress(r).c_str(), done ? "\n" : "");
+    std::fflush(stderr);
+    g_line_open = !done;
+  }, 0.5);
+}
+
+void end_progress_line() {
+  if (!g_line_open) return;
+  std::fputc('\n', stderr);
+  g_line_open = false;
+}
+
 void finish(OutputDir& out) {
+  end_progress_line();
   out.commit();
   std::cout << "wrote " << out.destination().string() << "\n";
 }

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   std::vector<cli::Command> commands = cli::add_rig_commands(app, threads);
   CLI::App* study = app.get_subcommand("study");
   for (cli::Command& c : cli::add_calibration_commands(app, *study, threads)) commands.push_back(c);
+  cli::add_quiet_option(app);
 
   try {
     app.parse(argc, argv);
@@ -43,15 +44,19 @@ int main(int argc, char** argv) {
         break;
       }
   } catch (const RigError& e) {
+    cli::end_progress_line();
     std::cerr << "polrig: error: " << e.what() << "\n";
     return 2;
   } catch (const DataError& e) {
+    cli::end_progress_line();
     std::cerr << "polrig: error: " << e.what() << "\n";
     return 2;
   } catch (const CalibrationError& e) {
+    cli::end_progress_line();
     std::cerr << "polrig: error: cannot calibrate: " << e.what() << "\n";
     return 3;
   } catch (const std::exception& e) {
+    cli::end_progress_line();
     std::cerr << "polrig: error: " << e.what() << "\n";
     return 1;
   }

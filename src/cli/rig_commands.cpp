@@ -14,6 +14,7 @@
 #include "cli.h"
 #include "polrig/calib/pipeline.h"
 #include "polrig/rig/keys.h"
+#include "polrig/source/traced_source.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
 #include "polrig/study/calibration_reports.h"
@@ -128,7 +129,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
       OutputDir dir = out->open();
-      const Simulation sim = simulate(r.rig, *samples);
+      const Simulation sim = simulate(r.rig, *samples, progress());
       write_manifest(dir.staging(), {command_line(), &r, report_simulation(dir.staging(), sim, out->plots())});
       finish(dir);
     }});
@@ -150,7 +151,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
       OutputDir dir = out->open();
-      const CsStudy s = cs_study(r.rig, CsTurn(*steps));
+      const CsStudy s = cs_study(r.rig, CsTurn(*steps), progress());
       write_manifest(dir.staging(), {command_line(), &r, report_cs_study(dir.staging(), s, out->plots())});
       finish(dir);
     }});
@@ -204,21 +205,20 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                    "row along that axis will be the same\n", a.key->path);
       check_grid(r.rig, axes);
       OutputDir dir = out->open(axes.size() <= 2);
-      const bool tty = ::isatty(2);
-      const auto t0 = std::chrono::steady_clock::now();
-      auto last = t0;
+      const Progress p = progress();
+      if (r.rig.source.traced) r.rig.source.traced->solve(p);
+      long long points = 1;
+      for (const GridAxis& a : axes) points *= a.count;
+      p.begin("sweep: grid points", points);
+      std::size_t reported = 0;
       SweepReport report(dir.staging(), axes);
       sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t first, std::span<const CsSummary> block) {
         report.write(first, block);
-      }, [&](std::size_t done, std::size_t total) {
-        const auto now = std::chrono::steady_clock::now();
-        if (done < total && now - last < std::chrono::milliseconds(500)) return;
-        last = now;
-        std::fprintf(stderr, "%ssweep: %zu/%zu grid points (%.0f%%), %.1f s%s", tty ? "\r" : "",
-                     done, total, 100.0 * static_cast<double>(done) / static_cast<double>(total),
-                     std::chrono::duration<double>(now - t0).count(),
-                     (tty && done < total) ? "" : "\n");
+      }, [&](std::size_t done, std::size_t) {
+        p.advance(static_cast<long long>(done - reported));
+        reported = done;
       });
+      p.finish();
       write_manifest(dir.staging(), {command_line(), &r, report.finish(out->plots())});
       finish(dir);
     }});
@@ -237,7 +237,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
       OutputDir dir = out->open();
-      const Simulation sim = simulate(r.rig, false);
+      const Progress p = progress();
+      const Simulation sim = simulate(r.rig, false, p);
       std::vector<CalibrationResult> calibrations;
       for (CalibrationMethod m : kAllMethods) {
         try {
@@ -250,7 +251,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                              "not usable: {}", method_name(m),
                                              calibrations.back().fit.summary.brief_report()));
       }
-      const CsStudy cs = cs_study(r.rig, CsTurn(360));
+      const CsStudy cs = cs_study(r.rig, CsTurn(360), p);
       std::vector<double> ds;
       for (int k = 1; k <= 19; ++k) ds.push_back(k / 20.0);
       const std::vector<AdcLimit> limits = adc_limits(r.rig, ds, 0.1);
@@ -304,7 +305,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       s.trace.photons -= s.trace.photons % s.trace.batches;  // whole batches, as traced
       OutputDir dir = out->open();
       const auto t0 = std::chrono::steady_clock::now();
-      Manifest m{command_line(), nullptr, trace_scene(dir.staging(), s, out->plots()), {*scene}};
+      Manifest m{command_line(), nullptr, trace_scene(dir.staging(), s, out->plots(), progress()), {*scene}};
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       write_manifest(dir.staging(), m);
       finish(dir);

@@ -48,6 +48,18 @@ bool refract(PolarizedRay& ray, const Vec3& normal, double n1, double n2) {
   return true;
 }
 
+SheetPolarizerPair::SheetPolarizerPair(const Vec3& film_normal, const Vec3& axis1, double tau_M1,
+                                       double tau_m1, const Vec3& axis2, double tau_M2, double tau_m2)
+    : m1_(cross(film_normal, axis1)), m2_(cross(film_normal, axis2)),
+      aa_(0.25 * (tau_M1 + tau_m1) * (tau_M2 + tau_m2)), bb_(0.25 * (tau_M1 - tau_m1) * (tau_M2 - tau_m2)) {}
+
+double SheetPolarizerPair::transmittance(const Vec3& k) const {
+  const Vec3 e1 = cross(k, m1_), e2 = cross(k, m2_);
+  const double c = dot(e1, e2);
+  // cos 2χ = 2cos²χ − 1 with cos²χ = (e1·e2)²/(|e1|²|e2|²): no square roots.
+  return aa_ + bb_ * (2 * c * c / (dot(e1, e1) * dot(e2, e2)) - 1);
+}
+
 MuellerMatrix diattenuator(double T_x, double T_y) {
   const double a = 0.5 * (T_x + T_y), b = 0.5 * (T_x - T_y), c = std::sqrt(T_x * T_y);
   MuellerMatrix m;

@@ -8,6 +8,7 @@
 #include <tbb/parallel_for.h>
 
 #include "polrig/device/sensor.h"
+#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
@@ -46,7 +47,7 @@ std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg) {
   return {E0, E0, E0, E0, E0, E0};
 }
 
-std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m) {
+TracedChannel traced_channel(const Rig& rig, double theta_R_deg, int m) {
   const TracedSource& traced = *rig.source.traced;
   const Point2 p = photodiode_positions(rig.device.ring, rig.eccentricity, theta_R_deg)[static_cast<std::size_t>(m)] -
                    port_centre(rig.eccentricity);
@@ -54,10 +55,14 @@ std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_d
   // The sensor frame is the scene frame turned by −θ_R (both seen from above; the table turns
   // anticlockwise seen from below): a sensor-frame angle φ is at φ − θ_R in the scene.
   const AnalyzerFilm film{film_axis_from_alpha_deg(truth, m) - theta_R_deg, 1.0 + truth.kd[static_cast<std::size_t>(m)]};
-  std::vector<double> e = traced.channel_signal(to_scene(p), rig.source.cos4.L_o, film);
   const double theta = sensor_polarization_angle_deg(theta_R_deg, traced.polarizer_axis_rig_deg());
-  const double bracket = channel_response(truth, m, theta, traced.degree_of_polarization());
-  for (double& x : e) x /= bracket;
+  return {to_scene(p), film, channel_response(truth, m, theta, traced.degree_of_polarization())};
+}
+
+std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m) {
+  const TracedChannel c = traced_channel(rig, theta_R_deg, m);
+  std::vector<double> e = rig.source.traced->channel_signal(c.p_scene, rig.source.cos4.L_o, c.film);
+  for (double& x : e) x /= c.bracket;
   return e;
 }
 
@@ -107,17 +112,21 @@ Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg,
 
 }  // namespace
 
-Simulation simulate(const Rig& rig, bool keep_samples) {
+Simulation simulate(const Rig& rig, bool keep_samples, const Progress& progress) {
   const std::vector<double> angles = rig.schedule.table_angles_deg();
   Simulation sim;
   sim.samples_per_stop = rig.schedule.samples_per_stop;
   sim.stops.resize(angles.size());
   if (keep_samples) sim.samples.resize(angles.size() * static_cast<std::size_t>(sim.samples_per_stop));
+  if (rig.source.traced) rig.source.traced->solve(progress);
+  progress.begin("simulate: stops", static_cast<long long>(angles.size()));
   tbb::parallel_for(std::size_t{0}, angles.size(), [&](std::size_t s) {
     std::array<double, 3>* out =
         keep_samples ? &sim.samples[s * static_cast<std::size_t>(sim.samples_per_stop)] : nullptr;
     sim.stops[s] = simulate_stop(rig, s, angles[s], out);
+    progress.advance();
   });
+  progress.finish();
   return sim;
 }
 

@@ -125,11 +125,12 @@ void record_embree_error(void* user, RTCError code, const char* message) {
 }
 
 // Embree callbacks. Rays arrive in single precision; `RayContext` carries the double-precision
-// ray so that user geometry can intersect exactly.
+// ray so that user geometry can intersect exactly, and the exact t of the hit Embree keeps.
 struct RayContext {
   RTCIntersectContext base;
   Vec3 o, d;
   double t_min;
+  double t_hit = -1;
 };
 
 RayContext ray_context(const Vec3& o, const Vec3& d, double t_min) {
@@ -188,11 +189,12 @@ void bounds_cb(const RTCBoundsFunctionArguments* args) {
 void intersect_cb(const RTCIntersectFunctionNArguments* args) {
   if (args->N != 1 || !args->valid[0]) return;
   const GeomData* g = static_cast<const GeomData*>(args->geometryUserPtr);
-  const RayContext* ctx = reinterpret_cast<const RayContext*>(args->context);
+  RayContext* ctx = reinterpret_cast<RayContext*>(args->context);
   RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
   const double t = g->impl->intersect(g->geom, args->primID, ctx->o, ctx->d, ctx->t_min);
   if (t < 0 || static_cast<float>(t) > rh->ray.tfar) return;
   rh->ray.tfar = static_cast<float>(t);
+  ctx->t_hit = t;
   rh->hit.geomID = args->geomID;
   rh->hit.primID = args->primID;
   rh->hit.u = rh->hit.v = 0;
@@ -265,7 +267,7 @@ SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t
   Hit h;
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return h;
   // The float tfar ordered the candidates; the point comes from the exact double root.
-  const double t = m.intersect(rh.hit.geomID, rh.hit.primID, o, d, t_min);
+  const double t = ctx.t_hit;
   h.t = t;
   h.point = add(o, mul(d, t));
   if (rh.hit.geomID == m.wall_geom) {
@@ -303,7 +305,7 @@ struct BatchTally {
 
 }  // namespace
 
-SphereSolution SphereTracer::trace_photons() const {
+SphereSolution SphereTracer::trace_photons(const Progress& progress) const {
   const Impl& m = *impl_;
   const TraceSettings& ts = scene_.trace;
   const auto t0 = std::chrono::steady_clock::now();
@@ -333,6 +335,8 @@ SphereSolution SphereTracer::trace_photons() const {
   const double photon_W = sol.power_W / static_cast<double>(per_batch * B);
 
   std::vector<BatchTally> tally(static_cast<std::size_t>(B));
+  progress.begin("sphere solve: photons", per_batch * B);
+  constexpr long long kReportEvery = 4096;
   tbb::parallel_for(0, B, [&](int b) {
     BatchTally& t = tally[static_cast<std::size_t>(b)];
     t.wall_W.assign(bins, 0.0);
@@ -341,8 +345,10 @@ SphereSolution SphereTracer::trace_photons() const {
     for (long long k = 0; k < per_batch; ++k) {
       const std::uint64_t photon = static_cast<std::uint64_t>(b) * static_cast<std::uint64_t>(per_batch) + static_cast<std::uint64_t>(k);
       std::uint64_t draw = 0;
-      const auto u = [&]() { return uniform_unit(ts.seed, photon, 0x5AB1, draw++); };
+      const UniformStream stream(ts.seed, photon, 0x5AB1);
+      const auto u = [&]() { return stream(draw++); };
       ++t.ledger.launched;
+      if ((k + 1) % kReportEvery == 0) progress.advance(kReportEvery);
       // Emission: a lamp by power, a point on its surface, a cosine-weighted direction.
       const double pick = u() * sol.power_W;
       const std::size_t li = static_cast<std::size_t>(std::lower_bound(lamp_cdf.begin(), lamp_cdf.end(), pick) - lamp_cdf.begin());
@@ -402,7 +408,9 @@ SphereSolution SphereTracer::trace_photons() const {
         d = cosine_direction(n, u(), u());
       }
     }
+    progress.advance(per_batch % kReportEvery);
   });
+  progress.finish();
 
   // Combine batches in order: means and standard errors of the per-batch estimates.
   const auto combine = [&](auto get, std::size_t n, double area_of(std::size_t, const WallMap&, const SceneSpec&),
@@ -446,12 +454,12 @@ SphereSolution SphereTracer::trace_photons() const {
   return sol;
 }
 
-SphereSolution SphereTracer::solve() const {
+SphereSolution SphereTracer::solve(const Progress& progress) const {
   const auto t0 = std::chrono::steady_clock::now();
-  SphereSolution sol = trace_photons();
+  SphereSolution sol = trace_photons(progress);
   impl_->throw_on_embree_error();
   const int steps = static_cast<int>(std::lround(180.0 / scene_.trace.field_step_deg));
-  sol.field = compute_wall_field(*this, sol, steps + 1, 2 * steps);
+  sol.field = compute_wall_field(*this, sol, steps + 1, 2 * steps, progress);
   sol.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return sol;
 }
@@ -498,17 +506,24 @@ double SphereTracer::direct_irradiance(const Vec3& wall_point) const {
   return e;
 }
 
-long long SphereTracer::plain_intersections(long long count, std::uint64_t seed) const {
-  const Impl& m = *impl_;
-  long long hits = 0;
+std::vector<SphereTracer::Ray> SphereTracer::wall_rays(long long count, std::uint64_t seed) const {
+  std::vector<Ray> rays;
+  rays.reserve(static_cast<std::size_t>(count));
   for (long long k = 0; k < count; ++k) {
     const auto u = [&](std::uint64_t j) { return uniform_unit(seed, static_cast<std::uint64_t>(k), 0xBE, j); };
     const Vec3 n = uniform_direction(u(0), u(1));
-    const Vec3 o = mul(n, m.R);
-    const Vec3 d = cosine_direction(mul(n, -1.0), u(2), u(3));
+    rays.push_back({mul(n, impl_->R), cosine_direction(mul(n, -1.0), u(2), u(3))});
+  }
+  return rays;
+}
+
+long long SphereTracer::plain_intersections(const std::vector<Ray>& rays) const {
+  const Impl& m = *impl_;
+  long long hits = 0;
+  for (const Ray& r : rays) {
     // The user geometry reads the double-precision ray from the context.
-    RayContext rc = ray_context(o, d, 1e-9);
-    RTCRayHit rh = ray_hit(o, d, 1e-4f);
+    RayContext rc = ray_context(r.origin, r.dir, 1e-9);
+    RTCRayHit rh = ray_hit(r.origin, r.dir, 1e-4f);
     rtcIntersect1(m.scene, &rc.base, &rh);
     hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
   }

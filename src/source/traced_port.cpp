@@ -82,11 +82,16 @@ double TracedPort::uniform_part(const Vec3& P, const RayTransmission& T) const {
 
 double TracedPort::sampled_part(const Vec3& P, const RayTransmission& T, long long samples,
                                 int shift) const {
+  return sampled_parts(P, {T}, samples, shift)[0];
+}
+
+std::vector<double> TracedPort::sampled_parts(const Vec3& P, const std::vector<RayTransmission>& Ts,
+                                              long long samples, int shift) const {
   const SceneSpec& sc = tracer_.scene();
   const double a = sc.port.radius(), zp = sc.port_plane_z();
   const double du = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 0);
   const double dv = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 1);
-  double e = 0;
+  std::vector<double> e(Ts.size(), 0.0);
   for (long long n = 0; n < samples; ++n) {
     double u = du + kR2a * static_cast<double>(n + 1), v = dv + kR2b * static_cast<double>(n + 1);
     u -= std::floor(u);
@@ -95,9 +100,12 @@ double TracedPort::sampled_part(const Vec3& P, const RayTransmission& T, long lo
     const Vec3 Q{rho * std::cos(phi), rho * std::sin(phi), zp};
     const Vec3 d = sub(Q, P);
     const Vec3 up = unit(d);
-    e += (wall_radiance_along(Q, up) - L_ref_) * T(mul(up, -1.0)) * plane_to_plane(d);
+    const double L = wall_radiance_along(Q, up) - L_ref_, G = plane_to_plane(d);
+    const Vec3 k = mul(up, -1.0);
+    for (std::size_t f = 0; f < Ts.size(); ++f) e[f] += L * Ts[f](k) * G;
   }
-  return e * kPi * a * a / static_cast<double>(samples);
+  for (double& x : e) x = x * kPi * a * a / static_cast<double>(samples);
+  return e;
 }
 
 double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const {
@@ -157,10 +165,20 @@ double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const 
 
 std::vector<double> TracedPort::irradiance(double x, double y, double h, const RayTransmission& T,
                                            long long samples, int shifts) const {
+  return irradiance(x, y, h, std::vector<RayTransmission>{T}, samples, shifts)[0];
+}
+
+std::vector<std::vector<double>> TracedPort::irradiance(double x, double y, double h,
+                                                        const std::vector<RayTransmission>& Ts,
+                                                        long long samples, int shifts) const {
   const Vec3 P{x, y, tracer_.scene().port_plane_z() - h};
-  const double fixed = uniform_part(P, T) + occluder_part(P, T);
-  std::vector<double> e(static_cast<std::size_t>(shifts));
-  for (int k = 0; k < shifts; ++k) e[static_cast<std::size_t>(k)] = fixed + sampled_part(P, T, samples, k);
+  std::vector<std::vector<double>> e(Ts.size(), std::vector<double>(static_cast<std::size_t>(shifts)));
+  std::vector<double> fixed(Ts.size());
+  for (std::size_t f = 0; f < Ts.size(); ++f) fixed[f] = uniform_part(P, Ts[f]) + occluder_part(P, Ts[f]);
+  for (int k = 0; k < shifts; ++k) {
+    const std::vector<double> s = sampled_parts(P, Ts, samples, k);
+    for (std::size_t f = 0; f < Ts.size(); ++f) e[f][static_cast<std::size_t>(k)] = fixed[f] + s[f];
+  }
   return e;
 }
 
@@ -173,12 +191,8 @@ StokesIrradiance TracedPort::plane_stokes(double x, double y, double h, long lon
   const RayTransmission through_film = [&](const Vec3&) { return film.g_up(); };
   const auto analyzer = [&](double beta_deg) -> RayTransmission {
     const Vec3 axis{std::cos(deg2rad(beta_deg)), std::sin(deg2rad(beta_deg)), 0};
-    return [=, &film](const Vec3& k) {
-      PolarizedRay ray = unpolarized_ray(k, 1.0);
-      pass_sheet_polarizer(ray, z, port_axis, film.tau_M, film.tau_m);
-      pass_sheet_polarizer(ray, z, axis, 1.0, 0.0);
-      return ray.S[0];
-    };
+    const SheetPolarizerPair films(z, port_axis, film.tau_M, film.tau_m, axis, 1.0, 0.0);
+    return [films](const Vec3& k) { return films.transmittance(k); };
   };
   const std::vector<double> s0 = irradiance(x, y, h, through_film, samples, shifts);
   std::vector<double> s1 = irradiance(x, y, h, analyzer(0), samples, shifts), s2 = irradiance(x, y, h, analyzer(45), samples, shifts);

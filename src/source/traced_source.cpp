@@ -22,7 +22,7 @@ TracedSource::TracedSource(const SceneSpec& scene)
 
 TracedSource::~TracedSource() = default;
 
-const SphereSolution& TracedSource::solution() const {
+void TracedSource::solve(const Progress& progress) const {
   std::call_once(solved_, [&] {
     // The first caller solves for all, usually from inside a parallel loop. Isolated, so that
     // while this thread waits in the solve's own loops it takes no other task of the caller's
@@ -34,7 +34,7 @@ const SphereSolution& TracedSource::solution() const {
       tbb::task_group_context own(tbb::task_group_context::isolated);
       tbb::this_task_arena::isolate([&] {
         tbb::parallel_for(0, 1, [&](int) {
-          auto sol = std::make_unique<SphereSolution>(tracer_->solve());
+          auto sol = std::make_unique<SphereSolution>(tracer_->solve(progress));
           L_ref_ = mean_port_radiance(*tracer_, *sol, scene_.sensor.L_o);
           solution_ = std::move(sol);
         }, own);
@@ -45,6 +45,10 @@ const SphereSolution& TracedSource::solution() const {
     }
   });
   if (solve_failure_) std::rethrow_exception(solve_failure_);
+}
+
+const SphereSolution& TracedSource::solution() const {
+  solve({});
   return *solution_;
 }
 
@@ -67,6 +71,12 @@ struct FilmPair {
   FilmPair(const PolarizerFilm& p, const AnalyzerFilm& a) : port(p), analyzer(a) {
     tau_m = (1 - a.efficiency) / (1 + a.efficiency);
     gains = p.g_up() * 0.5 * (tau_M + tau_m);
+  }
+  // The same two films as one closed form (S0 alone, for the bare sensor).
+  SheetPolarizerPair sheets() const {
+    const double psi = deg2rad(port.axis_deg), beta = deg2rad(analyzer.axis_deg);
+    return {{0, 0, 1}, {std::cos(psi), std::sin(psi), 0}, port.tau_M, port.tau_m,
+            {std::cos(beta), std::sin(beta), 0}, tau_M, tau_m};
   }
   PolarizedRay through(const Vec3& k) const {
     const Vec3 z{0, 0, 1};
@@ -130,27 +140,44 @@ std::vector<double> TracedSource::lensed_signal(const Point2& p, double top, con
   return signal;
 }
 
-std::vector<double> TracedSource::bare_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const {
-  const FilmPair films(scene_.port.polarizer, film);
-  const RayTransmission T = [&films](const Vec3& k) { return films.through(k).S[0] / films.gains; };
+std::vector<std::vector<double>> TracedSource::bare_signals(const Point2& p, double L_o,
+                                                           const std::vector<AnalyzerFilm>& films) const {
+  std::vector<FilmPair> pairs;
+  std::vector<SheetPolarizerPair> sheets;
+  for (const AnalyzerFilm& f : films) {
+    pairs.emplace_back(scene_.port.polarizer, f);
+    sheets.push_back(pairs.back().sheets());
+  }
+  std::vector<RayTransmission> T;
+  for (std::size_t f = 0; f < films.size(); ++f)
+    T.push_back([&, f](const Vec3& k) { return sheets[f].transmittance(k) / pairs[f].gains; });
   const SphereSolution& sol = solution();
   const TracedPort port(*tracer_, sol, L_ref_);
   const long long samples = std::max<long long>(16, scene_.trace.plane_samples / 4);
   // 2 × 2 Gauss–Legendre points over the square photodiode: exact for irradiance that varies as
   // a cubic across it.
   const double g = 0.5 * scene_.sensor.photodiode_size / std::sqrt(3.0);
-  std::vector<double> signal(static_cast<std::size_t>(shifts_), 0.0);
+  std::vector<std::vector<double>> signal(films.size(), std::vector<double>(static_cast<std::size_t>(shifts_), 0.0));
   for (int k = 0; k < 4; ++k) {
     const double x = p.x() + ((k & 1) ? g : -g), y = p.y() + ((k & 2) ? g : -g);
-    const std::vector<double> e = port.irradiance(x, y, L_o, T, samples, shifts_);
-    for (std::size_t i = 0; i < signal.size(); ++i) signal[i] += 0.25 * e[i];
+    const std::vector<std::vector<double>> e = port.irradiance(x, y, L_o, T, samples, shifts_);
+    for (std::size_t f = 0; f < films.size(); ++f)
+      for (std::size_t i = 0; i < signal[f].size(); ++i) signal[f][i] += 0.25 * e[f][i];
   }
   return signal;
 }
 
 std::vector<double> TracedSource::channel_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const {
   if (scene_.sensor.geometry == "lensed") return lensed_signal(p, L_o, film);
-  return bare_signal(p, L_o, film);
+  return bare_signals(p, L_o, {film})[0];
+}
+
+std::vector<std::vector<double>> TracedSource::channel_signals(const Point2& p, double L_o,
+                                                               const std::vector<AnalyzerFilm>& films) const {
+  if (scene_.sensor.geometry != "lensed") return bare_signals(p, L_o, films);
+  std::vector<std::vector<double>> signals;
+  for (const AnalyzerFilm& f : films) signals.push_back(lensed_signal(p, L_o, f));
+  return signals;
 }
 
 }  // namespace polrig

@@ -164,25 +164,29 @@ double WallField::after_first_strike(const Vec3& p) const {
   catmull_rom(theta / dt - it, wt);
   catmull_rom(phi / dp - ip, wp);
   // Rows beyond a pole continue over it on the opposite meridian (θ → −θ, φ → φ + π).
-  const auto value = [&](int i, int j) {
+  double d = 0;
+  for (int a = 0; a < 4; ++a) {
+    int i = it - 1 + a, turn = 0;
     if (i < 0) {
       i = -i;
-      j += n_phi / 2;
+      turn = n_phi / 2;
     } else if (i > n_theta - 1) {
       i = 2 * (n_theta - 1) - i;
-      j += n_phi / 2;
+      turn = n_phi / 2;
     }
-    j = ((j % n_phi) + n_phi) % n_phi;
-    return delta[static_cast<std::size_t>(i * n_phi + j)];
-  };
-  double d = 0;
-  for (int a = 0; a < 4; ++a)
-    for (int b = 0; b < 4; ++b) d += wt[a] * wp[b] * value(it - 1 + a, ip - 1 + b);
+    const double* row = delta.data() + static_cast<std::size_t>(i) * static_cast<std::size_t>(n_phi);
+    for (int b = 0; b < 4; ++b) {
+      int j = ip - 1 + b + turn;  // ≥ −1
+      if (j < 0) j += n_phi;
+      while (j >= n_phi) j -= n_phi;
+      d += wt[a] * wp[b] * row[j];
+    }
+  }
   return C + d;
 }
 
 WallField compute_wall_field(const SphereTracer& tracer, const SphereSolution& solution, int n_theta,
-                             int n_phi) {
+                             int n_phi, const Progress& progress) {
   const SceneSpec& scene = tracer.scene();
   WallField f;
   f.R = scene.sphere.radius();
@@ -191,6 +195,7 @@ WallField compute_wall_field(const SphereTracer& tracer, const SphereSolution& s
   const std::size_t nodes = static_cast<std::size_t>(f.n_theta) * static_cast<std::size_t>(f.n_phi);
   std::vector<Linear> delta(nodes);
   const OccluderIntegrals integrals(tracer, solution);
+  progress.begin("sphere solve: wall field", f.n_theta);
   tbb::parallel_for(0, f.n_theta, [&](int i) {
     const double theta = kPi * i / (f.n_theta - 1);
     const bool pole = i == 0 || i == f.n_theta - 1;
@@ -199,7 +204,9 @@ WallField compute_wall_field(const SphereTracer& tracer, const SphereSolution& s
       delta[k] = pole && j > 0 ? delta[k - static_cast<std::size_t>(j)]
                                : integrals.delta(node_point(f.R, theta, 2 * kPi * j / f.n_phi));
     }
+    progress.advance();
   });
+  progress.finish();
 
   // C from energy: the wall's mean of C + δ = the photon solve's mean after the first strike.
   // Wall means by the midpoint rule over the grid's cells, the port cap left out.

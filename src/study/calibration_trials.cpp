@@ -8,6 +8,7 @@
 
 #include "polrig/random.h"
 #include "polrig/sim/simulate.h"
+#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
@@ -50,9 +51,15 @@ double quantile(std::vector<double> sorted, double q) {
 
 }  // namespace
 
-std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& s) {
+std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& s, const Progress& progress) {
   std::vector<Trial> trials(static_cast<std::size_t>(std::max(0, s.trials)));
-  tbb::parallel_for(0, s.trials, [&](int k) { trials[static_cast<std::size_t>(k)] = run_trial(rig, s, k); });
+  if (rig.source.traced) rig.source.traced->solve(progress);
+  progress.begin("study calibration: trials", s.trials);
+  tbb::parallel_for(0, s.trials, [&](int k) {
+    trials[static_cast<std::size_t>(k)] = run_trial(rig, s, k);
+    progress.advance();
+  });
+  progress.finish();
   return trials;
 }
 

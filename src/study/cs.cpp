@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <stdexcept>
 
 #include "polrig/device/sensor.h"
@@ -47,15 +48,40 @@ void cos4_irradiance_over_turn(const Rig& rig, const CsTurn& turn, double* E) {
 
 // The traced source's effective irradiances (light_at_pose) at every step of the turn, one
 // array E[m·n + k] per shift.
-std::vector<std::vector<double>> traced_irradiance_over_turn(const Rig& rig, const CsTurn& turn) {
+std::vector<std::vector<double>> traced_irradiance_over_turn(const Rig& rig, const CsTurn& turn,
+                                                             const Progress& progress) {
   const int n = turn.steps(), S = rig.source.traced->shifts();
   std::vector<std::vector<double>> E(static_cast<std::size_t>(S), std::vector<double>(static_cast<std::size_t>(6 * n)));
+  std::vector<TracedChannel> channel(static_cast<std::size_t>(6 * n));
+  for (int mk = 0; mk < 6 * n; ++mk) channel[static_cast<std::size_t>(mk)] = traced_channel(rig, turn.theta_R_deg(mk % n), mk / n);
+  // Channels whose photodiodes sit at one point (to 1 pm: a coaxial rig turning in steps that
+  // divide the ring's spacing brings every channel to the same points) share the port's rays
+  // and radiance, at the point of the first of them.
+  std::map<std::pair<long long, long long>, std::size_t> group_at;
+  std::vector<std::vector<int>> groups;
+  for (int mk = 0; mk < 6 * n; ++mk) {
+    const Point2& p = channel[static_cast<std::size_t>(mk)].p_scene;
+    const auto [it, added] = group_at.try_emplace({std::llround(p.x() * 1e9), std::llround(p.y() * 1e9)}, groups.size());
+    if (added) groups.emplace_back();
+    groups[it->second].push_back(mk);
+  }
   // Isolated: a sweep's outer loop must not run another grid point on this thread while it
   // waits here, since that point would share this thread's scratch.
-  tbb::this_task_arena::isolate([&] { tbb::parallel_for(0, 6 * n, [&](int mk) {
-    const int m = mk / n, k = mk % n;
-    const std::vector<double> e = traced_effective_irradiance(rig, turn.theta_R_deg(k), m);
-    for (int sh = 0; sh < S; ++sh) E[static_cast<std::size_t>(sh)][static_cast<std::size_t>(mk)] = e[static_cast<std::size_t>(sh)];
+  tbb::this_task_arena::isolate([&] { tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
+    const std::vector<int>& members = groups[g];
+    std::vector<AnalyzerFilm> films;
+    for (int mk : members) films.push_back(channel[static_cast<std::size_t>(mk)].film);
+    const std::vector<std::vector<double>> e = rig.source.traced->channel_signals(
+        channel[static_cast<std::size_t>(members[0])].p_scene, rig.source.cos4.L_o, films);
+    for (std::size_t j = 0; j < members.size(); ++j) {
+      const std::size_t mk = static_cast<std::size_t>(members[j]);
+      for (int sh = 0; sh < S; ++sh) {
+        double x = e[j][static_cast<std::size_t>(sh)];
+        x /= channel[mk].bracket;
+        E[static_cast<std::size_t>(sh)][mk] = x;
+      }
+    }
+    progress.advance(static_cast<long long>(members.size()));
   }); });
   return E;
 }
@@ -130,15 +156,19 @@ namespace {
 // reduced by √shifts), with the standard errors of the per-shift figures. Eq. 6 is a cos⁴
 // result and has no meaning here (NaN).
 CsSummary traced_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch,
-                         std::vector<double>* mean_curves, CsSummary* coaxial_summary) {
+                         std::vector<double>* mean_curves, CsSummary* coaxial_summary,
+                         const Progress& progress = {}) {
   const int n = turn.steps(), S = rig.source.traced->shifts();
   std::vector<double> mean(static_cast<std::size_t>(6 * n), 0.0), coaxial_mean(mean.size(), 0.0);
   std::vector<std::vector<double>> curves;  // per shift, for the standard errors per pose
   std::vector<CsSummary> per_shift;
   // ΔV refers to the coaxial rig's traced voltages at the same pose (ideal_irradiance): Eq. 5's
   // bias of the eccentric rig less that of the coaxial one, log10 of the ratio of ratios.
-  std::vector<std::vector<double>> E = traced_irradiance_over_turn(rig, turn);
-  const std::vector<std::vector<double>> E_ideal = traced_irradiance_over_turn(coaxial(rig), turn);
+  rig.source.traced->solve(progress);
+  progress.begin("study cs: channels at every pose, eccentric and coaxial", 2 * 6 * n);
+  std::vector<std::vector<double>> E = traced_irradiance_over_turn(rig, turn, progress);
+  const std::vector<std::vector<double>> E_ideal = traced_irradiance_over_turn(coaxial(rig), turn, progress);
+  progress.finish();
   for (int k = 0; k < S; ++k) {
     std::vector<double>& e = E[static_cast<std::size_t>(k)];
     const std::vector<double>& ideal = E_ideal[static_cast<std::size_t>(k)];
@@ -178,7 +208,7 @@ CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& sc
   return traced_summary(rig, turn, scratch, nullptr, nullptr);
 }
 
-CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
+CsStudy cs_study(const Rig& rig, const CsTurn& turn, const Progress& progress) {
   const int n = turn.steps();
   std::vector<double> scratch;
   CsStudy study;
@@ -186,7 +216,7 @@ CsStudy cs_study(const Rig& rig, const CsTurn& turn) {
   for (int k = 0; k < n; ++k) study.theta_R_deg.push_back(turn.theta_R_deg(k));
   std::vector<double> curves;
   if (study.traced) {
-    study.summary = traced_summary(rig, turn, scratch, &curves, &study.coaxial);
+    study.summary = traced_summary(rig, turn, scratch, &curves, &study.coaxial, progress);
   } else {
     study.summary = one_pass(rig, turn, nullptr, scratch);
     curves.assign(scratch.begin(), scratch.begin() + 6 * n);

@@ -22,9 +22,9 @@ constexpr double kPi = std::numbers::pi;
 }
 
 std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const SceneSpec& scene,
-                                     bool plots) {
+                                     bool plots, const Progress& progress) {
   const SphereTracer tracer(scene);
-  const SphereSolution sol = tracer.solve();
+  const SphereSolution sol = tracer.solve(progress);
   const EnergyLedger& L = sol.ledger;
   if (L.leaked > 0)
     throw std::runtime_error(fmt::format("the sphere leaked {} of {} photons: the geometry is not "
@@ -54,10 +54,13 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
   const double half = 1.5 * a;
   std::vector<StokesIrradiance> grid(static_cast<std::size_t>(N * N));
   const long long map_samples = std::max<long long>(64, scene.trace.plane_samples / 8);
+  progress.begin("trace: plane map", N * N);
   tbb::parallel_for(0, N * N, [&](int k) {
     const double x = -half + 2 * half * (k % N) / (N - 1), y = half - 2 * half * (k / N) / (N - 1);
     grid[static_cast<std::size_t>(k)] = port.plane_stokes(x, y, L_o, map_samples, 4);
+    progress.advance();
   });
+  progress.finish();
   ExrChannel s0{"S0", {}}, s1{"S1", {}}, s2{"S2", {}}, s0se{"S0_se", {}};
   CsvTable plane({"x_mm", "y_mm", "S0", "S1", "S2", "S0_se"});
   for (int k = 0; k < N * N; ++k) {

@@ -4,7 +4,9 @@
 #include <array>
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/rig/rig.h"
+#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
@@ -35,6 +37,15 @@ std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg);
 // the film its truth α_m and kd_m stand for, turned with the table.
 std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m);
 
+// What traced_effective_irradiance computes channel m's signal from: the photodiode (or lens
+// axis) in the scene frame, the analyzer film turned with the table, and Eq. 15's bracket.
+struct TracedChannel {
+  Point2 p_scene;
+  AnalyzerFilm film;
+  double bracket = 1;
+};
+TracedChannel traced_channel(const Rig& rig, double theta_R_deg, int m);
+
 struct Stop {
   double theta_R_deg;
   PoseLight light;
@@ -54,6 +65,7 @@ struct Simulation {
 
 // Runs every stop in parallel (TBB); the result does not depend on the thread count, since
 // each noise value is a pure function of (seed, stop, channel, sample).
-Simulation simulate(const Rig& rig, bool keep_samples = false);
+// A traced rig reports the sphere solve and the stops to `progress`.
+Simulation simulate(const Rig& rig, bool keep_samples = false, const Progress& progress = {});
 
 }  // namespace polrig

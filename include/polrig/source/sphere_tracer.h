@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/source/scene.h"
 #include "polrig/source/wall_field.h"
 
@@ -52,10 +53,10 @@ class SphereTracer {
 
   // Traces scene.trace.photons photons in scene.trace.batches batches (in parallel; the result
   // does not depend on the thread count).
-  // Then computes the wall field (wall_field.h) from them.
-  SphereSolution solve() const;
+  // Then computes the wall field (wall_field.h) from them. Reports both stages to `progress`.
+  SphereSolution solve(const Progress& progress = {}) const;
   // The photons alone: the solution without its wall field (for benchmarks of the tracer).
-  SphereSolution trace_photons() const;
+  SphereSolution trace_photons(const Progress& progress = {}) const;
 
   struct Hit {
     enum Kind { None, Wall, Lamp, Baffle } kind = None;
@@ -80,9 +81,15 @@ class SphereTracer {
   // the line to it (a hard shadow; the penumbra of a finite lamp is not modelled).
   double direct_irradiance(const Vec3& wall_point) const;
 
-  // For benchmarks: `count` plain rtcIntersect1 calls on this scene with the rays a photon
-  // tracer casts (from wall points in cosine-weighted directions). Returns the hits counted.
-  long long plain_intersections(long long count, std::uint64_t seed) const;
+  // For benchmarks. `count` rays such as a photon tracer casts: from wall points in
+  // cosine-weighted directions.
+  struct Ray {
+    Vec3 origin, dir;
+  };
+  std::vector<Ray> wall_rays(long long count, std::uint64_t seed) const;
+  // One plain rtcIntersect1 call on this scene for each ray, nothing else (the reference of
+  // the tracer's speed). Returns the hits counted.
+  long long plain_intersections(const std::vector<Ray>& rays) const;
 
   struct Impl;
 

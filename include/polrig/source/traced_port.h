@@ -44,6 +44,12 @@ class TracedPort {
   // evaluated); the fixed-rule parts are shared by all shifts.
   std::vector<double> irradiance(double x, double y, double h, const RayTransmission& T,
                                  long long samples, int shifts) const;
+  // The same for several transmissions at one point, [transmission][shift]: the rays, the
+  // radiance along them and their geometry are computed once for all. Each value is bit-identical
+  // to irradiance() with that transmission alone.
+  std::vector<std::vector<double>> irradiance(double x, double y, double h,
+                                              const std::vector<RayTransmission>& Ts,
+                                              long long samples, int shifts) const;
 
   // The Stokes irradiance on the plane, through the port film, with standard errors from
   // `shifts` shifts. S0 is the irradiance; S1 and S2 are what ideal sheet analyzers lying in the
@@ -54,6 +60,8 @@ class TracedPort {
   // The parts of irradiance(), for tests and reports.
   double uniform_part(const Vec3& P, const RayTransmission& T) const;
   double sampled_part(const Vec3& P, const RayTransmission& T, long long samples, int shift) const;
+  std::vector<double> sampled_parts(const Vec3& P, const std::vector<RayTransmission>& Ts,
+                                    long long samples, int shift) const;
   double occluder_part(const Vec3& P, const RayTransmission& T) const;
 
  private:

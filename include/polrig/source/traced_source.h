@@ -12,6 +12,7 @@
 #include <mutex>
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/rig/geometry.h"
 #include "polrig/source/scene.h"
 
@@ -52,11 +53,19 @@ class TracedSource {
   // below the port (2 × 2 Gauss points over its square). Lensed: the film is L_o below the port,
   // then film_to_lens, the plano-convex lens and lens_to_photodiode.
   std::vector<double> channel_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const;
+  // channel_signal for several films at one point, [film][shift], each bit-identical to its
+  // channel_signal; bare, the port's rays and radiance are computed once for all films.
+  std::vector<std::vector<double>> channel_signals(const Point2& p, double L_o,
+                                                   const std::vector<AnalyzerFilm>& films) const;
 
   // The port film: degree of polarization, and its axis in the rig frame (the scene's axis,
   // mirrored: −axis_deg).
   double degree_of_polarization() const { return scene_.port.polarizer.degree_of_polarization(); }
   double polarizer_axis_rig_deg() const { return -scene_.port.polarizer.axis_deg; }
+
+  // Solves the sphere now (once; later calls return at once), reporting to `progress`. Otherwise
+  // the first signal solves it, silently.
+  void solve(const Progress& progress) const;
 
   // Rays traced by the sphere solve, and its time (for speed reports).
   long long solve_rays() const;
@@ -65,7 +74,8 @@ class TracedSource {
  private:
   // The sphere is solved on first use, once, whichever thread asks first.
   const SphereSolution& solution() const;
-  std::vector<double> bare_signal(const Point2& p, double L_o, const AnalyzerFilm& film) const;
+  std::vector<std::vector<double>> bare_signals(const Point2& p, double L_o,
+                                                const std::vector<AnalyzerFilm>& films) const;
   std::vector<double> lensed_signal(const Point2& p, double top, const AnalyzerFilm& film) const;
 
   SceneSpec scene_;

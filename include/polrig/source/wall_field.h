@@ -19,6 +19,7 @@
 // integrals use Gauss–Legendre × trapezoid rules over each baffle's disk and each lamp's cone.
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/source/scene.h"
 
 namespace polrig {
@@ -40,6 +41,6 @@ struct WallField {
 // The field of a solved sphere: uses the solution's baffle irradiances and mean after-first-strike
 // wall irradiance, and traces rays with `tracer`.
 WallField compute_wall_field(const SphereTracer& tracer, const SphereSolution& solution,
-                             int n_theta = 181, int n_phi = 360);
+                             int n_theta = 181, int n_phi = 360, const Progress& progress = {});
 
 }  // namespace polrig

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "polrig/calib/pipeline.h"
+#include "polrig/progress.h"
 #include "polrig/rig/rig.h"
 
 namespace polrig {
@@ -29,7 +30,8 @@ struct Trial {
 
 // Every trial is a pure function of (rig, settings, index): the result is the same for any
 // thread count. Trials run in parallel (TBB).
-std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& settings);
+std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& settings,
+                                      const Progress& progress = {});
 
 struct TrialSummary {
   CalibrationMethod method;

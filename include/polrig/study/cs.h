@@ -10,6 +10,7 @@
 #include <array>
 #include <vector>
 
+#include "polrig/progress.h"
 #include "polrig/rig/rig.h"
 
 namespace polrig {
@@ -52,7 +53,8 @@ struct CsStudy {
   CsSummary coaxial{};
 };
 
-CsStudy cs_study(const Rig& rig, const CsTurn& turn);
+// A traced rig reports the sphere solve and the poses to `progress`.
+CsStudy cs_study(const Rig& rig, const CsTurn& turn, const Progress& progress = {});
 
 // The summary alone, for sweeps. `scratch` is reused between calls to avoid allocation.
 CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& scratch);

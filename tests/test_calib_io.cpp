@@ -549,23 +549,24 @@ TEST(CalibrateData, TooFewStops) {
   EXPECT_EQ(r.fit.summary.message.find("at least 6"), std::string::npos) << r.fit.summary.message;
 }
 
-TEST(CalibrateData, TheFittedMaskFollowsTheRowsNotTheValues) {
-  // Every stop recorded twice: CS points come in identical copies (same angle, same voltages).
-  // Keeping only the 27 steepest per voltage splits a group of four copies, which a mask built
-  // by comparing floats would mark whole (28 per voltage); the mask follows each observation's row.
+TEST(CalibrateData, TheFittedMaskFollowsTheRowsOfRepeatedStops) {
+  // Every stop recorded twice: repeated stops are averaged before pairing, so the 74 rows give
+  // the 19 CS points of one turn, not 76 copies. Keeping the 12 steepest per voltage marks
+  // exactly 12 of the 19 points per voltage, one mask entry per observation row.
   std::vector<StopVoltages> stops = default_stops(), twice = stops;
   twice.insert(twice.end(), stops.begin(), stops.end());
   CalibrationOptions o;
   o.method = CalibrationMethod::CentralSymmetryNoncontinuous;
   o.d_a = 0.55;
-  o.noncontinuous = {1.0, 27};
+  o.noncontinuous = {1.0, 12};
   const CalibrationResult r = calibrate(twice, o);
   ASSERT_TRUE(r.usable()) << r.fit.summary.brief_report();
-  EXPECT_EQ(r.fit.summary.observations, 81);
+  ASSERT_EQ(r.points.size(), 19u);
+  EXPECT_EQ(r.fit.summary.observations, 36);
   for (int i = 0; i < 3; ++i) {
     int fitted = 0;
     for (bool b : r.fitted[static_cast<std::size_t>(i)]) fitted += b ? 1 : 0;
-    EXPECT_EQ(fitted, 27) << "V" << i + 1;
+    EXPECT_EQ(fitted, 12) << "V" << i + 1;
   }
 }
 

@@ -26,7 +26,8 @@ class MapReader {
                                  node_.Mark().line + 1, path_));
   }
 
-  double real(const char* key, double def, bool (*ok)(double), const char* expects) {
+  template <class Ok>
+  double checked_real(const char* key, double def, Ok ok, const std::string& expects) {
     const YAML::Node n = take(key);
     if (!n) return def;
     double v = 0;
@@ -39,20 +40,13 @@ class MapReader {
     if (!ok(v)) fail(n, key, fmt::format("expected {}, got {}", expects, n.Scalar()));
     return v;
   }
+  double real(const char* key, double def, bool (*ok)(double), const char* expects) {
+    return checked_real(key, def, ok, expects);
+  }
   // A value in a range: "expected a length in [10, 10000] mm, got …".
   double real(const char* key, double def, const RealRange& r, const char* noun, const char* unit) {
-    const std::string expects = fmt::format("{} in {}{}{}", noun, r.text(), *unit ? " " : "", unit);
-    const YAML::Node n = take(key);
-    if (!n) return def;
-    double v = 0;
-    try {
-      if (!n.IsScalar()) throw YAML::Exception(n.Mark(), "");
-      v = parse_finite_number(n.Scalar(), key);
-    } catch (const std::exception&) {
-      fail(n, key, fmt::format("expected {}, got {}", expects, shown(n)));
-    }
-    if (!r.contains(v)) fail(n, key, fmt::format("expected {}, got {}", expects, n.Scalar()));
-    return v;
+    return checked_real(key, def, [&r](double v) { return r.contains(v); },
+                        fmt::format("{} in {}{}{}", noun, r.text(), *unit ? " " : "", unit));
   }
   long long integer(const char* key, long long def, long long lo, long long hi) {
     const YAML::Node n = take(key);

@@ -4,10 +4,18 @@
 #include <yaml-cpp/binary.h>
 #include <yaml-cpp/yaml.h>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "polrig/io/rig_yaml.h"
@@ -558,22 +566,87 @@ TEST_F(Cli, BadOutputNamesGetClearMessagesAndLeaveNothing) {
   EXPECT_FALSE(fs::exists(tmp / "new")) << "a parent folder was left behind";
 }
 
+namespace {
+// Starts polrig with default signal dispositions (a shell's background job would ignore
+// SIGINT), its output to /dev/null; returns its pid.
+pid_t spawn_polrig(const std::vector<std::string>& args, bool ignore_hangup) {
+  std::vector<std::string> argv_s{kPolrigExe};
+  argv_s.insert(argv_s.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : argv_s) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t files;
+  posix_spawn_file_actions_init(&files);
+  posix_spawn_file_actions_addopen(&files, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&files, 2, "/dev/null", O_WRONLY, 0);
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  sigset_t defaults, none;
+  sigemptyset(&defaults);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP})
+    if (!(ignore_hangup && sig == SIGHUP)) sigaddset(&defaults, sig);
+  sigemptyset(&none);
+  posix_spawnattr_setsigdefault(&attr, &defaults);
+  posix_spawnattr_setsigmask(&attr, &none);
+  posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
+  // nohup: SIGHUP ignored from the start (exec keeps an ignored disposition).
+  struct sigaction ign {}, old {};
+  ign.sa_handler = SIG_IGN;
+  if (ignore_hangup) sigaction(SIGHUP, &ign, &old);
+  pid_t pid = -1;
+  const int rc = posix_spawn(&pid, argv[0], &files, &attr, argv.data(), environ);
+  if (ignore_hangup) sigaction(SIGHUP, &old, nullptr);
+  posix_spawn_file_actions_destroy(&files);
+  posix_spawnattr_destroy(&attr);
+  return rc == 0 ? pid : -1;
+}
+
+bool wait_for_staging(const fs::path& parent) {
+  for (int i = 0; i < 400; ++i) {
+    if (fs::exists(parent))
+      for (const auto& e : fs::directory_iterator(parent))
+        if (e.path().filename().string().find("partial") != std::string::npos) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(25));
+  }
+  return false;
+}
+}  // namespace
+
 TEST_F(Cli, AnInterruptedRunLeavesNothing) {
-  // Ctrl-C (SIGINT) or a kill (SIGTERM) during a long sweep: the staging folder and the parent
-  // folders polrig created are removed, and the process ends by the signal.
-  for (const char* sig : {"INT", "TERM"}) {
+  // Ctrl-C (SIGINT), a kill (SIGTERM) or a hang-up during a long sweep: the staging folder and
+  // the parent folders polrig created are removed, and the process ends by the signal.
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
     SCOPED_TRACE(sig);
     const fs::path parent = tmp / "made" / "for";
-    const std::string script =
-        kPolrigExe + " sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0:1:1000000 -o " +
-        shell_quote(parent / "out") + " --no-plots 2>/dev/null & pid=$!; "
-        "for i in $(seq 200); do ls -a " + shell_quote(parent) + " 2>/dev/null | grep -q partial && break; "
-        "sleep 0.05; done; kill -" + sig + " $pid; wait $pid; exit $?";
-    const int rc = std::system(("sh -c " + shell_quote(script)).c_str());
-    ASSERT_TRUE(WIFEXITED(rc));
-    EXPECT_GT(WEXITSTATUS(rc), 128) << "polrig did not end by the signal";
+    const pid_t pid = spawn_polrig({"sweep", kRig, "--grid", "eccentricity.L_S=0:1:1000000", "-o",
+                                    (parent / "out").string(), "--no-plots"}, false);
+    ASSERT_GT(pid, 0);
+    ASSERT_TRUE(wait_for_staging(parent));
+    ::kill(pid, sig);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFSIGNALED(status)) << "polrig did not end by the signal";
+    EXPECT_EQ(WTERMSIG(status), sig);
     EXPECT_FALSE(fs::exists(tmp / "made")) << "the staging folder or its parents were left behind";
   }
+}
+
+TEST_F(Cli, AHangUpIgnoredByNohupStaysIgnored) {
+  // Under nohup SIGHUP is ignored when polrig starts; it must stay so (the run goes on), and a
+  // later SIGTERM still cleans up.
+  const fs::path parent = tmp / "nohup";
+  const pid_t pid = spawn_polrig({"sweep", kRig, "--grid", "eccentricity.L_S=0:1:1000000", "-o",
+                                  (parent / "out").string(), "--no-plots"}, true);
+  ASSERT_GT(pid, 0);
+  ASSERT_TRUE(wait_for_staging(parent));
+  ::kill(pid, SIGHUP);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  int status = 0;
+  EXPECT_EQ(::waitpid(pid, &status, WNOHANG), 0) << "SIGHUP ended a run started under nohup";
+  ::kill(pid, SIGTERM);
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
+  EXPECT_FALSE(fs::exists(parent)) << "the staging folder or its parents were left behind";
 }
 
 TEST_F(Cli, ExistingOutputFolderNeedsForce) {

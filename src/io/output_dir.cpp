@@ -211,8 +211,14 @@ OutputDir::~OutputDir() {
 void clean_up_outputs_on_signals() {
   sigset_t signals;
   sigemptyset(&signals);
-  for (int sig : {SIGINT, SIGTERM, SIGHUP}) sigaddset(&signals, sig);
-  if (pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
+  // A signal the parent set to be ignored (nohup, a background job of a script) stays ignored:
+  // blocking it for sigwait would deliver it after all.
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old {};
+    if (sigaction(sig, nullptr, &old) == 0 && old.sa_handler == SIG_IGN) continue;
+    sigaddset(&signals, sig);
+  }
+  if (sigisemptyset(&signals) || pthread_sigmask(SIG_BLOCK, &signals, nullptr) != 0) return;
   std::thread([signals] {
     int sig = 0;
     if (sigwait(&signals, &sig) != 0) return;

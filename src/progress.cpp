@@ -36,6 +36,8 @@ struct Progress::State {
   bool shown = false;  // a stage that ends before its first report stays silent
 
   void report(bool final) {
+    // A stage's 100 % is said once, by finish().
+    if (!final && done.load(std::memory_order_relaxed) >= total) return;
     const Clock::time_point now = Clock::now();
     if (final ? !shown : std::chrono::duration<double>(now - last).count() < interval_s) return;
     last = now;

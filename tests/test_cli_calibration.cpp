@@ -414,6 +414,15 @@ TEST_F(CliCalibration, StudyCalibrationIsIndependentOfThreadCount) {
 // bad input writes nothing
 // ---------------------------------------------------------------------------------------------
 
+TEST_F(CliCalibration, StudyCalibrationRefusesAScheduleWithUnpairedStopsUpFront) {
+  // 0°..270°: 100°..170° have no partner 180° away. That is the rig's error, the same for every
+  // trial, said once before any work (it used to escape the trial loop as an exception).
+  const fs::path a = tmp / "unpaired";
+  expect_refused("study calibration " + shell_quote(kRig) + " --trials 4 --set schedule.stop_deg=270 -o " +
+                     shell_quote(a),
+                 a, 3, {"the rig's schedule: stop 10 (theta_R = 100°) has no partner 180° away"});
+}
+
 TEST_F(CliCalibration, StudyCalibrationCountsTerminationTypes) {
   // Light too weakly polarized for any calibration: every fit ends rank deficient, and the
   // study says so instead of failing.

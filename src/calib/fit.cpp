@@ -37,8 +37,10 @@ StatusOutcome outcome_of(Eigen::LevenbergMarquardtSpace::Status s) {
     case S::Running:
       return {"Running", T::NoConvergence, "the iteration limit came before convergence"};
     case S::ImproperInputParameters:
-      return {"ImproperInputParameters", T::TooFewObservations,
-              "fewer observations than unknowns"};
+      // After fit_eq15's own count of observations (≥ 6 per pair) this can only be the QR
+      // step's numerical failure, or tolerances the solver refuses.
+      return {"ImproperInputParameters", T::NoConvergence,
+              "the solver refused its input or its QR step failed numerically"};
     case S::RelativeReductionTooSmall:
       return {"RelativeReductionTooSmall", T::Converged,
               "the relative reduction of the residual norm is below the function tolerance"};

@@ -167,8 +167,11 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
     r.d_a = *std::max_element(r.fit.params.c.begin(), r.fit.params.c.end());
     r.d_a_source = "max c_m (the best film taken as ideal, kd = 0)";
   }
-  if (!(r.d_a > 0.0 && r.d_a < 1.0))
-    throw CalibrationError(fmt::format("d_a = {} is outside (0, 1)", r.d_a));
+  if (!(r.d_a > 0.0 && r.d_a < 1.0)) {  // a fit whose best film polarizes fully or not at all
+    r.fit.summary.termination = FitTermination::OutsideDomain;
+    r.fit.summary.message = fmt::format("d_a = {} ({}) is outside (0, 1)", r.d_a, r.d_a_source);
+    return r;
+  }
   r.params = r.fit.params.decoupled(r.d_a);
   r.standard_error.alpha_deg = r.fit.standard_error.alpha_deg;
   r.standard_error.k_mV = r.fit.standard_error.k_mV;

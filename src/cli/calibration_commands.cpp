@@ -1,4 +1,5 @@
 // Commands that calibrate: calibrate, apply, study calibration.
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <limits>
@@ -262,9 +263,9 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
     out->add_to(*app);
     app->add_option("--trials", *trials, "number of simulated calibration runs")
         ->check(CLI::Range(1, 10000000))->capture_default_str();
-    app->add_option("--L-IS-max", *L_IS_max, "largest port offset drawn, mm (default: 2 × the rig's L_IS)")
+    app->add_option("--L-IS-max", *L_IS_max, "largest port offset drawn, mm (default: 2 × the rig's L_IS, at most 100)")
         ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
-    app->add_option("--L-S-max", *L_S_max, "largest sensor offset drawn, mm (default: 2 × the rig's L_S)")
+    app->add_option("--L-S-max", *L_S_max, "largest sensor offset drawn, mm (default: 2 × the rig's L_S, at most 100)")
         ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
     settings->add_to(*app);
     add_threads_option(*app, threads);
@@ -272,8 +273,9 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
       const LoadedRig r = rig->load();
       TrialSettings s;
       s.trials = *trials;
-      s.L_IS_max = L_IS_max->value_or(2.0 * r.rig.eccentricity.L_IS);
-      s.L_S_max = L_S_max->value_or(2.0 * r.rig.eccentricity.L_S);
+      // Twice the rig's offsets by default, within the keys' own range [0, 100] mm.
+      s.L_IS_max = L_IS_max->value_or(std::min(2.0 * r.rig.eccentricity.L_IS, 100.0));
+      s.L_S_max = L_S_max->value_or(std::min(2.0 * r.rig.eccentricity.L_S, 100.0));
       s.calibration = settings->options(r.rig, r.rig.device.d);
       OutputDir dir = out->open();
       const std::vector<Trial> result = calibration_trials(r.rig, s, progress());

@@ -211,7 +211,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       for (const GridAxis& a : axes) points *= a.count;
       p.begin("sweep: grid points", points);
       std::size_t reported = 0;
-      SweepReport report(dir.staging(), axes);
+      SweepReport report(dir.staging(), axes, r.rig.source.traced != nullptr);
       sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t first, std::span<const CsSummary> block) {
         report.write(first, block);
       }, [&](std::size_t done, std::size_t) {

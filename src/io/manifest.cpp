@@ -22,7 +22,8 @@ bool literal_block_is_exact(const std::string& t) {
 }
 
 // True if `text`, written as a YAML string in `style`, reads back byte for byte. It does not for
-// bytes that are not UTF-8 (the emitter replaces them with U+FFFD) or for a NUL.
+// bytes that are not UTF-8 (the emitter replaces them with U+FFFD), nor for a NUL in a literal
+// block (a double-quoted string holds it as "\x00").
 bool reads_back_exactly(const std::string& text, YAML::EMITTER_MANIP style) {
   YAML::Emitter out;
   out << YAML::BeginMap << YAML::Key << "t" << YAML::Value << style << text << YAML::EndMap;
@@ -35,8 +36,8 @@ bool reads_back_exactly(const std::string& text, YAML::EMITTER_MANIP style) {
 }
 
 // The rig file's text exactly as read: a literal block when that reproduces it, else a
-// double-quoted string when that does, else (invalid UTF-8, a NUL) its bytes in base64 under
-// rig_text_base64.
+// double-quoted string when that does (tabs, carriage returns, a NUL), else (invalid UTF-8) its
+// bytes in base64 under rig_text_base64.
 void emit_rig_text(YAML::Emitter& out, const std::string& text) {
   if (literal_block_is_exact(text) && reads_back_exactly(text, YAML::Literal)) {
     out << YAML::Key << "rig_text" << YAML::Value << YAML::Literal << text;

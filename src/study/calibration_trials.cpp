@@ -4,8 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
+#include "polrig/calib/preprocess.h"
 #include "polrig/random.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/source/traced_source.h"
@@ -53,6 +55,17 @@ double quantile(std::vector<double> sorted, double q) {
 
 std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& s, const Progress& progress) {
   std::vector<Trial> trials(static_cast<std::size_t>(std::max(0, s.trials)));
+  // The CS types need every stop paired; that depends on the schedule alone, so it is the rig's
+  // error, said once before any work, not a failure of every trial.
+  std::vector<StopVoltages> schedule;
+  for (double theta : rig.schedule.table_angles_deg())
+    schedule.push_back({theta, {0, 0, 0}, fmt::format("stop {}", schedule.size())});
+  try {
+    central_symmetry_points(schedule);
+  } catch (const CalibrationError& e) {
+    throw CalibrationError(fmt::format("the rig's schedule: {}; study calibration runs the CS "
+                                       "types too", e.what()));
+  }
   if (rig.source.traced) rig.source.traced->solve(progress);
   progress.begin("study calibration: trials", s.trials);
   tbb::parallel_for(0, s.trials, [&](int k) {

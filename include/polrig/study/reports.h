@@ -23,7 +23,8 @@ std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const
 // memory does not grow with the grid. finish() closes it and draws the plots from it.
 class SweepReport {
  public:
-  SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes);
+  // `traced`: the rig's source is traced, so Eq. 6 (a cos⁴ result) is written as nan.
+  SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes, bool traced);
   void write(std::size_t first, std::span<const CsSummary> block);
   std::vector<DatasetFile> finish(bool plots);
 

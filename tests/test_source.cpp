@@ -374,6 +374,26 @@ TEST(SlowWallField, TheComputedFieldMatchesThePhotonMap) {
   EXPECT_GT(flat.chi2 / flat.bins, 1.0 + tolerance);
 }
 
+TEST(WallField, InterpolatesAcrossTheMeridianWherePhiWrapsAround) {
+  // δ = 100·sin θ·cos φ on a 2°-like grid; just below the x axis (y = −1e-300, where
+  // atan2 + 2π rounds to 2π exactly) the field must be the meridian's value, not an extrapolation.
+  WallField f;
+  f.C = 1000;
+  f.n_theta = 91;
+  f.n_phi = 180;
+  f.R = 250;
+  for (int i = 0; i < f.n_theta; ++i)
+    for (int j = 0; j < f.n_phi; ++j)
+      f.delta.push_back(100 * std::sin(kPi * i / (f.n_theta - 1)) * std::cos(2 * kPi * j / f.n_phi));
+  for (double theta_deg : {30.0, 90.0, 150.0}) {
+    const double t = theta_deg * kPi / 180;
+    const double expected = 1000 + 100 * std::sin(t);  // cos φ = 1
+    for (double y : {-1e-300, 0.0, 1e-300, -1e-9})
+      EXPECT_NEAR(f.after_first_strike({f.R * std::sin(t), y, f.R * std::cos(t)}), expected, 1e-3)
+          << "theta " << theta_deg << ", y " << y;
+  }
+}
+
 TEST(WallField, WithoutOccludersItIsSphereTheorysConstant) {
   // A point lamp and no baffles: nothing inside the sphere, so the field is uniform, and its
   // constant must be sphere theory's E = ρΦ(1 − f)/(A_s(1 − ρ(1 − f))) within the photon

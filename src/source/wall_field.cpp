@@ -157,6 +157,7 @@ double WallField::after_first_strike(const Vec3& p) const {
   const double theta = std::acos(std::clamp(p[2] / R, -1.0, 1.0));
   double phi = std::atan2(p[1], p[0]);
   if (phi < 0) phi += 2 * kPi;
+  if (phi >= 2 * kPi) phi = 0;  // atan2 of y = −tiny rounds up to 2π exactly
   const double dt = kPi / (n_theta - 1), dp = 2 * kPi / n_phi;
   const int it = std::min(static_cast<int>(theta / dt), n_theta - 2);
   const int ip = static_cast<int>(phi / dp) % n_phi;

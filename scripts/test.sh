@@ -60,7 +60,7 @@ fuzz_run() {  # fuzz_run TARGET SEED_DIR…: new inputs go to a scratch folder, 
   # only a timeout that does not repeat is reported as a warning instead of a failure.
   local input
   input=$(find "$work" -maxdepth 1 -name 'timeout-*' | head -n 1)
-  if [ -n "$input" ] && [ -z "$(find "$work" -maxdepth 1 -name 'crash-*' -o -maxdepth 1 -name 'leak-*' -o -maxdepth 1 -name 'oom-*')" ] &&
+  if [ -n "$input" ] && [ -z "$(find "$work" -maxdepth 1 \( -name 'crash-*' -o -name 'leak-*' -o -name 'oom-*' \))" ] &&
       "$exe" -timeout=1 "$input" "$input" "$input" >>"$work/log.repeat" 2>&1; then
     echo "fuzz_${target}: WARNING: $input timed out once but runs in < 1 s alone (a busy machine, not a hang)"
     return 0

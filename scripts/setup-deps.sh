@@ -5,6 +5,7 @@ set -euo pipefail
 
 packages=(
   cmake g++ make git pkg-config
+  clang libclang-rt-14-dev    # libFuzzer and its sanitizer runtimes (scripts/test.sh)
   libeigen3-dev libtbb-dev libyaml-cpp-dev libfmt-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libembree-dev libopenexr-dev

@@ -206,6 +206,23 @@ TEST_F(CalibIo, CrlfCommentsBlankLinesExtraColumnsAndAnyColumnOrder) {
             p.string() + ":7: column 'note': expected a finite number, got 'second'");
 }
 
+// The fuzzers' entry point (fuzz/fuzz_measured_csv.cpp) reads text exactly as the file reader.
+TEST_F(CalibIo, ParseMeasuredCsvReadsTheTextAsTheFileReaderReadsTheFile) {
+  const std::string text = "# c\r\nV2,theta_R_deg,V1,V3\r\n0.2,0,0.1,0.3\n\n0.5,10.5,-1e-3,+0.125\n";
+  const fs::path p = file("same.csv", text);
+  const MeasuredData a = read_measured(p);
+  const MeasuredData b = parse_measured_csv(text, p.string(), true);
+  ASSERT_EQ(b.stops.size(), a.stops.size());
+  for (std::size_t i = 0; i < a.stops.size(); ++i) {
+    EXPECT_EQ(b.stops[i].theta_R_deg, a.stops[i].theta_R_deg);
+    EXPECT_EQ(b.stops[i].V, a.stops[i].V);
+    EXPECT_EQ(b.stops[i].label, a.stops[i].label);
+  }
+  EXPECT_EQ(error_of<DataError>([&] { parse_measured_csv("V1,V2\n1,2\n", "x.csv", false); }),
+            "x.csv:1: missing column 'V3' (see docs/formats.md, \"Measured data\")");
+  EXPECT_TRUE(std::isnan(parse_measured_csv("V1,V2,V3\n1,2,3\n", "x.csv", false).stops[0].theta_R_deg));
+}
+
 TEST_F(CalibIo, ReadMeasuredReadsADatasetFolderAndItsRig) {
   Rig rig;
   rig.device.d = 0.3;
@@ -334,6 +351,19 @@ TEST_F(ParamsErrors, TheBaseFileLoads) {
   EXPECT_EQ(p.params.kv, (std::array<double, 3>{1.0224, 1.0081, 1.0183}));
   EXPECT_EQ(p.params.alpha_deg[2], -117.6);
   EXPECT_EQ(p.params.kd[5], -0.0166);
+}
+
+TEST_F(ParamsErrors, ParseParamsYamlReadsTheTextAsTheFileReaderReadsTheFile) {
+  std::string text;
+  for (const std::string& s : lines) text += s + "\n";
+  const LoadedParams a = read_params_yaml(write(lines));
+  const LoadedParams b = parse_params_yaml(text, path());
+  EXPECT_TRUE(b.params == a.params);
+  EXPECT_EQ(b.d_a, a.d_a);
+  EXPECT_EQ(b.volts_per_decade, a.volts_per_decade);
+  text.replace(text.find("d_a: 0.55"), 9, "d_a: 1.5");
+  EXPECT_EQ(error_of<DataError>([&] { parse_params_yaml(text, "p.yaml"); }),
+            "p.yaml:1: key 'd_a': expected d_a in (0, 1)");
 }
 
 TEST_F(ParamsErrors, UnknownKey) {

@@ -195,8 +195,11 @@ std::vector<Replacement> replacement_analysis(const CalibrationParams& calibrate
     if (mask & 4u) p.kv = theory.kv;
     if (mask & 8u) p.kd = theory.kd;
     std::string label;
-    for (int b = 0; b < 4; ++b)
-      if (mask & (1u << b)) label += (label.empty() ? "" : "-") + std::string(kNames[b]);
+    for (int b = 0; b < 4; ++b) {
+      if (!(mask & (1u << b))) continue;
+      if (!label.empty()) label += '-';
+      label += kNames[b];
+    }
     if (label.empty()) label = "none";
     out.push_back({label, mask, accuracy_of(angle_errors(p, v_dec, points))[kThetaSec].accuracy_deg()});
   }

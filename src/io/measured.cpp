@@ -34,8 +34,15 @@ CsvFile CsvFile::read(const fs::path& path) {
     throw DataError(fmt::format("{}: cannot read the file: {}", path.string(),
                                 fs::exists(path, ec) ? "not a regular file" : "no such file"));
   std::ifstream in(path, std::ios::binary);
+  std::stringstream buf;
+  buf << in.rdbuf();
+  return parse(buf.str(), path.string());
+}
+
+CsvFile CsvFile::parse(std::string_view content, std::string_view origin) {
+  std::istringstream in{std::string(content)};
   CsvFile f;
-  f.origin = path.string();
+  f.origin = std::string(origin);
   std::string text;
   int n = 0;
   while (std::getline(in, text)) {
@@ -88,18 +95,8 @@ double CsvFile::number(std::size_t row, std::size_t col) const {
 
 namespace {
 
-MeasuredData read_stops(const fs::path& input, bool need_angle) {
-  std::error_code ec;
+MeasuredData stops_of(const CsvFile& f, bool need_angle) {
   MeasuredData data;
-  fs::path csv = input;
-  if (fs::is_directory(input, ec)) {
-    csv = input / "stops.csv";
-    if (fs::exists(input / "rig.yaml", ec)) {
-      data.rig = load_rig(input / "rig.yaml").rig;
-      data.rig_origin = (input / "rig.yaml").string();
-    }
-  }
-  const CsvFile f = CsvFile::read(csv);
   data.origin = f.origin;
   const std::optional<std::size_t> angle =
       need_angle ? std::optional<std::size_t>(f.column("theta_R_deg")) : f.find_column("theta_R_deg");
@@ -116,9 +113,31 @@ MeasuredData read_stops(const fs::path& input, bool need_angle) {
   return data;
 }
 
+MeasuredData read_stops(const fs::path& input, bool need_angle) {
+  std::error_code ec;
+  fs::path csv = input;
+  std::optional<Rig> rig;
+  std::string rig_origin;
+  if (fs::is_directory(input, ec)) {
+    csv = input / "stops.csv";
+    if (fs::exists(input / "rig.yaml", ec)) {
+      rig = load_rig(input / "rig.yaml").rig;
+      rig_origin = (input / "rig.yaml").string();
+    }
+  }
+  MeasuredData data = stops_of(CsvFile::read(csv), need_angle);
+  data.rig = std::move(rig);
+  data.rig_origin = std::move(rig_origin);
+  return data;
+}
+
 }  // namespace
 
 MeasuredData read_measured(const fs::path& input) { return read_stops(input, true); }
 MeasuredData read_voltages(const fs::path& input) { return read_stops(input, false); }
+
+MeasuredData parse_measured_csv(std::string_view text, std::string_view origin, bool need_angle) {
+  return stops_of(CsvFile::parse(text, origin), need_angle);
+}
 
 }  // namespace polrig

@@ -104,13 +104,20 @@ constexpr ParamRange kScaleRange{0.01, 10, false, false, "log amplifiers give te
 }  // namespace
 
 LoadedParams read_params_yaml(const std::filesystem::path& path) {
-  const std::string file = path.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
-    throw DataError(fmt::format("{}: cannot read the parameter file: no such file", file));
+    throw DataError(fmt::format("{}: cannot read the parameter file: no such file", path.string()));
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream buf;
+  buf << in.rdbuf();
+  return parse_params_yaml(buf.str(), path.string());
+}
+
+LoadedParams parse_params_yaml(std::string_view text, std::string_view origin) {
+  const std::string file(origin);
   YAML::Node root;
   try {
-    root = YAML::LoadFile(file);
+    root = YAML::Load(std::string(text));
   } catch (const YAML::Exception& e) {
     throw DataError(fmt::format("{}:{}:{}: YAML syntax error: {}", file, e.mark.line + 1,
                                 e.mark.column + 1, e.msg));

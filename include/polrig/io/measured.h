@@ -6,6 +6,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "polrig/calib/preprocess.h"
@@ -28,6 +29,8 @@ struct CsvFile {
   int header_line = 1;
 
   static CsvFile read(const std::filesystem::path& path);
+  // The same from the file's text; `origin` names it in error messages.
+  static CsvFile parse(std::string_view text, std::string_view origin);
   // Index of a column, or DataError naming the file and the missing column.
   std::size_t column(std::string_view name) const;
   std::optional<std::size_t> find_column(std::string_view name) const;
@@ -49,5 +52,9 @@ MeasuredData read_measured(const std::filesystem::path& input);
 
 // Voltages only (for `polrig apply`): V1, V2, V3 required, theta_R_deg optional (NaN if absent).
 MeasuredData read_voltages(const std::filesystem::path& input);
+
+// A CSV's text, as read_measured (need_angle) or read_voltages read it; `origin` names it in
+// error messages.
+MeasuredData parse_measured_csv(std::string_view text, std::string_view origin, bool need_angle);
 
 }  // namespace polrig

@@ -4,6 +4,7 @@
 // rig's device.truth, so a rig can load them back (device.truth_from: params.yaml).
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include "polrig/calib/pipeline.h"
 
@@ -19,5 +20,7 @@ struct LoadedParams {
 
 // Throws DataError naming the file, the line and the key.
 LoadedParams read_params_yaml(const std::filesystem::path& path);
+// The same from the file's text; `origin` names it in error messages.
+LoadedParams parse_params_yaml(std::string_view text, std::string_view origin);
 
 }  // namespace polrig

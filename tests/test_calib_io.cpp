@@ -363,7 +363,7 @@ TEST_F(ParamsErrors, ParseParamsYamlReadsTheTextAsTheFileReaderReadsTheFile) {
   EXPECT_EQ(b.volts_per_decade, a.volts_per_decade);
   text.replace(text.find("d_a: 0.55"), 9, "d_a: 1.5");
   EXPECT_EQ(error_of<DataError>([&] { parse_params_yaml(text, "p.yaml"); }),
-            "p.yaml:1: key 'd_a': expected d_a in (0, 1)");
+            "p.yaml:1: key 'd_a': expected a value in (0, 1) (a degree of polarization), got 1.5");
 }
 
 TEST_F(ParamsErrors, UnknownKey) {

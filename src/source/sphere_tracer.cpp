@@ -72,6 +72,11 @@ struct SphereTracer::Impl {
   std::vector<GeomData> geom_data;  // user data of the Embree geometries; reserved, never moves
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
+  // Released here, not in ~SphereTracer, so that a constructor that throws halfway leaks nothing.
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
   const SceneSpec* spec = nullptr;
   double R = 0, port_z = 0;
   std::vector<int> lamp_of_prim;  // lamps with radius > 0
@@ -251,10 +256,7 @@ SphereTracer::SphereTracer(const SceneSpec& scene) : scene_(scene), impl_(std::m
   m.throw_on_embree_error();
 }
 
-SphereTracer::~SphereTracer() {
-  if (impl_->scene) rtcReleaseScene(impl_->scene);
-  if (impl_->device) rtcReleaseDevice(impl_->device);
-}
+SphereTracer::~SphereTracer() = default;
 
 SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t_min) const {
   const Impl& m = *impl_;

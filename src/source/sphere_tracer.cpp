@@ -101,6 +101,29 @@ struct SphereTracer::Impl {
     const Vec3 p = sub(add(o, mul(d, t)), b.centre);
     return dot(p, p) <= b.radius * b.radius ? t : -1;
   }
+
+  // The first surface along a ray by trying every primitive with the same exact intersection
+  // as Embree's callback: for the few primitives of a scene, cheaper than a traversal. Returns
+  // false when the scene has too many primitives for that (the caller then asks Embree).
+  struct Nearest {
+    unsigned geom = RTC_INVALID_GEOMETRY_ID, prim = 0;
+    double t = -1;
+  };
+  static constexpr std::size_t kExhaustiveLimit = 8;
+  bool exhaustive() const { return lamp_of_prim.size() + spec->baffles.size() <= kExhaustiveLimit; }
+  Nearest nearest(const Vec3& o, const Vec3& d, double t_min) const {
+    Nearest n;
+    const auto consider = [&](unsigned geom, unsigned prim) {
+      const double t = intersect(geom, prim, o, d, t_min);
+      // As the callback: a candidate replaces the hit unless its float t lies beyond it.
+      if (t < 0 || (n.t >= 0 && static_cast<float>(t) > static_cast<float>(n.t))) return;
+      n = {geom, prim, t};
+    };
+    consider(wall_geom, 0);
+    for (unsigned i = 0; i < lamp_of_prim.size(); ++i) consider(lamp_geom, i);
+    for (unsigned i = 0; i < spec->baffles.size(); ++i) consider(baffle_geom, i);
+    return n;
+  }
 };
 
 namespace {
@@ -256,11 +279,17 @@ SphereTracer::~SphereTracer() {
   if (impl_->device) rtcReleaseDevice(impl_->device);
 }
 
-SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t_min) const {
-  const Impl& m = *impl_;
+namespace {
+void require_finite_ray(const Vec3& o, const Vec3& d) {
   if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]) && std::isfinite(d[0]) &&
         std::isfinite(d[1]) && std::isfinite(d[2])))
     throw std::logic_error(fmt::format("non-finite ray ({}, {}, {}) + t({}, {}, {})", o[0], o[1], o[2], d[0], d[1], d[2]));
+}
+}  // namespace
+
+SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t_min) const {
+  const Impl& m = *impl_;
+  require_finite_ray(o, d);
   RayContext ctx = ray_context(o, d, t_min);
   RTCRayHit rh = ray_hit(o, d, 0.0f);
   rtcIntersect1(m.scene, &ctx.base, &rh);
@@ -497,9 +526,17 @@ double SphereTracer::direct_irradiance(const Vec3& wall_point) const {
     const Vec3 dir = mul(to, 1.0 / D);
     const double cos_w = dot(n, dir);
     if (cos_w <= 0) continue;
-    const Hit h = first_hit(wall_point, dir, 1e-9);
-    const bool seen = l.radius > 0 ? (h.kind == Hit::Lamp && h.index == static_cast<int>(i))
-                                   : (h.kind == Hit::None || h.t >= D);
+    bool seen = false;
+    if (impl_->exhaustive()) {
+      require_finite_ray(wall_point, dir);
+      const Impl::Nearest h = impl_->nearest(wall_point, dir, 1e-9);
+      seen = l.radius > 0 ? (h.geom == impl_->lamp_geom && impl_->lamp_of_prim[h.prim] == static_cast<int>(i))
+                          : (h.t < 0 || h.t >= D);
+    } else {
+      const Hit h = first_hit(wall_point, dir, 1e-9);
+      seen = l.radius > 0 ? (h.kind == Hit::Lamp && h.index == static_cast<int>(i))
+                          : (h.kind == Hit::None || h.t >= D);
+    }
     if (!seen) continue;
     e += l.power / (4 * kPi) * cos_w / D2 * 1e6;  // W/m²
   }

@@ -314,16 +314,39 @@ SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t
 
 namespace {
 
+// atan2(y, x) to within 2e-6 rad (a minimax polynomial for atan on [0, 1]), for x, y not both 0.
+double coarse_atan2(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double r = std::min(ax, ay) / std::max(ax, ay), r2 = r * r;
+  double a = r * (0.99997726 + r2 * (-0.33262347 + r2 * (0.19354346 + r2 * (-0.11643287 + r2 * (0.05265332 - r2 * 0.01172120)))));
+  if (ay > ax) a = 0.5 * kPi - a;
+  if (x < 0) a = kPi - a;
+  return y < 0 ? -a : a;
+}
+
+// The azimuth bin of (x, y) among n equal bins from φ = 0: floor(atan2(y, x)/(2π)·n), with φ
+// taken in [0, 2π). The coarse atan2 decides it away from the bins' edges, where its error
+// cannot move the floor; near an edge (or at the pole) the exact atan2 does, so the bin is
+// always the exact one.
+int azimuth_bin(double y, double x, int n) {
+  constexpr double kCoarseError = 1e-4;  // rad: 50 times the polynomial's
+  if (x != 0 || y != 0) {
+    double phi = coarse_atan2(y, x);
+    if (phi < 0) phi += 2 * kPi;
+    const double t = phi / (2 * kPi) * n, f = t - std::floor(t), edge = kCoarseError / (2 * kPi) * n;
+    if (f > edge && f < 1 - edge) return std::clamp(static_cast<int>(t), 0, n - 1);
+  }
+  double phi = std::atan2(y, x);
+  if (phi < 0) phi += 2 * kPi;
+  return std::clamp(static_cast<int>(phi / (2 * kPi) * n), 0, n - 1);
+}
+
 // Equal-area wall bin of a point on the sphere.
 int wall_bin(const WallMap& w, const Vec3& p, double R) {
   const double c = std::clamp(p[2] / R, -1.0, 1.0);
   int it = static_cast<int>((1.0 - c) * 0.5 * w.n_theta);
   it = std::clamp(it, 0, w.n_theta - 1);
-  double phi = std::atan2(p[1], p[0]);
-  if (phi < 0) phi += 2 * kPi;
-  int ip = static_cast<int>(phi / (2 * kPi) * w.n_phi);
-  ip = std::clamp(ip, 0, w.n_phi - 1);
-  return w.bin(it, ip);
+  return w.bin(it, azimuth_bin(p[1], p[0], w.n_phi));
 }
 
 struct BatchTally {

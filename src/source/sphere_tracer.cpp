@@ -106,6 +106,29 @@ struct SphereTracer::Impl {
     const Vec3 p = sub(add(o, mul(d, t)), b.centre);
     return dot(p, p) <= b.radius * b.radius ? t : -1;
   }
+
+  // The first surface along a ray by trying every primitive with the same exact intersection
+  // as Embree's callback: for the few primitives of a scene, cheaper than a traversal. Returns
+  // false when the scene has too many primitives for that (the caller then asks Embree).
+  struct Nearest {
+    unsigned geom = RTC_INVALID_GEOMETRY_ID, prim = 0;
+    double t = -1;
+  };
+  static constexpr std::size_t kExhaustiveLimit = 8;
+  bool exhaustive() const { return lamp_of_prim.size() + spec->baffles.size() <= kExhaustiveLimit; }
+  Nearest nearest(const Vec3& o, const Vec3& d, double t_min) const {
+    Nearest n;
+    const auto consider = [&](unsigned geom, unsigned prim) {
+      const double t = intersect(geom, prim, o, d, t_min);
+      // As the callback: a candidate replaces the hit unless its float t lies beyond it.
+      if (t < 0 || (n.t >= 0 && static_cast<float>(t) > static_cast<float>(n.t))) return;
+      n = {geom, prim, t};
+    };
+    consider(wall_geom, 0);
+    for (unsigned i = 0; i < lamp_of_prim.size(); ++i) consider(lamp_geom, i);
+    for (unsigned i = 0; i < spec->baffles.size(); ++i) consider(baffle_geom, i);
+    return n;
+  }
 };
 
 namespace {
@@ -258,11 +281,17 @@ SphereTracer::SphereTracer(const SceneSpec& scene) : scene_(scene), impl_(std::m
 
 SphereTracer::~SphereTracer() = default;
 
-SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t_min) const {
-  const Impl& m = *impl_;
+namespace {
+void require_finite_ray(const Vec3& o, const Vec3& d) {
   if (!(std::isfinite(o[0]) && std::isfinite(o[1]) && std::isfinite(o[2]) && std::isfinite(d[0]) &&
         std::isfinite(d[1]) && std::isfinite(d[2])))
     throw std::logic_error(fmt::format("non-finite ray ({}, {}, {}) + t({}, {}, {})", o[0], o[1], o[2], d[0], d[1], d[2]));
+}
+}  // namespace
+
+SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t_min) const {
+  const Impl& m = *impl_;
+  require_finite_ray(o, d);
   RayContext ctx = ray_context(o, d, t_min);
   RTCRayHit rh = ray_hit(o, d, 0.0f);
   rtcIntersect1(m.scene, &ctx.base, &rh);
@@ -287,16 +316,39 @@ SphereTracer::Hit SphereTracer::first_hit(const Vec3& o, const Vec3& d, double t
 
 namespace {
 
+// atan2(y, x) to within 2e-6 rad (a minimax polynomial for atan on [0, 1]), for x, y not both 0.
+double coarse_atan2(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double r = std::min(ax, ay) / std::max(ax, ay), r2 = r * r;
+  double a = r * (0.99997726 + r2 * (-0.33262347 + r2 * (0.19354346 + r2 * (-0.11643287 + r2 * (0.05265332 - r2 * 0.01172120)))));
+  if (ay > ax) a = 0.5 * kPi - a;
+  if (x < 0) a = kPi - a;
+  return y < 0 ? -a : a;
+}
+
+// The azimuth bin of (x, y) among n equal bins from φ = 0: floor(atan2(y, x)/(2π)·n), with φ
+// taken in [0, 2π). The coarse atan2 decides it away from the bins' edges, where its error
+// cannot move the floor; near an edge (or at the pole) the exact atan2 does, so the bin is
+// always the exact one.
+int azimuth_bin(double y, double x, int n) {
+  constexpr double kCoarseError = 1e-4;  // rad: 50 times the polynomial's
+  if (x != 0 || y != 0) {
+    double phi = coarse_atan2(y, x);
+    if (phi < 0) phi += 2 * kPi;
+    const double t = phi / (2 * kPi) * n, f = t - std::floor(t), edge = kCoarseError / (2 * kPi) * n;
+    if (f > edge && f < 1 - edge) return std::clamp(static_cast<int>(t), 0, n - 1);
+  }
+  double phi = std::atan2(y, x);
+  if (phi < 0) phi += 2 * kPi;
+  return std::clamp(static_cast<int>(phi / (2 * kPi) * n), 0, n - 1);
+}
+
 // Equal-area wall bin of a point on the sphere.
 int wall_bin(const WallMap& w, const Vec3& p, double R) {
   const double c = std::clamp(p[2] / R, -1.0, 1.0);
   int it = static_cast<int>((1.0 - c) * 0.5 * w.n_theta);
   it = std::clamp(it, 0, w.n_theta - 1);
-  double phi = std::atan2(p[1], p[0]);
-  if (phi < 0) phi += 2 * kPi;
-  int ip = static_cast<int>(phi / (2 * kPi) * w.n_phi);
-  ip = std::clamp(ip, 0, w.n_phi - 1);
-  return w.bin(it, ip);
+  return w.bin(it, azimuth_bin(p[1], p[0], w.n_phi));
 }
 
 struct BatchTally {
@@ -499,9 +551,17 @@ double SphereTracer::direct_irradiance(const Vec3& wall_point) const {
     const Vec3 dir = mul(to, 1.0 / D);
     const double cos_w = dot(n, dir);
     if (cos_w <= 0) continue;
-    const Hit h = first_hit(wall_point, dir, 1e-9);
-    const bool seen = l.radius > 0 ? (h.kind == Hit::Lamp && h.index == static_cast<int>(i))
-                                   : (h.kind == Hit::None || h.t >= D);
+    bool seen = false;
+    if (impl_->exhaustive()) {
+      require_finite_ray(wall_point, dir);
+      const Impl::Nearest h = impl_->nearest(wall_point, dir, 1e-9);
+      seen = l.radius > 0 ? (h.geom == impl_->lamp_geom && impl_->lamp_of_prim[h.prim] == static_cast<int>(i))
+                          : (h.t < 0 || h.t >= D);
+    } else {
+      const Hit h = first_hit(wall_point, dir, 1e-9);
+      seen = l.radius > 0 ? (h.kind == Hit::Lamp && h.index == static_cast<int>(i))
+                          : (h.kind == Hit::None || h.t >= D);
+    }
     if (!seen) continue;
     e += l.power / (4 * kPi) * cos_w / D2 * 1e6;  // W/m²
   }

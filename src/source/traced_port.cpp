@@ -1,5 +1,7 @@
 #include "polrig/source/traced_port.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <vector>
@@ -35,6 +37,44 @@ double plane_to_plane(const Vec3& d) {
   const double r2 = dot(d, d);
   return d[2] * d[2] / (r2 * r2);
 }
+// Port point n of one shift: a randomly shifted R2 lattice, area-uniform over the port.
+struct PortLattice {
+  double du, dv, a, zp;
+  PortLattice(std::uint64_t seed, int shift, double a_, double zp_)
+      : du(uniform_unit(seed, static_cast<std::uint64_t>(shift), 0x5041, 0)),
+        dv(uniform_unit(seed, static_cast<std::uint64_t>(shift), 0x5041, 1)), a(a_), zp(zp_) {}
+  Vec3 operator()(long long n) const {
+    double u = du + kR2a * static_cast<double>(n + 1), v = dv + kR2b * static_cast<double>(n + 1);
+    u -= std::floor(u);
+    v -= std::floor(v);
+    const double rho = a * std::sqrt(u), phi = 2 * kPi * v;
+    return {rho * std::cos(phi), rho * std::sin(phi), zp};
+  }
+};
+
+// The points of one shift are the same for every P, so each thread keeps the last sets it made
+// (up to kCachedPoints points each); null when there are more.
+constexpr long long kCachedPoints = 65536;
+const std::vector<Vec3>* cached_port_points(std::uint64_t seed, int shift, long long samples, double a, double zp) {
+  if (samples > kCachedPoints) return nullptr;
+  struct Set {
+    std::uint64_t seed;
+    int shift;
+    long long samples;
+    double a, zp;
+    std::vector<Vec3> Q;
+  };
+  constexpr std::size_t kKept = 16;
+  thread_local std::vector<Set> kept;
+  for (const Set& s : kept)
+    if (s.seed == seed && s.shift == shift && s.samples == samples && s.a == a && s.zp == zp) return &s.Q;
+  if (kept.size() == kKept) kept.erase(kept.begin());
+  Set& s = kept.emplace_back(Set{seed, shift, samples, a, zp, {}});
+  const PortLattice lattice(seed, shift, a, zp);
+  s.Q.reserve(static_cast<std::size_t>(samples));
+  for (long long n = 0; n < samples; ++n) s.Q.push_back(lattice(n));
+  return &s.Q;
+}
 }  // namespace
 
 double disk_irradiance(double L, double a, double h, double r) {
@@ -62,22 +102,38 @@ double TracedPort::wall_radiance_along(const Vec3& Q, const Vec3& up) const {
 }
 
 double TracedPort::uniform_part(const Vec3& P, const RayTransmission& T) const {
-  if (L_ref_ == 0) return 0;
+  return uniform_parts(P, {T})[0];
+}
+
+std::vector<double> TracedPort::uniform_parts(const Vec3& P, const std::vector<RayTransmission>& Ts) const {
+  std::vector<double> e(Ts.size(), 0.0);
+  if (L_ref_ == 0) return e;
   const double a = tracer_.scene().port.radius(), zp = tracer_.scene().port_plane_z();
   const QuadratureRule& rule = port_radial_rule();
-  double e = 0;
+  // The azimuths' cosines and sines, the same for every P.
+  static const std::array<std::array<double, 2>, kPortAzimuths> turn = [] {
+    std::array<std::array<double, 2>, kPortAzimuths> t{};
+    for (int j = 0; j < kPortAzimuths; ++j) {
+      const double phi = 2 * kPi * (j + 0.5) / kPortAzimuths;
+      t[static_cast<std::size_t>(j)] = {std::cos(phi), std::sin(phi)};
+    }
+    return t;
+  }();
+  std::vector<double> ring(Ts.size());
   for (std::size_t i = 0; i < rule.x.size(); ++i) {
     // Area-uniform radius ρ = a·√s: dA = (a²/2)·ds·dφ.
     const double rho = a * std::sqrt(rule.x[i]);
-    double ring = 0;
-    for (int j = 0; j < kPortAzimuths; ++j) {
-      const double phi = 2 * kPi * (j + 0.5) / kPortAzimuths;
-      const Vec3 d = sub({rho * std::cos(phi), rho * std::sin(phi), zp}, P);
-      ring += T(mul(unit(d), -1.0)) * plane_to_plane(d);
+    std::fill(ring.begin(), ring.end(), 0.0);
+    for (const auto& [c, s] : turn) {
+      const Vec3 d = sub({rho * c, rho * s, zp}, P);
+      const Vec3 k = mul(unit(d), -1.0);
+      const double G = plane_to_plane(d);
+      for (std::size_t f = 0; f < Ts.size(); ++f) ring[f] += Ts[f](k) * G;
     }
-    e += rule.w[i] * ring;
+    for (std::size_t f = 0; f < Ts.size(); ++f) e[f] += rule.w[i] * ring[f];
   }
-  return L_ref_ * e * 0.5 * a * a * (2 * kPi / kPortAzimuths);
+  for (double& x : e) x = L_ref_ * x * 0.5 * a * a * (2 * kPi / kPortAzimuths);
+  return e;
 }
 
 double TracedPort::sampled_part(const Vec3& P, const RayTransmission& T, long long samples,
@@ -89,15 +145,11 @@ std::vector<double> TracedPort::sampled_parts(const Vec3& P, const std::vector<R
                                               long long samples, int shift) const {
   const SceneSpec& sc = tracer_.scene();
   const double a = sc.port.radius(), zp = sc.port_plane_z();
-  const double du = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 0);
-  const double dv = uniform_unit(sc.trace.seed, static_cast<std::uint64_t>(shift), 0x5041, 1);
+  const std::vector<Vec3>* cached = cached_port_points(sc.trace.seed, shift, samples, a, zp);
+  const PortLattice lattice(sc.trace.seed, shift, a, zp);
   std::vector<double> e(Ts.size(), 0.0);
   for (long long n = 0; n < samples; ++n) {
-    double u = du + kR2a * static_cast<double>(n + 1), v = dv + kR2b * static_cast<double>(n + 1);
-    u -= std::floor(u);
-    v -= std::floor(v);
-    const double rho = a * std::sqrt(u), phi = 2 * kPi * v;
-    const Vec3 Q{rho * std::cos(phi), rho * std::sin(phi), zp};
+    const Vec3 Q = cached ? (*cached)[static_cast<std::size_t>(n)] : lattice(n);
     const Vec3 d = sub(Q, P);
     const Vec3 up = unit(d);
     const double L = wall_radiance_along(Q, up) - L_ref_, G = plane_to_plane(d);
@@ -109,20 +161,24 @@ std::vector<double> TracedPort::sampled_parts(const Vec3& P, const std::vector<R
 }
 
 double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const {
+  return occluder_parts(P, {T})[0];
+}
+
+std::vector<double> TracedPort::occluder_parts(const Vec3& P, const std::vector<RayTransmission>& Ts) const {
   const SceneSpec& sc = tracer_.scene();
   const double a = sc.port.radius(), zp = sc.port_plane_z();
   const QuadratureRule& rule = occluder_radial_rule();
-  // The correction along one ray from P: where `index` of `kind` is the first surface seen
-  // through the port, its radiance replaces the wall's.
-  const auto correction = [&](const Vec3& up, SphereTracer::Hit::Kind kind, int index) {
+  // The radiance difference along one ray from P: where `index` of `kind` is the first surface
+  // seen through the port, its radiance replaces the wall's (0 where it is not seen).
+  const auto difference = [&](const Vec3& up, SphereTracer::Hit::Kind kind, int index) {
     if (up[2] <= 0) return 0.0;
     const Vec3 Q = add(P, mul(up, (zp - P[2]) / up[2]));
     if (Q[0] * Q[0] + Q[1] * Q[1] > a * a) return 0.0;  // outside the port's view
     const SphereTracer::Hit h = tracer_.first_hit(Q, up, 0.0);
     if (h.kind != kind || h.index != index) return 0.0;
-    return (tracer_.radiance(solution_, h) - wall_radiance_along(Q, up)) * T(mul(up, -1.0));
+    return tracer_.radiance(solution_, h) - wall_radiance_along(Q, up);
   };
-  double e = 0;
+  std::vector<double> e(Ts.size(), 0.0);
   for (std::size_t b = 0; b < sc.baffles.size(); ++b) {
     const BaffleSpec& bf = sc.baffles[b];
     const Vec3 n = unit(bf.normal);
@@ -137,7 +193,10 @@ double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const 
         const double d2 = dot(d, d), dist = std::sqrt(d2);
         const Vec3 up = mul(d, 1.0 / dist);
         // dω = |cos θ_B|·dA/d²; times cos θ_P.
-        e += w * correction(up, SphereTracer::Hit::Baffle, static_cast<int>(b)) * up[2] * std::abs(dot(n, up)) / d2;
+        const double dL = difference(up, SphereTracer::Hit::Baffle, static_cast<int>(b));
+        if (dL == 0) continue;  // adds nothing to any transmission
+        const Vec3 k = mul(up, -1.0);
+        for (std::size_t f = 0; f < Ts.size(); ++f) e[f] += w * (dL * Ts[f](k)) * up[2] * std::abs(dot(n, up)) / d2;
       }
     }
   }
@@ -156,7 +215,10 @@ double TracedPort::occluder_part(const Vec3& P, const RayTransmission& T) const 
       for (int j = 0; j < kOccluderAzimuths; ++j) {
         const double phi = 2 * kPi * (j + 0.5) / kOccluderAzimuths;
         const Vec3 up = unit(add(mul(axis, cb), add(mul(t, sb * std::cos(phi)), mul(s, sb * std::sin(phi)))));
-        e += w * correction(up, SphereTracer::Hit::Lamp, static_cast<int>(l)) * up[2];
+        const double dL = difference(up, SphereTracer::Hit::Lamp, static_cast<int>(l));
+        if (dL == 0) continue;
+        const Vec3 k = mul(up, -1.0);
+        for (std::size_t f = 0; f < Ts.size(); ++f) e[f] += w * (dL * Ts[f](k)) * up[2];
       }
     }
   }
@@ -174,7 +236,8 @@ std::vector<std::vector<double>> TracedPort::irradiance(double x, double y, doub
   const Vec3 P{x, y, tracer_.scene().port_plane_z() - h};
   std::vector<std::vector<double>> e(Ts.size(), std::vector<double>(static_cast<std::size_t>(shifts)));
   std::vector<double> fixed(Ts.size());
-  for (std::size_t f = 0; f < Ts.size(); ++f) fixed[f] = uniform_part(P, Ts[f]) + occluder_part(P, Ts[f]);
+  const std::vector<double> uniform = uniform_parts(P, Ts), occluders = occluder_parts(P, Ts);
+  for (std::size_t f = 0; f < Ts.size(); ++f) fixed[f] = uniform[f] + occluders[f];
   for (int k = 0; k < shifts; ++k) {
     const std::vector<double> s = sampled_parts(P, Ts, samples, k);
     for (std::size_t f = 0; f < Ts.size(); ++f) e[f][static_cast<std::size_t>(k)] = fixed[f] + s[f];

@@ -63,6 +63,9 @@ class TracedPort {
   std::vector<double> sampled_parts(const Vec3& P, const std::vector<RayTransmission>& Ts,
                                     long long samples, int shift) const;
   double occluder_part(const Vec3& P, const RayTransmission& T) const;
+  // The fixed-rule parts for several transmissions at once (rays and radiance shared).
+  std::vector<double> uniform_parts(const Vec3& P, const std::vector<RayTransmission>& Ts) const;
+  std::vector<double> occluder_parts(const Vec3& P, const std::vector<RayTransmission>& Ts) const;
 
  private:
   double wall_radiance_along(const Vec3& Q, const Vec3& up) const;

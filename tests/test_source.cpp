@@ -292,6 +292,32 @@ std::vector<bool> penumbra_bins(const SphereTracer& tracer, const WallMap& w) {
   return near;
 }
 
+TEST(SphereSolve, TheShadowTestAgreesWithEmbreeBeyondTheExhaustiveLimit) {
+  // With few occluders the direct term's shadow test intersects every primitive itself; with
+  // more it asks Embree. JF-500 plus eight 0.1 mm baffles pressed to the floor (they hide the lamp
+  // from no point tested here) takes the Embree path: both must see the same lit and shadowed
+  // wall, bit for bit, over 4000 points spread over the sphere.
+  const SceneSpec a = load_scene(POLRIG_SOURCE_DIR "/scenes/jf500.yaml");
+  SceneSpec b = a;
+  for (int k = 0; k < 8; ++k) {
+    const double phi = 2 * kPi * k / 8;
+    b.baffles.push_back({{20 * std::cos(phi), 20 * std::sin(phi), -249}, {0, 0, 1}, 0.1, 0.98});
+  }
+  const SphereTracer exhaustive(a), embree(b);
+  const double R = a.sphere.radius();
+  int shadowed = 0, lit = 0;
+  for (int k = 0; k < 4000; ++k) {
+    const double z = 1 - 2 * (k + 0.5) / 4000, r = std::sqrt(1 - z * z), phi = k * 2.399963229728653;
+    const Vec3 p{R * r * std::cos(phi), R * r * std::sin(phi), R * z};
+    if (p[2] < a.port_plane_z()) continue;  // the port: no wall there
+    const double e = exhaustive.direct_irradiance(p);
+    ASSERT_EQ(e, embree.direct_irradiance(p)) << "wall point " << k;
+    (e == 0 ? shadowed : lit) += 1;
+  }
+  EXPECT_GT(shadowed, 20);  // the baffle's shadow and the far side of the lamp are in the test
+  EXPECT_GT(lit, 2000);
+}
+
 TEST(SlowSphereSolve, TheFiniteLampsFirstStrikeIsTheHardShadowOutsideItsPenumbra) {
   // The JF-500 scene as it is, its 10 mm lamp: the hard shadow leaves out the penumbra, a band
   // where part of the lamp is hidden. Outside it (every point of a bin and its neighbours sees

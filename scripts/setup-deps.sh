@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libtbb-dev libyaml-cpp-dev libfmt-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libembree-dev libopenexr-dev
+  liberfa-dev                 # the sun's apparent position (IAU SOFA-derived ERFA, as astropy)
   gnuplot-nox fonts-dejavu-core
 )
 

@@ -8,6 +8,7 @@
 
 #include "cli.h"
 #include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
 #include "polrig/io/plot.h"
 #include "polrig/io/spectrum_csv.h"
 #include "polrig/spectral/effective_degree.h"
@@ -51,8 +52,8 @@ CsvTable spectra_table(const FilmSpectra& film, const Spectrum& response, const 
 void run_spectral_kd(const SpectralKdOptions& o, const OutputOptions& out) {
   // Everything is read and checked before the output folder is opened.
   if (!o.tau_m_scale.empty() && o.tau_m_scale.size() != kChannels)
-    throw std::runtime_error(fmt::format("--tau-m-scale: {} values; expected {} (one per channel) "
-                                         "or none", o.tau_m_scale.size(), kChannels));
+    throw DataError(fmt::format("--tau-m-scale: {} values; expected {} (one per channel) or none",
+                                o.tau_m_scale.size(), kChannels));
   std::vector<double> scale = o.tau_m_scale;
   if (scale.empty()) scale.assign(kChannels, 1.0);
 
@@ -61,14 +62,14 @@ void run_spectral_kd(const SpectralKdOptions& o, const OutputOptions& out) {
   const double lo = response.min_nm(), hi = response.max_nm();
   for (const Spectrum* s : {&film.tau_M, &film.tau_m})
     if (!s->covers(lo, hi))
-      throw std::runtime_error(fmt::format("--films {}: its wavelengths [{}, {}] nm do not cover "
+      throw DataError(fmt::format("--films {}: its wavelengths [{}, {}] nm do not cover "
                                            "the response's [{}, {}] nm", o.films, s->min_nm(),
                                            s->max_nm(), lo, hi));
   const Spectrum lamp = blackbody(o.lamp_K, lo, hi);
   const Spectrum sun = o.sun.empty() ? blackbody(o.sun_K, lo, hi)
                                      : read_spectrum_csv(o.sun, o.sun_column);
   if (!sun.covers(lo, hi))
-    throw std::runtime_error(fmt::format("--sun {}: its wavelengths [{}, {}] nm do not cover the "
+    throw DataError(fmt::format("--sun {}: its wavelengths [{}, {}] nm do not cover the "
                                          "response's [{}, {}] nm", o.sun, sun.min_nm(),
                                          sun.max_nm(), lo, hi));
   const Spectrum sky = rayleigh_sky(sun);
@@ -82,7 +83,7 @@ void run_spectral_kd(const SpectralKdOptions& o, const OutputOptions& out) {
       lamp_d = effective_degree(film, lamp, response, s);
       sky_d = effective_degree(film, sky, response, s);
     } catch (const SpectrumError& e) {
-      throw std::runtime_error(fmt::format("channel {} (--tau-m-scale {}): {}", c + 1, s, e.what()));
+      throw DataError(fmt::format("channel {} (--tau-m-scale {}): {}", c + 1, s, e.what()));
     }
     kd.add_row({double(c + 1), s, lamp_d.d_eff, lamp_d.kd(), sky_d.d_eff, sky_d.kd(),
                 sky_d.kd() - lamp_d.kd()});

@@ -8,8 +8,14 @@ namespace polrig {
 
 namespace {
 
+std::size_t column_of(const CsvFile& f, std::string_view name) {
+  if (auto c = f.find_column(name)) return *c;
+  throw DataError(fmt::format("{}:{}: missing column '{}' (see docs/formats.md, \"Spectra\")",
+                              f.origin, f.header_line, name));
+}
+
 Spectrum spectrum_of(const CsvFile& f, std::string_view column, double max_value) {
-  const std::size_t x = f.column("wavelength_nm"), y = f.column(column);
+  const std::size_t x = column_of(f, "wavelength_nm"), y = column_of(f, column);
   if (f.rows.size() < 2)
     throw DataError(fmt::format("{}: {} data row(s); a spectrum needs at least two", f.origin,
                                 f.rows.size()));

@@ -99,10 +99,13 @@ void run_spectral_kd(const SpectralKdOptions& o, const OutputOptions& out) {
       {"spectra.csv", 1, "on a 1 nm grid over the response's band: films, their degree, the "
                          "response, and each source's S*R normalised to 1 at its peak"}};
   if (out.plots()) {
-    Plot fig{"spectra.png",
-             fmt::format("Weights S·R of the lamp ({} K) and of the sky, and the film's degree",
-                         o.lamp_K),
-             "wavelength (nm)", "S·R, normalised to 1 at the peak", "film (τM − τm)/(τM + τm)"};
+    Plot fig;
+    fig.png = "spectra.png";
+    fig.title = fmt::format("Weights S·R of the lamp ({} K) and of the sky, and the film's degree",
+                            o.lamp_K);
+    fig.xlabel = "wavelength (nm)";
+    fig.ylabel = "S·R, normalised to 1 at the peak";
+    fig.y2label = "film (τM − τm)/(τM + τm)";
     fig.series = {{"spectra.csv", "1:6", fmt::format("lamp, blackbody {} K", o.lamp_K)},
                   {"spectra.csv", "1:7",
                    o.sun.empty() ? fmt::format("sky: blackbody {} K × λ⁻⁴", o.sun_K)

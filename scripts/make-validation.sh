@@ -79,4 +79,22 @@ for f in traced_bare traced_lensed; do
   echo "-- $f: largest and median per-pose standard error of dv_mr (mV)"
   awk -F, 'NR>1 {print $6}' "$out/$f/deviations.csv" | sort -g | awk '{v[NR]=$1} END {print v[NR], v[int((NR+1)/2)]}'
 done
+echo "== Spectral model of kd: channel 1's kd_lamp, kd_sky, sky - lamp =="
+spec=data/spectra
+spectral() { $p spectral kd --films $spec/sheet-polarizer-synthetic.csv --no-plots -o "$out/spectral_$1" "${@:2}" >/dev/null
+             echo "-- $1: $(sed -n 2p "$out/spectral_$1/kd.csv" | cut -d, -f4,6,7)"; }
+$p spectral kd --films $spec/sheet-polarizer-synthetic.csv --response $spec/blue-filter-photodiode-synthetic.csv \
+  --sun $spec/astm-g173.csv -o "$out/spectral_plot" >/dev/null
+cp "$out/spectral_plot/spectra.png" "$img/spectral-weights.png"
+for R in blue-filter-photodiode-synthetic blue-filter-redleak-photodiode-synthetic; do
+  spectral "$R-etr" --response $spec/$R.csv --sun $spec/astm-g173.csv
+  spectral "$R-am15" --response $spec/$R.csv --sun $spec/astm-g173.csv --sun-column direct_am15
+  spectral "$R-bb5778" --response $spec/$R.csv
+done
+for T in 2700 3000 3200; do
+  spectral "lamp$T" --response $spec/blue-filter-photodiode-synthetic.csv --sun $spec/astm-g173.csv --lamp-temperature $T
+done
+$p spectral kd --films $spec/sheet-polarizer-synthetic.csv --response $spec/blue-filter-photodiode-synthetic.csv \
+  --sun $spec/astm-g173.csv --tau-m-scale 0.25,0.5,0.75,1,1,1.1 --no-plots -o "$out/spectral_scaled" >/dev/null
+cat "$out/spectral_scaled/kd.csv"
 rm -rf "$out"

@@ -1,5 +1,6 @@
 #include "polrig/io/sky_files.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -33,13 +34,24 @@ std::string sun_yaml(const SkyMap& map, const Sky& sky) {
   return y;
 }
 
+// The previews need no more than 512 pixels across (the PNG's disc is ~550 px): larger maps are
+// sampled every `stride` pixels (nearest, so that AoP is never averaged across its 0/180 seam).
+int preview_stride(int size) { return (size + 511) / 512; }
+
 // A float layer for gnuplot, −1 outside the horizon (drawn as background).
-void write_f32(const fs::path& path, const std::vector<float>& layer, const std::vector<float>& inside) {
-  std::string bytes(layer.size() * sizeof(float), '\0');
-  for (std::size_t k = 0; k < layer.size(); ++k) {
-    const float v = inside[k] > 0 ? layer[k] : -1.0f;
-    std::memcpy(bytes.data() + k * sizeof(float), &v, sizeof(float));
-  }
+void write_f32(const fs::path& path, const SkyMap& map, const std::vector<float>& layer) {
+  const int stride = preview_stride(map.size), m = (map.size + stride - 1) / stride;
+  std::string bytes(static_cast<std::size_t>(m) * static_cast<std::size_t>(m) * sizeof(float), '\0');
+  std::size_t out = 0;
+  for (int j = 0; j < m; ++j)
+    for (int i = 0; i < m; ++i) {
+      const std::size_t k = static_cast<std::size_t>(std::min(j * stride + stride / 2, map.size - 1)) *
+                                static_cast<std::size_t>(map.size) +
+                            static_cast<std::size_t>(std::min(i * stride + stride / 2, map.size - 1));
+      const float v = map.inside[k] > 0 ? layer[k] : -1.0f;
+      std::memcpy(bytes.data() + out, &v, sizeof(float));
+      out += sizeof(float);
+    }
   write_text_file(path, bytes);
 }
 
@@ -74,8 +86,10 @@ std::string preview_script(const SkyMap& map, const Sky& sky, const std::string&
   else
     s += fmt::format("set label 'sun {:.2f}° below the horizon, A_s {:.2f}°' at {},{} left font ',10' front\n",
                      -map.sun.elevation_deg, map.sun.azimuth_deg, -0.05 * n, -0.055 * n);
-  s += fmt::format("plot '{}' binary array=({},{}) format='%float' using ($1 < 0 ? NaN : $1) with image\n",
-                   layer, n, n);
+  const int stride = preview_stride(n), m = (n + stride - 1) / stride;
+  s += fmt::format("plot '{}' binary array=({},{}) dx={} dy={} origin=({},{}) format='%float' "
+                   "using ($1 < 0 ? NaN : $1) with image\n",
+                   layer, m, m, stride, stride, stride / 2 + 0.5, stride / 2 + 0.5);
   return s;
 }
 
@@ -93,8 +107,8 @@ std::vector<DatasetFile> write_sky_map(const fs::path& dir, const SkyMap& map, c
   write_text_file(dir / "sun.yaml", sun_yaml(map, sky));
   files.push_back({"sun.yaml", 1, "the sun: azimuth, elevation, declination, hour angles, site, UTC"});
   if (plots) {
-    write_f32(dir / "aop.f32", map.aop_deg, map.inside);
-    write_f32(dir / "dop.f32", map.dop, map.inside);
+    write_f32(dir / "aop.f32", map, map.aop_deg);
+    write_f32(dir / "dop.f32", map, map.dop);
     const double p_hi = std::max(0.05, std::ceil(sky.model.P_max.at(map.sun.elevation_deg) * 20) / 20);
     const std::string script =
         preview_script(map, sky, "aop.f32", "aop.png", "Angle of polarization χ (deg, meridian frame)",
@@ -103,8 +117,8 @@ std::vector<DatasetFile> write_sky_map(const fs::path& dir, const SkyMap& map, c
         preview_script(map, sky, "dop.f32", "dop.png", "Degree of linear polarization", 0, p_hi,
                        "set palette defined (0 '#000004', 0.25 '#51127c', 0.5 '#b73779', 0.75 '#fc8961', 1 '#fcfdbf')");
     run_gnuplot(dir, "sky.gp", script, {"aop.png", "dop.png"});
-    files.push_back({"aop.f32", 1, "AoP layer for the preview: float32, row-major, top row first, -1 outside"});
-    files.push_back({"dop.f32", 1, "DoP layer for the preview: float32, row-major, top row first, -1 outside"});
+    files.push_back({"aop.f32", 1, "AoP for the preview (every ceil(size/512)-th pixel): float32, row-major, top row first, -1 outside"});
+    files.push_back({"dop.f32", 1, "DoP for the preview (every ceil(size/512)-th pixel): float32, row-major, top row first, -1 outside"});
     files.push_back({"aop.png", 1, "AoP preview with the sun marked"});
     files.push_back({"dop.png", 1, "DoP preview with the sun marked"});
   }

@@ -569,7 +569,7 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 2 * 21);  // every real key, both ends
+  EXPECT_EQ(checked, 2 * 23);  // every real key, both ends
 }
 
 // Past the ranges (a rig built in code), simulate stops on the first non-finite voltage and says

@@ -11,6 +11,7 @@
 #include <string>
 
 #include "polrig/random.h"
+#include "polrig/sky/rayleigh.h"
 #include "polrig/sky/sun.h"
 
 namespace polrig {
@@ -311,6 +312,161 @@ TEST(SunTrack, MatchesTheExactPositionEverywhere) {
     EXPECT_NO_THROW(track.at(end));
     EXPECT_THROW(track.at(end.plus_seconds(1)), std::out_of_range);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The Rayleigh sky (spec §1.2)
+// ---------------------------------------------------------------------------------------------
+
+// A unit ENU vector from zenith angle θ and math azimuth φ (degrees).
+Vec3 from_angles(double theta_deg, double phi_deg) {
+  const double t = theta_deg * kDeg, p = phi_deg * kDeg;
+  return {std::sin(t) * std::cos(p), std::sin(t) * std::sin(p), std::cos(t)};
+}
+
+double wrap90(double a) { return std::remainder(a, 180.0); }
+
+TEST(RayleighSky, AngleMatchesTheSpecsClosedForm) {
+  // tan χ = [sin θs cos θv cos(φv − φs) − cos θs sin θv] / [sin θs sin(φv − φs)]
+  const SkyModel model;
+  for (std::uint64_t i = 0; i < 2000; ++i) {
+    const double ts = 120 * uniform_unit(23, i, 0, 0), ps = 360 * uniform_unit(23, i, 1, 0);
+    const double tv = 90 * uniform_unit(23, i, 2, 0), pv = 360 * uniform_unit(23, i, 3, 0);
+    const double dphi = (pv - ps) * kDeg;
+    const double num = std::sin(ts * kDeg) * std::cos(tv * kDeg) * std::cos(dphi) -
+                       std::cos(ts * kDeg) * std::sin(tv * kDeg);
+    const double den = std::sin(ts * kDeg) * std::sin(dphi);
+    const double chi_closed = std::atan2(num, den) / kDeg;
+    const SkyLight light = sky_light(from_angles(ts, ps), from_angles(tv, pv), model);
+    EXPECT_NEAR(wrap90(light.aop_deg - chi_closed), 0, 1e-9) << i;
+    EXPECT_GE(light.aop_deg, 0);
+    EXPECT_LT(light.aop_deg, 180);
+  }
+}
+
+TEST(RayleighSky, EVectorIsPerpendicularToSunAndView) {
+  const SkyModel model;
+  for (std::uint64_t i = 0; i < 500; ++i) {
+    const Vec3 s = from_angles(180 * uniform_unit(29, i, 0, 0), 360 * uniform_unit(29, i, 1, 0));
+    const Vec3 v = from_angles(90 * uniform_unit(29, i, 2, 0), 360 * uniform_unit(29, i, 3, 0));
+    const SkyLight light = sky_light(s, v, model);
+    EXPECT_NEAR(vec3::dot(light.e_vector, s), 0, 1e-14);
+    EXPECT_NEAR(vec3::dot(light.e_vector, v), 0, 1e-14);
+    EXPECT_NEAR(vec3::norm(light.e_vector), 1, 1e-14);
+    // The Stokes vector carries the same DoP and AoP.
+    const Stokes st = sky_stokes(light);
+    EXPECT_NEAR(std::hypot(st(1), st(2)) / st(0), light.dop, 1e-14);
+    if (light.dop > 1e-6) {
+      EXPECT_NEAR(wrap90(0.5 * std::atan2(st(2), st(1)) / kDeg - light.aop_deg), 0, 1e-9);
+    }
+  }
+}
+
+TEST(RayleighSky, NinetyDegreesOnTheSolarMeridian) {
+  const SkyModel model;
+  for (double ts : {10.0, 45.0, 80.0, 95.0})
+    for (double tv : {5.0, 30.0, 60.0, 89.0})
+      for (double ps : {0.0, 37.0, 200.0}) {
+        if (tv != ts) {  // same meridian, sun side
+          EXPECT_NEAR(sky_light(from_angles(ts, ps), from_angles(tv, ps), model).aop_deg, 90, 1e-9);
+        }
+        // the anti-solar half of the meridian
+        EXPECT_NEAR(sky_light(from_angles(ts, ps), from_angles(tv, ps + 180), model).aop_deg, 90, 1e-9);
+      }
+}
+
+TEST(RayleighSky, ZenithAngleTurnsExactlyWithTheSunsAzimuth) {
+  // At the zenith e_θ = east, e_φ = north (rayleigh.h): χ = −A_s mod 180°, whatever h_s.
+  const SkyModel model;
+  const Vec3 zenith{0, 0, 1};
+  for (std::uint64_t i = 0; i < 200; ++i) {
+    const double A1 = 360 * uniform_unit(31, i, 0, 0), dA = 2 * uniform_unit(31, i, 1, 0) - 1;
+    const double h1 = 80 * uniform_unit(31, i, 2, 0) - 10, h2 = 80 * uniform_unit(31, i, 3, 0) - 10;
+    const SunPosition a{A1, h1, 90 - h1, 0, 0, 0}, b{A1 + dA, h2, 90 - h2, 0, 0, 0};
+    const double chi1 = sky_light(sun_direction_enu(a), zenith, model).aop_deg;
+    const double chi2 = sky_light(sun_direction_enu(b), zenith, model).aop_deg;
+    EXPECT_NEAR(wrap90(chi2 - chi1), -dA, 1e-9) << i;
+    EXPECT_NEAR(wrap90(chi1 + A1), 0, 1e-9) << i;
+  }
+}
+
+TEST(RayleighSky, DegreeOfPolarization) {
+  SkyModel model;
+  model.P_max.constant = 0.63;
+  const Vec3 s = from_angles(50, 20);
+  // γ = 90°: P = P_max.
+  Vec3 t, b;
+  vec3::basis_around(s, t, b);
+  EXPECT_NEAR(sky_light(s, t, model).dop, 0.63, 1e-15);
+  // γ = 0° and 180°: P = 0, e undefined (zero), χ = 0.
+  for (const Vec3& v : {s, vec3::mul(s, -1)}) {
+    const SkyLight l = sky_light(s, v, model);
+    EXPECT_EQ(l.dop, 0);
+    EXPECT_EQ(l.e_vector, (Vec3{0, 0, 0}));
+    EXPECT_EQ(l.aop_deg, 0);
+  }
+  // Any γ: the formula.
+  for (double g : {10.0, 33.0, 90.0, 120.0, 170.0}) {
+    const Vec3 v = vec3::add(vec3::mul(s, std::cos(g * kDeg)), vec3::mul(t, std::sin(g * kDeg)));
+    const double c = std::cos(g * kDeg), sn = std::sin(g * kDeg);
+    EXPECT_NEAR(sky_light(s, v, model).dop, 0.63 * sn * sn / (1 + c * c), 1e-15);
+  }
+}
+
+TEST(RayleighSky, SunBelowTheHorizonStillDefinesTheSky) {
+  const SkyModel model;
+  const Vec3 s = from_angles(91.4, 30);  // h_s = −1.4°, as in W19 Outdoor2
+  const SkyLight l = sky_light(s, {0, 0, 1}, model);
+  EXPECT_TRUE(std::isfinite(l.dop) && std::isfinite(l.aop_deg));
+  EXPECT_NEAR(l.dop, 0.7 * std::pow(std::sin(91.4 * kDeg), 2) / (1 + std::pow(std::cos(91.4 * kDeg), 2)), 1e-15);
+}
+
+TEST(RayleighSky, MaxDegreeTable) {
+  MaxDegree p;
+  p.table = {{0, 0.6}, {10, 0.6}, {30, 0.4}};
+  EXPECT_EQ(p.at(-5), 0.6);
+  EXPECT_EQ(p.at(5), 0.6);
+  EXPECT_NEAR(p.at(20), 0.5, 1e-15);
+  EXPECT_EQ(p.at(60), 0.4);
+  SkyModel m;
+  m.P_max = p;
+  EXPECT_NO_THROW(check_sky_model(m));
+  m.P_max.table[2].first = 5;
+  EXPECT_THROW(check_sky_model(m), std::invalid_argument);
+  m.P_max = MaxDegree{1.2, {}};
+  EXPECT_THROW(check_sky_model(m), std::invalid_argument);
+}
+
+TEST(RayleighSky, RadianceModelsAreOneAtTheZenith) {
+  const Vec3 s = from_angles(40, 10), zenith{0, 0, 1};
+  for (SkyRadiance r : {SkyRadiance::Uniform, SkyRadiance::Rayleigh, SkyRadiance::CieClear})
+    EXPECT_NEAR(sky_light(s, zenith, SkyModel{MaxDegree{}, r}).radiance, 1, 1e-15);
+  // Rayleigh: (1 + cos²γ)/(1 + cos²θ_s).
+  const Vec3 v = from_angles(70, 200);
+  const double c = vec3::dot(s, v), cs = std::cos(40 * kDeg);
+  EXPECT_NEAR(sky_light(s, v, SkyModel{MaxDegree{}, SkyRadiance::Rayleigh}).radiance,
+              (1 + c * c) / (1 + cs * cs), 1e-14);
+}
+
+TEST(RayleighSky, CieClearSkyType12) {
+  // CIE S 011/E:2003, type 12, written out here: L/L_z = f(γ)φ(Z)/(f(Z_s)φ(0)).
+  auto phi = [](double Z) { return 1 - std::exp(-0.32 / std::cos(Z)); };
+  auto f = [](double g) {
+    return 1 + 10 * (std::exp(-3 * g) - std::exp(-3 * M_PI / 2)) + 0.45 * std::cos(g) * std::cos(g);
+  };
+  const SkyModel model{MaxDegree{}, SkyRadiance::CieClear};
+  for (std::uint64_t i = 0; i < 200; ++i) {
+    const double Zs = 89 * uniform_unit(37, i, 0, 0) * kDeg, Z = 89 * uniform_unit(37, i, 1, 0) * kDeg;
+    const double dA = 360 * uniform_unit(37, i, 2, 0) * kDeg;
+    const Vec3 s = from_angles(Zs / kDeg, 0), v = from_angles(Z / kDeg, dA / kDeg);
+    // The spherical law of cosines for the sun–element angle.
+    const double g = std::acos(std::cos(Zs) * std::cos(Z) + std::sin(Zs) * std::sin(Z) * std::cos(dA));
+    EXPECT_NEAR(sky_light(s, v, model).radiance, f(g) * phi(Z) / (f(Zs) * phi(0)), 1e-12) << i;
+  }
+  // The clear sky is darkest about 90° from the sun and brightens towards the horizon.
+  const Vec3 s = from_angles(30, 90);
+  EXPECT_LT(sky_light(s, from_angles(60, 270), model).radiance,
+            sky_light(s, from_angles(85, 270), model).radiance);
 }
 
 }  // namespace

@@ -177,4 +177,22 @@ TEST(Heading, TangentIsClampedWithinTheToleranceElseInconsistent) {
   EXPECT_NEAR(circ(c.heading_deg, 123 + 180), 0.0, 1e-6);
 }
 
+// The forward model through the sky (sky_light) agrees with the one written here, and with the
+// solver closes the loop.
+TEST(Heading, SkyViewMatchesTheIndependentForwardModel) {
+  SkyModel sky;
+  sky.P_max.constant = 0.61;
+  for (std::uint64_t k = 0; k < 300; ++k) {
+    const Pose p = random_pose(k + 20000);
+    const Vector3d s = sun_enu(p.A, p.h);
+    const Matrix3d C = body_to_n(p.H, p.roll, p.pitch);
+    const BodySkyView view = sky_view_body(to_vec3(s), p.H, {p.roll, p.pitch}, sky);
+    EXPECT_NEAR(axis_difference_deg(view.aop_body_deg, theta_b(C, s)), 0.0, 1e-10);
+    const double cg = s.dot(C.col(2));
+    EXPECT_NEAR(view.dop, 0.61 * (1 - cg * cg) / (1 + cg * cg), 1e-14);
+    const HeadingSolution r = solve_heading(to_vec3(s), view.aop_body_deg, {p.roll, p.pitch}, p.H + 1);
+    EXPECT_LT(circ(r.heading_deg, p.H), 1e-9);
+  }
+}
+
 }  // namespace

@@ -114,6 +114,8 @@ void run_heading(const std::string& input, const std::string& site_text, const O
       throw DataError(fmt::format("{}:{}: column '{}' is one heading writes: rename it", f.origin,
                                   f.header_line, added));
   const std::vector<HeadingRow> rows = read_heading_input(f, site);
+  // Opened first, so that an existing destination fails before any work; an error below (a
+  // date the ephemeris refuses is that row's error) removes the staging folder.
   OutputDir dir = out.open(false);
   std::string text;
   for (std::size_t c = 0; c < f.header.size(); ++c) text += f.header[c] + ",";
@@ -121,7 +123,13 @@ void run_heading(const std::string& input, const std::string& site_text, const O
   int solved = 0;
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const HeadingRow& h = rows[r];
-    const SunPosition sun = sun_position(h.utc, h.site);
+    SunPosition sun;
+    try {
+      sun = sun_position(h.utc, h.site);
+    } catch (const std::invalid_argument& e) {
+      throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
+                                  f.rows[r][f.column("utc")], e.what()));
+    }
     const HeadingSolution s = solve_heading(sun_direction_enu(sun), h.aop_deg, h.tilt, h.prior_deg);
     for (const std::string& v : f.rows[r]) text += v + ",";
     text += fmt::format("{},{},", sun.azimuth_deg, sun.elevation_deg);

@@ -215,6 +215,8 @@ std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
                  {"cdf.csv", "5:1", "mount misalignment alone", "steps lw 2 lc rgb '#9467bd'"},
                  {"cdf.csv", "6:1", "sensor noise alone", "steps lw 2 lc rgb '#1f77b4'"}};
   dist.extra = "set logscale x\nset yrange [0:1]\nset format x '%g'";
+  for (Plot* p : {&sync, &roll, &pitch, &mount_z, &mount_t, &ins, &pmax})
+    p->extra = "set key below horizontal";  // the scatter gets the whole width
   render_plots(dir, "plots.gp", {sync, roll, pitch, mount_z, mount_t, ins, pmax, dist});
   for (const char* png : {"error_vs_sync.png", "error_vs_roll.png", "error_vs_pitch.png",
                           "error_vs_mount_azimuth.png", "error_vs_mount_tilt.png",

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   CLI::App* study = app.get_subcommand("study");
   for (cli::Command& c : cli::add_calibration_commands(app, *study, threads)) commands.push_back(c);
   for (cli::Command& c : cli::add_spectral_commands(app)) commands.push_back(c);
+  for (cli::Command& c : cli::add_nav_commands(app, *study, threads)) commands.push_back(c);
   for (cli::Command& c : cli::add_sky_commands(app, threads)) commands.push_back(c);
   cli::add_quiet_option(app);
 

@@ -1,0 +1,238 @@
+// Commands that navigate: heading (the W19 compass on recorded attitudes and angles) and
+// study heading (its Monte-Carlo on a moving platform).
+#include <charconv>
+#include <cmath>
+#include <iostream>
+#include <optional>
+
+#include <fmt/format.h>
+
+#include "cli.h"
+#include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "polrig/nav/heading.h"
+#include "polrig/sky/sun.h"
+#include "polrig/report/heading_reports.h"
+#include "polrig/study/heading_trials.h"
+
+namespace polrig::cli {
+
+namespace {
+
+// "LAT,LON" in degrees, north and east positive.
+Site parse_site(const std::string& text) {
+  const auto comma = text.find(',');
+  const auto number = [&](std::string_view s, double& v) {
+    const char* b = s.data();
+    const char* e = s.data() + s.size();
+    if (b != e && *b == '+') ++b;
+    const auto [end, err] = std::from_chars(b, e, v);
+    return !s.empty() && err == std::errc() && end == e && std::isfinite(v);
+  };
+  Site site;
+  if (comma == std::string::npos ||
+      !number(std::string_view(text).substr(0, comma), site.lat_deg) ||
+      !number(std::string_view(text).substr(comma + 1), site.lon_deg))
+    throw DataError(fmt::format("--site {}: expected LAT,LON in degrees, e.g. 38.879167,121.543889", text));
+  if (std::abs(site.lat_deg) > 90.0 || std::abs(site.lon_deg) > 180.0)
+    throw DataError(fmt::format("--site {}: latitude must be in [−90°, 90°] and longitude in "
+                                "[−180°, 180°]", text));
+  return site;
+}
+
+UtcTime parse_utc_option(const std::string& text) {
+  try {
+    return parse_utc(text);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("--utc {}: {}", text, e.what()));
+  }
+}
+
+struct HeadingRow {
+  UtcTime utc;
+  Site site;
+  Tilt tilt;
+  double aop_deg = 0;
+  std::optional<double> prior_deg;
+};
+
+// Reads and checks every row before anything is computed or written.
+std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional<Site>& site) {
+  const std::size_t c_utc = f.column("utc"), c_roll = f.column("roll_deg"),
+                    c_pitch = f.column("pitch_deg"), c_aop = f.column("aop_deg");
+  const auto c_prior = f.find_column("heading_prior_deg");
+  const auto c_lat = f.find_column("lat_deg"), c_lon = f.find_column("lon_deg");
+  if (c_lat.has_value() != c_lon.has_value())
+    throw DataError(fmt::format("{}:{}: column '{}' without '{}': give both or neither", f.origin,
+                                f.header_line, c_lat ? "lat_deg" : "lon_deg",
+                                c_lat ? "lon_deg" : "lat_deg"));
+  if (c_lat && site)
+    throw DataError(fmt::format("{}:{}: the file has lat_deg and lon_deg columns and --site was "
+                                "given too: use one", f.origin, f.header_line));
+  if (!c_lat && !site)
+    throw DataError(fmt::format("{}:{}: no site: give --site LAT,LON or lat_deg and lon_deg "
+                                "columns", f.origin, f.header_line));
+  if (f.rows.empty()) throw DataError(fmt::format("{}: no data rows after the header", f.origin));
+  const auto ranged = [&](std::size_t r, std::size_t c, double lo, double hi, const char* what) {
+    const double v = f.number(r, c);
+    if (v < lo || v > hi)
+      throw DataError(fmt::format("{}:{}: column '{}': {} is outside [{}, {}] ({})", f.origin,
+                                  f.line[r], f.header[c], f.rows[r][c], lo, hi, what));
+    return v;
+  };
+  std::vector<HeadingRow> rows;
+  for (std::size_t r = 0; r < f.rows.size(); ++r) {
+    HeadingRow h;
+    try {
+      h.utc = parse_utc(f.rows[r][c_utc]);
+    } catch (const std::invalid_argument& e) {
+      throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
+                                  f.rows[r][c_utc], e.what()));
+    }
+    h.tilt.roll_deg = ranged(r, c_roll, -180, 180, "degrees, right side down positive");
+    h.tilt.pitch_deg = ranged(r, c_pitch, -90, 90, "degrees, nose up positive");
+    h.aop_deg = ranged(r, c_aop, -360, 360, "θ_b in degrees, anticlockwise from X_b seen from above");
+    if (c_prior && !f.rows[r][*c_prior].empty())
+      h.prior_deg = ranged(r, *c_prior, -360, 360, "degrees clockwise from north; empty for none");
+    if (c_lat) {
+      h.site.lat_deg = ranged(r, *c_lat, -90, 90, "degrees, north positive");
+      h.site.lon_deg = ranged(r, *c_lon, -180, 180, "degrees, east positive");
+    } else {
+      h.site = *site;
+    }
+    rows.push_back(h);
+  }
+  return rows;
+}
+
+void run_heading(const std::string& input, const std::string& site_text, const OutputOptions& out) {
+  const std::optional<Site> site =
+      site_text.empty() ? std::nullopt : std::optional<Site>(parse_site(site_text));
+  const CsvFile f = CsvFile::read(input);
+  for (const char* added : {"sun_az_deg", "sun_el_deg", "heading_deg", "heading_alt_deg", "status"})
+    if (f.find_column(added))
+      throw DataError(fmt::format("{}:{}: column '{}' is one heading writes: rename it", f.origin,
+                                  f.header_line, added));
+  const std::vector<HeadingRow> rows = read_heading_input(f, site);
+  // Opened first, so that an existing destination fails before any work; an error below (a
+  // date the ephemeris refuses is that row's error) removes the staging folder.
+  OutputDir dir = out.open(false);
+  std::string text;
+  for (std::size_t c = 0; c < f.header.size(); ++c) text += f.header[c] + ",";
+  text += "sun_az_deg,sun_el_deg,heading_deg,heading_alt_deg,status\n";
+  int solved = 0;
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    const HeadingRow& h = rows[r];
+    SunPosition sun;
+    try {
+      sun = sun_position(h.utc, h.site);
+    } catch (const std::invalid_argument& e) {
+      throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
+                                  f.rows[r][f.column("utc")], e.what()));
+    }
+    const HeadingSolution s = solve_heading(sun_direction_enu(sun), h.aop_deg, h.tilt, h.prior_deg);
+    for (const std::string& v : f.rows[r]) text += v + ",";
+    text += fmt::format("{},{},", sun.azimuth_deg, sun.elevation_deg);
+    if (has_heading(s.status)) {
+      ++solved;
+      text += fmt::format("{},{},", s.heading_deg, s.heading_alt_deg);
+    } else {
+      text += ",,";
+    }
+    text += fmt::format("{}\n", heading_status_name(s.status));
+  }
+  write_text_file(dir.staging() / "heading.csv", text);
+  write_manifest(dir.staging(),
+                 {command_line(), nullptr,
+                  {{"heading.csv", 1, "the input's columns, then the sun's azimuth and elevation, "
+                                      "the heading (clockwise from north; the root nearest "
+                                      "heading_prior_deg, else the one with the sun in front), "
+                                      "the other root, and the status"}},
+                  {f.origin}});
+  finish(dir);
+  std::cout << fmt::format("{} rows, {} with a heading, {} without\n", rows.size(), solved,
+                           rows.size() - static_cast<std::size_t>(solved));
+}
+
+}  // namespace
+
+std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& threads) {
+  std::vector<Command> commands;
+  {
+    auto* app = root.add_subcommand(
+        "heading", "heading from the sky's E-vector, the attitude and the sun (W19 Eqs. 22-25)");
+    auto input = std::make_shared<std::string>();
+    auto site = std::make_shared<std::string>();
+    auto out = std::make_shared<OutputOptions>();
+    app->add_option("INPUT", *input, "CSV with utc, roll_deg, pitch_deg, aop_deg and optionally "
+                                     "heading_prior_deg, lat_deg, lon_deg")->required();
+    app->add_option("--site", *site, "LAT,LON in degrees (north, east positive), unless the "
+                                     "input has lat_deg and lon_deg columns");
+    out->add_to(*app);
+    commands.push_back({app, [=] { run_heading(*input, *site, *out); }});
+  }
+  {
+    auto* app = study.add_subcommand(
+        "heading", "Monte-Carlo of the heading error on a moving platform (W19 §5.2)");
+    auto rig = std::make_shared<RigInput>();
+    auto out = std::make_shared<OutputOptions>();
+    auto s = std::make_shared<HeadingStudySettings>();
+    auto site = std::make_shared<std::string>();
+    auto utc = std::make_shared<std::string>("2019-07-01T11:01:00Z");
+    rig->add_to(*app, true);
+    out->add_to(*app);
+    app->add_option("--trials", s->trials, "number of trials")->check(CLI::Range(1, 10000000))->capture_default_str();
+    app->add_option("--site", *site, "LAT,LON in degrees (default: W19's Dalian site, 38.879167,121.543889)");
+    app->add_option("--utc", *utc, "time of the run, ISO 8601 with Z (default: W19's dynamic run)")
+        ->capture_default_str();
+    app->add_option("--roll-sd", s->roll_sd_deg, "SD of the roll drawn, degrees")
+        ->check(finite_range(0, 30, "°"))->capture_default_str();
+    app->add_option("--pitch-sd", s->pitch_sd_deg, "SD of the pitch drawn, degrees")
+        ->check(finite_range(0, 30, "°"))->capture_default_str();
+    app->add_option("--sync-max", s->sync_max_s, "largest sensor-INS time offset |Δt| drawn (uniform), s")
+        ->check(finite_range(0, 10, "s"))->capture_default_str();
+    app->add_option("--turn-rate-max", s->turn_rate_max_dps, "largest turn rate |ω| drawn (uniform), °/s")
+        ->check(finite_range(0, 360, "°/s"))->capture_default_str();
+    app->add_option("--ins-tilt-sd", s->ins_tilt_sd_deg, "SD of the INS's roll and pitch errors, degrees")
+        ->check(finite_range(0, 10, "°"))->capture_default_str();
+    app->add_option("--mount-tilt-sd", s->mount_tilt_sd_deg, "SD of the sensor axis' tilt about X_b and Y_b, degrees")
+        ->check(finite_range(0, 10, "°"))->capture_default_str();
+    app->add_option("--mount-azimuth-sd", s->mount_azimuth_sd_deg, "SD of the sensor's azimuthal mount offset, degrees")
+        ->check(finite_range(0, 10, "°"))->capture_default_str();
+    app->add_option("--p-max-min", s->p_max_min, "smallest P_max drawn (uniform)")
+        ->check(finite_range(0.05, 1))->capture_default_str();
+    app->add_option("--p-max-max", s->p_max_max, "largest P_max drawn (uniform)")
+        ->check(finite_range(0.05, 1))->capture_default_str();
+    app->add_option("--samples", s->samples, "voltage samples averaged per heading")
+        ->check(CLI::Range(1, 100000))->capture_default_str();
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      HeadingStudySettings settings = *s;
+      if (settings.p_max_min > settings.p_max_max)
+        throw DataError(fmt::format("--p-max-min {} is above --p-max-max {}", settings.p_max_min,
+                                    settings.p_max_max));
+      // Site and time: the options (a rig's `sky:` block, once rigs have one, is the hook for
+      // defaults taken from the rig).
+      if (!site->empty()) settings.site = parse_site(*site);
+      settings.utc = parse_utc_option(*utc);
+      const LoadedRig r = rig->load();
+      OutputDir dir = out->open();
+      const std::vector<HeadingTrial> result = heading_trials(r.rig, settings, progress());
+      write_manifest(dir.staging(), {command_line(), &r,
+                                     report_heading_trials(dir.staging(), result, settings, out->plots())});
+      finish(dir);
+      double sum_sq = 0;
+      int solved = 0;
+      for (const HeadingTrial& t : result)
+        if (!std::isnan(t.error_deg)) {
+          sum_sq += t.error_deg * t.error_deg;
+          ++solved;
+        }
+      std::cout << fmt::format("{} trials, {} with a heading; RMS heading error {:.4f}°\n",
+                               result.size(), solved, solved ? std::sqrt(sum_sq / solved) : NAN);
+    }});
+  }
+  return commands;
+}
+
+}  // namespace polrig::cli

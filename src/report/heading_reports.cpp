@@ -1,0 +1,228 @@
+#include "polrig/report/heading_reports.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "polrig/io/csv.h"
+#include "polrig/io/plot.h"
+
+namespace polrig {
+
+namespace {
+
+// A number for a CSV cell: finite, or NaN where `undefined_ok` (a trial without a heading).
+std::string cell(double v, const char* column, int trial, bool undefined_ok = false) {
+  if (!std::isfinite(v) && !(std::isnan(v) && undefined_ok))
+    throw std::runtime_error(fmt::format("a result is not finite: column '{}' of trial {} is {}; "
+                                         "nothing was written", column, trial, v));
+  return fmt::format("{}", v);
+}
+
+double quantile(const std::vector<double>& sorted, double q) {  // type 7, as NumPy's default
+  if (sorted.empty()) return std::nan("");
+  const double pos = q * static_cast<double>(sorted.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+}
+
+struct Stats {
+  int trials = 0, solved = 0;
+  double mean = NAN, rms = NAN, p50_abs = NAN, p95_abs = NAN, max_abs = NAN;
+};
+
+Stats stats_of(const std::vector<double>& errors) {
+  Stats s;
+  s.trials = static_cast<int>(errors.size());
+  std::vector<double> a;
+  double sum = 0, sum_sq = 0;
+  for (double e : errors)
+    if (!std::isnan(e)) {
+      a.push_back(std::abs(e));
+      sum += e;
+      sum_sq += e * e;
+    }
+  s.solved = static_cast<int>(a.size());
+  if (a.empty()) return s;
+  std::sort(a.begin(), a.end());
+  const double n = static_cast<double>(a.size());
+  s.mean = sum / n;
+  s.rms = std::sqrt(sum_sq / n);
+  s.p50_abs = quantile(a, 0.5);
+  s.p95_abs = quantile(a, 0.95);
+  s.max_abs = a.back();
+  return s;
+}
+
+std::string stats_row(const std::string& factor, const std::string& error, double lo, double hi,
+                      const Stats& s) {
+  const auto num = [](double v) { return std::isnan(v) ? std::string() : fmt::format("{}", v); };
+  return fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", factor, error, num(lo), num(hi), s.trials,
+                     s.solved, num(s.mean), num(s.rms), num(s.p50_abs), num(s.p95_abs),
+                     num(s.max_abs));
+}
+
+double sync_heading(const HeadingTrial& t) { return t.turn_rate_dps * t.sync_s; }
+double mount_tilt(const HeadingTrial& t) { return std::hypot(t.mount_x_deg, t.mount_y_deg); }
+double tilt(const HeadingTrial& t) { return std::hypot(t.roll_deg, t.pitch_deg); }
+
+}  // namespace
+
+std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
+                                               const std::vector<HeadingTrial>& trials,
+                                               const HeadingStudySettings& settings, bool plots) {
+  std::string text =
+      "trial,seed,heading_deg,roll_deg,pitch_deg,sync_s,turn_rate_dps,sync_heading_deg,"
+      "ins_roll_error_deg,ins_pitch_error_deg,mount_x_deg,mount_y_deg,mount_tilt_deg,mount_z_deg,"
+      "p_max,dop,aop_true_deg,aop_meas_deg,status,heading_est_deg,error_deg,error_sync_deg,"
+      "error_ins_tilt_deg,error_mount_deg,error_noise_deg\n";
+  for (const HeadingTrial& t : trials) {
+    const int k = t.index;
+    text += fmt::format("{},{}", k, t.seed);
+    for (auto [v, name] : {std::pair{t.heading_deg, "heading_deg"}, {t.roll_deg, "roll_deg"},
+                           {t.pitch_deg, "pitch_deg"}, {t.sync_s, "sync_s"},
+                           {t.turn_rate_dps, "turn_rate_dps"}, {sync_heading(t), "sync_heading_deg"},
+                           {t.ins_roll_error_deg, "ins_roll_error_deg"},
+                           {t.ins_pitch_error_deg, "ins_pitch_error_deg"},
+                           {t.mount_x_deg, "mount_x_deg"}, {t.mount_y_deg, "mount_y_deg"},
+                           {mount_tilt(t), "mount_tilt_deg"}, {t.mount_z_deg, "mount_z_deg"},
+                           {t.p_max, "p_max"}, {t.dop, "dop"}, {t.aop_true_deg, "aop_true_deg"},
+                           {t.aop_meas_deg, "aop_meas_deg"}})
+      (text += ',') += cell(v, name, k);
+    text += fmt::format(",{}", heading_status_name(t.status));
+    for (auto [v, name] : {std::pair{t.heading_est_deg, "heading_est_deg"}, {t.error_deg, "error_deg"},
+                           {t.error_sync_deg, "error_sync_deg"},
+                           {t.error_ins_tilt_deg, "error_ins_tilt_deg"},
+                           {t.error_mount_deg, "error_mount_deg"},
+                           {t.error_noise_deg, "error_noise_deg"}})
+      (text += ',') += cell(v, name, k, true);
+    text += "\n";
+  }
+  write_text_file(dir / "trials.csv", text);
+
+  // Overall, each factor alone, then the full error binned by each factor.
+  using Get = std::function<double(const HeadingTrial&)>;
+  const auto column = [&](const Get& get) {
+    std::vector<double> v;
+    for (const HeadingTrial& t : trials) v.push_back(get(t));
+    return v;
+  };
+  std::string summary =
+      "factor,error,bin_lo,bin_hi,trials,solved,mean_deg,rms_deg,p50_abs_deg,p95_abs_deg,max_abs_deg\n";
+  const std::array<std::pair<const char*, Get>, 5> errors{{
+      {"error_deg", [](const HeadingTrial& t) { return t.error_deg; }},
+      {"error_sync_deg", [](const HeadingTrial& t) { return t.error_sync_deg; }},
+      {"error_ins_tilt_deg", [](const HeadingTrial& t) { return t.error_ins_tilt_deg; }},
+      {"error_mount_deg", [](const HeadingTrial& t) { return t.error_mount_deg; }},
+      {"error_noise_deg", [](const HeadingTrial& t) { return t.error_noise_deg; }},
+  }};
+  for (const auto& [name, get] : errors) summary += stats_row("all", name, NAN, NAN, stats_of(column(get)));
+  const std::array<std::pair<const char*, Get>, 6> factors{{
+      {"sync_heading_deg", sync_heading},
+      {"tilt_deg", tilt},
+      {"mount_tilt_deg", mount_tilt},
+      {"mount_z_deg", [](const HeadingTrial& t) { return t.mount_z_deg; }},
+      {"p_max", [](const HeadingTrial& t) { return t.p_max; }},
+      {"dop", [](const HeadingTrial& t) { return t.dop; }},
+  }};
+  constexpr int kBins = 8;
+  for (const auto& [name, get] : factors) {
+    const std::vector<double> x = column(get);
+    if (x.empty()) break;
+    const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
+    const double lo = *lo_it, hi = *hi_it;
+    if (!(hi > lo)) continue;
+    for (int b = 0; b < kBins; ++b) {
+      const double a = lo + (hi - lo) * b / kBins, z = lo + (hi - lo) * (b + 1) / kBins;
+      std::vector<double> e;
+      for (const HeadingTrial& t : trials) {
+        const double v = get(t);
+        if (v >= a && (v < z || (b == kBins - 1 && v <= z))) e.push_back(t.error_deg);
+      }
+      summary += stats_row(name, "error_deg", a, z, stats_of(e));
+    }
+  }
+  write_text_file(dir / "summary.csv", summary);
+
+  // The distribution of |error|, all factors and each alone, each column sorted on its own.
+  std::array<std::vector<double>, 5> sorted;
+  for (std::size_t m = 0; m < errors.size(); ++m) {
+    for (double e : column(errors[m].second))
+      if (!std::isnan(e)) sorted[m].push_back(std::abs(e));
+    std::sort(sorted[m].begin(), sorted[m].end());
+  }
+  std::string cdf = "fraction,all_deg,sync_deg,ins_tilt_deg,mount_deg,noise_deg\n";
+  const std::size_t n = trials.size();
+  for (std::size_t k = 0; k < n; ++k) {
+    cdf += fmt::format("{}", (static_cast<double>(k) + 0.5) / static_cast<double>(n));
+    for (std::size_t m = 0; m < sorted.size(); ++m)
+      cdf += k < sorted[m].size() ? fmt::format(",{}", sorted[m][k]) : std::string(",nan");
+    cdf += "\n";
+  }
+  write_text_file(dir / "cdf.csv", cdf);
+
+  std::vector<DatasetFile> files{
+      {"trials.csv", 1, "per trial: the drawn attitude, sync error, turn rate, INS tilt error, mount "
+                        "misalignment, P_max; the sky's d and θ_b, the noisy θ_b, the status, the "
+                        "heading and its error (all factors, then each alone)"},
+      {"summary.csv", 1, "mean, RMS, median, 95 % and largest |error| overall and for each factor "
+                         "alone, then the full error in 8 bins of each factor"},
+      {"cdf.csv", 1, "empirical distribution of |heading error|, all factors and each alone"}};
+  if (!plots || n == 0) return files;
+
+  const std::string pts = "points pt 7 ps 0.35 lc rgb '#1f77b4'";
+  const std::string alone = "points pt 7 ps 0.35 lc rgb '#d62728'";
+  const std::string title_tail = fmt::format("{} trials", n);
+  Plot sync{"error_vs_sync.png",
+            fmt::format("Heading error against the sync error ω·Δt (|ω| ≤ {}°/s, |Δt| ≤ {} s; {})",
+                        settings.turn_rate_max_dps, settings.sync_max_s, title_tail),
+            "ω·Δt, turn rate × sensor-INS time offset (°)", "heading error (°)"};
+  sync.series = {{"trials.csv", "8:21", "all factors", pts},
+                 {"trials.csv", "8:22", "sync error alone", alone},
+                 {"trials.csv", "8:8", "ω·Δt", "lines lw 1 dt 2 lc rgb 'black'"}};
+  Plot roll{"error_vs_roll.png", "Heading error against roll (" + title_tail + ")", "roll (°)",
+            "heading error (°)"};
+  roll.series = {{"trials.csv", "4:21", "all factors", pts},
+                 {"trials.csv", "4:($21-$22)", "all factors minus the sync error alone", alone}};
+  Plot pitch{"error_vs_pitch.png", "Heading error against pitch (" + title_tail + ")", "pitch (°)",
+             "heading error (°)"};
+  pitch.series = {{"trials.csv", "5:21", "all factors", pts},
+                  {"trials.csv", "5:($21-$22)", "all factors minus the sync error alone", alone}};
+  Plot mount_z{"error_vs_mount_azimuth.png", "Heading error against the mount's azimuthal offset",
+               "mount azimuth offset m_z (°)", "heading error from the mount alone (°)"};
+  mount_z.series = {{"trials.csv", "14:24", "mount alone", alone},
+                    {"trials.csv", "14:(-$14)", "−m_z", "lines lw 1 dt 2 lc rgb 'black'"}};
+  Plot mount_t{"error_vs_mount_tilt.png", "Heading error against the mount's tilt",
+               "mount tilt √(m_x² + m_y²) (°)", "heading error from the mount alone (°)"};
+  mount_t.series = {{"trials.csv", "13:($24+$14)", "mount alone, azimuth offset removed", alone}};
+  Plot ins{"error_vs_ins_tilt.png", "Heading error against the INS's tilt error",
+           "INS roll error (°)", "heading error from the INS tilt alone (°)"};
+  ins.series = {{"trials.csv", "9:23", "INS tilt error alone", alone}};
+  Plot pmax{"error_vs_pmax.png", "Heading error from sensor noise against the sky's P_max",
+            "P_max", "heading error from sensor noise alone (°)"};
+  pmax.series = {{"trials.csv", "15:25", "sensor noise alone (device model)", alone}};
+  Plot dist{"error_cdf.png", "Distribution of |heading error| (" + title_tail + ")",
+            "|heading error| (°)", "fraction of trials"};
+  dist.series = {{"cdf.csv", "2:1", "all factors", "steps lw 2 lc rgb 'black'"},
+                 {"cdf.csv", "3:1", "sync error ω·Δt alone", "steps lw 2 lc rgb '#d62728'"},
+                 {"cdf.csv", "4:1", "INS tilt error alone", "steps lw 2 lc rgb '#2ca02c'"},
+                 {"cdf.csv", "5:1", "mount misalignment alone", "steps lw 2 lc rgb '#9467bd'"},
+                 {"cdf.csv", "6:1", "sensor noise alone", "steps lw 2 lc rgb '#1f77b4'"}};
+  dist.extra = "set logscale x\nset yrange [0:1]\nset format x '%g'";
+  for (Plot* p : {&sync, &roll, &pitch, &mount_z, &mount_t, &ins, &pmax})
+    p->extra = "set key below horizontal";  // the scatter gets the whole width
+  render_plots(dir, "plots.gp", {sync, roll, pitch, mount_z, mount_t, ins, pmax, dist});
+  for (const char* png : {"error_vs_sync.png", "error_vs_roll.png", "error_vs_pitch.png",
+                          "error_vs_mount_azimuth.png", "error_vs_mount_tilt.png",
+                          "error_vs_ins_tilt.png", "error_vs_pmax.png", "error_cdf.png"})
+    files.push_back({png, 1, "heading error against one factor (see the plot's title)"});
+  return files;
+}
+
+}  // namespace polrig

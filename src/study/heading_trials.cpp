@@ -1,0 +1,152 @@
+#include "polrig/study/heading_trials.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Geometry>
+#include <tbb/parallel_for.h>
+
+#include "polrig/calib/angles.h"
+#include "polrig/device/sensor.h"
+#include "polrig/random.h"
+#include "polrig/sky/rayleigh.h"
+#include "polrig/units.h"
+
+namespace polrig {
+
+namespace {
+
+using Eigen::AngleAxisd;
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+Vector3d to_eigen(const Vec3& v) { return {v[0], v[1], v[2]}; }
+Vec3 to_vec3(const Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+// C_b^n as a matrix, from nav's own rotation (columns: the body axes in n).
+Matrix3d body_to_n(double heading_deg, const Tilt& tilt) {
+  Matrix3d C;
+  for (int k = 0; k < 3; ++k) {
+    Vec3 axis{0, 0, 0};
+    axis[static_cast<std::size_t>(k)] = 1;
+    C.col(k) = to_eigen(body_to_enu(axis, heading_deg, tilt));
+  }
+  return C;
+}
+
+// The sensor's frame in the body's: Rx(m_x)·Ry(m_y)·Rz(m_z).
+Matrix3d mount(double mx_deg, double my_deg, double mz_deg) {
+  return (AngleAxisd(deg2rad(mx_deg), Vector3d::UnitX()) * AngleAxisd(deg2rad(my_deg), Vector3d::UnitY()) *
+          AngleAxisd(deg2rad(mz_deg), Vector3d::UnitZ()))
+      .toRotationMatrix();
+}
+
+struct Seen {
+  double theta_meas_deg;  // the sensor's own angle (spec §1.3: clockwise seen from above)
+  double dop;
+};
+
+// What a sensor with frame C (sensor → n) sees of the sky: θ_meas = −θ_s, θ_s = atan2(e_s,y, e_s,x).
+Seen sensor_sees(const Matrix3d& C, const Vec3& sun, const SkyModel& sky) {
+  const Vector3d v = C.col(2);
+  const SkyLight light = sky_light(sun, to_vec3(v), sky);
+  const Vector3d e_s = C.transpose() * to_eigen(light.e_vector);
+  return {wrap_axis_deg(-rad2deg(std::atan2(e_s.y(), e_s.x()))), light.dop};
+}
+
+double error_of(const HeadingSolution& r, double truth_deg) {
+  return has_heading(r.status) ? heading_difference_deg(r.heading_deg, truth_deg)
+                               : std::numeric_limits<double>::quiet_NaN();
+}
+
+// The device model: six films' response to (θ, d), pair voltages, noise per sample, the ADC,
+// the mean, and θ_sec back through calib/angles with the device's own (true) parameters.
+double through_device(const Rig& rig, std::uint64_t seed, const Seen& seen, int samples) {
+  const std::array<double, 6> E{1, 1, 1, 1, 1, 1};  // the sky at infinity: equal irradiance
+  const std::array<double, 3> V0 =
+      pair_voltages(rig.device.truth, rig.electronics, E, seen.theta_meas_deg, seen.dop);
+  std::array<double, 3> V{0, 0, 0};
+  for (int i = 0; i < 3; ++i) {
+    double sum = 0;
+    for (int k = 0; k < samples; ++k)
+      sum += adc_quantize(V0[static_cast<std::size_t>(i)] +
+                              rig.electronics.noise_sigma_V *
+                                  standard_normal(seed, 0, static_cast<std::uint64_t>(i),
+                                                  static_cast<std::uint64_t>(k)),
+                          rig.electronics);
+    V[static_cast<std::size_t>(i)] = sum / samples;
+  }
+  return sensor_angles(rig.device.truth, rig.electronics, V).theta_sec_deg;
+}
+
+HeadingTrial run_trial(const Rig& rig, const HeadingStudySettings& s, const Vec3& sun, int index) {
+  HeadingTrial t;
+  t.index = index;
+  t.seed = derive_seed(rig.seed, static_cast<std::uint64_t>(index));
+  const auto u = [&](std::uint64_t c) { return uniform_unit(t.seed, 1, 0x4EAD, c); };
+  const auto n = [&](std::uint64_t c) { return standard_normal(t.seed, 1, 0x4EAD, c); };
+  t.heading_deg = 360.0 * u(0);
+  t.roll_deg = s.roll_sd_deg * n(1);
+  t.pitch_deg = s.pitch_sd_deg * n(2);
+  t.sync_s = s.sync_max_s * (2.0 * u(3) - 1.0);
+  t.turn_rate_dps = s.turn_rate_max_dps * (2.0 * u(4) - 1.0);
+  t.ins_roll_error_deg = s.ins_tilt_sd_deg * n(5);
+  t.ins_pitch_error_deg = s.ins_tilt_sd_deg * n(6);
+  t.mount_x_deg = s.mount_tilt_sd_deg * n(7);
+  t.mount_y_deg = s.mount_tilt_sd_deg * n(8);
+  t.mount_z_deg = s.mount_azimuth_sd_deg * n(9);
+  t.p_max = s.p_max_min + (s.p_max_max - s.p_max_min) * u(10);
+  SkyModel sky;
+  sky.P_max.constant = t.p_max;
+
+  const Tilt truth{t.roll_deg, t.pitch_deg};
+  const Tilt ins{t.roll_deg + t.ins_roll_error_deg, t.pitch_deg + t.ins_pitch_error_deg};
+  // The body when the sensor samples: turned by ω·Δt since the INS's epoch.
+  const double heading_at_sensor = t.heading_deg + t.turn_rate_dps * t.sync_s;
+  const Matrix3d C_now = body_to_n(t.heading_deg, truth);
+  const Matrix3d C_sensor_time = body_to_n(heading_at_sensor, truth);
+  const Matrix3d M = mount(t.mount_x_deg, t.mount_y_deg, t.mount_z_deg);
+  // θ_b = θ_mount − θ_meas with the nominal θ_mount = 0 (spec §1.5, Eq. 22).
+  const auto body_angle = [](double theta_meas) { return wrap_axis_deg(-theta_meas); };
+  const auto solve = [&](double aop_b, const Tilt& tilt) {
+    return solve_heading(sun, aop_b, tilt, t.heading_deg);
+  };
+
+  const Seen all = sensor_sees(C_sensor_time * M, sun, sky);
+  t.dop = all.dop;
+  t.aop_meas_deg = body_angle(through_device(rig, t.seed, all, s.samples));
+  const HeadingSolution r = solve(t.aop_meas_deg, ins);
+  t.status = r.status;
+  t.heading_est_deg = has_heading(r.status) ? r.heading_deg : std::numeric_limits<double>::quiet_NaN();
+  t.error_deg = error_of(r, t.heading_deg);
+
+  // Each factor alone.
+  const Seen ideal = sensor_sees(C_now, sun, sky);
+  t.aop_true_deg = body_angle(ideal.theta_meas_deg);
+  t.error_sync_deg = error_of(solve(body_angle(sensor_sees(C_sensor_time, sun, sky).theta_meas_deg), truth),
+                              t.heading_deg);
+  t.error_ins_tilt_deg = error_of(solve(t.aop_true_deg, ins), t.heading_deg);
+  t.error_mount_deg = error_of(solve(body_angle(sensor_sees(C_now * M, sun, sky).theta_meas_deg), truth),
+                               t.heading_deg);
+  t.error_noise_deg =
+      error_of(solve(body_angle(through_device(rig, t.seed, ideal, s.samples)), truth), t.heading_deg);
+  return t;
+}
+
+}  // namespace
+
+std::vector<HeadingTrial> heading_trials(const Rig& rig, const HeadingStudySettings& s,
+                                         const Progress& progress) {
+  const Vec3 sun = sun_direction_enu(sun_position(s.utc, s.site, s.sun));
+  std::vector<HeadingTrial> trials(static_cast<std::size_t>(std::max(0, s.trials)));
+  progress.begin("study heading: trials", s.trials);
+  tbb::parallel_for(0, s.trials, [&](int k) {
+    trials[static_cast<std::size_t>(k)] = run_trial(rig, s, sun, k);
+    progress.advance();
+  });
+  progress.finish();
+  return trials;
+}
+
+}  // namespace polrig

@@ -8,6 +8,7 @@
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <tbb/task_arena.h>
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
@@ -73,7 +74,9 @@ void write_exr(const std::filesystem::path& path, int width, int height,
     }
     CheckedOStream stream(path);
     {
-      Imf::OutputFile file(stream, header);
+      // Compression runs per block of lines on the threads polrig may use (--threads); the
+      // file is the same for any count.
+      Imf::OutputFile file(stream, header, tbb::this_task_arena::max_concurrency());
       file.setFrameBuffer(fb);
       file.writePixels(height);
     }

@@ -5,10 +5,19 @@
 #include <utility>
 #include <vector>
 
+#include "polrig/optics/polarizer.h"
 #include "polrig/vec3.h"
 
 namespace polrig {
 
+// Radiance models, each relative to the zenith's radiance (L = 1 there):
+//   uniform:   L = 1;
+//   rayleigh:  L = (1 + cos²γ)/(1 + cos²θ_s);
+//   cie-clear: CIE standard general sky type 12 (ISO 15469 / CIE S 011/E:2003, "CIE standard clear
+//              sky, low luminance turbidity": gradation group 5, a = −1, b = −0.32; indicatrix
+//              group 4, c = 10, d = −3, e = 0.45): L = f(γ)·φ(Z)/(f(Z_s)·φ(0)) with
+//              φ(Z) = 1 + a·exp(b/cos Z), f(γ) = 1 + c·(exp(dγ) − exp(dπ/2)) + e·cos²γ, Z the
+//              view's zenith angle (φ = 1 at and below the horizon), Z_s the sun's.
 enum class SkyRadiance { Uniform, Rayleigh, CieClear };
 
 // P_max: a constant, or a table P_max(h_s) over the sun's elevation (degrees), interpolated
@@ -19,10 +28,15 @@ struct MaxDegree {
   double at(double sun_elevation_deg) const;
 };
 
+
 struct SkyModel {
   MaxDegree P_max;
   SkyRadiance radiance = SkyRadiance::Uniform;
 };
+
+// Throws std::invalid_argument naming the value: P_max outside (0, 1], a table not rising in h_s,
+// or a non-finite entry.
+void check_sky_model(const SkyModel& model);
 
 // What the sky sends along −v (light arriving from direction v).
 struct SkyLight {
@@ -33,7 +47,18 @@ struct SkyLight {
   double S0() const { return radiance; }
 };
 
-// s: unit vector to the sun; v: unit viewing direction; h_s: the sun's elevation (for P_max(h_s)).
+// s: unit vector to the sun; v: unit viewing direction, both ENU. The sun's elevation for
+// P_max(h_s) is asin(s_z). The sun below the horizon still defines DoP and AoP.
 SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model);
+
+// The local meridian frame of v = (sin θ cos φ, sin θ sin φ, cos θ), φ the math azimuth
+// (anticlockwise from east seen from above, φ = 90° − A): e_θ = ∂v/∂θ points down the meridian
+// (towards the horizon), e_φ = ẑ × v/|ẑ × v| along the almucantar towards rising φ. At the zenith,
+// where φ is undefined, φ = 0: e_θ = east, e_φ = north, so there χ is the E-vector's math angle.
+void meridian_frame(const Vec3& v, Vec3& e_theta, Vec3& e_phi);
+
+// The Stokes vector (S0, S1, S2, 0) with reference axis e_θ, angles from e_θ towards e_φ:
+// S1 = L·P·cos 2χ, S2 = L·P·sin 2χ (spec §1.2).
+Stokes sky_stokes(const SkyLight& light);
 
 }  // namespace polrig

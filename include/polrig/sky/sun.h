@@ -5,6 +5,8 @@
 //
 // Frames and senses (spec §0): the n-frame is ENU (x east, y north, z up); the azimuth A_s is
 // geographic, from north towards east (clockwise seen from above); hour angles run westwards.
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -34,14 +36,19 @@ struct Site {
   double height_m = 0;          // above the WGS-84 ellipsoid
 };
 
+// Time scales: UT1 = UTC + ut1_minus_utc_s turns the Earth. TT (the ephemeris and nutation
+// argument) comes by default from UTC through ERFA's leap-second table, TT = UTC + ΔAT + 32.184 s,
+// so that ΔT = TT − UT1 = ΔAT + 32.184 s − (UT1 − UTC) follows and needs no setting. delta_T_s
+// overrides it (TT = UT1 + ΔT), e.g. to reproduce NREL SPA's test case (ΔT = 67 s) or for dates
+// beyond the leap-second table; 1 s of ΔT moves the sun by only 1.1e-5°.
 struct SunSettings {
-  double delta_T_s = 69.0;      // ΔT = TT − UT1 (≈ 69 s for 2015–2021)
-  double ut1_minus_utc_s = 0;   // |UT1 − UTC| < 0.9 s
-  bool refraction = false;      // geometric sun by default (spec §1.1 [C])
-  double pressure_hPa = 1013.25;
+  std::optional<double> delta_T_s;  // ΔT = TT − UT1 in s; empty: from leap seconds (above)
+  double ut1_minus_utc_s = 0;       // |UT1 − UTC| < 0.9 s; 1 s is 0.0042° of hour angle
+  // Refraction (raises h_s only): Sæmundsson's formula scaled by pressure and temperature, as
+  // NREL SPA does, applied while the sun's upper limb can be seen (h_s ≥ −0.8334°).
+  bool refraction = false;          // geometric sun by default (spec §1.1 [C])
+  double pressure_hPa = 1010;       // for refraction only
   double temperature_C = 10;
-  double relative_humidity = 0.5;
-  double wavelength_um = 0.55;
 };
 
 struct SunPosition {
@@ -53,8 +60,31 @@ struct SunPosition {
   double lha_deg = 0;          // local hour angle = GHA + λ_g, [0°, 360°)
 };
 
-// The full-accuracy apparent position (ERFA).
+// The full-accuracy apparent topocentric position (ERFA). Declination and hour angles are
+// topocentric too (parallax and diurnal aberration in), so that with refraction off
+// sin h_s = sin φ_g·sin δ + cos φ_g·cos δ·cos LHA holds exactly (φ_g geodetic).
+// Throws std::invalid_argument naming the value for a latitude outside [−90°, 90°], a
+// non-finite input, or a date ERFA cannot handle.
 SunPosition sun_position(UtcTime t, const Site& site, const SunSettings& settings = {});
+
+// The fast path: exact apparent places at nodes `node_spacing_s` apart over [begin, end], and
+// between them 4-point Lagrange interpolation of the sun's apparent direction in CIRS (the
+// equator of date, which turns ~1° a day). The Earth's rotation and refraction are then applied
+// exactly for each time, so the result differs from sun_position by < 1e-6° (tests/test_sky.cpp).
+class SunTrack {
+ public:
+  SunTrack(UtcTime begin, UtcTime end, const Site& site, const SunSettings& settings = {},
+           double node_spacing_s = 1800);
+  // Throws std::out_of_range naming the time when t is outside [begin, end].
+  SunPosition at(UtcTime t) const;
+  UtcTime begin() const { return begin_; }
+  UtcTime end() const { return end_; }
+
+ private:
+  struct Nodes;
+  std::shared_ptr<const Nodes> nodes_;
+  UtcTime begin_, end_;
+};
 
 // The unit vector to the sun in ENU: (cos h·sin A, cos h·cos A, sin h).
 Vec3 sun_direction_enu(const SunPosition& sun);

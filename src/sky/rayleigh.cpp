@@ -1,0 +1,108 @@
+// The single-scattering Rayleigh sky (spec sky-and-compasses.md §1.2).
+#include "polrig/sky/rayleigh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace polrig {
+namespace {
+
+constexpr double kDeg = M_PI / 180;
+
+// CIE S 011/E:2003 type 12 (see rayleigh.h).
+constexpr double kCieA = -1, kCieB = -0.32, kCieC = 10, kCieD = -3, kCieE = 0.45;
+
+double cie_gradation(double cos_Z) {
+  return cos_Z <= 0 ? 1.0 : 1 + kCieA * std::exp(kCieB / cos_Z);
+}
+double cie_indicatrix(double gamma, double cos_gamma) {
+  return 1 + kCieC * (std::exp(kCieD * gamma) - std::exp(kCieD * M_PI / 2)) +
+         kCieE * cos_gamma * cos_gamma;
+}
+
+double relative_radiance(SkyRadiance model, const Vec3& s, const Vec3& v, double cos_gamma,
+                         double sin_gamma) {
+  switch (model) {
+    case SkyRadiance::Uniform:
+      return 1;
+    case SkyRadiance::Rayleigh:
+      return (1 + cos_gamma * cos_gamma) / (1 + s[2] * s[2]);
+    case SkyRadiance::CieClear: {
+      const double gamma = std::atan2(sin_gamma, cos_gamma);
+      const double sun_zenith = std::acos(std::clamp(s[2], -1.0, 1.0));
+      return cie_indicatrix(gamma, cos_gamma) * cie_gradation(v[2]) /
+             (cie_indicatrix(sun_zenith, s[2]) * cie_gradation(1));
+    }
+  }
+  return 1;
+}
+
+}  // namespace
+
+double MaxDegree::at(double sun_elevation_deg) const {
+  if (table.empty()) return constant;
+  if (sun_elevation_deg <= table.front().first) return table.front().second;
+  if (sun_elevation_deg >= table.back().first) return table.back().second;
+  const auto hi = std::upper_bound(table.begin(), table.end(), sun_elevation_deg,
+                                   [](double h, const auto& row) { return h < row.first; });
+  const auto lo = hi - 1;
+  const double f = (sun_elevation_deg - lo->first) / (hi->first - lo->first);
+  return lo->second + f * (hi->second - lo->second);
+}
+
+void check_sky_model(const SkyModel& model) {
+  auto check_p = [](double p, const std::string& where) {
+    if (!(p > 0 && p <= 1))
+      throw std::invalid_argument(fmt::format("P_max {}{} is outside (0, 1]", p, where));
+  };
+  if (model.P_max.table.empty()) check_p(model.P_max.constant, "");
+  for (std::size_t i = 0; i < model.P_max.table.size(); ++i) {
+    const auto& [h, p] = model.P_max.table[i];
+    if (!(std::abs(h) <= 90))
+      throw std::invalid_argument(fmt::format(
+          "P_max table row {}: sun elevation {}° is outside [-90°, 90°]", i + 1, h));
+    check_p(p, fmt::format(" (P_max table row {})", i + 1));
+    if (i > 0 && !(h > model.P_max.table[i - 1].first))
+      throw std::invalid_argument(fmt::format(
+          "P_max table row {}: sun elevation {}° does not rise from the row before ({}°)", i + 1, h,
+          model.P_max.table[i - 1].first));
+  }
+}
+
+void meridian_frame(const Vec3& v, Vec3& e_theta, Vec3& e_phi) {
+  const double rho = std::hypot(v[0], v[1]);
+  const double cos_phi = rho > 0 ? v[0] / rho : 1, sin_phi = rho > 0 ? v[1] / rho : 0;
+  e_theta = {v[2] * cos_phi, v[2] * sin_phi, -rho};
+  e_phi = {-sin_phi, cos_phi, 0};
+}
+
+SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model) {
+  SkyLight light;
+  const Vec3 c = vec3::cross(s, v);
+  const double sin_gamma = vec3::norm(c), cos_gamma = vec3::dot(s, v);
+  const double sin2 = sin_gamma * sin_gamma, cos2 = cos_gamma * cos_gamma;
+  const double h_s = std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg;
+  // P = P_max·sin²γ/(1 + cos²γ); sin²γ from |s × v|², exact at γ = 0° and 180°.
+  light.dop = model.P_max.at(h_s) * sin2 / (1 + cos2);
+  light.radiance = relative_radiance(model.radiance, s, v, cos_gamma, sin_gamma);
+  if (sin_gamma > 0) {
+    light.e_vector = vec3::mul(c, 1 / sin_gamma);
+    Vec3 e_theta, e_phi;
+    meridian_frame(v, e_theta, e_phi);
+    double chi = std::atan2(vec3::dot(light.e_vector, e_phi), vec3::dot(light.e_vector, e_theta)) / kDeg;
+    chi = std::fmod(chi + 360, 180.0);
+    light.aop_deg = chi >= 180 ? 0 : chi;
+  }
+  return light;
+}
+
+Stokes sky_stokes(const SkyLight& light) {
+  const double two_chi = 2 * light.aop_deg * kDeg;
+  const double lp = light.radiance * light.dop;
+  return {light.radiance, lp * std::cos(two_chi), lp * std::sin(two_chi), 0};
+}
+
+}  // namespace polrig

@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "polrig/calib/params.h"
+#include "polrig/device/params.h"
 #include "polrig/device/electronics.h"
 #include "polrig/device/sensor.h"
 #include "polrig/random.h"

@@ -3,9 +3,9 @@
 
 #include <cmath>
 
-#include "polrig/rig/geometry.h"
+#include "polrig/geometry/geometry.h"
 #include "polrig/rig/rig.h"
-#include "polrig/rig/schedule.h"
+#include "polrig/geometry/schedule.h"
 
 namespace polrig {
 namespace {

@@ -14,7 +14,7 @@
 #include "polrig/io/measured.h"
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/plot.h"
-#include "polrig/study/calibration_reports.h"
+#include "polrig/report/calibration_reports.h"
 #include "polrig/study/calibration_trials.h"
 #include "polrig/units.h"
 

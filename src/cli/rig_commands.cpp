@@ -17,11 +17,11 @@
 #include "polrig/source/traced_source.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
-#include "polrig/study/calibration_reports.h"
+#include "polrig/report/calibration_reports.h"
 #include "polrig/study/cs.h"
-#include "polrig/study/reports.h"
+#include "polrig/report/reports.h"
 #include "polrig/study/sweep.h"
-#include "polrig/study/trace_report.h"
+#include "polrig/report/trace_report.h"
 #include "polrig/io/scene_yaml.h"
 
 namespace polrig::cli {

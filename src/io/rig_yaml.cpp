@@ -299,17 +299,6 @@ std::string number_text(double v) { return fmt::format("{}", v); }
 
 }  // namespace
 
-double parse_finite_number(std::string_view text, std::string_view what) {
-  double v = 0.0;
-  const char* b = text.data();
-  const char* e = text.data() + text.size();
-  if (b != e && *b == '+') ++b;
-  auto [end, ec] = std::from_chars(b, e, v);
-  if (b == e || ec != std::errc() || end != e || !std::isfinite(v))
-    throw RigError(fmt::format("{}: expected a finite number, got '{}'", what, text));
-  return v;
-}
-
 RigOverride RigOverride::parse(std::string_view arg) {
   const auto eq = arg.find('=');
   if (eq == std::string_view::npos || eq == 0)

@@ -1,10 +1,24 @@
 #include "polrig/rig/keys.h"
 
+#include <charconv>
 #include <cmath>
 
 #include <fmt/format.h>
 
+#include "polrig/rig/error.h"
+
 namespace polrig {
+
+double parse_finite_number(std::string_view text, std::string_view what) {
+  double v = 0.0;
+  const char* b = text.data();
+  const char* e = text.data() + text.size();
+  if (b != e && *b == '+') ++b;
+  auto [end, ec] = std::from_chars(b, e, v);
+  if (b == e || ec != std::errc() || end != e || !std::isfinite(v))
+    throw RigError(fmt::format("{}: expected a finite number, got '{}'", what, text));
+  return v;
+}
 
 std::string RealRange::text() const {
   return fmt::format("{}{}, {}{}", lo_open ? "(" : "[", lo, hi, hi_open ? ")" : "]");

@@ -12,7 +12,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
-#include "polrig/io/rig_yaml.h"
+#include "polrig/rig/error.h"
 
 namespace polrig {
 

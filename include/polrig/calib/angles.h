@@ -3,7 +3,7 @@
 // section algorithm. With theory parameters Eqs. 16–19 reduce to Eq. 2.
 #include <array>
 
-#include "polrig/calib/params.h"
+#include "polrig/device/params.h"
 #include "polrig/device/electronics.h"
 
 namespace polrig {

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "polrig/calib/params.h"
+#include "polrig/device/params.h"
 
 namespace polrig {
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <numbers>
 
-#include "polrig/calib/params.h"
+#include "polrig/device/params.h"
 #include "polrig/device/electronics.h"
-#include "polrig/rig/geometry.h"
+#include "polrig/geometry/geometry.h"
 
 namespace polrig {
 

@@ -7,15 +7,10 @@
 #include <string_view>
 #include <vector>
 
+#include "polrig/rig/error.h"  // RigError, parse_finite_number
 #include "polrig/rig/rig.h"
 
 namespace polrig {
-
-// Any problem with a rig file or an override. what() is the complete message for the user.
-class RigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 // One `--set key.path=value`; the value is read as YAML ("3", "[1, 2, 3]", "cos4").
 struct RigOverride {
@@ -40,8 +35,5 @@ LoadedRig load_rig(const std::filesystem::path& file,
 
 // The complete effective rig, every key written: a file that loads back to the same Rig.
 std::string rig_to_yaml(const Rig& rig);
-
-// Number parsing shared with --grid: a finite double, or an error naming `what`.
-double parse_finite_number(std::string_view text, std::string_view what);
 
 }  // namespace polrig

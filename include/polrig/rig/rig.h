@@ -7,8 +7,8 @@
 
 #include "polrig/device/electronics.h"
 #include "polrig/device/sensor.h"
-#include "polrig/rig/geometry.h"
-#include "polrig/rig/schedule.h"
+#include "polrig/geometry/geometry.h"
+#include "polrig/geometry/schedule.h"
 #include "polrig/source/cos4.h"
 #include "polrig/source/traced_source.h"
 

@@ -2,7 +2,7 @@
 // The analytic integrating-sphere source: a port of uniform radiance whose off-axis irradiance
 // on a plane L_o below it falls off as E = E_0·cos⁴φ, tan φ = L/L_o (the sphere manual's law;
 // Wang et al. 2019 §3.1). L is the distance from the port axis.
-#include "polrig/rig/geometry.h"
+#include "polrig/geometry/geometry.h"
 
 namespace polrig {
 

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "polrig/progress.h"
-#include "polrig/rig/geometry.h"
+#include "polrig/geometry/geometry.h"
 #include "polrig/source/scene.h"
 
 namespace polrig {

@@ -1,4 +1,4 @@
-#include "polrig/rig/schedule.h"
+#include "polrig/geometry/schedule.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "polrig/study/calibration_reports.h"
+#include "polrig/report/calibration_reports.h"
 
 #include <algorithm>
 #include <cmath>

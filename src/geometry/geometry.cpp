@@ -1,4 +1,4 @@
-#include "polrig/rig/geometry.h"
+#include "polrig/geometry/geometry.h"
 
 #include <cmath>
 

@@ -1,4 +1,4 @@
-#include "polrig/calib/params.h"
+#include "polrig/device/params.h"
 
 #include <cmath>
 

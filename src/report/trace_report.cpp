@@ -1,4 +1,4 @@
-#include "polrig/study/trace_report.h"
+#include "polrig/report/trace_report.h"
 
 #include <cmath>
 #include <numbers>

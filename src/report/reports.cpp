@@ -1,4 +1,4 @@
-#include "polrig/study/reports.h"
+#include "polrig/report/reports.h"
 
 #include <algorithm>
 #include <cmath>

@@ -162,6 +162,23 @@ TEST(OutdoorSun, TheTestsSunReproducesTheSpecsDaliaNumbers) {
   EXPECT_NEAR(90 - aa_sun(kDay + 8 * 3600 + 11 * 60 + 28, kLat, kLon).zenith_deg, 4.11, 0.01);
 }
 
+// Spec §1.4: a sensor on a stopped table at Dalian, 2018-11-16 16:10 Beijing, sees θ rise at
+// +0.00273°/s in the spec's sense (clockwise from above, with A_s); polrig's sensor frame is its
+// mirror (anticlockwise from above, docs/physics.md §1), where θ falls at 0.00273°/s.
+TEST(OutdoorDrift, AStoppedTableSeesTheSkyTurnAt0_00273DegPerSecond) {
+  const UtcTime t0 = parse_utc("2018-11-16T08:09:30Z");
+  const std::vector<UtcTime> times{t0, t0.plus_seconds(30), t0.plus_seconds(60)};
+  const Site dalian{kLat, kLon, 0};
+  const SkyDrift d = drift_corrections(times, dalian, {}, MaxDegree{}, DriftMode::Angle);
+  EXPECT_NEAR(-d.dtheta_deg[2] / 60.0, 0.00273, 0.000005);  // spec's sense: +0.00273°/s
+  EXPECT_LT(d.dtheta_deg[1], 0.0);                           // polrig's sensor frame: falling
+  // Per-stop d ratio over Outdoor1 (08:09:40–08:11:28Z): the zenith DoP rises by 0.16 % (spec §1.4).
+  const UtcTime a = parse_utc("2018-11-16T08:09:40Z");
+  const SkyDrift ps = drift_corrections({a, a.plus_seconds(108)}, dalian, {}, MaxDegree{},
+                                        DriftMode::PerStop);
+  EXPECT_NEAR(ps.d_ratio[1] - 1.0, 0.0016, 0.00005);
+}
+
 TEST(OutdoorCalibration, CorrectionsOfZeroAndOneLeaveTheFitBitIdentical) {
   const Column& c = table2()[0];
   const OutdoorRun run = simulate_run(c, 37);

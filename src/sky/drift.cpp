@@ -24,6 +24,11 @@ std::optional<DriftMode> parse_drift_mode(std::string_view name) {
   return std::nullopt;
 }
 
+double zenith_dop(const SunPosition& sun, const MaxDegree& P_max) {
+  const double c = std::cos(deg2rad(sun.zenith_deg));
+  return P_max.at(sun.elevation_deg) * (1.0 - c * c) / (1.0 + c * c);
+}
+
 namespace {
 // A_s(t) − A_s(t_0) in (−180°, 180°]: the azimuth wraps at north.
 double azimuth_change_deg(double a, double a0) {
@@ -60,6 +65,19 @@ SkyDrift drift_from_sun(const std::vector<double>& t_s, const std::vector<double
     if (mode == DriftMode::Linear) out.d_ratio.push_back(1.0 + total_ratio * f);
   }
   return out;
+}
+
+SkyDrift drift_corrections(const std::vector<UtcTime>& times, const Site& site,
+                           const SunSettings& settings, const MaxDegree& P_max, DriftMode mode) {
+  std::vector<double> t, A, dop;
+  if (mode != DriftMode::None)
+    for (const UtcTime& u : times) {
+      const SunPosition sun = sun_position(u, site, settings);
+      t.push_back(u.unix_s - times.front().unix_s);
+      A.push_back(sun.azimuth_deg);
+      dop.push_back(zenith_dop(sun, P_max));
+    }
+  return drift_from_sun(t, A, dop, mode);
 }
 
 }  // namespace polrig

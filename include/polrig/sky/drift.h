@@ -35,11 +35,19 @@ struct SkyDrift {
   std::vector<double> d_ratio;
 };
 
+// The zenith's degree of polarization for the sun at zenith angle θ_s (spec §1.2 with γ = θ_s):
+// P_max(h_s)·sin²θ_s/(1 + cos²θ_s).
+double zenith_dop(const SunPosition& sun, const MaxDegree& P_max);
+
 // The corrections at each stop from its time t_s[k] (seconds, any origin), the sun's azimuth
 // A_s and the zenith's degree of polarization there. The first stop is the earliest, the last the
 // latest (stops in any order). Throws std::invalid_argument when the sizes differ, a value is
 // not finite, or (per-stop) the zenith is unpolarized at the first stop.
 SkyDrift drift_from_sun(const std::vector<double>& t_s, const std::vector<double>& azimuth_deg,
                         const std::vector<double>& zenith_dop, DriftMode mode);
+
+// The same with the sun from the ephemeris at each stop's time (a sensor looking at the zenith).
+SkyDrift drift_corrections(const std::vector<UtcTime>& times, const Site& site,
+                           const SunSettings& settings, const MaxDegree& P_max, DriftMode mode);
 
 }  // namespace polrig

@@ -15,6 +15,7 @@
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/plot.h"
 #include "polrig/report/calibration_reports.h"
+#include "polrig/sky/drift.h"
 #include "polrig/study/calibration_trials.h"
 #include "polrig/units.h"
 
@@ -76,19 +77,63 @@ void check_adc_range(const StopVoltages& s) {
   }
 }
 
+// The sun-drift settings of an outdoor calibration (spec sky-and-compasses.md §1.4).
+struct DriftSettings {
+  std::string mode = "none";
+  std::string site;  // "LAT,LON" in degrees, north and east positive
+};
+
+Site parse_site(const std::string& text) {
+  const auto comma = text.find(',');
+  double lat = 0, lon = 0;
+  if (comma == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, comma), lat) ||
+      !CLI::detail::lexical_cast(text.substr(comma + 1), lon) || !(std::abs(lat) <= 90) ||
+      !(std::abs(lon) <= 180))
+    throw DataError(fmt::format("--site {}: expected LAT,LON in degrees (north and east positive, "
+                                "|LAT| ≤ 90, |LON| ≤ 180), e.g. 38.879167,121.543889", text));
+  Site s;
+  s.lat_deg = lat;
+  s.lon_deg = lon;
+  return s;
+}
+
+// The per-stop corrections for --drift: the stops' times from the data's utc column, the sun
+// from the ephemeris at --site. Empty for --drift none.
+StopCorrections drift_of(const MeasuredData& data, const DriftSettings& drift) {
+  const std::optional<DriftMode> mode = parse_drift_mode(drift.mode);
+  if (!mode)
+    throw DataError(fmt::format("--drift {}: expected none, angle, per-stop or linear", drift.mode));
+  if (*mode == DriftMode::None) return {};
+  if (data.utc.empty())
+    throw DataError(fmt::format("--drift {}: {} has no 'utc' column giving each stop's time "
+                                "(ISO 8601, Z; see docs/formats.md, \"Measured data\")",
+                                drift.mode, data.origin));
+  if (drift.site.empty())
+    throw DataError(fmt::format("--drift {} needs --site LAT,LON (the sun's position)", drift.mode));
+  const SkyDrift d = drift_corrections(data.utc, parse_site(drift.site), SunSettings{},
+                                       MaxDegree{}, *mode);  // the d ratio does not depend on P_max
+  return {d.dtheta_deg, d.d_ratio};
+}
+
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
-                   const OutputOptions& out) {
+                   const DriftSettings& drift, const OutputOptions& out) {
   std::vector<CalibrationMethod> methods;
   if (method_text == "all") {
     methods.assign(kAllMethods.begin(), kAllMethods.end());
   } else if (auto m = parse_method(method_text)) {
     methods.push_back(*m);
   } else {
-    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc or all", method_text));
+    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc or all", method_text));
   }
+  if (drift.mode != "none")
+    for (CalibrationMethod m : methods)
+      if (m != CalibrationMethod::Section && m != CalibrationMethod::Noncontinuous)
+        throw DataError(fmt::format("--drift {} needs --method nc or section (the raw stops), not "
+                                    "{}: a CS point mixes two times", drift.mode, method_text));
   const MeasuredData data = read_measured(input);
   for (const StopVoltages& s : data.stops) check_adc_range(s);
+  const StopCorrections corrections = drift_of(data, drift);
   // The sensor description (film axes, amplifier scale): --rig, else the dataset's rig.yaml,
   // else the default rig. d_a: --d-a, else the dataset rig's d.
   std::optional<LoadedRig> given;
@@ -103,6 +148,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   for (CalibrationMethod m : methods) {
     CalibrationOptions o = settings.options(rig, rig_d);
     o.method = m;
+    o.corrections = corrections;
     CalibrationResult r;
     try {
       r = calibrate(data.stops, o);
@@ -223,21 +269,28 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
   std::vector<Command> commands;
   {
     auto* app = root.add_subcommand(
-        "calibrate", "calibrate a simulate dataset or measured voltages (Eq. 15, three types)");
+        "calibrate", "calibrate a simulate dataset or measured voltages (Eq. 15, three types; nc outdoors)");
     auto input = std::make_shared<std::string>();
     auto method = std::make_shared<std::string>("cs-nc");
     auto rig = std::make_shared<std::string>();
     auto settings = std::make_shared<CalibrationSettings>();
+    auto drift = std::make_shared<DriftSettings>();
     auto out = std::make_shared<OutputOptions>();
     app->add_option("INPUT", *input, "a folder written by polrig simulate, or a CSV with "
-                                     "theta_R_deg,V1,V2,V3 (volts)")->required();
-    app->add_option("--method", *method, "section | cs | cs-nc | all")->capture_default_str();
+                                     "theta_R_deg,V1,V2,V3 (volts) and optionally utc")->required();
+    app->add_option("--method", *method, "section | cs | cs-nc | nc | all (nc: the raw stops, "
+                                         "noncontinuous + section, as outdoors)")->capture_default_str();
+    app->add_option("--drift", drift->mode, "sun-drift correction of an outdoor run: none | angle | "
+                                            "per-stop | linear (needs a utc column and --site)")
+        ->capture_default_str();
+    app->add_option("--site", drift->site, "the observer for --drift: LAT,LON in degrees (north, "
+                                           "east positive)");
     app->add_option("--rig", *rig, "rig file describing the sensor (film axes, amplifier); "
                                    "default: the dataset's rig.yaml, else the default rig");
     settings->add_to(*app);
     out->add_to(*app);
     add_threads_option(*app, threads);
-    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *out); }});
+    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *drift, *out); }});
   }
   {
     auto* app = root.add_subcommand("apply", "turn voltages into θ and d with calibrated parameters");

@@ -20,6 +20,7 @@
 #include "polrig/calib/pipeline.h"
 #include "polrig/io/params_yaml.h"
 #include "polrig/sky/drift.h"
+#include "polrig/sky/sensor_view.h"
 #include "support.h"
 
 namespace polrig {
@@ -318,6 +319,107 @@ TEST(OutdoorCalibration, AdcQuantisedRunsRecoverTable2ToTheLsb) {
     EXPECT_LT(e.alpha_deg, lsb / dV_dalpha);
     EXPECT_LT(e.kd, lsb / dV_dc / c.d_a);
   }
+}
+
+// ---------------------------------------------------------------------------------------------
+// What the sensor sees (sky/sensor_view.h)
+// ---------------------------------------------------------------------------------------------
+
+Sky dalian_sky(const char* utc) {
+  Sky sky;
+  sky.site = {kLat, kLon, 0};
+  sky.first_stop = parse_utc(utc);
+  sky.model.P_max.constant = 0.7;
+  return sky;
+}
+
+double wrap180(double a) { return a - 180.0 * std::floor(a / 180.0); }
+double axis_diff(double a, double b) { return wrap180(a - b + 90.0) - 90.0; }
+
+// Level, point sample: the zenith E-vector lies at azimuth A_s ± 90° (spec §1.2), so with the
+// sensor's 0° axis at azimuth mount + θ_R, θ = mount + θ_R − A_s − 90° (mod 180°), and
+// d = P_max·sin²θ_s/(1 + cos²θ_s).
+TEST(SkySeen, LevelSensorSeesTheZenithEVectorAndDoP) {
+  const Sky sky = dalian_sky("2018-11-16T08:09:40Z");
+  for (double mount : {0.0, 37.5, 250.0})
+    for (double theta_R : {0.0, 10.0, 95.0, 180.0})
+      for (double t : {0.0, 30.0, 54.0}) {
+        SkyMount m;
+        m.mount_deg = mount;
+        const SkyView v = sky_seen(sky, m, theta_R, t);
+        const SunPosition sun = sun_position(sky.first_stop.plus_seconds(t), sky.site, sky.sun);
+        EXPECT_NEAR(axis_diff(v.theta_deg, mount + theta_R - sun.azimuth_deg - 90.0), 0.0, 1e-9);
+        EXPECT_NEAR(v.d, 0.7 * zenith_shape(sun.zenith_deg), 1e-12);
+        EXPECT_NEAR(v.E_Wm2, 1.0, 1e-15);  // uniform sky, E0 = 1
+      }
+}
+
+// Signs (spec §1.4): the table's +10° is +10° of θ; a stopped table sees θ fall as A_s rises
+// (0.00273°/s at 16:10 Beijing), i.e. rise in the spec's sense.
+TEST(SkySeen, TableAndSunTurnTheAngleOppositeWays) {
+  const Sky sky = dalian_sky("2018-11-16T08:09:30Z");
+  const SkyMount m;
+  const double a = sky_seen(sky, m, 0, 0).theta_deg;
+  EXPECT_NEAR(axis_diff(sky_seen(sky, m, 10, 0).theta_deg, a), 10.0, 1e-9);
+  EXPECT_NEAR(axis_diff(sky_seen(sky, m, 0, 60).theta_deg, a) / 60.0, -0.00273, 0.000005);
+  // A time offset is the same as a later stop.
+  SkyMount late = m;
+  late.time_offset_s = 60;
+  EXPECT_NEAR(sky_seen(sky, late, 0, 0).theta_deg, sky_seen(sky, m, 0, 60).theta_deg, 1e-12);
+}
+
+// Tilt: the view axis is v = sin r·X_0 − cos r·sin p·Y_0 + cos r·cos p·ẑ (pitch p lifts Y_0, roll r
+// lowers X_0), and the sensor's x-axis X_s = cos r·X_0 − sin r·(−sin p·Y_0 + cos p·ẑ) at θ_R = 0.
+// With the spec's §1.3 formula, θ_spec = atan2(e·(k × X_s), e·X_s), k = −v, and polrig's θ = −θ_spec.
+TEST(SkySeen, TiltedSensorFollowsTheSpecsPointSensorFormula) {
+  const Sky sky = dalian_sky("2018-11-16T08:41:20Z");
+  const SunPosition sun = sun_position(sky.first_stop, sky.site, sky.sun);
+  const double h = sun.elevation_deg * kDeg, A = sun.azimuth_deg * kDeg;
+  const std::array<double, 3> s{std::cos(h) * std::sin(A), std::cos(h) * std::cos(A), std::sin(h)};
+  for (double roll : {-8.0, 0.0, 5.0})
+    for (double pitch : {-3.0, 0.0, 12.0}) {
+      SkyMount m;
+      m.mount_deg = 20.0;
+      m.roll_deg = roll;
+      m.pitch_deg = pitch;
+      const double a = 20.0 * kDeg, r = roll * kDeg, p = pitch * kDeg;
+      const std::array<double, 3> X0{std::sin(a), std::cos(a), 0}, Y0{-std::cos(a), std::sin(a), 0};
+      std::array<double, 3> v{}, X{}, e{}, kx{};
+      for (int i = 0; i < 3; ++i) {
+        const double z = i == 2 ? 1.0 : 0.0;
+        v[i] = std::sin(r) * X0[i] - std::cos(r) * std::sin(p) * Y0[i] + std::cos(r) * std::cos(p) * z;
+        X[i] = std::cos(r) * X0[i] - std::sin(r) * (-std::sin(p) * Y0[i] + std::cos(p) * z);
+      }
+      auto cross = [](const std::array<double, 3>& u, const std::array<double, 3>& w) {
+        return std::array<double, 3>{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                                     u[0] * w[1] - u[1] * w[0]};
+      };
+      auto dot = [](const std::array<double, 3>& u, const std::array<double, 3>& w) {
+        return u[0] * w[0] + u[1] * w[1] + u[2] * w[2];
+      };
+      e = cross(s, v);
+      const std::array<double, 3> k{-v[0], -v[1], -v[2]};
+      kx = cross(k, X);
+      const double theta_spec = std::atan2(dot(e, kx), dot(e, X)) / kDeg;
+      const double cg = dot(s, v);
+      const SkyView got = sky_seen(sky, m, 0, 0);
+      EXPECT_NEAR(axis_diff(got.theta_deg, -theta_spec), 0.0, 1e-9) << roll << " " << pitch;
+      EXPECT_NEAR(got.d, 0.7 * (1 - cg * cg) / (1 + cg * cg), 1e-12);
+    }
+}
+
+// The lens's cone (half-angle ρ = atan(0.65/50)) against the point sample, with the sun near
+// the horizon (Outdoor2, h_s ≈ −1.1°) and the sensor at the zenith, where γ ≈ 90°: P ≈ P_max·(1 −
+// 2δ²) for a ray δ off the sun's great circle through the zenith, and δ² averages to ρ²/4 over
+// the cone (uniform in solid angle), so d falls by ρ²/2 = 8.45e-5 relative; θ moves by O(ρ²·δθ).
+TEST(SkySeen, TheLensConeLowersTheZenithDoPByHalfRhoSquared) {
+  const Sky sky = dalian_sky("2018-11-16T08:41:20Z");
+  SkyMount point, cone;
+  cone.cone = true;
+  const SkyView a = sky_seen(sky, point, 30, 0), b = sky_seen(sky, cone, 30, 0);
+  const double rho = std::atan(0.65 / 50);
+  EXPECT_NEAR(b.d / a.d - 1.0, -rho * rho / 2, 0.1 * rho * rho / 2);
+  EXPECT_NEAR(axis_diff(b.theta_deg, a.theta_deg), 0.0, 1e-6);
 }
 
 // `polrig calibrate --method nc --drift per-stop --site` on a CSV with a utc column. The CSV's sun

@@ -456,6 +456,12 @@ TEST_F(CliOutdoor, CalibrateNcPerStopRecoversTheColumn) {
   EXPECT_LT(error_of(ps, c.truth).alpha_deg, 1e-3);
   EXPECT_LT(error_of(ps, c.truth).kd, 1e-5);
   EXPECT_GT(error_of(none, c.truth).alpha_deg, 0.2);
+  EXPECT_HAS(test::read_file(tmp / "ps" / "params.yaml"), "drift: per-stop (stop times from the utc column, the sun from ERFA at --site 38.879167,121.543889)");
+  EXPECT_LACKS(test::read_file(tmp / "none" / "params.yaml"), "drift");
+  // The model voltages in points.csv are the fitted model at each stop's d: they match the data.
+  const test::Csv pts = test::read_csv(tmp / "ps" / "points.csv");
+  for (const auto& row : pts.rows)
+    EXPECT_NEAR(std::stod(row[1]), std::stod(row[4]), 1e-6);
 }
 
 TEST_F(CliOutdoor, DriftNeedsTimesASiteAndRawStops) {

@@ -119,6 +119,7 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
                                          stops.size()));
   CalibrationResult r;
   r.method = o.method;
+  r.drift = corr.source;
   if (raw_stops) {
     for (std::size_t k = 0; k < stops.size(); ++k) {
       EvalPoint p{stops[k].theta_R_deg, stops[k].V};

@@ -112,7 +112,10 @@ StopCorrections drift_of(const MeasuredData& data, const DriftSettings& drift) {
     throw DataError(fmt::format("--drift {} needs --site LAT,LON (the sun's position)", drift.mode));
   const SkyDrift d = drift_corrections(data.utc, parse_site(drift.site), SunSettings{},
                                        MaxDegree{}, *mode);  // the d ratio does not depend on P_max
-  return {d.dtheta_deg, d.d_ratio};
+  return {d.dtheta_deg, d.d_ratio,
+          fmt::format("{} (stop times from the utc column, the sun from ERFA at --site {}{})",
+                      drift.mode, drift.site,
+                      *mode == DriftMode::Linear ? ", interpolated between the first and last stop" : "")};
 }
 
 void run_calibrate(const std::string& input, const std::string& method_text,

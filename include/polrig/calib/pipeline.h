@@ -34,6 +34,7 @@ inline constexpr std::array<CalibrationMethod, 3> kAllMethods{
 struct StopCorrections {
   std::vector<double> dtheta_deg;
   std::vector<double> d_ratio;
+  std::string source;  // how they were made, for params.yaml ("per-stop: …"); "" without them
   bool empty() const { return dtheta_deg.empty() && d_ratio.empty(); }
 };
 
@@ -75,6 +76,7 @@ struct CalibrationResult {
   FitResult fit;
   double d_a = 0;
   std::string d_a_source;            // "given" or how it was chosen
+  std::string drift;                 // StopCorrections::source ("" without corrections)
   CalibrationParams params;          // decoupled with d_a
   CalibrationParams standard_error;  // kd's from c's: se(c_m)/d_a
   std::vector<EvalPoint> points;     // raw stops (type 1) or CS points (types 2, 3)

@@ -321,6 +321,55 @@ TEST(OutdoorCalibration, AdcQuantisedRunsRecoverTable2ToTheLsb) {
   }
 }
 
+// The outdoor replacement analysis (W19 §6, Figs. 24–25): Outdoor2's simulated run (16-bit ADC,
+// per-stop compensation) judged with parameters taken from elsewhere. W19's numbers on its real
+// Outdoor2 data are [DATA] (spec §5): α from Indoor or Outdoor1 ±0.036° against ±0.014° for its own
+// fit; Indoor kd ±0.850°; the recommended set (k = 0, kv = 1, α from Indoor, kd from Outdoor)
+// ±0.050°. The simulation shows the trend for devices that are exactly Table 2's columns. Prints
+// the table docs/validation.md quotes (--gtest_filter='OutdoorReplacement*').
+TEST(OutdoorReplacement, IndoorKdCostsMoreThanIndoorAlpha) {
+  const Column& o2 = table2()[1];
+  const Column& o1 = table2()[0];
+  const CalibrationParams indoor{{0.7554, 0.5500, -117.6462, -116.5699, 123.0730, 120.6994},
+                                 {-10.1519, 7.9230, -9.4542},
+                                 {1.0224, 1.0081, 1.0183},
+                                 {-0.0438, -0.0365, -0.0457, -0.0492, -0.0555, -0.0166}};
+  const CalibrationResult own =
+      calibrate_run(simulate_run(o2, 19, 0.6 / 32768), o2, DriftMode::PerStop);
+  ASSERT_TRUE(own.usable());
+  const auto accuracy = [&](const CalibrationParams& p) {
+    return accuracy_of(angle_errors(p, 0.5, own.points))[kThetaSec].accuracy_deg();
+  };
+  CalibrationParams alpha_indoor = own.params, alpha_o1 = own.params, kd_indoor = own.params,
+                    mix = own.params, mix_o1 = own.params;
+  alpha_indoor.alpha_deg = indoor.alpha_deg;
+  alpha_o1.alpha_deg = o1.truth.alpha_deg;
+  kd_indoor.kd = indoor.kd;
+  for (CalibrationParams* p : {&mix, &mix_o1}) {
+    p->alpha_deg = indoor.alpha_deg;
+    p->k_mV = {0, 0, 0};
+    p->kv = {1, 1, 1};
+  }
+  mix_o1.kd = o1.truth.kd;
+  const double a_own = accuracy(own.params), a_alpha = accuracy(alpha_indoor),
+               a_alpha_o1 = accuracy(alpha_o1), a_kd = accuracy(kd_indoor), a_mix = accuracy(mix),
+               a_mix_o1 = accuracy(mix_o1);
+  std::printf("Outdoor2 data judged with            simulated ±°   W19 ±°\n");
+  std::printf("its own fit                          %.4f         0.014\n", a_own);
+  std::printf("α from Indoor                        %.4f         0.036\n", a_alpha);
+  std::printf("α from Outdoor1                      %.4f         0.036\n", a_alpha_o1);
+  std::printf("kd from Indoor                       %.4f         0.850\n", a_kd);
+  std::printf("k=0, kv=1, α Indoor, kd Outdoor2     %.4f         0.050\n", a_mix);
+  std::printf("k=0, kv=1, α Indoor, kd Outdoor1     %.4f         -\n", a_mix_o1);
+  EXPECT_LT(a_own, 1e-3);         // the ADC's limit (sensor-and-rig.md §2: ±0.001° at d ≈ 0.7)
+  EXPECT_GT(a_kd, 2 * a_alpha);   // kd matters more than α (W19: 0.850 against 0.036)
+  EXPECT_GT(a_alpha, 10 * a_own);
+  // k = 0 is not harmless for Table 2's devices: k_3 = −18.76 mV against a slope of at most
+  // v_dec·2d/ln10 = 5.4 mV per degree of θ (d = 0.71) is degrees of error, as indoors
+  // (validation.md, "Replacement analysis"); W19's ±0.050° for its set is [DATA].
+  EXPECT_GT(a_mix, 1.0);
+}
+
 // ---------------------------------------------------------------------------------------------
 // What the sensor sees (sky/sensor_view.h)
 // ---------------------------------------------------------------------------------------------

@@ -86,5 +86,23 @@ TEST(Schedule, ExplicitAnglesReplaceStartStepStop) {
   EXPECT_EQ(s.table_angles_deg(), (std::vector<double>{5, 185, 17}));
 }
 
+// Spec sky-and-compasses.md §1.4: the paper's 10° steps at 5°/s with 1 s of dwell are 3 s per
+// stop, so the 37 stops of 0:10:360 span 108 s.
+TEST(Schedule, StopTimesOfThePapersTurnAreThreeSecondsApart) {
+  const Schedule s;  // 0:10:360, 5°/s, 1 s dwell
+  const std::vector<double> t = s.stop_times_s();
+  ASSERT_EQ(t.size(), 37u);
+  for (std::size_t k = 0; k < t.size(); ++k) EXPECT_NEAR(t[k], 3.0 * static_cast<double>(k), 1e-12) << k;
+}
+
+// An explicit list turns by |Δθ| whatever the direction: 5 → 185 → 17 is 180° then 168°.
+TEST(Schedule, StopTimesFollowTheAnglesTurned) {
+  Schedule s;
+  s.angles_deg = {5, 185, 17};
+  s.speed_deg_s = 10;
+  s.dwell_s = 2;
+  EXPECT_EQ(s.stop_times_s(), (std::vector<double>{0, 18 + 2, 18 + 16.8 + 4}));
+}
+
 }  // namespace
 }  // namespace polrig

@@ -394,7 +394,7 @@ TEST(RigYamlError, SourceModelOtherThanCos4OrTraced) {
   expect_file_error("source:\n  model: traced\n", 2, "source.model",
                     "expected source.scene with source.model traced");
   expect_file_error("source:\n  scene: scenes/jf500.yaml\n", 2, "source.scene",
-                    "expected no scene with source.model cos4 (set source.model: traced)");
+                    "expected no value with source.model cos4 (only source.model traced reads it)");
   expect_file_error("source:\n  model: traced\n  scene: no/such/scene.yaml\n", 3, "source.scene",
                     "cannot load the scene: ");
   expect_file_error("source:\n  model: COS4\n", 2, "source.model",

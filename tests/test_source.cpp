@@ -769,17 +769,18 @@ TEST(TracedRigFailure, ASolveThatFailsInsideTheParallelStudyStopsItCleanly) {
     s.port.diameter = 100;
     Rig rig;
     rig.source.model = "traced";
-    rig.source.traced = std::make_shared<const TracedSource>(s);
+    auto traced = std::make_shared<const TracedSource>(s);
+    rig.light = traced;
     try {
       cs_study(rig, CsTurn(36));
       FAIL() << "the study did not stop";
     } catch (const std::logic_error& e) {
       EXPECT_HAS(e.what(), "non-finite ray");
     }
-    EXPECT_THROW(rig.source.traced->solve_rays(), std::logic_error);  // the same error again
+    EXPECT_THROW(traced->solve_rays(), std::logic_error);  // the same error again
     // And from a sweep, whose grid points run the study in parallel, nested.
     const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0:1:8")};
-    rig.source.traced = std::make_shared<const TracedSource>(s);
+    rig.light = std::make_shared<const TracedSource>(s);
     EXPECT_THROW(sweep(rig, axes, CsTurn(36)), std::logic_error);
   }
 }
@@ -870,10 +871,12 @@ TEST(SlowTracedRig, BareChannelsFollowTheFilmsAtObliqueIncidenceUnderAUniformPor
                               "\neccentricity: {L_IS: 0, alpha_IS: 0, L_S: 0.5, alpha_S: 70}\n",
                           "inline");
   const Rig& rig = r.rig;
-  ASSERT_NE(rig.source.traced, nullptr);
+  ASSERT_EQ(rig.light->kind(), "traced");
   const int n = 36;
   const CsStudy s = cs_study(rig, CsTurn(n));
-  EXPECT_TRUE(s.traced);
+  EXPECT_TRUE(s.standard_errors);
+  EXPECT_TRUE(s.coaxial_reference);
+  EXPECT_FALSE(s.eq6);
   const double a = 50.0, h = 20.0, L_photo = 14.0, half = 0.65;  // port radius; L_o; ring; photodiode
   const double L_S = 0.5, alpha_S = 70 * kPi / 180;
   const CalibrationParams& truth = rig.device.truth;
@@ -1033,7 +1036,7 @@ TEST(TracedRig, TheCos4SettingsAreRefused) {
     parse_rig("device: {d: 0.3}\nsource: {model: traced, scene: " + scene + "}\n", "inline");
     FAIL();
   } catch (const RigError& e) {
-    EXPECT_HAS(e.what(), "key 'device.d': expected the port film's d = ");
+    EXPECT_HAS(e.what(), "key 'device.d': expected the source's d = ");
   }
 }
 

@@ -21,6 +21,7 @@
 #include "polrig/progress.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
+#include "polrig/source/source.h"
 #include "polrig/study/adc_limit.h"
 #include "polrig/study/cs.h"
 #include "polrig/io/rig_yaml.h"
@@ -569,7 +570,7 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 2 * 21);  // every real key, both ends
+  EXPECT_EQ(checked, 2 * 23);  // every real key, both ends
 }
 
 // Past the ranges (a rig built in code), simulate stops on the first non-finite voltage and says
@@ -602,6 +603,79 @@ TEST(RigRanges, ExtremeCornersGiveFiniteResults) {
   bright.electronics = {0.01, 2, 0.01, 1.0};  // volts_per_decade, adc_bits, vref_V, noise_sigma_V
   bright.device.truth.kv = {0.5, 0.5, 0.5};
   EXPECT_EQ(first_non_finite(bright), "");
+}
+
+// ---------------------------------------------------------------------------------------------
+// The source seam
+// ---------------------------------------------------------------------------------------------
+
+// A time-dependent source written here: uniform light whose angle turns at 1°/s and whose degree
+// grows by 0.001 per second, so that each stop's light tells the time simulate gave it.
+class ClockSource final : public Source {
+ public:
+  std::string_view kind() const override { return "clock"; }
+  unsigned flags() const override { return kTimeDependent | kUniformReference; }
+  Polarization polarization(const SourceView&, const SourcePose& pose) const override {
+    return {std::fmod(pose.t_s, 180.0), 0.3 + 0.001 * pose.t_s};
+  }
+  void irradiance(const SourceView&, const SourcePose&, std::span<double> E) const override {
+    for (double& e : E) e = 7.0;
+  }
+  std::array<double, 6> ideal_irradiance(const SourceView&, const SourcePose&) const override {
+    return {7, 7, 7, 7, 7, 7};
+  }
+};
+
+// simulate passes each stop's time t_k (Schedule::stop_times_s) to the source: the paper's 10°
+// steps at 5°/s with 1 s of dwell are 3 s apart (spec sky-and-compasses.md §1.4).
+TEST(SourceSeam, SimulatePassesEachStopsTimeToTheSource) {
+  Rig rig;
+  rig.light = std::make_shared<const ClockSource>();
+  const Simulation sim = simulate(rig);
+  ASSERT_EQ(sim.stops.size(), 37u);
+  for (std::size_t k = 0; k < sim.stops.size(); ++k) {
+    const double t = 3.0 * static_cast<double>(k);
+    EXPECT_NEAR(sim.stops[k].t_s, t, 1e-12) << k;
+    EXPECT_NEAR(sim.stops[k].light.theta_deg, std::fmod(t, 180.0), 1e-12) << k;
+    EXPECT_NEAR(sim.stops[k].light.d, 0.3 + 0.001 * t, 1e-15) << k;
+  }
+}
+
+// A source with a uniform reference and no Eq. 6: the CS study takes the default per-pose turn,
+// finds no eccentricity bias under uniform light (every ratio is 1) and writes Eq. 6 as NaN.
+TEST(SourceSeam, TheCsStudyAsksTheSourceWhatItCanDo) {
+  Rig rig;
+  rig.light = std::make_shared<const ClockSource>();
+  const CsStudy s = cs_study(rig, CsTurn(36));
+  EXPECT_FALSE(s.standard_errors);
+  EXPECT_FALSE(s.coaxial_reference);
+  EXPECT_FALSE(s.eq6);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(s.summary[i].bsd_mV, 0.0);
+    EXPECT_EQ(s.summary[i].mean_br_mV, 0.0);
+    EXPECT_TRUE(std::isnan(s.summary[i].eq6_mV));
+  }
+  const CsStudy cos4 = cs_study(Rig{}, CsTurn(36));
+  EXPECT_TRUE(cos4.eq6);
+  EXPECT_FALSE(cos4.standard_errors);
+}
+
+// The factory is the only place naming the models: every kind it lists is accepted by the
+// source.model key, and an unknown one is refused naming the key.
+TEST(SourceSeam, TheFactoryKnowsTheKindsTheKeyAccepts) {
+  const RigKey* model = find_rig_key("source.model");
+  ASSERT_NE(model, nullptr);
+  for (std::string_view kind : source_kinds()) EXPECT_TRUE(model->valid_text(kind)) << kind;
+  EXPECT_FALSE(model->valid_text("fisheye"));
+  SourceSpec spec;
+  spec.model = "fisheye";
+  try {
+    make_source(spec);
+    FAIL();
+  } catch (const SourceSettingError& e) {
+    EXPECT_EQ(e.key, "source.model");
+  }
+  EXPECT_EQ(make_source(SourceSpec{})->kind(), "cos4");
 }
 
 }  // namespace

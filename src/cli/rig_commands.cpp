@@ -14,7 +14,6 @@
 #include "cli.h"
 #include "polrig/calib/pipeline.h"
 #include "polrig/rig/keys.h"
-#include "polrig/source/traced_source.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
 #include "polrig/report/calibration_reports.h"
@@ -103,12 +102,6 @@ CalibrationOptions calibration_options_for(const Rig& rig, CalibrationMethod m) 
   o.film_axis_deg = rig.device.film_axis_deg;
   o.volts_per_decade = rig.electronics.volts_per_decade;
   return o;
-}
-
-// The keys a CS study reads; sweeping any other key repeats the same row.
-bool cs_study_reads(std::string_view path) {
-  return path.starts_with("eccentricity.") || path == "source.L_o" || path == "device.L_photo" ||
-         path == "electronics.volts_per_decade";
 }
 
 }  // namespace
@@ -200,18 +193,18 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       std::vector<GridAxis> axes;
       for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
       for (const GridAxis& a : axes)
-        if (!cs_study_reads(a.key->path))
+        if (!(a.key->studies & RigKey::kCs))  // sweeping a key the CS study does not read repeats a row
           std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
                                    "row along that axis will be the same\n", a.key->path);
       check_grid(r.rig, axes);
       OutputDir dir = out->open(axes.size() <= 2);
       const Progress p = progress();
-      if (r.rig.source.traced) r.rig.source.traced->solve(p);
+      r.rig.light->prepare(p);
       long long points = 1;
       for (const GridAxis& a : axes) points *= a.count;
       p.begin("sweep: grid points", points);
       std::size_t reported = 0;
-      SweepReport report(dir.staging(), axes, r.rig.source.traced != nullptr);
+      SweepReport report(dir.staging(), axes, r.rig.light->has(Source::kClosedFormEq6));
       sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t first, std::span<const CsSummary> block) {
         report.write(first, block);
       }, [&](std::size_t done, std::size_t) {
@@ -327,8 +320,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     auto* app = rig_app->add_subcommand("keys", "print every rig key as a Markdown table");
     commands.push_back({app, [] {
       Rig defaults;
-      std::cout << "| key | unit | default | accepts | meaning | why this range |\n"
-                   "|---|---|---|---|---|---|\n";
+      std::cout << "| key | unit | default | accepts | meaning | why this range | read by | sources |\n"
+                   "|---|---|---|---|---|---|---|---|\n";
       for (const RigKey& k : rig_keys()) {
         std::string def;
         using K = RigKey::Kind;
@@ -340,8 +333,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
           case K::RealArray: def = fmt::format("[{}]", fmt::join(k.array(defaults), ", ")); break;
           case K::RealList: def = "(none)"; break;
         }
-        std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects,
-                                 k.doc, k.why);
+        std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects,
+                                 k.doc, k.why, k.studies_text(), k.sources.empty() ? "all" : k.sources);
       }
     }});
   }

@@ -15,4 +15,15 @@ std::vector<double> Schedule::table_angles_deg() const {
   return out;
 }
 
+std::vector<double> Schedule::stop_times_s() const {
+  const std::vector<double> angles = table_angles_deg();
+  std::vector<double> t(angles.size(), 0.0);
+  double turning = 0;  // Σ |Δθ|/speed, summed in stop order
+  for (std::size_t k = 1; k < angles.size(); ++k) {
+    turning += std::abs(angles[k] - angles[k - 1]) / speed_deg_s;
+    t[k] = turning + static_cast<double>(k) * dwell_s;
+  }
+  return t;
+}
+
 }  // namespace polrig

@@ -40,7 +40,7 @@ class RigParser {
     walk(root, "", rig);
     check_schedule_form();
     load_truth_from(rig);
-    load_scene_of(rig);
+    make_light(rig);
     if (auto problem = check_rig(rig)) {
       std::string also;
       if (!problem->related_path.empty())
@@ -248,38 +248,41 @@ class RigParser {
     rig.device.truth_from.clear();
   }
 
-  // source.model traced: the scene file must load; the path is made absolute so that a dataset's
-  // rig.yaml finds it from anywhere.
-  void load_scene_of(Rig& rig) const {
-    if (rig.source.model != "traced") {
-      if (!rig.source.scene.empty())
-        fail("source.scene", "expected no scene with source.model cos4 (set source.model: traced)");
-      return;
-    }
-    if (rig.source.scene.empty())
-      fail("source.model", "expected source.scene with source.model traced");
-    std::filesystem::path scene = rig.source.scene;
-    if (scene.is_relative() && !override_for("source.scene") &&
-        !std::filesystem::path(file_).parent_path().empty())
-      scene = std::filesystem::path(file_).parent_path() / scene;
-    scene = std::filesystem::absolute(scene).lexically_normal();
+  // The light: make_source builds the rig's model; a scene it names is read relative to the rig
+  // file and kept as an absolute path, so that a dataset's rig.yaml finds it from anywhere.
+  // Keys the model does not read are refused (RigKey::sources).
+  void make_light(Rig& rig) const {
+    for (const RigKey& k : rig_keys())
+      if (present_.count(std::string(k.path)) && !k.read_by_source(rig.source.model))
+        fail(std::string(k.path), fmt::format("expected no value with source.model {} (only source.model {} "
+                                              "reads it)", rig.source.model, k.sources));
+    const SceneLoader load = [&](const std::string& path) {
+      std::filesystem::path scene = path;
+      if (scene.is_relative() && !override_for("source.scene") &&
+          !std::filesystem::path(file_).parent_path().empty())
+        scene = std::filesystem::path(file_).parent_path() / scene;
+      scene = std::filesystem::absolute(scene).lexically_normal();
+      try {
+        SceneSpec spec = load_scene(scene);
+        rig.source.scene = scene.string();
+        return spec;
+      } catch (const RigError& e) {
+        fail("source.scene", fmt::format("cannot load the scene: {}", e.what()));
+      }
+    };
     try {
-      rig.source.traced = std::make_shared<const TracedSource>(load_scene(scene));
-    } catch (const RigError& e) {
-      fail("source.scene", fmt::format("cannot load the scene: {}", e.what()));
+      rig.light = make_source(rig.source, load);
+    } catch (const SourceSettingError& e) {
+      fail(e.key, e.what());
     }
-    rig.source.scene = scene.string();
-    // The light is the film's: its d is the rig's d (for decoupling and the rig's checks), and
-    // the cos⁴ source's own settings would be silently unused.
-    const double film_d = rig.source.traced->degree_of_polarization();
-    if (present_.count("device.d") && std::abs(rig.device.d - film_d) > 1e-12)
-      fail("device.d", fmt::format("expected the port film's d = {} with a traced source (or leave "
-                                   "device.d out), got {}", film_d, rig.device.d));
-    rig.device.d = film_d;
-    for (const char* unused : {"source.polarizer_deg", "source.E_0"})
-      if (present_.count(unused))
-        fail(unused, "expected no value with source.model traced (the scene's port film and lamps "
-                     "set the light)");
+    // A source that sets the light's d itself (the traced port film): it is the rig's d, for
+    // decoupling and the rig's checks; a device.d in the file must agree.
+    if (const std::optional<double> d = rig.light->fixed_degree_of_polarization()) {
+      if (present_.count("device.d") && std::abs(rig.device.d - *d) > 1e-12)
+        fail("device.d", fmt::format("expected the source's d = {} with source.model {} (or leave "
+                                     "device.d out), got {}", *d, rig.source.model, rig.device.d));
+      rig.device.d = *d;
+    }
   }
 
   void check_schedule_form() const {
@@ -357,9 +360,8 @@ std::string rig_to_yaml(const Rig& rig_in) {
     if (explicit_stops && (k.path == "schedule.start_deg" || k.path == "schedule.step_deg" ||
                            k.path == "schedule.stop_deg"))
       continue;
-    // A traced source refuses the cos⁴ source's own settings (its scene sets the light).
-    if (rig.source.model == "traced" && (k.path == "source.E_0" || k.path == "source.polarizer_deg"))
-      continue;
+    // Keys the rig's source model does not read are refused on loading: leave them out.
+    if (!k.read_by_source(rig.source.model)) continue;
     std::stringstream ss{std::string(k.path)};
     std::vector<std::string> parts;
     for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);

@@ -58,31 +58,32 @@ std::vector<DatasetFile> report_simulation(const std::filesystem::path& dir,
 std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const CsStudy& study,
                                          bool plots) {
   std::vector<std::string> dev_columns{"theta_R_deg", "pair", "dv_br_mV", "dv_mr_mV"};
-  if (study.traced) dev_columns.insert(dev_columns.end(), {"dv_br_stderr_mV", "dv_mr_stderr_mV"});
+  if (study.standard_errors) dev_columns.insert(dev_columns.end(), {"dv_br_stderr_mV", "dv_mr_stderr_mV"});
   CsvTable dev(dev_columns);
   // Pair-major, so that each pair's rows are contiguous (and plot as one line).
   for (int i = 0; i < 3; ++i)
     for (std::size_t k = 0; k < study.theta_R_deg.size(); ++k) {
       std::vector<double> row{study.theta_R_deg[k], static_cast<double>(i + 1), study.dv_br_V[i][k] * 1e3,
                               study.dv_mr_V[i][k] * 1e3};
-      if (study.traced) row.insert(row.end(), {study.dv_br_se_V[i][k] * 1e3, study.dv_mr_se_V[i][k] * 1e3});
+      if (study.standard_errors) row.insert(row.end(), {study.dv_br_se_V[i][k] * 1e3, study.dv_mr_se_V[i][k] * 1e3});
       dev.add_row(row);
     }
   write_text_file(dir / "deviations.csv", dev.text());
 
   std::vector<std::string> columns{"pair", "bsd_mV", "asd_mV", "mean_br_mV", "mean_mr_mV", "eq6_mV"};
-  if (study.traced)
-    for (const char* c : {"bsd_stderr_mV", "asd_stderr_mV", "mean_br_stderr_mV", "mean_mr_stderr_mV",
-                          "coaxial_bsd_mV", "coaxial_asd_mV", "coaxial_mean_br_mV"})
+  if (study.standard_errors)
+    for (const char* c : {"bsd_stderr_mV", "asd_stderr_mV", "mean_br_stderr_mV", "mean_mr_stderr_mV"})
       columns.emplace_back(c);
+  if (study.coaxial_reference)
+    for (const char* c : {"coaxial_bsd_mV", "coaxial_asd_mV", "coaxial_mean_br_mV"}) columns.emplace_back(c);
   CsvTable summary(columns);
-  if (study.traced) summary.allow_undefined("eq6_mV");  // Eq. 6 has no meaning for a traced source
+  if (!study.eq6) summary.allow_undefined("eq6_mV");  // no closed form for this source
   for (int i = 0; i < 3; ++i) {
     const CsPairSummary& s = study.summary[i];
     std::vector<double> row{static_cast<double>(i + 1), s.bsd_mV, s.asd_mV, s.mean_br_mV, s.mean_mr_mV, s.eq6_mV};
     const CsPairSummary& c = study.coaxial[i];
-    if (study.traced)
-      row.insert(row.end(), {s.bsd_se_mV, s.asd_se_mV, s.mean_br_se_mV, s.mean_mr_se_mV, c.bsd_mV, c.asd_mV, c.mean_br_mV});
+    if (study.standard_errors) row.insert(row.end(), {s.bsd_se_mV, s.asd_se_mV, s.mean_br_se_mV, s.mean_mr_se_mV});
+    if (study.coaxial_reference) row.insert(row.end(), {c.bsd_mV, c.asd_mV, c.mean_br_mV});
     summary.add_row(row);
   }
   write_text_file(dir / "summary.csv", summary.text());
@@ -128,12 +129,12 @@ std::vector<std::string> sweep_header(const std::vector<GridAxis>& axes) {
 }
 }  // namespace
 
-SweepReport::SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes, bool traced)
+SweepReport::SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes, bool eq6)
     : dir_(dir), axes_(std::move(axes)), table_(sweep_header(axes_)), file_(dir / "sweep.csv") {
-  for (int i = 1; i <= 3; ++i) {  // ratios over a zero denominator; Eq. 6 of a traced source
+  for (int i = 1; i <= 3; ++i) {  // ratios over a zero denominator; Eq. 6 where it has no closed form
     table_.allow_undefined(fmt::format("pair{}_asd_bsd_pct", i));
     table_.allow_undefined(fmt::format("pair{}_eq6_dev_pct", i));
-    if (traced) table_.allow_undefined(fmt::format("pair{}_eq6_mV", i));
+    if (!eq6) table_.allow_undefined(fmt::format("pair{}_eq6_mV", i));
   }
   file_.write(table_.header_line());
 }

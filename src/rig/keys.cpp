@@ -1,7 +1,9 @@
 #include "polrig/rig/keys.h"
 
 #include <charconv>
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -65,66 +67,90 @@ constexpr std::string_view kOffsetWhy =
     "no longer sits under the port";
 constexpr std::string_view kTableWhy = "ten turns of the table either way";
 
+// "\"cos4\" or \"traced\"": the models make_source knows.
+std::string kinds_text() {
+  std::string out;
+  const auto kinds = source_kinds();
+  for (std::size_t i = 0; i < kinds.size(); ++i)
+    out += fmt::format("{}\"{}\"", i == 0 ? "" : i + 1 == kinds.size() ? " or " : ", ", kinds[i]);
+  return out;
+}
+
+// Who reads a key: the studies (RigKey::Study bits) and the source models (space-separated
+// source.model names; empty for every model).
+RigKey reads(RigKey k, unsigned studies, std::string_view sources) {
+  k.studies = studies;
+  k.sources = sources;
+  return k;
+}
+
+constexpr unsigned kSimulate = RigKey::kSimulate, kCs = RigKey::kCs, kAdc = RigKey::kAdc,
+                   kCalibrate = RigKey::kCalibrate;
+
 std::vector<RigKey> make_keys() {
   std::vector<RigKey> keys;
   // --- device -------------------------------------------------------------------------
-  keys.push_back(real<RealRange{0.1, 500.0}>(
+  keys.push_back(reads(real<RealRange{0.1, 500.0}>(
       "device.L_photo", "mm", "a length",
       "radius of the photodiode ring around the sensor centre O_S",
       "the seed sensor's ring is 14 mm; a ring of more than 0.5 m is no sensor under a port",
-      [](Rig& r) -> double& { return r.device.ring.L_photo; }));
-  keys.push_back(array<kTurn>("device.beta_deg", "deg", "6 angles",
+      [](Rig& r) -> double& { return r.device.ring.L_photo; }), kSimulate | kCs, ""));
+  keys.push_back(reads(array<kTurn>("device.beta_deg", "deg", "6 angles",
                               "angle β_m of photodiode m on the ring, rig frame at θ_R = 0 "
                               "(x-axis from O_S through photodiode 1)",
                               kTurnWhy,
-                              [](Rig& r) { return std::span<double>(r.device.ring.beta_deg); }));
-  keys.push_back(array<kTurn>("device.film_axes_deg", "deg", "6 angles",
+                              [](Rig& r) { return std::span<double>(r.device.ring.beta_deg); }), kSimulate | kCs, ""));
+  keys.push_back(reads(array<kTurn>("device.film_axes_deg", "deg", "6 angles",
                               "nominal film axes in the sensor frame; they define the theory "
                               "parameters α_j = −2f_j, α_h = 180° − 2f_h",
                               kTurnWhy,
-                              [](Rig& r) { return std::span<double>(r.device.film_axis_deg); }));
-  keys.push_back(real<RealRange{0.0, 1.0, true, true}>(
+                              [](Rig& r) { return std::span<double>(r.device.film_axis_deg); }), kAdc | kCalibrate, ""));
+  keys.push_back(reads(real<RealRange{0.0, 1.0, true, true}>(
       "device.d", "", "a degree of polarization",
       "degree of linear polarization of the light reaching the sensor",
       "0 is unpolarized light (no angle to measure), 1 the limit of a perfect polarizer",
-      [](Rig& r) -> double& { return r.device.d; }));
-  keys.push_back(array<RealRange{-720.0, 720.0}>(
+      [](Rig& r) -> double& { return r.device.d; }), kSimulate | kAdc | kCalibrate, ""));
+  keys.push_back(reads(array<RealRange{-720.0, 720.0}>(
       "device.truth.alpha_deg", "deg", "6 angles",
       "true installation angles α_m, doubled-angle domain (Eq. 15)",
       "doubled angles (α = −2f): one turn of the film either way",
-      [](Rig& r) { return std::span<double>(r.device.truth.alpha_deg); }));
-  keys.push_back(array<RealRange{-1000.0, 1000.0}>(
+      [](Rig& r) { return std::span<double>(r.device.truth.alpha_deg); }), kSimulate | kCs, ""));
+  keys.push_back(reads(array<RealRange{-1000.0, 1000.0}>(
       "device.truth.k_mV", "mV", "3 offsets",
       "true additive offsets k_i of the pair voltages (Eq. 15)",
       "the paper's offsets are ±10 mV; beyond ±1 V an offset exceeds a log amplifier's output",
-      [](Rig& r) { return std::span<double>(r.device.truth.k_mV); }));
-  keys.push_back(array<RealRange{0.5, 2.0}>(
+      [](Rig& r) { return std::span<double>(r.device.truth.k_mV); }), kSimulate, ""));
+  keys.push_back(reads(array<RealRange{0.5, 2.0}>(
       "device.truth.kv", "", "3 gains",
       "true log-amplifier reference deviations kv_i (Eq. 15)",
       "the amplifier's scale against nominal: Table 2's are 1.008–1.022; a factor of 2 either "
       "way is another amplifier",
-      [](Rig& r) { return std::span<double>(r.device.truth.kv); }));
-  keys.push_back(array<RealRange{-1.0, 0.0, true, false}>(
+      [](Rig& r) { return std::span<double>(r.device.truth.kv); }), kSimulate | kCs, ""));
+  keys.push_back(reads(array<RealRange{-1.0, 0.0, true, false}>(
       "device.truth.kd", "", "6 values",
       "true polarizer coefficients kd_m = (τM−τm)/(τM+τm) − 1 (Eq. 15)",
       "kd = −1 is a film that does not polarize, 0 a perfect one",
-      [](Rig& r) { return std::span<double>(r.device.truth.kd); }));
+      [](Rig& r) { return std::span<double>(r.device.truth.kd); }), kSimulate | kCs, ""));
   {
     RigKey k{"device.truth_from", K::Text, "", "a path to a params.yaml",
              "load device.truth from a calibration's params.yaml (path relative to the rig "
              "file); excludes device.truth.*"};
     k.text = [](Rig& r) -> std::string& { return r.device.truth_from; };
     k.valid_text = [](std::string_view v) { return !v.empty(); };
-    keys.push_back(k);
+    keys.push_back(reads(k, kSimulate | kCs, ""));
   }
   // --- source -------------------------------------------------------------------------
   {
-    RigKey k{"source.model", K::Text, "", "\"cos4\" or \"traced\"",
+    RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
              "sphere of source.scene"};
     k.text = [](Rig& r) -> std::string& { return r.source.model; };
-    k.valid_text = [](std::string_view v) { return v == "cos4" || v == "traced"; };
-    keys.push_back(k);
+    k.valid_text = [](std::string_view v) {
+      for (std::string_view kind : source_kinds())
+        if (v == kind) return true;
+      return false;
+    };
+    keys.push_back(reads(k, kSimulate | kCs, ""));
   }
   {
     RigKey k{"source.scene", K::Text, "", "a path to a scene file",
@@ -132,46 +158,46 @@ std::vector<RigKey> make_keys() {
              "the light's d and angle"};
     k.text = [](Rig& r) -> std::string& { return r.source.scene; };
     k.valid_text = [](std::string_view v) { return !v.empty(); };
-    keys.push_back(k);
+    keys.push_back(reads(k, kSimulate | kCs, "traced"));
   }
-  keys.push_back(real<RealRange{0.1, 1000.0}>(
+  keys.push_back(reads(real<RealRange{0.1, 1000.0}>(
       "source.L_o", "mm", "a length",
       "distance from the port plane down to the photosensitive plane",
       "the paper's is 20 mm; at 0 the cos⁴ law gives no light off-axis, beyond 1 m the port is "
       "a point",
-      [](Rig& r) -> double& { return r.source.cos4.L_o; }));
-  keys.push_back(real<RealRange{1e-3, 1e5}>(
+      [](Rig& r) -> double& { return r.source.cos4.L_o; }), kSimulate | kCs, ""));
+  keys.push_back(reads(real<RealRange{1e-3, 1e5}>(
       "source.E_0", "W/m^2", "an irradiance",
       "irradiance on the port axis at the photosensitive plane",
       "from dim laboratory light to a hundred suns",
-      [](Rig& r) -> double& { return r.source.cos4.E_0; }));
-  keys.push_back(real<kTurn>("source.polarizer_deg", "deg", "an angle",
+      [](Rig& r) -> double& { return r.source.cos4.E_0; }), kSimulate, "cos4"));
+  keys.push_back(reads(real<kTurn>("source.polarizer_deg", "deg", "an angle",
                              "axis ψ_P of the port polarizer in the rig frame; θ = θ_R − ψ_P",
-                             kTurnWhy, [](Rig& r) -> double& { return r.source.polarizer_deg; }));
+                             kTurnWhy, [](Rig& r) -> double& { return r.source.polarizer_deg; }), kSimulate, "cos4"));
   // --- eccentricity -------------------------------------------------------------------
-  keys.push_back(real<kOffset>("eccentricity.L_IS", "mm", "a length",
+  keys.push_back(reads(real<kOffset>("eccentricity.L_IS", "mm", "a length",
                                "offset of the port centre O_IS from the table centre O_R",
-                               kOffsetWhy, [](Rig& r) -> double& { return r.eccentricity.L_IS; }));
-  keys.push_back(real<kTurn>("eccentricity.alpha_IS", "deg", "an angle",
+                               kOffsetWhy, [](Rig& r) -> double& { return r.eccentricity.L_IS; }), kSimulate | kCs, ""));
+  keys.push_back(reads(real<kTurn>("eccentricity.alpha_IS", "deg", "an angle",
                              "direction of the port centre's offset", kTurnWhy,
-                             [](Rig& r) -> double& { return r.eccentricity.alpha_IS; }));
-  keys.push_back(real<kOffset>("eccentricity.L_S", "mm", "a length",
+                             [](Rig& r) -> double& { return r.eccentricity.alpha_IS; }), kSimulate | kCs, ""));
+  keys.push_back(reads(real<kOffset>("eccentricity.L_S", "mm", "a length",
                                "offset of the sensor centre O_S from O_R at θ_R = 0", kOffsetWhy,
-                               [](Rig& r) -> double& { return r.eccentricity.L_S; }));
-  keys.push_back(real<kTurn>("eccentricity.alpha_S", "deg", "an angle",
+                               [](Rig& r) -> double& { return r.eccentricity.L_S; }), kSimulate | kCs, ""));
+  keys.push_back(reads(real<kTurn>("eccentricity.alpha_S", "deg", "an angle",
                              "direction of the sensor centre's offset at θ_R = 0", kTurnWhy,
-                             [](Rig& r) -> double& { return r.eccentricity.alpha_S; }));
+                             [](Rig& r) -> double& { return r.eccentricity.alpha_S; }), kSimulate | kCs, ""));
   // --- schedule -----------------------------------------------------------------------
-  keys.push_back(real<kTableAngle>("schedule.start_deg", "deg", "an angle", "first table stop",
+  keys.push_back(reads(real<kTableAngle>("schedule.start_deg", "deg", "an angle", "first table stop",
                                    kTableWhy,
-                                   [](Rig& r) -> double& { return r.schedule.start_deg; }));
-  keys.push_back(real<RealRange{0.0, 360.0, true, false}>(
+                                   [](Rig& r) -> double& { return r.schedule.start_deg; }), kSimulate, ""));
+  keys.push_back(reads(real<RealRange{0.0, 360.0, true, false}>(
       "schedule.step_deg", "deg", "a step", "table step between stops",
       "at most one turn; the stops between start and stop may number at most 1e6",
-      [](Rig& r) -> double& { return r.schedule.step_deg; }));
-  keys.push_back(real<kTableAngle>("schedule.stop_deg", "deg", "an angle ≥ schedule.start_deg",
+      [](Rig& r) -> double& { return r.schedule.step_deg; }), kSimulate, ""));
+  keys.push_back(reads(real<kTableAngle>("schedule.stop_deg", "deg", "an angle ≥ schedule.start_deg",
                                    "last table stop (included when reached by whole steps)",
-                                   kTableWhy, [](Rig& r) -> double& { return r.schedule.stop_deg; }));
+                                   kTableWhy, [](Rig& r) -> double& { return r.schedule.stop_deg; }), kSimulate, ""));
   {
     RigKey k{"schedule.angles_deg", K::RealList, "deg",
              expects_text("a list of 1 to 1e6 angles", kTableAngle, "deg"),
@@ -181,42 +207,53 @@ std::vector<RigKey> make_keys() {
     k.range = kTableAngle;
     k.max_items = kMaxStops;
     k.valid_real = &within<kTableAngle>;
-    keys.push_back(k);
+    keys.push_back(reads(k, kSimulate, ""));
   }
   {
     RigKey k{"schedule.samples_per_stop", K::Integer, "", "an integer in [1, 100000]",
              "samples the sensor records at each stop (the paper averages 40)"};
     k.integer = [](Rig& r) -> int& { return r.schedule.samples_per_stop; };
     k.valid_integer = [](long long v) { return v >= 1 && v <= 100000; };
-    keys.push_back(k);
+    keys.push_back(reads(k, kSimulate, ""));
   }
+  keys.push_back(reads(real<RealRange{0.01, 1000.0}>(
+      "schedule.speed_deg_s", "deg/s", "a speed",
+      "the table's turning speed between stops (times the stops of a time-dependent source)",
+      "from a slow hand-turned table (0.01°/s) to a fast motorised one (1000°/s); the paper's 10° "
+      "steps at 3 s per stop suggest 5°/s with 1 s of dwell",
+      [](Rig& r) -> double& { return r.schedule.speed_deg_s; }), kSimulate, ""));
+  keys.push_back(reads(real<RealRange{0.0, 3600.0}>(
+      "schedule.dwell_s", "s", "a duration",
+      "time the table rests at each stop while the sensor records",
+      "0 (no rest) to an hour per stop",
+      [](Rig& r) -> double& { return r.schedule.dwell_s; }), kSimulate, ""));
   // --- electronics --------------------------------------------------------------------
-  keys.push_back(real<RealRange{0.01, 10.0}>(
+  keys.push_back(reads(real<RealRange{0.01, 10.0}>(
       "electronics.volts_per_decade", "V", "a gain", "log-amplifier scale (the 0.5 of Eq. 1)",
       "log amplifiers give tens to thousands of mV per decade (the paper's: 500 mV)",
-      [](Rig& r) -> double& { return r.electronics.volts_per_decade; }));
+      [](Rig& r) -> double& { return r.electronics.volts_per_decade; }), kSimulate | kCs | kAdc | kCalibrate, ""));
   {
     RigKey k{"electronics.adc_bits", K::Integer, "", "an integer in [2, 31]",
              "resolution of the signed ADC (Eq. 3 uses 2^(bits−1))"};
     k.integer = [](Rig& r) -> int& { return r.electronics.adc_bits; };
     k.valid_integer = [](long long v) { return v >= 2 && v <= 31; };
-    keys.push_back(k);
+    keys.push_back(reads(k, kSimulate | kAdc, ""));
   }
-  keys.push_back(real<RealRange{0.01, 100.0}>(
+  keys.push_back(reads(real<RealRange{0.01, 100.0}>(
       "electronics.vref_V", "V", "a voltage", "ADC reference voltage",
       "ADC references span tens of mV to tens of volts (the paper's: 0.6 V)",
-      [](Rig& r) -> double& { return r.electronics.vref_V; }));
-  keys.push_back(real<RealRange{0.0, 1.0}>(
+      [](Rig& r) -> double& { return r.electronics.vref_V; }), kSimulate | kAdc, ""));
+  keys.push_back(reads(real<RealRange{0.0, 1.0}>(
       "electronics.noise_sigma_V", "V", "a standard deviation",
       "Gaussian noise on each pair voltage, per sample, before the ADC",
       "noise of more than 1 V buries any log amplifier's signal (our rigs: 0.1 mV)",
-      [](Rig& r) -> double& { return r.electronics.noise_sigma_V; }));
+      [](Rig& r) -> double& { return r.electronics.noise_sigma_V; }), kSimulate, ""));
   // --- seed ---------------------------------------------------------------------------
   {
     RigKey k{"seed", K::Seed, "", "an unsigned 64-bit integer",
              "seed of every random stream; streams derive from (seed, stop, channel, sample)"};
     k.seed = [](Rig& r) -> std::uint64_t& { return r.seed; };
-    keys.push_back(k);
+    keys.push_back(reads(k, kSimulate, ""));
   }
   return keys;
 }
@@ -226,6 +263,23 @@ std::vector<RigKey> make_keys() {
 const std::vector<RigKey>& rig_keys() {
   static const std::vector<RigKey> keys = make_keys();
   return keys;
+}
+
+bool RigKey::read_by_source(std::string_view model) const {
+  if (sources.empty()) return true;
+  for (std::size_t b = 0; b < sources.size();) {
+    const std::size_t e = std::min(sources.find(' ', b), sources.size());
+    if (sources.substr(b, e - b) == model) return true;
+    b = e + 1;
+  }
+  return false;
+}
+
+std::string RigKey::studies_text() const {
+  std::string out;
+  for (const auto& [bit, name] : {std::pair{kSimulate, "simulate"}, {kCs, "cs"}, {kAdc, "adc"}, {kCalibrate, "calibrate"}})
+    if (studies & bit) out += (out.empty() ? "" : ", ") + std::string(name);
+  return out;
 }
 
 const RigKey* find_rig_key(std::string_view path) {

@@ -8,29 +8,29 @@
 #include <tbb/parallel_for.h>
 
 #include "polrig/device/sensor.h"
-#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
-PoseLight light_at_pose(const Rig& rig, double theta_R_deg) {
+PoseLight light_at_pose(const Rig& rig, double theta_R_deg, double t_s) {
+  const Source& source = *rig.light;
+  const SourceView view = rig.source_view();
+  const SourcePose pose{theta_R_deg, t_s};
   PoseLight light;
-  const Point2 port = port_centre(rig.eccentricity);
-  const auto p = photodiode_positions(rig.device.ring, rig.eccentricity, theta_R_deg);
-  if (const TracedSource* traced = rig.source.traced.get()) {
-    // The traced port: d and the angle from its film; each channel's signal traced.
-    light.theta_deg = sensor_polarization_angle_deg(theta_R_deg, traced->polarizer_axis_rig_deg());
-    light.d = traced->degree_of_polarization();
-    for (int m = 0; m < 6; ++m) {
-      const std::vector<double> e = traced_effective_irradiance(rig, theta_R_deg, m);
+  const int S = source.shifts();
+  if (S == 1) {
+    source.irradiance(view, pose, light.E_Wm2);
+  } else {  // the mean over the shifts
+    std::vector<double> e(static_cast<std::size_t>(6 * S));
+    source.irradiance(view, pose, e);
+    for (std::size_t m = 0; m < 6; ++m) {
       double sum = 0;
-      for (double x : e) sum += x;
-      light.E_Wm2[m] = sum / static_cast<double>(e.size());
+      for (int k = 0; k < S; ++k) sum += e[static_cast<std::size_t>(k) * 6 + m];
+      light.E_Wm2[m] = sum / static_cast<double>(S);
     }
-    return light;
   }
-  for (int m = 0; m < 6; ++m) light.E_Wm2[m] = rig.source.cos4.irradiance(p[m], port);
-  light.theta_deg = sensor_polarization_angle_deg(theta_R_deg, rig.source.polarizer_deg);
-  light.d = rig.device.d;
+  const Polarization p = source.polarization(view, pose);
+  light.theta_deg = p.theta_deg;
+  light.d = p.d;
   return light;
 }
 
@@ -41,41 +41,21 @@ Rig coaxial(const Rig& rig) {
   return c;
 }
 
-std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg) {
-  if (rig.source.traced) return light_at_pose(coaxial(rig), theta_R_deg).E_Wm2;
-  const double E0 = rig.source.cos4.E_0;
-  return {E0, E0, E0, E0, E0, E0};
-}
-
-TracedChannel traced_channel(const Rig& rig, double theta_R_deg, int m) {
-  const TracedSource& traced = *rig.source.traced;
-  const Point2 p = photodiode_positions(rig.device.ring, rig.eccentricity, theta_R_deg)[static_cast<std::size_t>(m)] -
-                   port_centre(rig.eccentricity);
-  const CalibrationParams& truth = rig.device.truth;
-  // The sensor frame is the scene frame turned by −θ_R (both seen from above; the table turns
-  // anticlockwise seen from below): a sensor-frame angle φ is at φ − θ_R in the scene.
-  const AnalyzerFilm film{film_axis_from_alpha_deg(truth, m) - theta_R_deg, 1.0 + truth.kd[static_cast<std::size_t>(m)]};
-  const double theta = sensor_polarization_angle_deg(theta_R_deg, traced.polarizer_axis_rig_deg());
-  return {to_scene(p), film, channel_response(truth, m, theta, traced.degree_of_polarization())};
-}
-
-std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m) {
-  const TracedChannel c = traced_channel(rig, theta_R_deg, m);
-  std::vector<double> e = rig.source.traced->channel_signal(c.p_scene, rig.source.cos4.L_o, c.film);
-  for (double& x : e) x /= c.bracket;
-  return e;
+std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg, double t_s) {
+  return rig.light->ideal_irradiance(rig.source_view(), {theta_R_deg, t_s});
 }
 
 namespace {
 
-Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg,
+Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg, double t_s,
                    std::array<double, 3>* samples_out) {
   Stop s;
   s.theta_R_deg = theta_R_deg;
-  s.light = light_at_pose(rig, theta_R_deg);
+  s.t_s = t_s;
+  s.light = light_at_pose(rig, theta_R_deg, t_s);
   const CalibrationParams& truth = rig.device.truth;
   const Electronics& el = rig.electronics;
-  s.V_ideal = pair_voltages(truth, el, ideal_irradiance(rig, theta_R_deg), s.light.theta_deg, s.light.d);
+  s.V_ideal = pair_voltages(truth, el, ideal_irradiance(rig, theta_R_deg, t_s), s.light.theta_deg, s.light.d);
   s.V_ecc = pair_voltages(truth, el, s.light.E_Wm2, s.light.theta_deg, s.light.d);
   // The keys' ranges keep these finite; should a combination of values escape them, say where,
   // rather than let the ADC refuse an anonymous voltage.
@@ -114,16 +94,17 @@ Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg,
 
 Simulation simulate(const Rig& rig, bool keep_samples, const Progress& progress) {
   const std::vector<double> angles = rig.schedule.table_angles_deg();
+  const std::vector<double> times = rig.schedule.stop_times_s();
   Simulation sim;
   sim.samples_per_stop = rig.schedule.samples_per_stop;
   sim.stops.resize(angles.size());
   if (keep_samples) sim.samples.resize(angles.size() * static_cast<std::size_t>(sim.samples_per_stop));
-  if (rig.source.traced) rig.source.traced->solve(progress);
+  rig.light->prepare(progress);
   progress.begin("simulate: stops", static_cast<long long>(angles.size()));
   tbb::parallel_for(std::size_t{0}, angles.size(), [&](std::size_t s) {
     std::array<double, 3>* out =
         keep_samples ? &sim.samples[s * static_cast<std::size_t>(sim.samples_per_stop)] : nullptr;
-    sim.stops[s] = simulate_stop(rig, s, angles[s], out);
+    sim.stops[s] = simulate_stop(rig, s, angles[s], times[s], out);
     progress.advance();
   });
   progress.finish();

@@ -1,6 +1,7 @@
 #include "polrig/source/traced_source.h"
 
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 
@@ -8,6 +9,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include "polrig/device/sensor.h"
 #include "polrig/optics/lens.h"
 #include "polrig/optics/polarized_ray.h"
 #include "polrig/units.h"
@@ -178,6 +180,66 @@ std::vector<std::vector<double>> TracedSource::channel_signals(const Point2& p, 
   std::vector<std::vector<double>> signals;
   for (const AnalyzerFilm& f : films) signals.push_back(lensed_signal(p, L_o, f));
   return signals;
+}
+
+Polarization TracedSource::polarization(const SourceView&, const SourcePose& pose) const {
+  return {sensor_polarization_angle_deg(pose.theta_R_deg, polarizer_axis_rig_deg()), degree_of_polarization()};
+}
+
+TracedChannel TracedSource::channel(const SourceView& rig, double theta_R_deg, int m) const {
+  const Point2 p = photodiode_positions(rig.sensor.ring, rig.eccentricity, theta_R_deg)[static_cast<std::size_t>(m)] -
+                   port_centre(rig.eccentricity);
+  const CalibrationParams& truth = rig.sensor.truth;
+  // The sensor frame is the scene frame turned by −θ_R (both seen from above; the table turns
+  // anticlockwise seen from below): a sensor-frame angle φ is at φ − θ_R in the scene.
+  const AnalyzerFilm film{film_axis_from_alpha_deg(truth, m) - theta_R_deg, 1.0 + truth.kd[static_cast<std::size_t>(m)]};
+  const double theta = sensor_polarization_angle_deg(theta_R_deg, polarizer_axis_rig_deg());
+  return {to_scene(p), film, channel_response(truth, m, theta, degree_of_polarization())};
+}
+
+void TracedSource::irradiance(const SourceView& rig, const SourcePose& pose, std::span<double> E) const {
+  for (int m = 0; m < 6; ++m) {
+    const TracedChannel c = channel(rig, pose.theta_R_deg, m);
+    std::vector<double> e = channel_signal(c.p_scene, rig.settings.cos4.L_o, c.film);
+    for (double& x : e) x /= c.bracket;
+    for (std::size_t k = 0; k < e.size(); ++k) E[k * 6 + static_cast<std::size_t>(m)] = e[k];
+  }
+}
+
+void TracedSource::irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
+                                        const Progress& progress) const {
+  const int n = turn.steps(), S = shifts();
+  std::vector<TracedChannel> channels(static_cast<std::size_t>(6 * n));
+  for (int mk = 0; mk < 6 * n; ++mk) channels[static_cast<std::size_t>(mk)] = channel(rig, turn.theta_R_deg(mk % n), mk / n);
+  // Channels whose photodiodes sit at one point (to 1 pm: a coaxial rig turning in steps that
+  // divide the ring's spacing brings every channel to the same points) share the port's rays
+  // and radiance, at the point of the first of them.
+  std::map<std::pair<long long, long long>, std::size_t> group_at;
+  std::vector<std::vector<int>> groups;
+  for (int mk = 0; mk < 6 * n; ++mk) {
+    const Point2& p = channels[static_cast<std::size_t>(mk)].p_scene;
+    const auto [it, added] = group_at.try_emplace({std::llround(p.x() * 1e9), std::llround(p.y() * 1e9)}, groups.size());
+    if (added) groups.emplace_back();
+    groups[it->second].push_back(mk);
+  }
+  // Isolated: a sweep's outer loop must not run another grid point on this thread while it
+  // waits here, since that point would share this thread's scratch.
+  tbb::this_task_arena::isolate([&] { tbb::parallel_for(std::size_t{0}, groups.size(), [&](std::size_t g) {
+    const std::vector<int>& members = groups[g];
+    std::vector<AnalyzerFilm> films;
+    for (int mk : members) films.push_back(channels[static_cast<std::size_t>(mk)].film);
+    const std::vector<std::vector<double>> e =
+        channel_signals(channels[static_cast<std::size_t>(members[0])].p_scene, rig.settings.cos4.L_o, films);
+    for (std::size_t j = 0; j < members.size(); ++j) {
+      const std::size_t mk = static_cast<std::size_t>(members[j]);
+      for (int sh = 0; sh < S; ++sh) {
+        double x = e[j][static_cast<std::size_t>(sh)];
+        x /= channels[mk].bracket;
+        E[static_cast<std::size_t>(sh) * static_cast<std::size_t>(6 * n) + mk] = x;
+      }
+    }
+    progress.advance(static_cast<long long>(members.size()));
+  }); });
 }
 
 }  // namespace polrig

@@ -10,7 +10,6 @@
 #include "polrig/calib/preprocess.h"
 #include "polrig/random.h"
 #include "polrig/sim/simulate.h"
-#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
@@ -66,7 +65,7 @@ std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& s, co
     throw CalibrationError(fmt::format("the rig's schedule: {}; study calibration runs the CS "
                                        "types too", e.what()));
   }
-  if (rig.source.traced) rig.source.traced->solve(progress);
+  rig.light->prepare(progress);
   progress.begin("study calibration: trials", s.trials);
   tbb::parallel_for(0, s.trials, [&](int k) {
     trials[static_cast<std::size_t>(k)] = run_trial(rig, s, k);

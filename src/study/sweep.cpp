@@ -157,11 +157,16 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
   for (const GridAxis& a : axes) points *= a.count;
   if (points > 1e9)
     throw RigError(fmt::format("--grid: {:.3g} grid points; at most 1e9 (a summary row each)", points));
-  if (base.source.traced)
-    for (const GridAxis& a : axes)
-      if (a.key->path == "device.d" || a.key->path == "source.E_0" || a.key->path == "source.polarizer_deg")
-        throw RigError(fmt::format("--grid {}: a traced source's light comes from its scene; '{}' "
-                                   "cannot be swept", a.text(), a.key->path));
+  // A key the rig's source does not read is refused (RigKey::sources), and so is device.d when
+  // the source sets the light's d itself (the traced port film): a swept value would be unused.
+  for (const GridAxis& a : axes) {
+    if (!a.key->read_by_source(base.source.model))
+      throw RigError(fmt::format("--grid {}: source.model {} does not read '{}' (only source.model {} "
+                                 "does); it cannot be swept", a.text(), base.source.model, a.key->path, a.key->sources));
+    if (a.key->path == "device.d" && base.light->fixed_degree_of_polarization())
+      throw RigError(fmt::format("--grid {}: source.model {} sets the light's d itself; 'device.d' "
+                                 "cannot be swept", a.text(), base.source.model));
+  }
   // The corners: the cross-key rules are monotone in each key, so a grid that breaks one
   // usually does at a corner, and is stopped before any computation. sweep() checks every point.
   std::size_t varying = 0;

@@ -12,8 +12,16 @@ struct Schedule {
   double stop_deg = 360.0;
   std::vector<double> angles_deg;  // explicit stops; when non-empty it replaces start/step/stop
   int samples_per_stop = 40;
+  // The table's timing, for sources that change during a run (the sky): it turns at speed_deg_s
+  // between stops and dwells dwell_s at each (spec sky-and-compasses.md §1.4: the paper's 10°
+  // steps take 3 s per stop).
+  double speed_deg_s = 5.0;
+  double dwell_s = 1.0;
 
   std::vector<double> table_angles_deg() const;
+  // Time of each stop since the first: t_k = Σ_{i=1..k} |θ_i − θ_{i−1}|/speed + k·dwell
+  // (t_0 = 0), one per table_angles_deg().
+  std::vector<double> stop_times_s() const;
 };
 
 }  // namespace polrig

@@ -23,8 +23,8 @@ std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const
 // memory does not grow with the grid. finish() closes it and draws the plots from it.
 class SweepReport {
  public:
-  // `traced`: the rig's source is traced, so Eq. 6 (a cos⁴ result) is written as nan.
-  SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes, bool traced);
+  // `eq6`: the rig's source has Eq. 6 in closed form (Source::kClosedFormEq6); else it is written as nan.
+  SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes, bool eq6);
   void write(std::size_t first, std::span<const CsSummary> block);
   std::vector<DatasetFile> finish(bool plots);
 

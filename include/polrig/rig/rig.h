@@ -9,28 +9,24 @@
 #include "polrig/device/sensor.h"
 #include "polrig/geometry/geometry.h"
 #include "polrig/geometry/schedule.h"
-#include "polrig/source/cos4.h"
-#include "polrig/source/traced_source.h"
+#include "polrig/source/source.h"
 
 namespace polrig {
 
-struct SourceSpec {
-  std::string model = "cos4";  // "cos4" (analytic) or "traced" (Embree, from `scene`)
-  Cos4Source cos4;             // L_o (both models), E_0 (cos4)
-  double polarizer_deg = 0.0;  // port polarizer axis in the rig frame (cos4)
-  std::string scene;           // traced: the scene file, an absolute path once loaded
-  // traced: the source itself, shared by copies of the rig (sweeps); made when the rig loads,
-  // its sphere solved on first use.
-  std::shared_ptr<const TracedSource> traced;
-};
-
 struct Rig {
   SensorSpec device;
-  SourceSpec source;
+  SourceSpec source;  // the source.* keys' settings
+  // The light, made by make_source from `source` when the rig loads (cos⁴ by default) and shared
+  // by copies of the rig (sweeps): a traced sphere is solved once. Callers ask it what it can do
+  // (Source::flags), never which model it is.
+  std::shared_ptr<const Source> light = cos4_source();
   Eccentricity eccentricity;
   Schedule schedule;
   Electronics electronics;
   std::uint64_t seed = 20190806;
+
+  // What the light reads of the rig at a pose.
+  SourceView source_view() const { return {device, eccentricity, source}; }
 };
 
 }  // namespace polrig

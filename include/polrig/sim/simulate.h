@@ -6,7 +6,6 @@
 
 #include "polrig/progress.h"
 #include "polrig/rig/rig.h"
-#include "polrig/source/traced_source.h"
 
 namespace polrig {
 
@@ -17,37 +16,23 @@ struct PoseLight {
   double d;                     // degree of linear polarization
 };
 
-// The light at each photodiode. For a traced source E_Wm2 is an effective irradiance (the mean
-// of traced_effective_irradiance over its shifts).
-PoseLight light_at_pose(const Rig& rig, double theta_R_deg);
+// The light at each photodiode, from the rig's source at table angle θ_R and t_s seconds after
+// the first stop. A source with several shifts gives the mean of its per-shift (effective)
+// irradiances (Source::irradiance).
+PoseLight light_at_pose(const Rig& rig, double theta_R_deg, double t_s = 0);
 
 // The rig with port and sensor on the table's axis (L_IS = L_S = 0).
 Rig coaxial(const Rig& rig);
 
-// The irradiances of the ideal, eccentricity-free measurement that V_ideal and ΔV refer to: the
-// uniform E_0 of the cos⁴ model; for a traced source, the coaxial rig's effective irradiances
-// at the same pose (its optics, obliquity and port pattern included, which calibration absorbs,
-// and no eccentricity).
-std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg);
-
-// A traced source's effective irradiance at channel m, one value per shift: the channel's traced
-// signal through its films and optics (TracedSource::channel_signal) divided by Eq. 15's
-// normal-incidence bracket for the pose's (θ, d), so that the device model, which applies the
-// bracket, reproduces the traced signal, obliquity effects included. The channel's analyzer is
-// the film its truth α_m and kd_m stand for, turned with the table.
-std::vector<double> traced_effective_irradiance(const Rig& rig, double theta_R_deg, int m);
-
-// What traced_effective_irradiance computes channel m's signal from: the photodiode (or lens
-// axis) in the scene frame, the analyzer film turned with the table, and Eq. 15's bracket.
-struct TracedChannel {
-  Point2 p_scene;
-  AnalyzerFilm film;
-  double bracket = 1;
-};
-TracedChannel traced_channel(const Rig& rig, double theta_R_deg, int m);
+// The irradiances of the ideal, eccentricity-free measurement that V_ideal and ΔV refer to
+// (Source::ideal_irradiance): the uniform E_0 of the cos⁴ model; for a source without a uniform
+// reference, the coaxial rig's irradiances at the same pose (its optics, obliquity and port
+// pattern included, which calibration absorbs, and no eccentricity).
+std::array<double, 6> ideal_irradiance(const Rig& rig, double theta_R_deg, double t_s = 0);
 
 struct Stop {
   double theta_R_deg;
+  double t_s = 0;                 // time since the first stop (Schedule::stop_times_s)
   PoseLight light;
   std::array<double, 3> V_ideal;  // the rig's device without eccentricity (ideal_irradiance)
   std::array<double, 3> V_ecc;    // with the pose's irradiances, before noise and ADC
@@ -65,7 +50,7 @@ struct Simulation {
 
 // Runs every stop in parallel (TBB); the result does not depend on the thread count, since
 // each noise value is a pure function of (seed, stop, channel, sample).
-// A traced rig reports the sphere solve and the stops to `progress`.
+// Reports the source's preparation (a traced sphere solve) and the stops to `progress`.
 Simulation simulate(const Rig& rig, bool keep_samples = false, const Progress& progress = {});
 
 }  // namespace polrig

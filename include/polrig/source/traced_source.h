@@ -15,6 +15,7 @@
 #include "polrig/progress.h"
 #include "polrig/geometry/geometry.h"
 #include "polrig/source/scene.h"
+#include "polrig/source/source.h"
 
 namespace polrig {
 
@@ -32,13 +33,36 @@ struct AnalyzerFilm {
   double efficiency = 1;
 };
 
-class TracedSource {
+// What a traced channel's effective irradiance is computed from at a pose: its photodiode (or
+// lens axis) in the scene frame, port-centred, the analyzer film turned with the table, and
+// Eq. 15's normal-incidence bracket at the pose's (θ, d).
+struct TracedChannel {
+  Point2 p_scene;
+  AnalyzerFilm film;
+  double bracket = 1;
+};
+
+class TracedSource final : public Source {
  public:
   explicit TracedSource(const SceneSpec& scene);
-  ~TracedSource();
+  ~TracedSource() override;
 
   const SceneSpec& scene() const { return scene_; }
-  int shifts() const { return shifts_; }
+
+  // --- Source: the port film sets θ and d; each channel's signal is traced (per shift).
+  std::string_view kind() const override { return "traced"; }
+  unsigned flags() const override { return kStandardErrors; }
+  int shifts() const override { return shifts_; }
+  std::optional<double> fixed_degree_of_polarization() const override { return degree_of_polarization(); }
+  void prepare(const Progress& progress) const override { solve(progress); }
+  Polarization polarization(const SourceView& rig, const SourcePose& pose) const override;
+  // channel_signal of each channel (its analyzer the film the truth's α_m and kd_m stand for,
+  // turned with the table) divided by its bracket: obliquity effects included.
+  void irradiance(const SourceView& rig, const SourcePose& pose, std::span<double> E) const override;
+  // Channels that sit at one point (to 1 pm) over the turn share the port's rays and radiance.
+  void irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
+                            const Progress& progress = {}) const override;
+  TracedChannel channel(const SourceView& rig, double theta_R_deg, int m) const;
 
   // The signal of one channel, per shift (0 … shifts() − 1): the flux reaching its photodiode
   // through the port film, the channel's analyzer film and, lensed, the blue filter and the lens,

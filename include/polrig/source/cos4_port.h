@@ -1,0 +1,23 @@
+#pragma once
+// The cos⁴ port as a Source (source.model: cos4): E_m = E_0·cos⁴φ_m at each photodiode
+// (source/cos4.h), the light's angle from the port polarizer (θ = θ_R − ψ_P) and its degree the
+// rig's device.d. Its ideal irradiance is the uniform E_0, and Eq. 6 holds in closed form.
+#include "polrig/source/source.h"
+
+namespace polrig {
+
+class Cos4PortSource final : public Source {
+ public:
+  std::string_view kind() const override { return "cos4"; }
+  unsigned flags() const override { return kClosedFormEq6 | kUniformReference; }
+  Polarization polarization(const SourceView& rig, const SourcePose& pose) const override;
+  void irradiance(const SourceView& rig, const SourcePose& pose, std::span<double> E) const override;
+  std::array<double, 6> ideal_irradiance(const SourceView& rig, const SourcePose& pose) const override;
+  // cos⁴φ alone (E_0 is the common factor), written over the turn so that it vectorizes.
+  void irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
+                            const Progress& progress = {}) const override;
+  // log10[(L_o² + L_Rh² + L_IS²)/(L_o² + L_Rj² + L_IS²)], L_Rm = |O_R P_m| (fixed during the turn).
+  double eq6_log_ratio(const SourceView& rig, int pair) const override;
+};
+
+}  // namespace polrig

@@ -1,0 +1,31 @@
+// The only place that names the source models: each kind is one entry here.
+#include <array>
+
+#include "polrig/source/cos4_port.h"
+#include "polrig/source/source.h"
+#include "polrig/source/traced_source.h"
+
+namespace polrig {
+
+namespace {
+constexpr std::array<std::string_view, 2> kKinds{"cos4", "traced"};
+}  // namespace
+
+std::span<const std::string_view> source_kinds() { return kKinds; }
+
+std::shared_ptr<const Source> cos4_source() {
+  static const std::shared_ptr<const Source> source = std::make_shared<const Cos4PortSource>();
+  return source;
+}
+
+std::shared_ptr<const Source> make_source(const SourceSpec& s, const SceneLoader& load_scene) {
+  if (s.model == "cos4") return cos4_source();
+  if (s.model == "traced") {
+    if (s.scene.empty()) throw SourceSettingError("source.model", "expected source.scene with source.model traced");
+    if (!load_scene) throw std::logic_error("make_source: a traced source needs a scene loader");
+    return std::make_shared<const TracedSource>(load_scene(s.scene));
+  }
+  throw SourceSettingError("source.model", "expected one of \"cos4\", \"traced\", got '" + s.model + "'");
+}
+
+}  // namespace polrig

@@ -97,24 +97,43 @@ Site parse_site(const std::string& text) {
   return s;
 }
 
-// The per-stop corrections for --drift: the stops' times from the data's utc column, the sun
-// from the ephemeris at --site. Empty for --drift none.
-StopCorrections drift_of(const MeasuredData& data, const DriftSettings& drift) {
+// The per-stop corrections for --drift: the stops' times from the data's utc column, or from a
+// sky rig's sky.first_stop_utc plus the data's t_s column (a simulate folder of a sky rig); the
+// sun from the ephemeris at --site, else at the sky rig's site. Empty for --drift none.
+StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSettings& drift) {
   const std::optional<DriftMode> mode = parse_drift_mode(drift.mode);
   if (!mode)
     throw DataError(fmt::format("--drift {}: expected none, angle, per-stop or linear", drift.mode));
   if (*mode == DriftMode::None) return {};
-  if (data.utc.empty())
+  // A time-dependent source's rig (the sky) carries the site and the first stop's time.
+  const bool sky_rig = rig.light->has(Source::kTimeDependent);
+  std::vector<UtcTime> times = data.utc;
+  std::string times_from = "the utc column";
+  if (times.empty() && sky_rig && !data.t_s.empty()) {
+    const UtcTime t0 = parse_utc(rig.source.sky.first_stop_utc);
+    for (double t : data.t_s) times.push_back(t0.plus_seconds(t));
+    times_from = "the rig's sky.first_stop_utc + t_s";
+  }
+  if (times.empty())
     throw DataError(fmt::format("--drift {}: {} has no 'utc' column giving each stop's time "
                                 "(ISO 8601, Z; see docs/formats.md, \"Measured data\")",
                                 drift.mode, data.origin));
-  if (drift.site.empty())
+  Site site;
+  std::string site_from;
+  if (!drift.site.empty()) {
+    site = parse_site(drift.site);
+    site_from = "--site " + drift.site;
+  } else if (sky_rig) {
+    site = rig.source.sky.sky.site;
+    site_from = fmt::format("the rig's site {},{}", site.lat_deg, site.lon_deg);
+  } else {
     throw DataError(fmt::format("--drift {} needs --site LAT,LON (the sun's position)", drift.mode));
-  const SkyDrift d = drift_corrections(data.utc, parse_site(drift.site), SunSettings{},
-                                       MaxDegree{}, *mode);  // the d ratio does not depend on P_max
+  }
+  const SkyDrift d = drift_corrections(times, site, SunSettings{}, MaxDegree{},
+                                       *mode);  // the d ratio does not depend on P_max
   return {d.dtheta_deg, d.d_ratio,
-          fmt::format("{} (stop times from the utc column, the sun from ERFA at --site {}{})",
-                      drift.mode, drift.site,
+          fmt::format("{} (stop times from {}, the sun from ERFA at {}{})", drift.mode, times_from,
+                      site_from,
                       *mode == DriftMode::Linear ? ", interpolated between the first and last stop" : "")};
 }
 
@@ -136,12 +155,12 @@ void run_calibrate(const std::string& input, const std::string& method_text,
                                     "{}: a CS point mixes two times", drift.mode, method_text));
   const MeasuredData data = read_measured(input);
   for (const StopVoltages& s : data.stops) check_adc_range(s);
-  const StopCorrections corrections = drift_of(data, drift);
   // The sensor description (film axes, amplifier scale): --rig, else the dataset's rig.yaml,
   // else the default rig. d_a: --d-a, else the dataset rig's d.
   std::optional<LoadedRig> given;
   if (!rig_path.empty()) given = load_rig(rig_path);
   const Rig rig = given ? given->rig : data.rig ? *data.rig : Rig{};
+  const StopCorrections corrections = drift_of(data, rig, drift);
   const std::optional<double> rig_d =
       given ? std::optional<double>(given->rig.device.d)
             : data.rig ? std::optional<double>(data.rig->device.d) : std::nullopt;

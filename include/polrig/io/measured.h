@@ -44,6 +44,8 @@ struct MeasuredData {
   std::vector<StopVoltages> stops;  // in file order; labels are "file:line"
   std::vector<UtcTime> utc;         // each stop's time, from an optional `utc` column (ISO 8601,
                                     // Z); empty without the column
+  std::vector<double> t_s;          // each stop's time since the first, from an optional `t_s`
+                                    // column (a time-dependent source's stops.csv)
   std::optional<Rig> rig;           // the dataset's rig.yaml, when there is one
   std::string rig_origin;           // its path
 };

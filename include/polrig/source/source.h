@@ -23,6 +23,7 @@
 #include "polrig/progress.h"
 #include "polrig/source/cos4.h"
 #include "polrig/source/scene.h"
+#include "polrig/source/sky_settings.h"
 
 namespace polrig {
 
@@ -34,6 +35,7 @@ struct SourceSpec {
   Cos4Source cos4;             // L_o (every model: port plane to photosensitive plane), E_0 (cos4)
   double polarizer_deg = 0.0;  // port polarizer axis ψ_P in the rig frame (cos4)
   std::string scene;           // traced: the scene file, an absolute path once loaded
+  SkySettings sky;             // sky: site, time, sky model and the sensor's mount (sky.* keys)
 };
 
 // What a source reads of the rig at a pose: the sensor (its ring, its films through the true

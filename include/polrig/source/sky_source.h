@@ -1,0 +1,22 @@
+#pragma once
+// The sky as a Source (source.model: sky): the six-photodiode sensor on its turntable under a
+// single-scattering Rayleigh sky (sky/sensor_view.h). Time-dependent: the stop's time is
+// sky.first_stop_utc + the schedule's stop time. All six channels see the same light (the sky is
+// at infinity: no parallax, no eccentricity bias), E_m = E_0·radiance. The polarization is the
+// sky's: θ in the sensor frame, d = the sky's DoP along the sensor's axis; the rig's device.d is
+// the stated d_a that calibrate decouples with (the shipped rigs choose P_max so that the two
+// agree at the first stop).
+#include "polrig/source/source.h"
+
+namespace polrig {
+
+class SkySource final : public Source {
+ public:
+  std::string_view kind() const override { return "sky"; }
+  unsigned flags() const override { return kTimeDependent | kUniformReference; }
+  Polarization polarization(const SourceView& rig, const SourcePose& pose) const override;
+  void irradiance(const SourceView& rig, const SourcePose& pose, std::span<double> E) const override;
+  std::array<double, 6> ideal_irradiance(const SourceView& rig, const SourcePose& pose) const override;
+};
+
+}  // namespace polrig

@@ -1,0 +1,28 @@
+#include "polrig/source/sky_settings.h"
+
+#include <stdexcept>
+
+namespace polrig {
+
+Sky SkySettings::resolved_sky() const {
+  Sky s = sky;
+  s.first_stop = parse_utc(first_stop_utc);
+  if (radiance == "uniform") s.model.radiance = SkyRadiance::Uniform;
+  else if (radiance == "rayleigh") s.model.radiance = SkyRadiance::Rayleigh;
+  else if (radiance == "cie-clear") s.model.radiance = SkyRadiance::CieClear;
+  else throw std::invalid_argument("sky.radiance: expected uniform, rayleigh or cie-clear, got '" + radiance + "'");
+  if (refraction != "off" && refraction != "on")
+    throw std::invalid_argument("sky.refraction: expected off or on, got '" + refraction + "'");
+  s.sun.refraction = refraction == "on";
+  return s;
+}
+
+SkyMount SkySettings::resolved_mount() const {
+  if (field != "point" && field != "cone")
+    throw std::invalid_argument("sky.field: expected point or cone, got '" + field + "'");
+  SkyMount m = mount;
+  m.cone = field == "cone";
+  return m;
+}
+
+}  // namespace polrig

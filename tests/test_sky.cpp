@@ -10,14 +10,20 @@
 #include <stdexcept>
 #include <string>
 
+#include <tbb/global_control.h>
+
+#include "polrig/io/exr.h"
 #include "polrig/random.h"
 #include "polrig/sky/rayleigh.h"
+#include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
+#include "support.h"
 
 namespace polrig {
 namespace {
 
 constexpr double kDeg = M_PI / 180;
+namespace fs = std::filesystem;
 
 const Site kDalian{38.0 + 52.0 / 60 + 45.0 / 3600, 121.0 + 32.0 / 60 + 38.0 / 3600, 0};
 const Site kChangsha{28.221, 112.992, 0};
@@ -467,6 +473,149 @@ TEST(RayleighSky, CieClearSkyType12) {
   const Vec3 s = from_angles(30, 90);
   EXPECT_LT(sky_light(s, from_angles(60, 270), model).radiance,
             sky_light(s, from_angles(85, 270), model).radiance);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Sky maps
+// ---------------------------------------------------------------------------------------------
+
+TEST(SkyMap, ProjectionLooksUpWithNorthAtTheTopAndEastOnTheLeft) {
+  const int n = 400;
+  Vec3 v;
+  ASSERT_TRUE(sky_map_direction(n, 200, 200, v));
+  EXPECT_NEAR(v[2], 1, 1e-15);  // centre: zenith
+  ASSERT_TRUE(sky_map_direction(n, 200, 0, v));
+  EXPECT_NEAR(v[1], 1, 1e-15);  // top rim: the northern horizon
+  ASSERT_TRUE(sky_map_direction(n, 0, 200, v));
+  EXPECT_NEAR(v[0], 1, 1e-15);  // left rim: the eastern horizon
+  ASSERT_TRUE(sky_map_direction(n, 400, 200, v));
+  EXPECT_NEAR(v[0], -1, 1e-15);  // right rim: west
+  EXPECT_FALSE(sky_map_direction(n, 10, 10, v));
+  // Equidistant: 30° from the zenith is a third of the radius, at any azimuth.
+  for (double A : {0.0, 75.0, 200.0}) {
+    const Vec3 d = sun_direction_enu({A, 60, 30, 0, 0, 0});
+    double x, y;
+    sky_map_pixel(n, d, x, y);
+    EXPECT_NEAR(std::hypot(x - 200, y - 200), 200.0 / 3, 1e-9);
+    Vec3 back;
+    ASSERT_TRUE(sky_map_direction(n, x, y, back));
+    EXPECT_NEAR(angle_deg(back, d), 0, 1e-9);
+  }
+}
+
+TEST(SkyMap, DarkAtTheSunAndTheZenithAngleFollowsIt) {
+  Sky sky;  // W19 Outdoor1's first stop, h_s = 4.4°
+  sky.first_stop = parse_utc("2019-09-18T08:14:00Z");
+  sky.site = kBeijing;  // h_s = 22.9°
+  const int n = 201;    // odd: a pixel centre on the zenith
+  const SkyMap map = sky_map(sky, n);
+  const std::size_t zenith = static_cast<std::size_t>(n / 2) * n + n / 2;
+  std::size_t darkest = zenith;
+  for (std::size_t k = 0; k < map.dop.size(); ++k)
+    if (map.inside[k] > 0 && map.dop[k] < map.dop[darkest]) darkest = k;
+  Vec3 v;
+  ASSERT_TRUE(sky_map_direction(n, static_cast<double>(darkest % n) + 0.5,
+                                static_cast<double>(darkest / n) + 0.5, v));
+  EXPECT_LT(angle_deg(v, sun_direction_enu(map.sun)), 90.0 / 100 * 1.5);  // within 1.5 pixels
+  EXPECT_NEAR(wrap90(map.aop_deg[zenith] + map.sun.azimuth_deg), 0, 1e-4);  // float layer
+  EXPECT_NEAR(map.dop[zenith], 0.7 * std::pow(std::cos(map.sun.elevation_deg * kDeg), 2) /
+                                   (1 + std::pow(std::sin(map.sun.elevation_deg * kDeg), 2)), 1e-6);
+  EXPECT_EQ(map.inside[0], 0);
+  EXPECT_EQ(map.dop[0], 0);
+}
+
+TEST(SkyMap, SameForAnyThreadCount) {
+  const Sky sky;
+  SkyMap one, many;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = sky_map(sky, 256);
+  }
+  many = sky_map(sky, 256);
+  EXPECT_EQ(one.S1, many.S1);
+  EXPECT_EQ(one.aop_deg, many.aop_deg);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The commands
+// ---------------------------------------------------------------------------------------------
+
+class SkyCli : public test::PolrigTest {
+ protected:
+  SkyCli() : PolrigTest("polrig_sky_", "") {}
+};
+
+TEST_F(SkyCli, MapWritesExrSunYamlAndPreviews) {
+  const std::string plots = test::gnuplot_present() ? "" : " --no-plots";
+  ok("sky -o " + test::shell_quote(tmp / "map") + " --size 64 --site 39.979,116.339 --utc 2019-09-18T08:14:00Z" + plots);
+  int w = 0, h = 0;
+  const auto layers = read_exr(tmp / "map" / "sky.exr", w, h);
+  EXPECT_EQ(w, 64);
+  EXPECT_EQ(layers.size(), 6u);
+  const std::string yaml = test::read_file(tmp / "map" / "sun.yaml");
+  EXPECT_PRED_FORMAT2(test::HasText, yaml, "utc: 2019-09-18T08:14:00Z");
+  EXPECT_PRED_FORMAT2(test::HasText, yaml, "declination_deg: 1.93");
+  if (plots.empty()) {
+    EXPECT_TRUE(test::starts_with_png_signature(tmp / "map" / "aop.png"));
+    EXPECT_TRUE(test::starts_with_png_signature(tmp / "map" / "dop.png"));
+  }
+  // An existing folder is not replaced without --force; a bad option writes nothing.
+  EXPECT_NE(polrig("sky -o " + test::shell_quote(tmp / "map") + " --no-plots").status, 0);
+  const Result bad = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --site 95,10 --no-plots");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_PRED_FORMAT2(test::HasText, bad.err, "--site '95,10': latitude 95");
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+  const Result bad_utc = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --utc 2019-09-18T08:14:00 --no-plots");
+  EXPECT_PRED_FORMAT2(test::HasText, bad_utc.err, "\"2019-09-18T08:14:00\"");
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+}
+
+TEST_F(SkyCli, TableAddsTheSunAndTheSkyToEveryRow) {
+  test::write_file(tmp / "in.csv",
+                   "utc,lat_deg,lon_deg,view_az_deg,view_el_deg\n"
+                   "2018-11-16T08:09:40Z,38.879167,121.543889,0,90\n"
+                   "2018-11-16T08:41:20Z,38.879167,121.543889,241.5,30\n"   // sun below the horizon
+                   "2019-09-18T08:14:00Z,39.979,116.339,72.1,0\n");
+  ok("sky table " + test::shell_quote(tmp / "in.csv") + " -o " + test::shell_quote(tmp / "out"));
+  const test::Csv csv = test::read_csv(tmp / "out" / "sky.csv");
+  ASSERT_EQ(csv.rows.size(), 3u);
+  for (std::size_t r = 0; r < 3; ++r) {
+    const auto& row = csv.rows[r];
+    const UtcTime t = parse_utc(row[csv.col("utc")]);
+    const Site site{std::stod(row[csv.col("lat_deg")]), std::stod(row[csv.col("lon_deg")]), 0};
+    const SunPosition sun = sun_position(t, site);
+    EXPECT_EQ(std::stod(row[csv.col("sun_az_deg")]), sun.azimuth_deg);
+    EXPECT_EQ(std::stod(row[csv.col("sun_el_deg")]), sun.elevation_deg);
+    const SunPosition view{std::stod(row[csv.col("view_az_deg")]), std::stod(row[csv.col("view_el_deg")]), 0, 0, 0, 0};
+    const SkyLight l = sky_light(sun_direction_enu(sun), sun_direction_enu(view), SkyModel{});
+    EXPECT_NEAR(std::stod(row[csv.col("dop")]), l.dop, 1e-15);
+    EXPECT_NEAR(std::stod(row[csv.col("aop_deg")]), l.aop_deg, 1e-12);
+  }
+  // Row 1 looks at the zenith along azimuth 0: its meridian frame is the limit from the north,
+  // e_θ = north, e_φ = west, and the E-vector lies at A_s ± 90°, so χ = −(A_s + 90°) mod 180°.
+  EXPECT_NEAR(wrap90(std::stod(csv.rows[0][csv.col("aop_deg")]) + std::stod(csv.rows[0][csv.col("sun_az_deg")]) + 90), 0, 1e-9);
+  EXPECT_LT(std::stod(csv.rows[1][csv.col("sun_el_deg")]), 0);
+}
+
+TEST_F(SkyCli, TableRefusesABadCellNamingFileLineColumnAndValue) {
+  const std::string header = "utc,lat_deg,lon_deg,view_az_deg,view_el_deg\n";
+  const std::string good = "2018-11-16T08:09:40Z,38.9,121.5,0,90\n";
+  struct Case {
+    std::string row, expect;
+  };
+  for (const Case& c : {Case{"2018-11-16T08:09:40,38.9,121.5,0,90\n", ":3: column 'utc'"},
+                        Case{"2018-11-16T08:09:40Z,91,121.5,0,90\n", ":3: column 'lat_deg': 91 is outside"},
+                        Case{"2018-11-16T08:09:40Z,38.9,abc,0,90\n", ":3: column 'lon_deg'"},
+                        Case{"2018-11-16T08:09:40Z,38.9,121.5,0,95\n", ":3: column 'view_el_deg': 95"}}) {
+    test::write_file(tmp / "bad.csv", header + good + c.row);
+    const Result r = polrig("sky table " + test::shell_quote(tmp / "bad.csv") + " -o " + test::shell_quote(tmp / "out"));
+    EXPECT_NE(r.status, 0);
+    EXPECT_PRED_FORMAT2(test::HasText, r.err, "bad.csv" + c.expect);
+    EXPECT_FALSE(fs::exists(tmp / "out")) << c.row;
+  }
+  test::write_file(tmp / "nocol.csv", "utc,lat_deg,lon_deg,view_az_deg\n");
+  const Result r = polrig("sky table " + test::shell_quote(tmp / "nocol.csv") + " -o " + test::shell_quote(tmp / "out"));
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "view_el_deg");
 }
 
 }  // namespace

@@ -61,5 +61,6 @@ struct Command {
 };
 std::vector<Command> add_rig_commands(CLI::App& root, int& threads);
 std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, int& threads);
+std::vector<Command> add_sky_commands(CLI::App& root, int& threads);
 
 }  // namespace polrig::cli

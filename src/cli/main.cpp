@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   std::vector<cli::Command> commands = cli::add_rig_commands(app, threads);
   CLI::App* study = app.get_subcommand("study");
   for (cli::Command& c : cli::add_calibration_commands(app, *study, threads)) commands.push_back(c);
+  for (cli::Command& c : cli::add_sky_commands(app, threads)) commands.push_back(c);
   cli::add_quiet_option(app);
 
   try {

@@ -57,7 +57,16 @@ bool gnuplot_available() { return std::system("gnuplot --version >/dev/null 2>&1
 void render_plots(const fs::path& dir, const std::string& script_name,
                   const std::vector<Plot>& plots) {
   std::string script;
-  for (const Plot& p : plots) script += "reset session\n" + script_for(p) + "\n";
+  std::vector<std::string> pngs;
+  for (const Plot& p : plots) {
+    script += "reset session\n" + script_for(p) + "\n";
+    pngs.push_back(p.png);
+  }
+  run_gnuplot(dir, script_name, script, pngs);
+}
+
+void run_gnuplot(const fs::path& dir, const std::string& script_name, const std::string& script,
+                 const std::vector<std::string>& pngs) {
   write_text_file(dir / script_name, script);
   const fs::path log = dir / (script_name + ".log");
   const std::string cmd = fmt::format("cd {} && gnuplot {} > {} 2>&1", shell_quoted(dir.string()),
@@ -77,8 +86,8 @@ void render_plots(const fs::path& dir, const std::string& script_name,
     throw std::runtime_error(fmt::format("gnuplot failed on {}: {}", script_name, text));
   }
   // gnuplot does not always notice a failed write (a full disk): every PNG must be there.
-  for (const Plot& p : plots) {
-    const fs::path png = dir / p.png;
+  for (const std::string& name : pngs) {
+    const fs::path png = dir / name;
     if (fs::file_size(png, ec) == 0 || ec)
       throw std::runtime_error(fmt::format("{}: gnuplot did not write the plot{}", png.string(),
                                            ec ? ": " + ec.message() : std::string(" (empty file)")));

@@ -175,7 +175,7 @@ std::vector<RigKey> make_keys() {
   keys.push_back(reads(real<kTurn>("source.polarizer_deg", "deg", "an angle",
                              "axis ψ_P of the port polarizer in the rig frame; θ = θ_R − ψ_P",
                              kTurnWhy, [](Rig& r) -> double& { return r.source.polarizer_deg; }), kSimulate, "cos4"));
-  // --- sky (source.model: sky; docs/physics.md §9) ------------------------------------
+  // --- sky (source.model: sky; docs/physics.md §10) ------------------------------------
   const auto sky_text = [&](std::string_view path, std::string_view expects, std::string_view doc,
                             std::string& (*ref)(Rig&), bool (*valid)(std::string_view),
                             unsigned studies) {

@@ -28,5 +28,9 @@ bool gnuplot_available();
 // message when it fails.
 void render_plots(const std::filesystem::path& dir, const std::string& script_name,
                   const std::vector<Plot>& plots);
+// The same for a script written by hand (images, maps): writes DIR/<script_name>, runs gnuplot in
+// DIR and checks that every PNG named in `pngs` was written.
+void run_gnuplot(const std::filesystem::path& dir, const std::string& script_name,
+                 const std::string& script, const std::vector<std::string>& pngs);
 
 }  // namespace polrig

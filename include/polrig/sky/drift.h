@@ -3,7 +3,7 @@
 // during a turn the zenith E-vector follows the sun's azimuth and the zenith degree of
 // polarization follows its elevation. calib/ takes the result as per-stop vectors.
 //
-// Sign (docs/physics.md §1, §9): polrig's sensor frame measures θ anticlockwise seen from above
+// Sign (docs/physics.md §1, §10): polrig's sensor frame measures θ anticlockwise seen from above
 // and the table turns the sensor clockwise seen from above, so θ = θ_R + const for a fixed
 // light. The zenith E-vector lies at geographic azimuth A_s ± 90°, which turns clockwise seen
 // from above as A_s rises, so in the sensor frame θ(t) = θ_0 + θ_R(t) − [A_s(t) − A_s(t_0)].

@@ -3,7 +3,7 @@
 // §1.3): it looks along its axis Z_s (the zenith when level); the sky is at infinity, so every
 // channel sees the same light (no parallax, no eccentricity bias).
 //
-// Frames and senses (docs/physics.md §1 and §9): the sensor's θ runs from its x-axis X_s towards
+// Frames and senses (docs/physics.md §1 and §10): the sensor's θ runs from its x-axis X_s towards
 // Y_s, anticlockwise seen from above (polrig's sensor frame, the mirror of the spec's "looking
 // into the source"). The table turns the sensor clockwise seen from above by θ_R (the rig frame,
 // anticlockwise seen from the sensor looking up), so a fixed light is seen at θ = θ_R + const.

@@ -55,7 +55,7 @@ struct SunPosition {
   double azimuth_deg = 0;      // A_s, from north towards east, [0°, 360°)
   double elevation_deg = 0;    // h_s (refracted when SunSettings::refraction)
   double zenith_deg = 0;       // θ_s = 90° − h_s
-  double declination_deg = 0;  // δ, apparent (true equator and equinox of date)
+  double declination_deg = 0;  // δ, apparent, topocentric (true equator of date)
   double gha_deg = 0;          // Greenwich hour angle, westwards, [0°, 360°)
   double lha_deg = 0;          // local hour angle = GHA + λ_g, [0°, 360°)
 };

@@ -1,7 +1,7 @@
 #pragma once
 // The settings of the sky source (source.model: sky), as the rig's `sky.*` keys write them:
 // where and when (the sky), how the sun and the sky are modelled, and how the sensor is mounted
-// under it (spec sky-and-compasses.md §1.3–1.4; docs/physics.md §9).
+// under it (spec sky-and-compasses.md §1.3–1.4; docs/physics.md §10).
 #include <string>
 
 #include "polrig/sky/sensor_view.h"

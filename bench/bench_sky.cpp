@@ -1,0 +1,60 @@
+// The sky's Google Benchmark cases: sun positions per second (exact ERFA place and the
+// interpolated SunTrack), sky_light calls per second and sky-map pixels per second.
+//   build/bench/polrig_bench --benchmark_filter='Sky'
+#include <cstdint>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+#include <tbb/global_control.h>
+
+#include "polrig/sky/sky.h"
+#include "polrig/sky/sky_map.h"
+
+namespace {
+using namespace polrig;
+
+// Times spread over one day (distinct for every call, so nothing is cached).
+UtcTime day_time(std::uint64_t k) { return {1542326400.0 + static_cast<double>(k % 86400) + 0.37}; }
+
+void BM_Sky_SunPositionExact(benchmark::State& state) {
+  const Site site;
+  std::uint64_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(sun_position(day_time(k++ * 7919), site));
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Sky_SunPositionExact);
+
+void BM_Sky_SunTrackInterpolated(benchmark::State& state) {
+  const Site site;
+  SunSettings settings;
+  settings.refraction = state.range(0) != 0;
+  const SunTrack track(day_time(0), day_time(86399), site, settings);
+  std::uint64_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(track.at(day_time(k++ * 7919)));
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Sky_SunTrackInterpolated)->Arg(0)->Arg(1);
+
+void BM_Sky_SkyLight(benchmark::State& state) {
+  const SkyModel model{MaxDegree{}, static_cast<SkyRadiance>(state.range(0))};
+  const Vec3 s = vec3::unit({-0.6, -0.3, 0.2});
+  std::vector<Vec3> views;
+  for (int i = 0; i < 1024; ++i)
+    views.push_back(vec3::unit({std::cos(i * 0.1), std::sin(i * 0.1), 0.1 + (i % 37) * 0.05}));
+  std::size_t k = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(sky_light(s, views[k++ & 1023], model));
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Sky_SkyLight)->Arg(0)->Arg(1)->Arg(2);  // uniform, rayleigh, cie-clear
+
+// One 1024 × 1024 map (its pixels per second), on range(0) threads.
+void BM_Sky_Map1024(benchmark::State& state) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<std::size_t>(state.range(0)));
+  const Sky sky;
+  for (auto _ : state) benchmark::DoNotOptimize(sky_map(sky, 1024));
+  state.SetItemsProcessed(state.iterations() * 1024 * 1024);
+}
+BENCHMARK(BM_Sky_Map1024)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace

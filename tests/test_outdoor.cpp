@@ -633,5 +633,20 @@ TEST_F(CliOutdoorRigs, AngleOnlyCompensationLeavesTheSpecsAlphaError) {
   }
 }
 
+// `polrig sky RIG`: the map at the rig's site and first stop, with the rig's P_max unless
+// --p-max is given; a rig without a sky is refused, and nothing is written.
+TEST_F(CliOutdoorRigs, SkyMapOfARigUsesItsSkyBlock) {
+  ok("sky " + test::shell_quote(rig_file(1)) + " --size 16 --no-plots -o " + test::shell_quote(tmp / "m"));
+  const std::string sun = test::read_file(tmp / "m" / "sun.yaml");
+  EXPECT_HAS(sun, "utc: 2018-11-16T08:41:20Z");
+  EXPECT_HAS(sun, "lat_deg: 38.87916666667");
+  EXPECT_HAS(test::read_file(tmp / "m" / "rig.yaml"), "p_max: 0.710549858088");
+  const Result bad = polrig("sky " + test::shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2019-indoor.yaml")) +
+                            " --size 16 -o " + test::shell_quote(tmp / "x"));
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_HAS(bad.err, "wang2019-indoor.yaml: source.model cos4 has no sky (expected source.model sky)");
+  EXPECT_FALSE(fs::exists(tmp / "x"));
+}
+
 }  // namespace
 }  // namespace polrig

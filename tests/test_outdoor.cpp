@@ -20,6 +20,7 @@
 #include "polrig/calib/pipeline.h"
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/rig_yaml.h"
+#include "polrig/rig/error.h"
 #include "polrig/sky/drift.h"
 #include "polrig/sky/sensor_view.h"
 #include "support.h"
@@ -567,11 +568,29 @@ TEST(OutdoorRigs, PmaxGivesTheZenithDoPOfTable2AtTheFirstStop) {
     EXPECT_NEAR(s.sky.site.lon_deg, kLon, 1e-10);
     const SunPosition sun = sun_position(t0, s.sky.site, s.sky.sun);
     EXPECT_NEAR(s.sky.model.P_max.constant * zenith_shape(sun.zenith_deg), table2()[c].d_a, 1e-11);
-    EXPECT_EQ(rig.device.d, table2()[c].d_a);
+    // The loaded rig's d is the sky's at the first stop (SkySource::rig_degree_of_polarization),
+    // which the file's device.d must equal within 1e-12 (io/rig_yaml).
+    EXPECT_NEAR(rig.device.d, table2()[c].d_a, 1e-12);
     EXPECT_NEAR(axis_diff(s.mount.mount_deg, sun.azimuth_deg + 90.0), 0.0, 1e-9);
     EXPECT_EQ(rig.schedule.table_angles_deg().size(), 19u);
     EXPECT_EQ(rig.schedule.stop_times_s().back(), 54.0);
     for (int m = 0; m < 6; ++m) EXPECT_EQ(rig.device.truth.alpha_deg[m], table2()[c].truth.alpha_deg[m]);
+  }
+}
+
+// With source.model sky, device.d is the sky's zenith d at the first stop, as the traced source's
+// is its film's: a file without device.d gets it, one with another value is refused naming the key.
+TEST(OutdoorRigs, DeviceDIsTheSkysAtTheFirstStop) {
+  const std::string sky = "source:\n  model: sky\nsky:\n  first_stop_utc: \"2018-11-16T08:09:40Z\"\n"
+                          "  lat_deg: 38.87916666667\n  lon_deg: 121.54388888889\n  p_max: 0.7\n";
+  const Rig rig = parse_rig(sky, "sky.yaml").rig;
+  const SunPosition sun = sun_position(parse_utc("2018-11-16T08:09:40Z"), rig.source.sky.sky.site);
+  EXPECT_NEAR(rig.device.d, 0.7 * zenith_shape(sun.zenith_deg), 1e-15);
+  try {
+    parse_rig("device:\n  d: 0.55\n" + sky, "sky.yaml");
+    FAIL() << "a device.d other than the sky's was accepted";
+  } catch (const RigError& e) {
+    EXPECT_HAS(std::string(e.what()), "sky.yaml:2: key 'device.d': expected the source's d = 0.6917");
   }
 }
 
@@ -640,7 +659,7 @@ TEST_F(CliOutdoorRigs, SkyMapOfARigUsesItsSkyBlock) {
   const std::string sun = test::read_file(tmp / "m" / "sun.yaml");
   EXPECT_HAS(sun, "utc: 2018-11-16T08:41:20Z");
   EXPECT_HAS(sun, "lat_deg: 38.87916666667");
-  EXPECT_HAS(test::read_file(tmp / "m" / "rig.yaml"), "p_max: 0.710549858088");
+  EXPECT_HAS(test::read_file(tmp / "m" / "rig.yaml"), "p_max: 0.710549858087988");
   const Result bad = polrig("sky " + test::shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2019-indoor.yaml")) +
                             " --size 16 -o " + test::shell_quote(tmp / "x"));
   EXPECT_EQ(bad.status, 2);

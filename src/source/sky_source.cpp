@@ -24,4 +24,8 @@ std::array<double, 6> SkySource::ideal_irradiance(const SourceView& rig, const S
   return {e, e, e, e, e, e};
 }
 
+std::optional<double> SkySource::rig_degree_of_polarization(const SourceView& rig) const {
+  return seen(rig, {0.0, 0.0}).d;
+}
+
 }  // namespace polrig

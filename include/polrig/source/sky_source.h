@@ -3,9 +3,9 @@
 // single-scattering Rayleigh sky (sky/sensor_view.h). Time-dependent: the stop's time is
 // sky.first_stop_utc + the schedule's stop time. All six channels see the same light (the sky is
 // at infinity: no parallax, no eccentricity bias), E_m = E_0·radiance. The polarization is the
-// sky's: θ in the sensor frame, d = the sky's DoP along the sensor's axis; the rig's device.d is
-// the stated d_a that calibrate decouples with (the shipped rigs choose P_max so that the two
-// agree at the first stop).
+// sky's: θ in the sensor frame, d = the sky's DoP along the sensor's axis. The rig's device.d is
+// the sky's d at the first stop (rig_degree_of_polarization: io/rig_yaml sets it, or refuses a
+// file's other value), the d_a that calibrate decouples with.
 #include "polrig/source/source.h"
 
 namespace polrig {
@@ -17,6 +17,9 @@ class SkySource final : public Source {
   Polarization polarization(const SourceView& rig, const SourcePose& pose) const override;
   void irradiance(const SourceView& rig, const SourcePose& pose, std::span<double> E) const override;
   std::array<double, 6> ideal_irradiance(const SourceView& rig, const SourcePose& pose) const override;
+  // The sky's d along the sensor's axis at the first stop (the table turns about that axis, so
+  // θ_R does not change it).
+  std::optional<double> rig_degree_of_polarization(const SourceView& rig) const override;
 };
 
 }  // namespace polrig

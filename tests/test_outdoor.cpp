@@ -594,6 +594,27 @@ TEST(OutdoorRigs, DeviceDIsTheSkysAtTheFirstStop) {
   }
 }
 
+// sky.p_max_table: P_max(h_s) between the rows, the sky's d follows it, and bad tables are
+// refused naming the key.
+TEST(OutdoorRigs, PmaxTableSetsTheSkysDegree) {
+  const std::string base = "source:\n  model: sky\nsky:\n  first_stop_utc: \"2018-11-16T08:09:40Z\"\n"
+                           "  lat_deg: 38.87916666667\n  lon_deg: 121.54388888889\n";
+  const Rig rig = parse_rig(base + "  p_max_table_elevation_deg: [0, 10]\n  p_max_table: [0.6, 0.8]\n",
+                            "t.yaml").rig;
+  const SunPosition sun = sun_position(parse_utc("2018-11-16T08:09:40Z"), rig.source.sky.sky.site);
+  const double P = 0.6 + 0.2 * sun.elevation_deg / 10.0;  // linear between the rows
+  EXPECT_NEAR(rig.device.d, P * zenith_shape(sun.zenith_deg), 1e-12);
+  for (const char* bad : {"  p_max_table_elevation_deg: [0, 10]\n  p_max_table: [0.6]\n",
+                          "  p_max_table_elevation_deg: [10, 0]\n  p_max_table: [0.6, 0.7]\n"}) {
+    try {
+      parse_rig(base + bad, "t.yaml");
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const RigError& e) {
+      EXPECT_HAS(std::string(e.what()), "key 'sky.p_max_table'");
+    }
+  }
+}
+
 // The whole path: `polrig simulate` of each outdoor rig (the sky source: sun from ERFA, Rayleigh
 // sky, sensor view) and `polrig calibrate --method nc --drift …` of its folder (drift from the
 // rig's site and first stop + t_s), against Table 2 as written in this file.

@@ -129,8 +129,9 @@ StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSe
   } else {
     throw DataError(fmt::format("--drift {} needs --site LAT,LON (the sun's position)", drift.mode));
   }
-  const SkyDrift d = drift_corrections(times, site, SunSettings{}, MaxDegree{},
-                                       *mode);  // the d ratio does not depend on P_max
+  // The d ratio does not depend on a constant P_max; a sky rig's P_max(h_s) table enters it.
+  const MaxDegree P_max = sky_rig ? rig.source.sky.resolved_sky().model.P_max : MaxDegree{};
+  const SkyDrift d = drift_corrections(times, site, SunSettings{}, P_max, *mode);
   return {d.dtheta_deg, d.d_ratio,
           fmt::format("{} (stop times from {}, the sun from ERFA at {}{})", drift.mode, times_from,
                       site_from,

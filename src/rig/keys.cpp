@@ -221,6 +221,24 @@ std::vector<RigKey> make_keys() {
       "P_max of the single-scattering sky, P = P_max·sin²γ/(1 + cos²γ)",
       "0 is an unpolarized sky, 1 the single-scattering limit (clear skies: 0.65–0.75)",
       [](Rig& r) -> double& { return r.source.sky.sky.model.P_max.constant; }), kSimulate, "sky"));
+  for (const bool values : {false, true}) {
+    constexpr RealRange kElevation{-90.0, 90.0}, kPmax{0.0, 1.0, true, false};
+    RigKey k{values ? "sky.p_max_table" : "sky.p_max_table_elevation_deg", K::RealList,
+             values ? "" : "deg",
+             values ? expects_text("a list of degrees of polarization", kPmax, "")
+                    : expects_text("a rising list of elevations", kElevation, "deg"),
+             values ? "P_max at each elevation of sky.p_max_table_elevation_deg (replaces "
+                      "sky.p_max; linear between, constant beyond)"
+                    : "sun elevations h_s of a P_max(h_s) table (spec §1.2: one P_max cannot fit "
+                      "every elevation)",
+             values ? "as sky.p_max" : "the sun's elevation"};
+    if (values) k.list = [](Rig& r) -> std::vector<double>& { return r.source.sky.p_max_table; };
+    else k.list = [](Rig& r) -> std::vector<double>& { return r.source.sky.p_max_table_elevation_deg; };
+    k.range = values ? kPmax : kElevation;
+    k.max_items = 1000;
+    k.valid_real = values ? &within<kPmax> : &within<kElevation>;
+    keys.push_back(reads(k, kSimulate, "sky"));
+  }
   sky_text("sky.radiance", "uniform, rayleigh or cie-clear", "the sky's radiance model (spec §1.2)",
            [](Rig& r) -> std::string& { return r.source.sky.radiance; },
            [](std::string_view v) { return v == "uniform" || v == "rayleigh" || v == "cie-clear"; },

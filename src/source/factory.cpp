@@ -26,7 +26,15 @@ std::shared_ptr<const Source> make_source(const SourceSpec& s, const SceneLoader
     if (!load_scene) throw std::logic_error("make_source: a traced source needs a scene loader");
     return std::make_shared<const TracedSource>(load_scene(s.scene));
   }
-  if (s.model == "sky") return std::make_shared<const SkySource>();
+  if (s.model == "sky") {
+    try {  // the settings the keys cannot check one by one: the first stop, the P_max table
+      s.sky.resolved_sky();
+      s.sky.resolved_mount();
+    } catch (const std::invalid_argument& e) {
+      throw SourceSettingError("sky.p_max_table", e.what());
+    }
+    return std::make_shared<const SkySource>();
+  }
   throw SourceSettingError("source.model", "expected one of \"cos4\", \"traced\", \"sky\", got '" + s.model + "'");
 }
 

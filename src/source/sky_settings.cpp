@@ -14,6 +14,14 @@ Sky SkySettings::resolved_sky() const {
   if (refraction != "off" && refraction != "on")
     throw std::invalid_argument("sky.refraction: expected off or on, got '" + refraction + "'");
   s.sun.refraction = refraction == "on";
+  if (p_max_table_elevation_deg.size() != p_max_table.size())
+    throw std::invalid_argument("sky.p_max_table: " + std::to_string(p_max_table.size()) +
+                                " values for " + std::to_string(p_max_table_elevation_deg.size()) +
+                                " elevations in sky.p_max_table_elevation_deg");
+  s.model.P_max.table.clear();
+  for (std::size_t i = 0; i < p_max_table.size(); ++i)
+    s.model.P_max.table.emplace_back(p_max_table_elevation_deg[i], p_max_table[i]);
+  check_sky_model(s.model);
   return s;
 }
 

@@ -139,7 +139,7 @@ CalibrationResult calibrate_run(const OutdoorRun& run, const Column& c, DriftMod
   o.method = CalibrationMethod::Noncontinuous;
   o.d_a = c.d_a;
   const SkyDrift drift = drift_from_sun(run.t_s, run.azimuth_deg, run.dop, mode);
-  o.corrections = {drift.dtheta_deg, drift.d_ratio};
+  o.corrections = {drift.dtheta_deg, drift.d_ratio, ""};
   CalibrationResult r = calibrate(run.stops, o);
   EXPECT_TRUE(r.usable()) << r.fit.summary.brief_report();
   return r;
@@ -196,7 +196,7 @@ TEST(OutdoorCalibration, CorrectionsOfZeroAndOneLeaveTheFitBitIdentical) {
     o.d_a = c.d_a;
     const CalibrationResult plain = calibrate(run.stops, o);
     o.corrections = {std::vector<double>(run.stops.size(), 0.0),
-                     std::vector<double>(run.stops.size(), 1.0)};
+                     std::vector<double>(run.stops.size(), 1.0), ""};
     const CalibrationResult zero = calibrate(run.stops, o);
     ASSERT_TRUE(plain.usable() && zero.usable());
     EXPECT_EQ(0, std::memcmp(&plain.params, &zero.params, sizeof plain.params)) << method_name(m);

@@ -27,6 +27,11 @@ $p trace scenes/jf500.yaml -o "$out/trace"
 $p study cs rigs/wang2019-indoor-traced.yaml -o "$out/traced_bare"
 $p study cs rigs/wang2019-indoor-traced-lensed.yaml -o "$out/traced_lensed"
 $p study cs rigs/wang2019-indoor.yaml -o "$out/cos4_indoor"
+# Outdoors (W19 §5.1): Outdoor1 without noise, 16-bit ADC, calibrated with each drift mode.
+$p simulate rigs/wang2019-outdoor1.yaml --set electronics.noise_sigma_V=0 -o "$out/outdoor1"
+for d in none angle per-stop linear; do
+  $p calibrate "$out/outdoor1" --method nc --drift $d -o "$out/outdoor1_$d"
+done
 
 cp "$out/adc/accuracy_limit.png" "$img/fig6_accuracy_limit.png"
 cp "$out/fig8a/cs_pair1.png" "$img/fig8a_port_offset_pair1.png"
@@ -49,6 +54,7 @@ cp "$out/trace/plane_profile.png" "$img/traced_plane_profile.png"
 cp "$out/trace/wall_radiance.png" "$img/traced_wall_radiance.png"
 cp "$out/traced_bare/cs_pair1.png" "$img/traced_bare_cs_pair1.png"
 cp "$out/traced_lensed/cs_pair1.png" "$img/traced_lensed_cs_pair1.png"
+for d in none angle per-stop; do cp "$out/outdoor1_$d/errors.png" "$img/outdoor1_errors_$d.png"; done
 
 echo "== ADC limits (d = 0.05, 0.7) =="
 grep -E '^(0.05|0.7),' "$out/adc/accuracy_limit.csv"
@@ -97,4 +103,6 @@ done
 $p spectral kd --films $spec/sheet-polarizer-synthetic.csv --response $spec/blue-filter-photodiode-synthetic.csv \
   --sun $spec/astm-g173.csv --tau-m-scale 0.25,0.5,0.75,1,1,1.1 --no-plots -o "$out/spectral_scaled" >/dev/null
 cat "$out/spectral_scaled/kd.csv"
+echo "== Outdoor1 (no noise, 16-bit ADC): nc with each drift mode (accuracy, parameters) =="
+for d in none angle per-stop linear; do echo "-- $d"; grep -A4 '^accuracy_deg' "$out/outdoor1_$d/params.yaml"; grep -E '^(alpha_deg|kd):' "$out/outdoor1_$d/params.yaml"; done
 rm -rf "$out"

@@ -342,7 +342,7 @@ TEST(RigYamlError, ListOrMappingWhereScalarExpected) {
   expect_file_error("electronics:\n  adc_bits: [16]\n", 2, "electronics.adc_bits",
                     "expected an integer in [2, 31], got a list");
   expect_file_error("source:\n  model: [cos4]\n", 2, "source.model",
-                    "expected \"cos4\" or \"traced\", got a list");
+                    "expected \"cos4\", \"traced\" or \"sky\", got a list");
   expect_file_error("seed:\n  value: 3\n", 1, "seed",
                     "expected an unsigned 64-bit integer, got a mapping");
   expect_file_error("device:\n  d:\n", 2, "device.d",
@@ -398,7 +398,7 @@ TEST(RigYamlError, SourceModelOtherThanCos4OrTraced) {
   expect_file_error("source:\n  model: traced\n  scene: no/such/scene.yaml\n", 3, "source.scene",
                     "cannot load the scene: ");
   expect_file_error("source:\n  model: COS4\n", 2, "source.model",
-                    "expected \"cos4\" or \"traced\", got 'COS4'");
+                    "expected \"cos4\", \"traced\" or \"sky\", got 'COS4'");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -678,8 +678,8 @@ TEST(RigYamlOverrideError, WrongTypeNamesTheSetNotTheFileLine) {
             "got -1");
 
   const std::string msg5 = rig_error("seed: 1\n", sets({"source.model=fisheye"}));
-  EXPECT_EQ(msg5, "--set source.model=fisheye: key 'source.model': expected \"cos4\" or "
-                  "\"traced\", got 'fisheye'");
+  EXPECT_EQ(msg5, "--set source.model=fisheye: key 'source.model': expected \"cos4\", "
+                  "\"traced\" or \"sky\", got 'fisheye'");
 }
 
 TEST(RigYamlOverrideError, ValueThatIsNotYaml) {
@@ -774,6 +774,10 @@ TEST(RigToYaml, EveryKeyIsWritten) {
       EXPECT_FALSE(n.IsDefined()) << "an empty list or path is omitted";
       continue;
     }
+    if (!k.read_by_source("cos4")) {  // the sky's keys: the default rig's source does not read them
+      EXPECT_FALSE(n.IsDefined()) << "a key its source does not read is omitted";
+      continue;
+    }
     EXPECT_TRUE(n.IsDefined()) << "missing from rig_to_yaml:\n" << text;
     if (k.kind == polrig::RigKey::Kind::RealArray) EXPECT_TRUE(n.IsSequence());
     else EXPECT_TRUE(n.IsScalar());
@@ -801,5 +805,8 @@ TEST(RigToYaml, OnlyKnownKeysAreWritten) {
   };
   walk(root, "");
   for (const std::string& p : leaves) EXPECT_NE(polrig::find_rig_key(p), nullptr) << p;
-  EXPECT_EQ(leaves.size(), polrig::rig_keys().size() - 3);  // all but the empty list and paths
+  std::size_t cos4_keys = 0;
+  for (const polrig::RigKey& k : polrig::rig_keys()) cos4_keys += k.read_by_source("cos4") ? 1 : 0;
+  // All the default (cos4) rig's keys but the empty list and paths (source.scene is traced's).
+  EXPECT_EQ(leaves.size(), cos4_keys - 2);
 }

@@ -80,7 +80,7 @@ struct Eq15Residuals : Eigen::DenseFunctor<double> {
   int operator()(const InputType& x, ValueType& r) const {
     const FitParams p = FitParams::from_vector(x);
     for (std::size_t n = 0; n < data.size(); ++n) {
-      const double v = eq15_voltage(p, volts_per_decade, data[n].pair, data[n].theta_deg);
+      const double v = eq15_voltage(p, volts_per_decade, data[n].pair, data[n].theta_deg, data[n].d_ratio);
       // A trial step outside Eq. 15's domain (1 ± c·cos ≤ 0) gets a large residual, so LM
       // rejects it and damps; only a solution outside the domain is an error.
       r(static_cast<Eigen::Index>(n)) = std::isfinite(v) ? v - data[n].volts : kOutsideDomain_V;
@@ -103,7 +103,7 @@ Eigen::MatrixXd eq15_jacobian(const std::vector<Observation>& data, const FitPar
   Eigen::MatrixXd J(static_cast<Eigen::Index>(data.size()), FitParams::kCount);
   for (std::size_t n = 0; n < data.size(); ++n)
     J.row(static_cast<Eigen::Index>(n)) =
-        eq15_gradient(p, v_dec, data[n].pair, data[n].theta_deg).transpose();
+        eq15_gradient(p, v_dec, data[n].pair, data[n].theta_deg, data[n].d_ratio).transpose();
   return J;
 }
 
@@ -141,6 +141,8 @@ FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start,
     if (o.pair < 0 || o.pair > 2) throw std::invalid_argument("fit_eq15: observation of an unknown pair");
     if (!std::isfinite(o.volts) || !std::isfinite(o.theta_deg))
       throw std::invalid_argument("fit_eq15: an observation is not a finite number");
+    if (!(o.d_ratio > 0.0 && std::isfinite(o.d_ratio)))
+      throw std::invalid_argument("fit_eq15: an observation's d ratio is not a finite number > 0");
     ++per_pair[static_cast<std::size_t>(o.pair)];
   }
   result.params = start;
@@ -186,7 +188,7 @@ FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start,
     return result;
   };
   for (const Observation& o : data)
-    if (!std::isfinite(eq15_voltage(result.params, v_dec, o.pair, o.theta_deg)))
+    if (!std::isfinite(eq15_voltage(result.params, v_dec, o.pair, o.theta_deg, o.d_ratio)))
       return stop(FitTermination::OutsideDomain,
                   fmt::format("the fit ended outside Eq. 15's domain ((1 ± c·cos) ≤ 0): the data "
                               "are not those of this sensor model (solver: {})", outcome.message));

@@ -41,26 +41,28 @@ CalibrationParams FitParams::decoupled(double d_a) const {
   return q;
 }
 
-double eq15_voltage(const FitParams& p, double v_dec, int i, double theta_deg) {
+// r·c is exactly c when r = 1, so a source with a constant d fits bit for bit as before.
+double eq15_voltage(const FitParams& p, double v_dec, int i, double theta_deg, double r) {
   const int j = pair_j(i), h = pair_h(i);
-  const double num = 1.0 + p.c[j] * std::cos(deg2rad(2.0 * theta_deg + p.alpha_deg[j]));
-  const double den = 1.0 - p.c[h] * std::cos(deg2rad(2.0 * theta_deg + p.alpha_deg[h]));
+  const double num = 1.0 + r * p.c[j] * std::cos(deg2rad(2.0 * theta_deg + p.alpha_deg[j]));
+  const double den = 1.0 - r * p.c[h] * std::cos(deg2rad(2.0 * theta_deg + p.alpha_deg[h]));
   if (!(num > 0.0 && den > 0.0)) return std::numeric_limits<double>::quiet_NaN();
   return p.kv[i] * v_dec * std::log10(num / den) + p.k_mV[i] * 1e-3;
 }
 
-FitParams::Vector eq15_gradient(const FitParams& p, double v_dec, int i, double theta_deg) {
+FitParams::Vector eq15_gradient(const FitParams& p, double v_dec, int i, double theta_deg,
+                                double r) {
   const int j = pair_j(i), h = pair_h(i);
   const double xj = deg2rad(2.0 * theta_deg + p.alpha_deg[j]);
   const double xh = deg2rad(2.0 * theta_deg + p.alpha_deg[h]);
-  const double num = 1.0 + p.c[j] * std::cos(xj);
-  const double den = 1.0 - p.c[h] * std::cos(xh);
+  const double num = 1.0 + r * p.c[j] * std::cos(xj);
+  const double den = 1.0 - r * p.c[h] * std::cos(xh);
   const double g = p.kv[i] * v_dec / std::numbers::ln10;  // d(kv·v·log10 u)/du = g/u
   FitParams::Vector grad = FitParams::Vector::Zero();
-  grad(FitParams::alpha_index(j)) = g * (-p.c[j] * std::sin(xj)) / num * deg2rad(1.0);
-  grad(FitParams::alpha_index(h)) = -g * (p.c[h] * std::sin(xh)) / den * deg2rad(1.0);
-  grad(FitParams::c_index(j)) = g * std::cos(xj) / num;
-  grad(FitParams::c_index(h)) = g * std::cos(xh) / den;
+  grad(FitParams::alpha_index(j)) = g * (-(r * p.c[j]) * std::sin(xj)) / num * deg2rad(1.0);
+  grad(FitParams::alpha_index(h)) = -g * (r * p.c[h] * std::sin(xh)) / den * deg2rad(1.0);
+  grad(FitParams::c_index(j)) = g * (r * std::cos(xj)) / num;
+  grad(FitParams::c_index(h)) = g * (r * std::cos(xh)) / den;
   grad(FitParams::k_index(i)) = 1e-3;
   grad(FitParams::kv_index(i)) = v_dec * std::log10(num / den);
   return grad;

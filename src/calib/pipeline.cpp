@@ -15,6 +15,7 @@ std::string_view method_name(CalibrationMethod m) {
     case CalibrationMethod::Section: return "section";
     case CalibrationMethod::CentralSymmetry: return "cs";
     case CalibrationMethod::CentralSymmetryNoncontinuous: return "cs-nc";
+    case CalibrationMethod::Noncontinuous: return "nc";
   }
   return "?";
 }
@@ -22,6 +23,7 @@ std::string_view method_name(CalibrationMethod m) {
 std::optional<CalibrationMethod> parse_method(std::string_view name) {
   for (CalibrationMethod m : kAllMethods)
     if (method_name(m) == name) return m;
+  if (name == method_name(CalibrationMethod::Noncontinuous)) return CalibrationMethod::Noncontinuous;
   return std::nullopt;
 }
 
@@ -30,7 +32,8 @@ namespace {
 std::vector<Observation> observations_of(const std::vector<EvalPoint>& points) {
   std::vector<Observation> obs;
   for (std::size_t n = 0; n < points.size(); ++n)
-    for (int i = 0; i < 3; ++i) obs.push_back({points[n].theta_ref_deg, i, points[n].V[i], n});
+    for (int i = 0; i < 3; ++i)
+      obs.push_back({points[n].theta_ref_deg, i, points[n].V[i], n, points[n].d_ratio});
   return obs;
 }
 
@@ -103,10 +106,32 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
   if (!(std::isfinite(o.volts_per_decade) && o.volts_per_decade > 0))
     throw CalibrationError(fmt::format("volts_per_decade = {}: expected a finite gain > 0",
                                        o.volts_per_decade));
+  const bool raw_stops =
+      o.method == CalibrationMethod::Section || o.method == CalibrationMethod::Noncontinuous;
+  const StopCorrections& corr = o.corrections;
+  if (!corr.empty() && !raw_stops)
+    throw CalibrationError(fmt::format("per-stop drift corrections need a method on raw stops "
+                                       "(section or nc), not {}: a CS point mixes two times",
+                                       method_name(o.method)));
+  for (const std::vector<double>* v : {&corr.dtheta_deg, &corr.d_ratio})
+    if (!v->empty() && v->size() != stops.size())
+      throw CalibrationError(fmt::format("{} per-stop corrections for {} stops", v->size(),
+                                         stops.size()));
   CalibrationResult r;
   r.method = o.method;
-  if (o.method == CalibrationMethod::Section) {
-    for (const StopVoltages& s : stops) r.points.push_back({s.theta_R_deg, s.V});
+  r.drift = corr.source;
+  if (raw_stops) {
+    for (std::size_t k = 0; k < stops.size(); ++k) {
+      EvalPoint p{stops[k].theta_R_deg, stops[k].V};
+      if (!corr.dtheta_deg.empty()) p.theta_ref_deg += corr.dtheta_deg[k];
+      if (!corr.d_ratio.empty()) p.d_ratio = corr.d_ratio[k];
+      if (!(std::isfinite(p.theta_ref_deg) && std::isfinite(p.d_ratio) && p.d_ratio > 0.0))
+        throw CalibrationError(fmt::format("{}: the drift correction (Δθ = {}°, d ratio {}) is "
+                                           "not finite, or the ratio not > 0", stops[k].label,
+                                           corr.dtheta_deg.empty() ? 0.0 : corr.dtheta_deg[k],
+                                           p.d_ratio));
+      r.points.push_back(p);
+    }
   } else {
     for (const CsPoint& p : central_symmetry_points(stops)) r.points.push_back({p.theta_R_deg, p.V});
   }
@@ -114,7 +139,7 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
     r.fit.summary = failed_before_fit(
         FitTermination::TooFewObservations,
         fmt::format("{} {} to fit; Eq. 15 has 6 unknowns per pair, so at least 6 are needed",
-                    r.points.size(), o.method == CalibrationMethod::Section ? "stops" : "CS points"),
+                    r.points.size(), raw_stops ? "stops" : "CS points"),
         3 * r.points.size());
     return r;
   }
@@ -143,13 +168,15 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
 
   const std::vector<Observation> all = observations_of(r.points);
   std::vector<Observation> used = all;
-  if (o.method == CalibrationMethod::CentralSymmetryNoncontinuous) {
-    // Slopes from a preliminary fit of all CS points, so that the selection does not depend on
-    // how the table zero sits against the port polarizer.
+  if (o.method == CalibrationMethod::CentralSymmetryNoncontinuous ||
+      o.method == CalibrationMethod::Noncontinuous) {
+    // Slopes from a preliminary fit of all points, so that the selection does not depend on
+    // how the table zero sits against the port polarizer (or the sky's E-vector).
     const FitResult preliminary = fit_eq15(all, start, o.volts_per_decade, o.fit);
     if (!preliminary.summary.usable()) {
       r.fit = preliminary;
-      r.fit.summary.message = "the preliminary fit of all CS points: " + r.fit.summary.message;
+      r.fit.summary.message = fmt::format("the preliminary fit of all {}: {}",
+                                          raw_stops ? "stops" : "CS points", r.fit.summary.message);
       return r;
     }
     used = select_noncontinuous(all, preliminary.params, o.volts_per_decade, o.noncontinuous);

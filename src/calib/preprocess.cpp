@@ -121,10 +121,10 @@ std::vector<CsPoint> central_symmetry_points(const std::vector<StopVoltages>& st
   return points;
 }
 
-double eq15_slope(const FitParams& p, double v_dec, int i, double theta_deg) {
+double eq15_slope(const FitParams& p, double v_dec, int i, double theta_deg, double d_ratio) {
   // θ enters Eq. 15 only as 2θ + α_m, so ∂V/∂θ = 2·(∂V/∂α_j + ∂V/∂α_h); the gradient is per
   // degree of α, the slope per radian of θ.
-  const FitParams::Vector g = eq15_gradient(p, v_dec, i, theta_deg);
+  const FitParams::Vector g = eq15_gradient(p, v_dec, i, theta_deg, d_ratio);
   return 2.0 * (g(FitParams::alpha_index(pair_j(i))) + g(FitParams::alpha_index(pair_h(i)))) / deg2rad(1.0);
 }
 
@@ -136,7 +136,7 @@ std::vector<Observation> select_noncontinuous(const std::vector<Observation>& da
     std::vector<std::pair<double, std::size_t>> slope;  // (|dV/dθ|, index)
     for (std::size_t n = 0; n < data.size(); ++n)
       if (data[n].pair == i)
-        slope.emplace_back(std::abs(eq15_slope(model, v_dec, i, data[n].theta_deg)), n);
+        slope.emplace_back(std::abs(eq15_slope(model, v_dec, i, data[n].theta_deg, data[n].d_ratio)), n);
     if (slope.empty()) continue;
     // Steepest first; ties by index, so the choice is deterministic.
     std::stable_sort(slope.begin(), slope.end(),

@@ -15,6 +15,7 @@
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/plot.h"
 #include "polrig/report/calibration_reports.h"
+#include "polrig/sky/drift.h"
 #include "polrig/study/calibration_trials.h"
 #include "polrig/units.h"
 
@@ -76,17 +77,83 @@ void check_adc_range(const StopVoltages& s) {
   }
 }
 
+// The sun-drift settings of an outdoor calibration (spec sky-and-compasses.md §1.4).
+struct DriftSettings {
+  std::string mode = "none";
+  std::string site;  // "LAT,LON" in degrees, north and east positive
+};
+
+Site parse_site(const std::string& text) {
+  const auto comma = text.find(',');
+  double lat = 0, lon = 0;
+  if (comma == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, comma), lat) ||
+      !CLI::detail::lexical_cast(text.substr(comma + 1), lon) || !(std::abs(lat) <= 90) ||
+      !(std::abs(lon) <= 180))
+    throw DataError(fmt::format("--site {}: expected LAT,LON in degrees (north and east positive, "
+                                "|LAT| ≤ 90, |LON| ≤ 180), e.g. 38.879167,121.543889", text));
+  Site s;
+  s.lat_deg = lat;
+  s.lon_deg = lon;
+  return s;
+}
+
+// The per-stop corrections for --drift: the stops' times from the data's utc column, or from a
+// sky rig's sky.first_stop_utc plus the data's t_s column (a simulate folder of a sky rig); the
+// sun from the ephemeris at --site, else at the sky rig's site. Empty for --drift none.
+StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSettings& drift) {
+  const std::optional<DriftMode> mode = parse_drift_mode(drift.mode);
+  if (!mode)
+    throw DataError(fmt::format("--drift {}: expected none, angle, per-stop or linear", drift.mode));
+  if (*mode == DriftMode::None) return {};
+  // A time-dependent source's rig (the sky) carries the site and the first stop's time.
+  const bool sky_rig = rig.light->has(Source::kTimeDependent);
+  std::vector<UtcTime> times = data.utc;
+  std::string times_from = "the utc column";
+  if (times.empty() && sky_rig && !data.t_s.empty()) {
+    const UtcTime t0 = parse_utc(rig.source.sky.first_stop_utc);
+    for (double t : data.t_s) times.push_back(t0.plus_seconds(t));
+    times_from = "the rig's sky.first_stop_utc + t_s";
+  }
+  if (times.empty())
+    throw DataError(fmt::format("--drift {}: {} has no 'utc' column giving each stop's time "
+                                "(ISO 8601, Z; see docs/formats.md, \"Measured data\")",
+                                drift.mode, data.origin));
+  Site site;
+  std::string site_from;
+  if (!drift.site.empty()) {
+    site = parse_site(drift.site);
+    site_from = "--site " + drift.site;
+  } else if (sky_rig) {
+    site = rig.source.sky.sky.site;
+    site_from = fmt::format("the rig's site {},{}", site.lat_deg, site.lon_deg);
+  } else {
+    throw DataError(fmt::format("--drift {} needs --site LAT,LON (the sun's position)", drift.mode));
+  }
+  // The d ratio does not depend on a constant P_max; a sky rig's P_max(h_s) table enters it.
+  const MaxDegree P_max = sky_rig ? rig.source.sky.resolved_sky().model.P_max : MaxDegree{};
+  const SkyDrift d = drift_corrections(times, site, SunSettings{}, P_max, *mode);
+  return {d.dtheta_deg, d.d_ratio,
+          fmt::format("{} (stop times from {}, the sun from ERFA at {}{})", drift.mode, times_from,
+                      site_from,
+                      *mode == DriftMode::Linear ? ", interpolated between the first and last stop" : "")};
+}
+
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
-                   const OutputOptions& out) {
+                   const DriftSettings& drift, const OutputOptions& out) {
   std::vector<CalibrationMethod> methods;
   if (method_text == "all") {
     methods.assign(kAllMethods.begin(), kAllMethods.end());
   } else if (auto m = parse_method(method_text)) {
     methods.push_back(*m);
   } else {
-    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc or all", method_text));
+    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc or all", method_text));
   }
+  if (drift.mode != "none")
+    for (CalibrationMethod m : methods)
+      if (m != CalibrationMethod::Section && m != CalibrationMethod::Noncontinuous)
+        throw DataError(fmt::format("--drift {} needs --method nc or section (the raw stops), not "
+                                    "{}: a CS point mixes two times", drift.mode, method_text));
   const MeasuredData data = read_measured(input);
   for (const StopVoltages& s : data.stops) check_adc_range(s);
   // The sensor description (film axes, amplifier scale): --rig, else the dataset's rig.yaml,
@@ -94,6 +161,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   std::optional<LoadedRig> given;
   if (!rig_path.empty()) given = load_rig(rig_path);
   const Rig rig = given ? given->rig : data.rig ? *data.rig : Rig{};
+  const StopCorrections corrections = drift_of(data, rig, drift);
   const std::optional<double> rig_d =
       given ? std::optional<double>(given->rig.device.d)
             : data.rig ? std::optional<double>(data.rig->device.d) : std::nullopt;
@@ -103,6 +171,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   for (CalibrationMethod m : methods) {
     CalibrationOptions o = settings.options(rig, rig_d);
     o.method = m;
+    o.corrections = corrections;
     CalibrationResult r;
     try {
       r = calibrate(data.stops, o);
@@ -223,21 +292,28 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
   std::vector<Command> commands;
   {
     auto* app = root.add_subcommand(
-        "calibrate", "calibrate a simulate dataset or measured voltages (Eq. 15, three types)");
+        "calibrate", "calibrate a simulate dataset or measured voltages (Eq. 15, three types; nc outdoors)");
     auto input = std::make_shared<std::string>();
     auto method = std::make_shared<std::string>("cs-nc");
     auto rig = std::make_shared<std::string>();
     auto settings = std::make_shared<CalibrationSettings>();
+    auto drift = std::make_shared<DriftSettings>();
     auto out = std::make_shared<OutputOptions>();
     app->add_option("INPUT", *input, "a folder written by polrig simulate, or a CSV with "
-                                     "theta_R_deg,V1,V2,V3 (volts)")->required();
-    app->add_option("--method", *method, "section | cs | cs-nc | all")->capture_default_str();
+                                     "theta_R_deg,V1,V2,V3 (volts) and optionally utc")->required();
+    app->add_option("--method", *method, "section | cs | cs-nc | nc | all (nc: the raw stops, "
+                                         "noncontinuous + section, as outdoors)")->capture_default_str();
+    app->add_option("--drift", drift->mode, "sun-drift correction of an outdoor run: none | angle | "
+                                            "per-stop | linear (needs a utc column and --site)")
+        ->capture_default_str();
+    app->add_option("--site", drift->site, "the observer for --drift: LAT,LON in degrees (north, "
+                                           "east positive)");
     app->add_option("--rig", *rig, "rig file describing the sensor (film axes, amplifier); "
                                    "default: the dataset's rig.yaml, else the default rig");
     settings->add_to(*app);
     out->add_to(*app);
     add_threads_option(*app, threads);
-    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *out); }});
+    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *drift, *out); }});
   }
   {
     auto* app = root.add_subcommand("apply", "turn voltages into θ and d with calibrated parameters");

@@ -3,6 +3,7 @@
 #include <charconv>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +11,7 @@
 
 #include "cli.h"
 #include "polrig/io/csv.h"
+#include "polrig/io/rig_yaml.h"
 #include "polrig/io/sky_files.h"
 #include "polrig/sky/sky.h"
 #include "polrig/sky/sky_map.h"
@@ -65,8 +67,11 @@ struct SkyOptions {
     app.add_option("--radiance", radiance, "radiance model")
         ->check(CLI::IsMember({"uniform", "rayleigh", "cie-clear"}))->capture_default_str();
   }
-  Sky sky() const {
-    Sky s;
+  // The sky of the options, starting from `base` (a rig's sky block, or the defaults); with a
+  // rig, only the options given on the command line (`app` counts them) change it.
+  Sky sky(const Sky& base = {}, const CLI::App* app = nullptr) const {
+    Sky s = base;
+    const auto given = [&](const char* option) { return app == nullptr || app->count(option) > 0; };
     if (!site.empty()) s.site = parse_site(site);
     if (!utc.empty()) {
       try {
@@ -75,10 +80,10 @@ struct SkyOptions {
         throw std::runtime_error(fmt::format("--utc: {}", e.what()));
       }
     }
-    s.model.P_max.constant = p_max;
-    s.model.radiance = parse_radiance(radiance);
-    s.sun.refraction = refraction;
-    s.sun.ut1_minus_utc_s = ut1_minus_utc;
+    if (given("--p-max")) s.model.P_max.constant = p_max;
+    if (given("--radiance")) s.model.radiance = parse_radiance(radiance);
+    if (given("--refraction")) s.sun.refraction = refraction;
+    if (given("--ut1-minus-utc")) s.sun.ut1_minus_utc_s = ut1_minus_utc;
     return s;
   }
 };
@@ -121,6 +126,9 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     auto out = std::make_shared<OutputOptions>();
     auto opts = std::make_shared<SkyOptions>();
     auto size = std::make_shared<int>(1024);
+    auto rig = std::make_shared<std::string>();
+    sky_app->add_option("RIG", *rig, "a rig file with source.model sky: its sky block (site, first "
+                                     "stop, P_max, radiance, refraction) is the default of every option");
     // -o is checked when the map is made: `sky table` has its own.
     sky_app->add_option("-o,--out", out->out, "output folder (written whole or not at all)");
     sky_app->add_flag("--force", out->force, "replace the output folder if it exists");
@@ -131,10 +139,19 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     add_threads_option(*sky_app, threads);
     commands.push_back({sky_app, [=] {
       if (out->out.empty()) throw std::runtime_error("sky: -o/--out is required");
-      const Sky sky = opts->sky();
+      std::optional<LoadedRig> loaded;
+      if (!rig->empty()) {
+        loaded = load_rig(*rig);
+        if (!loaded->rig.light->has(Source::kTimeDependent))
+          throw RigError(fmt::format("{}: source.model {} has no sky (expected source.model sky)",
+                                     *rig, loaded->rig.source.model));
+      }
+      const Sky sky = loaded ? opts->sky(loaded->rig.source.sky.resolved_sky(), sky_app)
+                             : opts->sky();
       OutputDir dir = out->open();
       const SkyMap map = sky_map(sky, *size);
-      write_manifest(dir.staging(), {command_line(), nullptr, write_sky_map(dir.staging(), map, sky, out->plots())});
+      write_manifest(dir.staging(), {command_line(), loaded ? &*loaded : nullptr,
+                                     write_sky_map(dir.staging(), map, sky, out->plots())});
       finish(dir);
     }});
   }

@@ -5,13 +5,18 @@
 namespace polrig {
 
 std::vector<DatasetFile> write_simulation(const std::filesystem::path& dir, const Simulation& sim) {
-  CsvTable stops({"stop", "theta_R_deg", "theta_deg", "d", "E1_Wm2", "E2_Wm2", "E3_Wm2",
-                  "E4_Wm2", "E5_Wm2", "E6_Wm2", "V1_ideal", "V2_ideal", "V3_ideal", "V1_ecc",
-                  "V2_ecc", "V3_ecc", "V1", "V2", "V3", "V1_std", "V2_std", "V3_std"});
+  std::vector<std::string> columns{"stop", "theta_R_deg", "theta_deg", "d", "E1_Wm2", "E2_Wm2",
+                                   "E3_Wm2", "E4_Wm2", "E5_Wm2", "E6_Wm2", "V1_ideal", "V2_ideal",
+                                   "V3_ideal", "V1_ecc", "V2_ecc", "V3_ecc", "V1", "V2", "V3",
+                                   "V1_std", "V2_std", "V3_std"};
+  // A light that changes during the run (the sky): each stop's time since the first.
+  if (sim.time_dependent) columns.insert(columns.begin() + 2, "t_s");
+  CsvTable stops(columns);
   for (std::size_t s = 0; s < sim.stops.size(); ++s) {
     const Stop& st = sim.stops[s];
     std::vector<double> row{static_cast<double>(s), st.theta_R_deg, st.light.theta_deg,
                             st.light.d};
+    if (sim.time_dependent) row.insert(row.begin() + 2, st.t_s);
     row.insert(row.end(), st.light.E_Wm2.begin(), st.light.E_Wm2.end());
     for (const auto* v : {&st.V_ideal, &st.V_ecc, &st.V_mean, &st.V_std})
       row.insert(row.end(), v->begin(), v->end());

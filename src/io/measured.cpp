@@ -101,6 +101,8 @@ MeasuredData stops_of(const CsvFile& f, bool need_angle) {
   const std::optional<std::size_t> angle =
       need_angle ? std::optional<std::size_t>(f.column("theta_R_deg")) : f.find_column("theta_R_deg");
   const std::size_t v[3] = {f.column("V1"), f.column("V2"), f.column("V3")};
+  const std::optional<std::size_t> utc = f.find_column("utc");
+  const std::optional<std::size_t> t_s = f.find_column("t_s");
   if (f.rows.empty())
     throw DataError(fmt::format("{}: no data rows after the header", f.origin));
   for (std::size_t r = 0; r < f.rows.size(); ++r) {
@@ -109,6 +111,16 @@ MeasuredData stops_of(const CsvFile& f, bool need_angle) {
     for (int i = 0; i < 3; ++i) s.V[i] = f.number(r, v[i]);
     s.label = fmt::format("{}:{}", f.origin, f.line[r]);
     data.stops.push_back(s);
+    if (t_s) data.t_s.push_back(f.number(r, *t_s));
+    if (utc) {
+      try {
+        data.utc.push_back(parse_utc(f.rows[r][*utc]));
+      } catch (const std::invalid_argument& e) {
+        throw DataError(fmt::format("{}:{}: column 'utc': expected an ISO 8601 UTC time such as "
+                                    "2018-11-16T08:09:40Z, got '{}' ({})", f.origin, f.line[r],
+                                    f.rows[r][*utc], e.what()));
+      }
+    }
   }
   return data;
 }

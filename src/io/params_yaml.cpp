@@ -29,6 +29,7 @@ std::string params_to_yaml(const CalibrationResult& r, double v_dec) {
   out << YAML::Key << "method" << YAML::Value << std::string(method_name(r.method));
   out << YAML::Key << "d_a" << YAML::Value << fmt::format("{}", r.d_a);
   out << YAML::Key << "d_a_source" << YAML::Value << r.d_a_source;
+  if (!r.drift.empty()) out << YAML::Key << "drift" << YAML::Value << r.drift;
   out << YAML::Key << "volts_per_decade" << YAML::Value << fmt::format("{}", v_dec);
   emit_list(out, "alpha_deg", r.params.alpha_deg);
   emit_list(out, "k_mV", r.params.k_mV);
@@ -125,7 +126,7 @@ LoadedParams parse_params_yaml(std::string_view text, std::string_view origin) {
   if (!root.IsMap())
     throw DataError(fmt::format("{}: expected a mapping with alpha_deg, k_mV, kv, kd and d_a", file));
   refuse_duplicate_keys(root, file);
-  static const std::set<std::string> known = {"params_schema", "method", "d_a", "d_a_source",
+  static const std::set<std::string> known = {"params_schema", "method", "d_a", "d_a_source", "drift",
                                               "volts_per_decade", "alpha_deg", "k_mV", "kv", "kd",
                                               "standard_error", "fit", "accuracy_deg"};
   for (auto it = root.begin(); it != root.end(); ++it) {

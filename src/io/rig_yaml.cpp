@@ -275,9 +275,10 @@ class RigParser {
     } catch (const SourceSettingError& e) {
       fail(e.key, e.what());
     }
-    // A source that sets the light's d itself (the traced port film): it is the rig's d, for
-    // decoupling and the rig's checks; a device.d in the file must agree.
-    if (const std::optional<double> d = rig.light->fixed_degree_of_polarization()) {
+    // A source that sets the light's d itself (the traced port film; the sky's at the first
+    // stop): it is the rig's d, for decoupling and the rig's checks; a device.d in the file must
+    // agree.
+    if (const std::optional<double> d = rig.light->rig_degree_of_polarization(rig.source_view())) {
       if (present_.count("device.d") && std::abs(rig.device.d - *d) > 1e-12)
         fail("device.d", fmt::format("expected the source's d = {} with source.model {} (or leave "
                                      "device.d out), got {}", *d, rig.source.model, rig.device.d));

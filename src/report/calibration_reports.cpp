@@ -24,7 +24,8 @@ std::vector<DatasetFile> report_calibration(const std::filesystem::path& dir,
   for (std::size_t n = 0; n < r.points.size(); ++n) {
     const EvalPoint& p = r.points[n];
     std::vector<double> row{p.theta_ref_deg, p.V[0], p.V[1], p.V[2]};
-    for (int i = 0; i < 3; ++i) row.push_back(eq15_voltage(fitted, v_dec, i, p.theta_ref_deg));
+    for (int i = 0; i < 3; ++i)
+      row.push_back(eq15_voltage(fitted, v_dec, i, p.theta_ref_deg, p.d_ratio));
     for (int i = 0; i < 3; ++i) row.push_back(r.fitted[i][n] ? 1.0 : 0.0);
     points.add_row(row);
   }

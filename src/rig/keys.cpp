@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "polrig/rig/error.h"
+#include "polrig/sky/sun.h"
 
 namespace polrig {
 
@@ -143,7 +144,7 @@ std::vector<RigKey> make_keys() {
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
-             "sphere of source.scene"};
+             "sphere of source.scene; sky is the Rayleigh sky of the sky.* keys (outdoors)"};
     k.text = [](Rig& r) -> std::string& { return r.source.model; };
     k.valid_text = [](std::string_view v) {
       for (std::string_view kind : source_kinds())
@@ -174,6 +175,107 @@ std::vector<RigKey> make_keys() {
   keys.push_back(reads(real<kTurn>("source.polarizer_deg", "deg", "an angle",
                              "axis ψ_P of the port polarizer in the rig frame; θ = θ_R − ψ_P",
                              kTurnWhy, [](Rig& r) -> double& { return r.source.polarizer_deg; }), kSimulate, "cos4"));
+  // --- sky (source.model: sky; docs/physics.md §10) ------------------------------------
+  const auto sky_text = [&](std::string_view path, std::string_view expects, std::string_view doc,
+                            std::string& (*ref)(Rig&), bool (*valid)(std::string_view),
+                            unsigned studies) {
+    RigKey k{path, K::Text, "", std::string(expects), doc};
+    k.text = ref;
+    k.valid_text = valid;
+    keys.push_back(reads(k, studies, "sky"));
+  };
+  keys.push_back(reads(real<RealRange{-90.0, 90.0}>(
+      "sky.lat_deg", "deg", "a latitude", "the site's geodetic latitude, north positive",
+      "the poles bound latitude (W19's roof in Dalian: 38.879167°)",
+      [](Rig& r) -> double& { return r.source.sky.sky.site.lat_deg; }), kSimulate | kCalibrate, "sky"));
+  keys.push_back(reads(real<RealRange{-180.0, 180.0}>(
+      "sky.lon_deg", "deg", "a longitude", "the site's longitude, east positive",
+      "one turn of longitude (W19's roof: 121.543889°)",
+      [](Rig& r) -> double& { return r.source.sky.sky.site.lon_deg; }), kSimulate | kCalibrate, "sky"));
+  keys.push_back(reads(real<RealRange{-500.0, 9000.0}>(
+      "sky.height_m", "m", "a height", "the site's height above the WGS-84 ellipsoid",
+      "from the Dead Sea shore to above Everest",
+      [](Rig& r) -> double& { return r.source.sky.sky.site.height_m; }), kSimulate, "sky"));
+  sky_text("sky.first_stop_utc", "an ISO 8601 UTC time with Z",
+           "time of the first table stop (UTC; W19 gives Beijing time, UTC+8); stop k is "
+           "schedule-timed after it",
+           [](Rig& r) -> std::string& { return r.source.sky.first_stop_utc; },
+           [](std::string_view v) {
+             try {
+               parse_utc(v);
+               return true;
+             } catch (const std::invalid_argument&) {
+               return false;
+             }
+           },
+           kSimulate | kCalibrate);
+  keys.push_back(reads(real<RealRange{-0.9, 0.9}>(
+      "sky.ut1_minus_utc_s", "s", "a time difference", "UT1 − UTC (IERS Bulletin A)",
+      "UTC is kept within 0.9 s of UT1 by leap seconds",
+      [](Rig& r) -> double& { return r.source.sky.sky.sun.ut1_minus_utc_s; }), kSimulate, "sky"));
+  sky_text("sky.refraction", "off or on", "atmospheric refraction of the sun's elevation (spec §1.1)",
+           [](Rig& r) -> std::string& { return r.source.sky.refraction; },
+           [](std::string_view v) { return v == "off" || v == "on"; }, kSimulate);
+  keys.push_back(reads(real<RealRange{0.0, 1.0, true, false}>(
+      "sky.p_max", "", "a degree of polarization",
+      "P_max of the single-scattering sky, P = P_max·sin²γ/(1 + cos²γ)",
+      "0 is an unpolarized sky, 1 the single-scattering limit (clear skies: 0.65–0.75)",
+      [](Rig& r) -> double& { return r.source.sky.sky.model.P_max.constant; }), kSimulate, "sky"));
+  for (const bool values : {false, true}) {
+    constexpr RealRange kElevation{-90.0, 90.0}, kPmax{0.0, 1.0, true, false};
+    RigKey k{values ? "sky.p_max_table" : "sky.p_max_table_elevation_deg", K::RealList,
+             values ? "" : "deg",
+             values ? expects_text("a list of degrees of polarization", kPmax, "")
+                    : expects_text("a rising list of elevations", kElevation, "deg"),
+             values ? "P_max at each elevation of sky.p_max_table_elevation_deg (replaces "
+                      "sky.p_max; linear between, constant beyond)"
+                    : "sun elevations h_s of a P_max(h_s) table (spec §1.2: one P_max cannot fit "
+                      "every elevation)",
+             values ? "as sky.p_max" : "the sun's elevation"};
+    if (values) k.list = [](Rig& r) -> std::vector<double>& { return r.source.sky.p_max_table; };
+    else k.list = [](Rig& r) -> std::vector<double>& { return r.source.sky.p_max_table_elevation_deg; };
+    k.range = values ? kPmax : kElevation;
+    k.max_items = 1000;
+    k.valid_real = values ? &within<kPmax> : &within<kElevation>;
+    keys.push_back(reads(k, kSimulate, "sky"));
+  }
+  sky_text("sky.radiance", "uniform, rayleigh or cie-clear", "the sky's radiance model (spec §1.2)",
+           [](Rig& r) -> std::string& { return r.source.sky.radiance; },
+           [](std::string_view v) { return v == "uniform" || v == "rayleigh" || v == "cie-clear"; },
+           kSimulate);
+  keys.push_back(reads(real<kTurn>(
+      "sky.mount_deg", "deg", "an angle",
+      "geographic azimuth (clockwise from north) of the sensor's 0° axis at table angle 0",
+      kTurnWhy, [](Rig& r) -> double& { return r.source.sky.mount.mount_deg; }), kSimulate, "sky"));
+  keys.push_back(reads(real<RealRange{-90.0, 90.0}>(
+      "sky.roll_deg", "deg", "an angle",
+      "the table's tilt about the sensor's 90° axis at θ_R = 0 (its 0° axis down for > 0)",
+      "a quarter turn either way: beyond it the sensor looks below the horizon",
+      [](Rig& r) -> double& { return r.source.sky.mount.roll_deg; }), kSimulate, "sky"));
+  keys.push_back(reads(real<RealRange{-90.0, 90.0}>(
+      "sky.pitch_deg", "deg", "an angle",
+      "the table's tilt about the sensor's 0° axis at θ_R = 0 (its 90° axis up for > 0)",
+      "a quarter turn either way: beyond it the sensor looks below the horizon",
+      [](Rig& r) -> double& { return r.source.sky.mount.pitch_deg; }), kSimulate, "sky"));
+  keys.push_back(reads(real<RealRange{-86400.0, 86400.0}>(
+      "sky.time_offset_s", "s", "a time difference",
+      "true time of each stop minus its nominal time (a clock error): the sky is seen then",
+      "a clock off by up to a day",
+      [](Rig& r) -> double& { return r.source.sky.mount.time_offset_s; }), kSimulate, "sky"));
+  sky_text("sky.field", "point or cone",
+           "a point sample along the sensor's axis, or the lens's cone (spec §1.3)",
+           [](Rig& r) -> std::string& { return r.source.sky.field; },
+           [](std::string_view v) { return v == "point" || v == "cone"; }, kSimulate);
+  keys.push_back(reads(real<RealRange{0.0, 10.0, true, false}>(
+      "sky.field_half_angle_deg", "deg", "an angle",
+      "half-angle of the lens's cone, atan(0.65 mm/50 mm) = 0.74475° (spec §1.3)",
+      "a photodiode at the focus of a lens sees a few degrees at most",
+      [](Rig& r) -> double& { return r.source.sky.mount.field_half_angle_deg; }), kSimulate, "sky"));
+  keys.push_back(reads(real<RealRange{1e-7, 1e5}>(
+      "sky.E_0", "W/m^2", "an irradiance",
+      "each channel's irradiance for the sky's radiance 1 (the zenith of a uniform sky)",
+      "W19's log amplifier covers 1.46e-5 to 14.64 W/m²; from deep twilight to a hundred suns",
+      [](Rig& r) -> double& { return r.source.sky.mount.E0_Wm2; }), kSimulate, "sky"));
   // --- eccentricity -------------------------------------------------------------------
   keys.push_back(reads(real<kOffset>("eccentricity.L_IS", "mm", "a length",
                                "offset of the port centre O_IS from the table centre O_R",

@@ -97,6 +97,7 @@ Simulation simulate(const Rig& rig, bool keep_samples, const Progress& progress)
   const std::vector<double> times = rig.schedule.stop_times_s();
   Simulation sim;
   sim.samples_per_stop = rig.schedule.samples_per_stop;
+  sim.time_dependent = rig.light->has(Source::kTimeDependent);
   sim.stops.resize(angles.size());
   if (keep_samples) sim.samples.resize(angles.size() * static_cast<std::size_t>(sim.samples_per_stop));
   rig.light->prepare(progress);

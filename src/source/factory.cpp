@@ -2,13 +2,14 @@
 #include <array>
 
 #include "polrig/source/cos4_port.h"
+#include "polrig/source/sky_source.h"
 #include "polrig/source/source.h"
 #include "polrig/source/traced_source.h"
 
 namespace polrig {
 
 namespace {
-constexpr std::array<std::string_view, 2> kKinds{"cos4", "traced"};
+constexpr std::array<std::string_view, 3> kKinds{"cos4", "traced", "sky"};
 }  // namespace
 
 std::span<const std::string_view> source_kinds() { return kKinds; }
@@ -25,7 +26,16 @@ std::shared_ptr<const Source> make_source(const SourceSpec& s, const SceneLoader
     if (!load_scene) throw std::logic_error("make_source: a traced source needs a scene loader");
     return std::make_shared<const TracedSource>(load_scene(s.scene));
   }
-  throw SourceSettingError("source.model", "expected one of \"cos4\", \"traced\", got '" + s.model + "'");
+  if (s.model == "sky") {
+    try {  // the settings the keys cannot check one by one: the first stop, the P_max table
+      s.sky.resolved_sky();
+      s.sky.resolved_mount();
+    } catch (const std::invalid_argument& e) {
+      throw SourceSettingError("sky.p_max_table", e.what());
+    }
+    return std::make_shared<const SkySource>();
+  }
+  throw SourceSettingError("source.model", "expected one of \"cos4\", \"traced\", \"sky\", got '" + s.model + "'");
 }
 
 }  // namespace polrig

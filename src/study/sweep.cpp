@@ -163,7 +163,7 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
     if (!a.key->read_by_source(base.source.model))
       throw RigError(fmt::format("--grid {}: source.model {} does not read '{}' (only source.model {} "
                                  "does); it cannot be swept", a.text(), base.source.model, a.key->path, a.key->sources));
-    if (a.key->path == "device.d" && base.light->fixed_degree_of_polarization())
+    if (a.key->path == "device.d" && base.light->rig_degree_of_polarization(base.source_view()))
       throw RigError(fmt::format("--grid {}: source.model {} sets the light's d itself; 'device.d' "
                                  "cannot be swept", a.text(), base.source.model));
   }

@@ -23,12 +23,14 @@ class CalibrationError : public std::runtime_error {
 };
 
 // One measured voltage: pair i (0-based) at reference angle θ (degrees), from point `row` of
-// the data being calibrated (a stop or a CS point).
+// the data being calibrated (a stop or a CS point). d_ratio = d(t)/d(t_0) when the light's
+// degree of polarization changes during the run (the sky, --drift per-stop); 1 otherwise.
 struct Observation {
   double theta_deg;
   int pair;
   double volts;
   std::size_t row = 0;
+  double d_ratio = 1.0;
 };
 
 // Work is bounded by counts, never by time, so that a fit is the same on any machine. A good

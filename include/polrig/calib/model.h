@@ -35,12 +35,15 @@ struct FitParams {
 };
 
 // Eq. 15 for pair i (0-based) at polarization angle θ:
-//   V_i = kv_i·v_dec·log10[(1 + c_j·cos(2θ + α_j)) / (1 − c_h·cos(2θ + α_h))] + k_i.
-// Returns NaN where a bracket is not positive (outside the model's domain).
-double eq15_voltage(const FitParams& p, double volts_per_decade, int pair, double theta_deg);
+//   V_i = kv_i·v_dec·log10[(1 + r·c_j·cos(2θ + α_j)) / (1 − r·c_h·cos(2θ + α_h))] + k_i.
+// r = d(t)/d(t_0) is the light's degree of polarization at this observation relative to the
+// one c describes (1 for a source whose d does not change; the sky's zenith d follows the sun,
+// spec sky-and-compasses.md §1.4). Returns NaN where a bracket is not positive.
+double eq15_voltage(const FitParams& p, double volts_per_decade, int pair, double theta_deg,
+                    double d_ratio = 1.0);
 
 // ∂V_i/∂x for the 18 unknowns (degrees for α, mV for k); only pair i's six are non-zero.
 FitParams::Vector eq15_gradient(const FitParams& p, double volts_per_decade, int pair,
-                                double theta_deg);
+                                double theta_deg, double d_ratio = 1.0);
 
 }  // namespace polrig

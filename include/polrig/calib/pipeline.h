@@ -13,15 +13,30 @@
 namespace polrig {
 
 enum class CalibrationMethod {
-  Section,                      // type 1: the raw stops, section algorithm only
-  CentralSymmetry,              // type 2: CS points + section
-  CentralSymmetryNoncontinuous  // type 3: CS points, noncontinuous selection + section
+  Section,                       // type 1: the raw stops, section algorithm only
+  CentralSymmetry,               // type 2: CS points + section
+  CentralSymmetryNoncontinuous,  // type 3: CS points, noncontinuous selection + section
+  Noncontinuous                  // outdoors (§5.1): the raw stops, noncontinuous selection + section
 };
-std::string_view method_name(CalibrationMethod m);  // "section", "cs", "cs-nc"
+std::string_view method_name(CalibrationMethod m);  // "section", "cs", "cs-nc", "nc"
 std::optional<CalibrationMethod> parse_method(std::string_view name);
+// The paper's three indoor calibration types (Fig. 14), as `--method all` and the studies run them.
 inline constexpr std::array<CalibrationMethod, 3> kAllMethods{
     CalibrationMethod::Section, CalibrationMethod::CentralSymmetry,
     CalibrationMethod::CentralSymmetryNoncontinuous};
+
+// Per-stop corrections for a light that changes during the run (the sky: spec
+// sky-and-compasses.md §1.4), one entry per stop in the order of the stops given to calibrate():
+// the reference angle of stop k becomes θ_R,k + dtheta_deg[k] (sensor frame, docs/physics.md §1),
+// and the fitted model sees d·d_ratio[k] (Eq. 15's c_m·d_ratio[k]). Empty vectors: none (a
+// constant source; results bit-identical to a calibration without corrections). Only the
+// methods on raw stops (section, nc) take them: a CS point mixes two times.
+struct StopCorrections {
+  std::vector<double> dtheta_deg;
+  std::vector<double> d_ratio;
+  std::string source;  // how they were made, for params.yaml ("per-stop: …"); "" without them
+  bool empty() const { return dtheta_deg.empty() && d_ratio.empty(); }
+};
 
 struct CalibrationOptions {
   CalibrationMethod method = CalibrationMethod::CentralSymmetryNoncontinuous;
@@ -31,6 +46,7 @@ struct CalibrationOptions {
   std::array<double, 6> film_axis_deg = kWang2019FilmAxesDeg;  // for the nominal start
   double volts_per_decade = 0.5;
   FitOptions fit;
+  StopCorrections corrections;
 };
 
 // A point at which a calibration is judged: the reference angle (the table angle) and the
@@ -38,6 +54,7 @@ struct CalibrationOptions {
 struct EvalPoint {
   double theta_ref_deg;
   std::array<double, 3> V;
+  double d_ratio = 1.0;  // d at this point over d at the first stop (StopCorrections)
 };
 
 // θ12, θ13, θ23 and θ_sec minus the reference angle, each wrapped into [−90°, 90°).
@@ -59,6 +76,7 @@ struct CalibrationResult {
   FitResult fit;
   double d_a = 0;
   std::string d_a_source;            // "given" or how it was chosen
+  std::string drift;                 // StopCorrections::source ("" without corrections)
   CalibrationParams params;          // decoupled with d_a
   CalibrationParams standard_error;  // kd's from c's: se(c_m)/d_a
   std::vector<EvalPoint> points;     // raw stops (type 1) or CS points (types 2, 3)

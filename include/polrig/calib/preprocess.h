@@ -47,7 +47,8 @@ std::vector<Observation> select_noncontinuous(const std::vector<Observation>& da
                                               const FitParams& model, double volts_per_decade,
                                               const NoncontinuousRule& rule);
 
-// dV_i/dθ of Eq. 15, in volts per radian of θ.
-double eq15_slope(const FitParams& p, double volts_per_decade, int pair, double theta_deg);
+// dV_i/dθ of Eq. 15, in volts per radian of θ (d_ratio as in eq15_voltage).
+double eq15_slope(const FitParams& p, double volts_per_decade, int pair, double theta_deg,
+                  double d_ratio = 1.0);
 
 }  // namespace polrig

@@ -11,6 +11,7 @@
 
 #include "polrig/calib/preprocess.h"
 #include "polrig/rig/rig.h"
+#include "polrig/sky/sun.h"
 
 namespace polrig {
 
@@ -41,12 +42,17 @@ struct CsvFile {
 struct MeasuredData {
   std::string origin;               // the CSV read
   std::vector<StopVoltages> stops;  // in file order; labels are "file:line"
+  std::vector<UtcTime> utc;         // each stop's time, from an optional `utc` column (ISO 8601,
+                                    // Z); empty without the column
+  std::vector<double> t_s;          // each stop's time since the first, from an optional `t_s`
+                                    // column (a time-dependent source's stops.csv)
   std::optional<Rig> rig;           // the dataset's rig.yaml, when there is one
   std::string rig_origin;           // its path
 };
 
 // `input` is a folder (reads stops.csv, and rig.yaml when present) or a CSV file. Requires
-// theta_R_deg, V1, V2, V3; other columns are ignored. Throws DataError (or RigError for the
+// theta_R_deg, V1, V2, V3; an optional `utc` column gives each stop's time (for the sun-drift
+// corrections of an outdoor run); other columns are ignored. Throws DataError (or RigError for the
 // dataset's rig.yaml).
 MeasuredData read_measured(const std::filesystem::path& input);
 

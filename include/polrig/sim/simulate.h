@@ -43,6 +43,7 @@ struct Stop {
 struct Simulation {
   std::vector<Stop> stops;
   int samples_per_stop = 0;
+  bool time_dependent = false;  // the source's light changes during the run (stops.csv gets t_s)
   // Every quantized sample, stop-major (stop s, sample n at s·samples_per_stop + n);
   // empty unless asked for.
   std::vector<std::array<double, 3>> samples;

@@ -23,6 +23,7 @@
 #include "polrig/progress.h"
 #include "polrig/source/cos4.h"
 #include "polrig/source/scene.h"
+#include "polrig/source/sky_settings.h"
 
 namespace polrig {
 
@@ -34,6 +35,7 @@ struct SourceSpec {
   Cos4Source cos4;             // L_o (every model: port plane to photosensitive plane), E_0 (cos4)
   double polarizer_deg = 0.0;  // port polarizer axis ψ_P in the rig frame (cos4)
   std::string scene;           // traced: the scene file, an absolute path once loaded
+  SkySettings sky;             // sky: site, time, sky model and the sensor's mount (sky.* keys)
 };
 
 // What a source reads of the rig at a pose: the sensor (its ring, its films through the true
@@ -83,6 +85,12 @@ class Source {
   // A degree of polarization the source sets itself (the traced port film), which the rig's
   // device.d must then equal; none when the rig's device.d is the light's.
   virtual std::optional<double> fixed_degree_of_polarization() const { return std::nullopt; }
+  // The light's d that the rig's device.d must equal, from the rig's settings: the fixed d above
+  // by default; a sky's d at the first stop (it changes during the run, and device.d is then the
+  // d_a that calibrate decouples with). None when the rig's device.d is the light's.
+  virtual std::optional<double> rig_degree_of_polarization(const SourceView&) const {
+    return fixed_degree_of_polarization();
+  }
 
   // Once-only expensive work (the traced sphere solve), reported to `progress`; a later call
   // returns at once. Queries do it silently if it has not been done. No-op by default.

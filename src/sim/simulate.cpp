@@ -1,6 +1,7 @@
 #include "polrig/sim/simulate.h"
 
 #include <cmath>
+#include <exception>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -102,12 +103,21 @@ Simulation simulate(const Rig& rig, bool keep_samples, const Progress& progress)
   if (keep_samples) sim.samples.resize(angles.size() * static_cast<std::size_t>(sim.samples_per_stop));
   rig.light->prepare(progress);
   progress.begin("simulate: stops", static_cast<long long>(angles.size()));
+  // A stop's error is kept in its own slot and the first stop's is rethrown, so that which
+  // error a user sees does not depend on the thread schedule.
+  std::vector<std::exception_ptr> failure(angles.size());
   tbb::parallel_for(std::size_t{0}, angles.size(), [&](std::size_t s) {
     std::array<double, 3>* out =
         keep_samples ? &sim.samples[s * static_cast<std::size_t>(sim.samples_per_stop)] : nullptr;
-    sim.stops[s] = simulate_stop(rig, s, angles[s], times[s], out);
+    try {
+      sim.stops[s] = simulate_stop(rig, s, angles[s], times[s], out);
+    } catch (...) {
+      failure[s] = std::current_exception();
+    }
     progress.advance();
   });
+  for (const std::exception_ptr& e : failure)
+    if (e) std::rethrow_exception(e);
   progress.finish();
   return sim;
 }

@@ -38,12 +38,16 @@ struct Stokes3 {
 };
 Stokes3 seen_along(const Vec3& s, const Vec3& v, const Frame& f, const SkyModel& model) {
   const SkyLight light = sky_light(s, v, model);  // along the sun's line P = 0 and e = 0
-  const double psi = std::atan2(vec3::dot(light.e_vector, f.y), vec3::dot(light.e_vector, f.x));
+  const double psi = sensor_frame_angle_rad(light.e_vector, f.x, f.y);
   const double lp = light.radiance * light.dop;
   return {lp * std::cos(2 * psi), lp * std::sin(2 * psi), light.radiance};
 }
 
 }  // namespace
+
+double sensor_frame_angle_rad(const Vec3& e, const Vec3& X_s, const Vec3& Y_s) {
+  return std::atan2(vec3::dot(e, Y_s), vec3::dot(e, X_s));
+}
 
 SkyView sky_seen(const SunPosition& sun, const SkyModel& model, const SkyMount& mount,
                  double theta_R_deg) {

@@ -11,6 +11,7 @@
 #include "polrig/device/sensor.h"
 #include "polrig/random.h"
 #include "polrig/sky/rayleigh.h"
+#include "polrig/sky/sensor_view.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -43,16 +44,16 @@ Matrix3d mount(double mx_deg, double my_deg, double mz_deg) {
 }
 
 struct Seen {
-  double theta_meas_deg;  // the sensor's own angle (spec §1.3: clockwise seen from above)
+  double theta_deg;  // the sensor's angle in polrig's sensor frame (anticlockwise seen from above)
   double dop;
 };
 
-// What a sensor with frame C (sensor → n) sees of the sky: θ_meas = −θ_s, θ_s = atan2(e_s,y, e_s,x).
+// What a sensor with frame C (sensor → n, looking along its Z) sees of the sky: its angle from
+// X_s towards Y_s (sky/sensor_view.h, the frame the device model and the sky source use).
 Seen sensor_sees(const Matrix3d& C, const Vec3& sun, const SkyModel& sky) {
-  const Vector3d v = C.col(2);
-  const SkyLight light = sky_light(sun, to_vec3(v), sky);
-  const Vector3d e_s = C.transpose() * to_eigen(light.e_vector);
-  return {wrap_axis_deg(-rad2deg(std::atan2(e_s.y(), e_s.x()))), light.dop};
+  const SkyLight light = sky_light(sun, to_vec3(C.col(2)), sky);
+  const double theta = sensor_frame_angle_rad(light.e_vector, to_vec3(C.col(0)), to_vec3(C.col(1)));
+  return {wrap_axis_deg(rad2deg(theta)), light.dop};
 }
 
 double error_of(const HeadingSolution& r, double truth_deg) {
@@ -65,7 +66,7 @@ double error_of(const HeadingSolution& r, double truth_deg) {
 double through_device(const Rig& rig, std::uint64_t seed, const Seen& seen, int samples) {
   const std::array<double, 6> E{1, 1, 1, 1, 1, 1};  // the sky at infinity: equal irradiance
   const std::array<double, 3> V0 =
-      pair_voltages(rig.device.truth, rig.electronics, E, seen.theta_meas_deg, seen.dop);
+      pair_voltages(rig.device.truth, rig.electronics, E, seen.theta_deg, seen.dop);
   std::array<double, 3> V{0, 0, 0};
   for (int i = 0; i < 3; ++i) {
     double sum = 0;
@@ -107,8 +108,9 @@ HeadingTrial run_trial(const Rig& rig, const HeadingStudySettings& s, const Vec3
   const Matrix3d C_now = body_to_n(t.heading_deg, truth);
   const Matrix3d C_sensor_time = body_to_n(heading_at_sensor, truth);
   const Matrix3d M = mount(t.mount_x_deg, t.mount_y_deg, t.mount_z_deg);
-  // θ_b = θ_mount − θ_meas with the nominal θ_mount = 0 (spec §1.5, Eq. 22).
-  const auto body_angle = [](double theta_meas) { return wrap_axis_deg(-theta_meas); };
+  // θ_b = θ_mount + θ with the nominal θ_mount = 0: θ and θ_b both turn anticlockwise seen from
+  // above (spec §1.5's Eq. 22 has θ_mount − θ_meas for the spec's clockwise θ_meas).
+  const auto body_angle = [](double theta) { return wrap_axis_deg(theta); };
   const auto solve = [&](double aop_b, const Tilt& tilt) {
     return solve_heading(sun, aop_b, tilt, t.heading_deg);
   };
@@ -123,11 +125,11 @@ HeadingTrial run_trial(const Rig& rig, const HeadingStudySettings& s, const Vec3
 
   // Each factor alone.
   const Seen ideal = sensor_sees(C_now, sun, sky);
-  t.aop_true_deg = body_angle(ideal.theta_meas_deg);
-  t.error_sync_deg = error_of(solve(body_angle(sensor_sees(C_sensor_time, sun, sky).theta_meas_deg), truth),
+  t.aop_true_deg = body_angle(ideal.theta_deg);
+  t.error_sync_deg = error_of(solve(body_angle(sensor_sees(C_sensor_time, sun, sky).theta_deg), truth),
                               t.heading_deg);
   t.error_ins_tilt_deg = error_of(solve(t.aop_true_deg, ins), t.heading_deg);
-  t.error_mount_deg = error_of(solve(body_angle(sensor_sees(C_now * M, sun, sky).theta_meas_deg), truth),
+  t.error_mount_deg = error_of(solve(body_angle(sensor_sees(C_now * M, sun, sky).theta_deg), truth),
                                t.heading_deg);
   t.error_noise_deg =
       error_of(solve(body_angle(through_device(rig, t.seed, ideal, s.samples)), truth), t.heading_deg);

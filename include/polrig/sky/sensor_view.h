@@ -37,6 +37,11 @@ struct SkyView {
   double E_Wm2 = 0;      // every channel's irradiance: E0·radiance
 };
 
+// The E-vector e's angle in a sensor frame (X_s, Y_s): atan2(e·Y_s, e·X_s), from X_s towards Y_s
+// (anticlockwise seen from above for a sensor looking up: polrig's sensor frame), in radians,
+// (−π, π]. Every model of a sensor looking at the sky reads its angle here.
+double sensor_frame_angle_rad(const Vec3& e, const Vec3& X_s, const Vec3& Y_s);
+
 // The sky seen at table angle θ_R, t_s seconds after sky.first_stop (looking along the sun's line
 // the light is unpolarized: d = 0, θ = 0).
 SkyView sky_seen(const Sky& sky, const SkyMount& mount, double theta_R_deg, double t_s);

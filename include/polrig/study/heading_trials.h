@@ -50,7 +50,7 @@ struct HeadingTrial {
   // What the sensor saw and gave.
   double dop = 0;            // d at the sensor's axis
   double aop_true_deg = 0;   // θ_b the solver would get from a perfect sensor on a perfect mount
-  double aop_meas_deg = 0;   // θ_b from the noisy voltages (θ_mount − θ_sec, θ_mount = 0)
+  double aop_meas_deg = 0;   // θ_b from the noisy voltages (θ_mount + θ_sec, θ_mount = 0; both anticlockwise from above)
   HeadingStatus status = HeadingStatus::Ok;
   double heading_est_deg = 0;  // NaN without a solution
   // Heading error (estimate − truth at the INS's time, [−180°, 180°)), all factors together, then

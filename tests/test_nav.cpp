@@ -94,8 +94,10 @@ TEST(Heading, TurningAnticlockwiseLowersTheHeading) {
     const Matrix3d C0 = body_to_n(p.H, p.roll, p.pitch);
     const Matrix3d C1 = AngleAxisd(rad(10.0), Vector3d::UnitZ()).toRotationMatrix() * C0;
     const HeadingSolution r0 = solve_heading(to_vec3(s), theta_b(C0, s), {p.roll, p.pitch}, p.H);
-    // The turned body's roll and pitch are unchanged (the turn is about the vertical).
-    const HeadingSolution r1 = solve_heading(to_vec3(s), theta_b(C1, s), {p.roll, p.pitch}, p.H - 10);
+    // The turned body's roll and pitch are unchanged (the turn is about the vertical). The
+    // prior is the unturned heading, not the answer: of the roots H − 10 and H + 170 it picks
+    // the one 10° away.
+    const HeadingSolution r1 = solve_heading(to_vec3(s), theta_b(C1, s), {p.roll, p.pitch}, p.H);
     EXPECT_NEAR(heading_difference_deg(r1.heading_deg, r0.heading_deg), -10.0, 1e-9) << k;
   }
 }

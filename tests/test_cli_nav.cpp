@@ -69,7 +69,7 @@ TEST_F(CliNav, HeadingRecoversTheTruthAndWritesEveryRow) {
   const Csv t = read_csv(tmp / "t" / "heading.csv");
   ASSERT_EQ(t.rows.size(), 1u);
   ASSERT_EQ(t.rows[0].size(), t.header.size());
-  EXPECT_EQ(t.rows[0][t.col("status")], "sun-near-zenith");
+  EXPECT_EQ(t.rows[0][t.col("status")], "sun-near-zenith-or-vertical-e");
   EXPECT_EQ(t.rows[0][t.col("heading_deg")], "");
   EXPECT_EQ(t.rows[0][t.col("heading_alt_deg")], "");
 }

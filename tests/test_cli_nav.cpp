@@ -70,8 +70,8 @@ TEST_F(CliNav, HeadingRecoversTheTruthAndWritesEveryRow) {
   ASSERT_EQ(t.rows.size(), 1u);
   ASSERT_EQ(t.rows[0].size(), t.header.size());
   EXPECT_EQ(t.rows[0][t.col("status")], "sun-near-zenith-or-vertical-e");
-  EXPECT_EQ(t.rows[0][t.col("heading_deg")], "");
-  EXPECT_EQ(t.rows[0][t.col("heading_alt_deg")], "");
+  EXPECT_EQ(t.rows[0][t.col("heading_deg")], "nan");
+  EXPECT_EQ(t.rows[0][t.col("heading_alt_deg")], "nan");
 }
 
 TEST_F(CliNav, HeadingRefusesBadRowsAndWritesNothing) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iostream>
 #include <optional>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -131,14 +132,19 @@ void run_heading(const std::string& input, const std::string& site_text, const O
                                   f.rows[r][f.column("utc")], e.what()));
     }
     const HeadingSolution s = solve_heading(sun_direction_enu(sun), h.aop_deg, h.tilt, h.prior_deg);
+    // Every number finite, except the heading columns of a row without a heading: `nan`
+    // (formats.md §5).
+    const auto cell = [&](double v, const char* column, bool undefined_ok = false) {
+      if (!std::isfinite(v) && !(std::isnan(v) && undefined_ok))
+        throw std::runtime_error(fmt::format("{}:{}: a result is not finite: column '{}' is {}; "
+                                             "nothing was written", f.origin, f.line[r], column, v));
+      return fmt::format("{},", v);
+    };
     for (const std::string& v : f.rows[r]) text += v + ",";
-    text += fmt::format("{},{},", sun.azimuth_deg, sun.elevation_deg);
-    if (has_heading(s.status)) {
-      ++solved;
-      text += fmt::format("{},{},", s.heading_deg, s.heading_alt_deg);
-    } else {
-      text += ",,";
-    }
+    text += cell(sun.azimuth_deg, "sun_az_deg") + cell(sun.elevation_deg, "sun_el_deg");
+    const bool ok = has_heading(s.status);
+    solved += ok ? 1 : 0;
+    text += cell(s.heading_deg, "heading_deg", !ok) + cell(s.heading_alt_deg, "heading_alt_deg", !ok);
     text += fmt::format("{}\n", heading_status_name(s.status));
   }
   write_text_file(dir.staging() / "heading.csv", text);

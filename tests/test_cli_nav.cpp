@@ -90,6 +90,9 @@ TEST_F(CliNav, HeadingRefusesBadRowsAndWritesNothing) {
     EXPECT_HAS(r.err, c.message);
     EXPECT_FALSE(fs::exists(tmp / "o"));
   }
+  write_file(tmp / "nocol.csv", "utc,roll_deg,aop_deg\n2019-07-01T11:01:00Z,0,30\n");
+  EXPECT_HAS(polrig("heading " + shell_quote(tmp / "nocol.csv") + " --site 38,121 -o " + shell_quote(tmp / "o")).err,
+             "nocol.csv:1: missing column 'pitch_deg' (see docs/formats.md, \"6.13 polrig heading\")");
   write_file(tmp / "in.csv", good);
   EXPECT_HAS(polrig("heading " + shell_quote(tmp / "in.csv") + " -o " + shell_quote(tmp / "o")).err,
              "no site");

@@ -615,7 +615,8 @@ TEST_F(SkyCli, TableRefusesABadCellNamingFileLineColumnAndValue) {
   }
   test::write_file(tmp / "nocol.csv", "utc,lat_deg,lon_deg,view_az_deg\n");
   const Result r = polrig("sky table " + test::shell_quote(tmp / "nocol.csv") + " -o " + test::shell_quote(tmp / "out"));
-  EXPECT_PRED_FORMAT2(test::HasText, r.err, "view_el_deg");
+  EXPECT_PRED_FORMAT2(test::HasText, r.err,
+                     "nocol.csv:1: missing column 'view_el_deg' (see docs/formats.md, \"6.12 polrig sky table\")");
 }
 
 }  // namespace

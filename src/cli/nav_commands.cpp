@@ -59,8 +59,9 @@ struct HeadingRow {
 
 // Reads and checks every row before anything is computed or written.
 std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional<Site>& site) {
-  const std::size_t c_utc = f.column("utc"), c_roll = f.column("roll_deg"),
-                    c_pitch = f.column("pitch_deg"), c_aop = f.column("aop_deg");
+  constexpr std::string_view section = "6.13 polrig heading";
+  const std::size_t c_utc = f.column("utc", section), c_roll = f.column("roll_deg", section),
+                    c_pitch = f.column("pitch_deg", section), c_aop = f.column("aop_deg", section);
   const auto c_prior = f.find_column("heading_prior_deg");
   const auto c_lat = f.find_column("lat_deg"), c_lon = f.find_column("lon_deg");
   if (c_lat.has_value() != c_lon.has_value())

@@ -126,8 +126,10 @@ std::vector<DatasetFile> write_sky_map(const fs::path& dir, const SkyMap& map, c
 }
 
 std::string sky_table_csv(const CsvFile& in, const SkyModel& model, const SunSettings& sun) {
-  const std::size_t c_utc = in.column("utc"), c_lat = in.column("lat_deg"), c_lon = in.column("lon_deg"),
-                    c_az = in.column("view_az_deg"), c_el = in.column("view_el_deg");
+  constexpr std::string_view section = "6.12 polrig sky table";
+  const std::size_t c_utc = in.column("utc", section), c_lat = in.column("lat_deg", section),
+                    c_lon = in.column("lon_deg", section), c_az = in.column("view_az_deg", section),
+                    c_el = in.column("view_el_deg", section);
   auto ranged = [&](std::size_t row, std::size_t col, double lo, double hi) {
     const double v = in.number(row, col);
     if (v < lo || v > hi)

@@ -174,6 +174,14 @@ double angle_deg(const Vec3& a, const Vec3& b) {
   return std::atan2(vec3::norm(vec3::cross(a, b)), vec3::dot(a, b)) / kDeg;
 }
 
+// Past the leap-second table (2027 on, ERFA 2.0) ΔT must be given: the table's last value,
+// TT − UTC = 37 s + 32.184 s (UT1 = UTC), as ERFA itself would have extrapolated.
+SunSettings delta_T_past_the_table(double unix_s) {
+  SunSettings s;
+  if (unix_s >= 1798761600.0) s.delta_T_s = 69.184;  // 2027-01-01T00:00:00Z
+  return s;
+}
+
 TEST(SunPosition, AgreesWithTheAlmanacFormulaToItsAccuracy) {
   // 2000 random instants of 1990–2040 at random sites. Michalsky quotes "0.01°" for 1950–2050;
   // the worst case here is 0.0104°, so the bound is 0.011°.
@@ -181,7 +189,7 @@ TEST(SunPosition, AgreesWithTheAlmanacFormulaToItsAccuracy) {
   for (std::uint64_t i = 0; i < 2000; ++i) {
     const double t = 631152000.0 + uniform_unit(7, i, 0, 0) * 50 * 365.25 * 86400;
     const Site site{-89 + 178 * uniform_unit(7, i, 1, 0), -180 + 360 * uniform_unit(7, i, 2, 0), 0};
-    SunPosition sun = sun_position({t}, site);
+    SunPosition sun = sun_position({t}, site, delta_T_past_the_table(t));
     sun.elevation_deg = geocentric_elevation(sun);  // the formula is geocentric
     const Vec3 ours = sun_direction_enu(sun);
     worst = std::max(worst, angle_deg(ours, almanac_sun_enu(t, site)));
@@ -250,7 +258,8 @@ TEST(SunPosition, HourAngleAndDeclinationGiveTheElevation) {
   for (std::uint64_t i = 0; i < 200; ++i) {
     const Site site{-89 + 178 * uniform_unit(17, i, 1, 0), -180 + 360 * uniform_unit(17, i, 2, 0),
                     3000 * uniform_unit(17, i, 3, 0)};
-    const SunPosition s = sun_position({1.5e9 + 3e8 * uniform_unit(17, i, 0, 0)}, site);
+    const double t = 1.5e9 + 3e8 * uniform_unit(17, i, 0, 0);
+    const SunPosition s = sun_position({t}, site, delta_T_past_the_table(t));
     const double phi = site.lat_deg * kDeg, d = s.declination_deg * kDeg, H = s.lha_deg * kDeg;
     const double sin_h = std::sin(phi) * std::sin(d) + std::cos(phi) * std::cos(d) * std::cos(H);
     EXPECT_NEAR(std::asin(sin_h) / kDeg, s.elevation_deg, 1e-6) << i;
@@ -291,6 +300,41 @@ TEST(SunPosition, RefusesBadInput) {
   s.refraction = true;
   s.pressure_hPa = -2;
   EXPECT_THROW(sun_position({0}, Site{}, s), std::invalid_argument);
+}
+
+// The ephemeris (eraEpv00) holds over 1900–2100 and the leap-second table from 1960 to its
+// release year + 5: outside, ERFA only warns ("dubious year"); polrig refuses.
+TEST(SunPosition, RefusesTimesOutsideTheEphemerisAndTheLeapSecondTable) {
+  const auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_PRED_FORMAT2(test::HasText, message([] { parse_utc("1899-12-31T23:59:59Z"); }),
+                      "year 1899 is outside 1900-2100");
+  EXPECT_PRED_FORMAT2(test::HasText, message([] { parse_utc("2101-01-01T00:00:00Z"); }),
+                      "year 2101 is outside 1900-2100");
+  EXPECT_NO_THROW(parse_utc("1900-01-01T00:00:00Z"));
+  EXPECT_NO_THROW(parse_utc("2100-12-31T23:59:59Z"));
+  // Through the API, a time that did not come from parse_utc.
+  EXPECT_PRED_FORMAT2(test::HasText, message([] { sun_position({-2300000000.0}, Site{}); }),
+                      "outside 1900-2100");
+  // Before 1960 or past the table: only with ΔT given.
+  const UtcTime y1950 = parse_utc("1950-06-01T12:00:00Z"), y2090 = parse_utc("2090-06-01T12:00:00Z");
+  EXPECT_PRED_FORMAT2(test::HasText, message([&] { sun_position(y1950, Site{}); }),
+                      "leap-second table");
+  EXPECT_PRED_FORMAT2(test::HasText, message([&] { sun_position(y2090, Site{}); }),
+                      "leap-second table");
+  EXPECT_PRED_FORMAT2(test::HasText, message([&] { SunTrack(y2090, y2090.plus_seconds(60), Site{}); }),
+                      "leap-second table");
+  SunSettings dt;
+  dt.delta_T_s = 29.0;
+  EXPECT_NO_THROW(sun_position(y1950, Site{}, dt));
+  EXPECT_NO_THROW(sun_position(y2090, Site{}, dt));
+  EXPECT_NO_THROW(sun_position(parse_utc("1960-01-01T00:00:00Z"), Site{}));
 }
 
 // ---------------------------------------------------------------------------------------------

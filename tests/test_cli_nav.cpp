@@ -97,7 +97,7 @@ TEST_F(CliNav, HeadingRefusesBadRowsAndWritesNothing) {
   EXPECT_HAS(polrig("heading " + shell_quote(tmp / "in.csv") + " -o " + shell_quote(tmp / "o")).err,
              "no site");
   EXPECT_HAS(polrig("heading " + shell_quote(tmp / "in.csv") + " --site 38,200 -o " + shell_quote(tmp / "o")).err,
-             "--site 38,200");
+             "--site '38,200': longitude 200 is outside [-180, 180]");
   EXPECT_FALSE(fs::exists(tmp / "o"));
   ok("heading " + shell_quote(tmp / "in.csv") + " --site 38,121 -o " + shell_quote(tmp / "o"));
   EXPECT_NE(polrig("heading " + shell_quote(tmp / "in.csv") + " --site 38,121 -o " + shell_quote(tmp / "o")).status, 0);

@@ -612,6 +612,15 @@ TEST_F(SkyCli, MapWritesExrSunYamlAndPreviews) {
   const Result bad_utc = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --utc 2019-09-18T08:14:00 --no-plots");
   EXPECT_PRED_FORMAT2(test::HasText, bad_utc.err, "\"2019-09-18T08:14:00\"");
   EXPECT_FALSE(fs::exists(tmp / "bad"));
+  // Bad input is exit 2 (as every command's), one site range for every command, and a
+  // missing -o is CLI11's "required" (106) unless a subcommand is given.
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_EQ(bad_utc.status, 2);
+  const Result east = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --site 10,200 --no-plots");
+  EXPECT_EQ(east.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, east.err, "--site '10,200': longitude 200 is outside [-180, 180]");
+  EXPECT_EQ(polrig("sky --size 8 --no-plots").status, 106);
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
 }
 
 TEST_F(SkyCli, TableAddsTheSunAndTheSkyToEveryRow) {

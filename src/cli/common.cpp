@@ -1,12 +1,16 @@
 #include <unistd.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <stdexcept>
+#include <string_view>
 
 #include <fmt/format.h>
 
 #include "cli.h"
+#include "polrig/io/measured.h"
 #include "polrig/io/plot.h"
 
 namespace polrig::cli {
@@ -76,6 +80,38 @@ CLI::Validator finite_range(double lo, double hi, const std::string& unit) {
         return {};
       },
       range);
+}
+
+Site parse_site(const std::string& text, const std::string& option) {
+  const auto number = [](std::string_view s, double& v) {
+    const char* b = s.data();
+    const char* e = s.data() + s.size();
+    if (b != e && *b == '+') ++b;
+    const auto [end, err] = std::from_chars(b, e, v);
+    return !s.empty() && err == std::errc() && end == e && std::isfinite(v);
+  };
+  const auto comma = text.find(',');
+  Site site;
+  if (comma == std::string::npos || text.find(',', comma + 1) != std::string::npos ||
+      !number(std::string_view(text).substr(0, comma), site.lat_deg) ||
+      !number(std::string_view(text).substr(comma + 1), site.lon_deg))
+    throw DataError(fmt::format("{} '{}': expected LAT,LON in degrees (finite numbers), e.g. "
+                                "38.879167,121.543889", option, text));
+  if (std::abs(site.lat_deg) > 90)
+    throw DataError(fmt::format("{} '{}': latitude {} is outside [-90, 90] (degrees, north "
+                                "positive)", option, text, site.lat_deg));
+  if (std::abs(site.lon_deg) > 180)
+    throw DataError(fmt::format("{} '{}': longitude {} is outside [-180, 180] (degrees, east "
+                                "positive)", option, text, site.lon_deg));
+  return site;
+}
+
+UtcTime parse_utc_option(const std::string& text, const std::string& option) {
+  try {
+    return parse_utc(text);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("{} {}: {}", option, text, e.what()));
+  }
 }
 
 void add_threads_option(CLI::App& app, int& threads) {

@@ -1,6 +1,5 @@
 // Commands that navigate: heading (the W19 compass on recorded attitudes and angles) and
 // study heading (its Monte-Carlo on a moving platform).
-#include <charconv>
 #include <cmath>
 #include <iostream>
 #include <optional>
@@ -19,35 +18,6 @@
 namespace polrig::cli {
 
 namespace {
-
-// "LAT,LON" in degrees, north and east positive.
-Site parse_site(const std::string& text) {
-  const auto comma = text.find(',');
-  const auto number = [&](std::string_view s, double& v) {
-    const char* b = s.data();
-    const char* e = s.data() + s.size();
-    if (b != e && *b == '+') ++b;
-    const auto [end, err] = std::from_chars(b, e, v);
-    return !s.empty() && err == std::errc() && end == e && std::isfinite(v);
-  };
-  Site site;
-  if (comma == std::string::npos ||
-      !number(std::string_view(text).substr(0, comma), site.lat_deg) ||
-      !number(std::string_view(text).substr(comma + 1), site.lon_deg))
-    throw DataError(fmt::format("--site {}: expected LAT,LON in degrees, e.g. 38.879167,121.543889", text));
-  if (std::abs(site.lat_deg) > 90.0 || std::abs(site.lon_deg) > 180.0)
-    throw DataError(fmt::format("--site {}: latitude must be in [−90°, 90°] and longitude in "
-                                "[−180°, 180°]", text));
-  return site;
-}
-
-UtcTime parse_utc_option(const std::string& text) {
-  try {
-    return parse_utc(text);
-  } catch (const std::invalid_argument& e) {
-    throw DataError(fmt::format("--utc {}: {}", text, e.what()));
-  }
-}
 
 struct HeadingRow {
   UtcTime utc;

@@ -1,6 +1,5 @@
 // `polrig sky` (an all-sky map of the Rayleigh sky) and `polrig sky table` (the sun and the sky's
 // polarization along given directions at given times and places).
-#include <charconv>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -16,32 +15,6 @@
 
 namespace polrig::cli {
 namespace {
-
-double parse_number(const std::string& text, const std::string& option, const std::string& whole) {
-  double v = 0;
-  const char* b = text.data();
-  const char* e = b + text.size();
-  auto [end, err] = std::from_chars(b, e, v);
-  if (text.empty() || err != std::errc() || end != e || !std::isfinite(v))
-    throw std::runtime_error(fmt::format("{} '{}': '{}' is not a finite number (expected LAT,LON in degrees)",
-                                         option, whole, text));
-  return v;
-}
-
-// "LAT,LON" in degrees, north and east positive.
-Site parse_site(const std::string& text) {
-  const auto comma = text.find(',');
-  if (comma == std::string::npos || text.find(',', comma + 1) != std::string::npos)
-    throw std::runtime_error(fmt::format("--site '{}': expected LAT,LON in degrees, e.g. 38.8792,121.5439", text));
-  Site site;
-  site.lat_deg = parse_number(text.substr(0, comma), "--site", text);
-  site.lon_deg = parse_number(text.substr(comma + 1), "--site", text);
-  if (std::abs(site.lat_deg) > 90)
-    throw std::runtime_error(fmt::format("--site '{}': latitude {} is outside [-90, 90]", text, site.lat_deg));
-  if (site.lon_deg < -180 || site.lon_deg > 360)
-    throw std::runtime_error(fmt::format("--site '{}': longitude {} is outside [-180, 360]", text, site.lon_deg));
-  return site;
-}
 
 SkyRadiance parse_radiance(const std::string& name) {
   if (name == "uniform") return SkyRadiance::Uniform;
@@ -68,13 +41,7 @@ struct SkyOptions {
   Sky sky() const {
     Sky s;
     if (!site.empty()) s.site = parse_site(site);
-    if (!utc.empty()) {
-      try {
-        s.first_stop = parse_utc(utc);
-      } catch (const std::invalid_argument& e) {
-        throw std::runtime_error(fmt::format("--utc: {}", e.what()));
-      }
-    }
+    if (!utc.empty()) s.first_stop = parse_utc_option(utc);
     s.model.P_max.constant = p_max;
     s.model.radiance = parse_radiance(radiance);
     s.sun.refraction = refraction;
@@ -122,15 +89,21 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     auto opts = std::make_shared<SkyOptions>();
     auto size = std::make_shared<int>(1024);
     // -o is checked when the map is made: `sky table` has its own.
-    sky_app->add_option("-o,--out", out->out, "output folder (written whole or not at all)");
+    sky_app->add_option("-o,--out", out->out, "output folder (written whole or not at all); "
+                                              "required unless a subcommand is given");
     sky_app->add_flag("--force", out->force, "replace the output folder if it exists");
     sky_app->add_flag("--no-plots", out->no_plots, "write sky.exr and sun.yaml only, no PNG previews");
     opts->add_to(*sky_app, true);
     sky_app->add_option("--size", *size, "image width = height in pixels")
         ->check(CLI::Range(2, 8192))->capture_default_str();
     add_threads_option(*sky_app, threads);
+    // -o is required for the map only; CLI11 cannot say "required unless a subcommand", so
+    // the check runs once the line is parsed, with CLI11's error and exit code (106).
+    sky_app->parse_complete_callback([sky_app, out] {
+      if (sky_app->get_subcommands().empty() && out->out.empty())
+        throw CLI::RequiredError("--out");
+    });
     commands.push_back({sky_app, [=] {
-      if (out->out.empty()) throw std::runtime_error("sky: -o/--out is required");
       const Sky sky = opts->sky();
       OutputDir dir = out->open();
       const SkyMap map = sky_map(sky, *size);

@@ -145,7 +145,7 @@ std::string sky_table_csv(const CsvFile& in, const SkyModel& model, const SunSet
     } catch (const std::invalid_argument& e) {
       throw DataError(fmt::format("{}:{}: column 'utc': {}", in.origin, in.line[r], e.what()));
     }
-    const Site site{ranged(r, c_lat, -90, 90), ranged(r, c_lon, -180, 360), 0};
+    const Site site{ranged(r, c_lat, -90, 90), ranged(r, c_lon, -180, 180), 0};
     const double az = ranged(r, c_az, -360, 360), el = ranged(r, c_el, -90, 90);
     const SunPosition s = sun_position(t, site, sun);
     const SunPosition view{az, el, 90 - el, 0, 0, 0};

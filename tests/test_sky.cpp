@@ -17,6 +17,7 @@
 #include "polrig/sky/rayleigh.h"
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
+#include "polrig/sky/sun_rows.h"
 #include "support.h"
 
 namespace polrig {
@@ -337,6 +338,45 @@ TEST(SunPosition, RefusesTimesOutsideTheEphemerisAndTheLeapSecondTable) {
   EXPECT_NO_THROW(sun_position(parse_utc("1960-01-01T00:00:00Z"), Site{}));
 }
 
+// Many rows: one site's rows go through a SunTrack (so < 1e-6° from exact), another site's few
+// rows are exact; the same for 1 and all threads; a refused row is named by its index.
+TEST(SunRows, TrackForManyRowsExactForFewSameForAnyThreadCount) {
+  const Site dalian{38.879167, 121.543889, 0}, beijing{39.979, 116.339, 0};
+  const double t0 = parse_utc("2018-11-16T00:00:00Z").unix_s;
+  std::vector<SunRow> rows;
+  for (int i = 0; i < 3000; ++i) rows.push_back({{t0 + 28.8 * i}, dalian});  // 1 day, 52 nodes
+  for (int i = 0; i < 5; ++i) rows.push_back({{t0 + 3600.0 * i}, beijing});
+  std::vector<SunPosition> one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = sun_positions(rows);
+  }
+  const std::vector<SunPosition> all = sun_positions(rows);
+  ASSERT_EQ(one.size(), rows.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(one[i].azimuth_deg, all[i].azimuth_deg);
+    EXPECT_EQ(one[i].elevation_deg, all[i].elevation_deg);
+    const SunPosition exact = sun_position(rows[i].utc, rows[i].site);
+    if (i >= 3000) {
+      EXPECT_EQ(all[i].azimuth_deg, exact.azimuth_deg);  // few rows: exact
+      EXPECT_EQ(all[i].elevation_deg, exact.elevation_deg);
+    } else {
+      worst = std::max(worst, angle_deg(sun_direction_enu(all[i]), sun_direction_enu(exact)));
+    }
+  }
+  EXPECT_GT(worst, 0.0);  // interpolated, not exact
+  EXPECT_LT(worst, 1e-6);
+  std::printf("3000 rows of one site along a SunTrack: worst %.3g deg from exact\n", worst);
+  rows[1000].utc = parse_utc("2090-01-01T00:00:00Z");
+  try {
+    sun_positions(rows);
+    ADD_FAILURE() << "2090 without delta T accepted";
+  } catch (const SunRowError& e) {
+    EXPECT_EQ(e.row, 1000u);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The interpolated track
 // ---------------------------------------------------------------------------------------------
@@ -603,6 +643,14 @@ TEST_F(SkyCli, MapWritesExrSunYamlAndPreviews) {
     EXPECT_TRUE(test::starts_with_png_signature(tmp / "map" / "aop.png"));
     EXPECT_TRUE(test::starts_with_png_signature(tmp / "map" / "dop.png"));
   }
+  // Every compression gives the same pixels back.
+  for (const char* c : {"zip", "none"}) {
+    ok("sky -o " + test::shell_quote(tmp / c) + " --size 64 --site 39.979,116.339 --utc 2019-09-18T08:14:00Z --no-plots --exr-compression " + c);
+    int w2 = 0, h2 = 0;
+    const auto again = read_exr(tmp / c / "sky.exr", w2, h2);
+    ASSERT_EQ(again.size(), layers.size());
+    for (std::size_t k = 0; k < layers.size(); ++k) EXPECT_EQ(again[k].pixels, layers[k].pixels) << c;
+  }
   // An existing folder is not replaced without --force; a bad option writes nothing.
   EXPECT_NE(polrig("sky -o " + test::shell_quote(tmp / "map") + " --no-plots").status, 0);
   const Result bad = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --site 95,10 --no-plots");
@@ -648,6 +696,44 @@ TEST_F(SkyCli, TableAddsTheSunAndTheSkyToEveryRow) {
   // e_θ = north, e_φ = west, and the E-vector lies at A_s ± 90°, so χ = −(A_s + 90°) mod 180°.
   EXPECT_NEAR(wrap90(std::stod(csv.rows[0][csv.col("aop_deg")]) + std::stod(csv.rows[0][csv.col("sun_az_deg")]) + 90), 0, 1e-9);
   EXPECT_LT(std::stod(csv.rows[1][csv.col("sun_el_deg")]), 0);
+}
+
+// The input's cells are carried through as written (extra columns too); nothing is reformatted.
+TEST_F(SkyCli, TableCopiesTheInputColumnsVerbatim) {
+  test::write_file(tmp / "in.csv",
+                   "id,utc,lat_deg,lon_deg,view_az_deg,view_el_deg,note\n"
+                   "a,2018-11-16T08:09:40.000Z,+38.8791670,121.543889000,0,90.0,x y\n");
+  ok("sky table " + test::shell_quote(tmp / "in.csv") + " -o " + test::shell_quote(tmp / "out"));
+  const std::string text = test::read_file(tmp / "out" / "sky.csv");
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "id,utc,lat_deg,lon_deg,view_az_deg,view_el_deg,note,sun_az_deg,sun_el_deg,dop,aop_deg");
+  EXPECT_PRED_FORMAT2(test::HasText, text, "\na,2018-11-16T08:09:40.000Z,+38.8791670,121.543889000,0,90.0,x y,241.");
+}
+
+TEST_F(SkyCli, TableRefusesEmptyInputOrAddedColumnsAndFailsFastOnAnExistingFolder) {
+  const std::string header = "utc,lat_deg,lon_deg,view_az_deg,view_el_deg\n";
+  test::write_file(tmp / "empty.csv", header);
+  Result r = polrig("sky table " + test::shell_quote(tmp / "empty.csv") + " -o " + test::shell_quote(tmp / "out"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "empty.csv: no data rows after the header");
+  test::write_file(tmp / "dop.csv", "utc,lat_deg,lon_deg,view_az_deg,view_el_deg,dop\n2018-11-16T08:09:40Z,38,121,0,90,1\n");
+  r = polrig("sky table " + test::shell_quote(tmp / "dop.csv") + " -o " + test::shell_quote(tmp / "out"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "dop.csv:1: column 'dop' is one sky table writes");
+  EXPECT_FALSE(fs::exists(tmp / "out"));
+  // The folder is opened before the sun is computed: an existing one is reported even though
+  // the row's 2090 (past the leap-second table) would fail later.
+  fs::create_directories(tmp / "out");
+  test::write_file(tmp / "late.csv", header + "2090-01-01T00:00:00Z,38,121,0,90\n");
+  r = polrig("sky table " + test::shell_quote(tmp / "late.csv") + " -o " + test::shell_quote(tmp / "out"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "-o/--out");
+  r = polrig("sky table " + test::shell_quote(tmp / "late.csv") + " -o " + test::shell_quote(tmp / "out2"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "late.csv:2: column 'utc': sun position: 2090-01-01T00:00:00Z");
+  EXPECT_FALSE(fs::exists(tmp / "out2"));
+  // sky table draws no plots: --no-plots is not an option of it.
+  EXPECT_EQ(polrig("sky table " + test::shell_quote(tmp / "late.csv") + " -o " + test::shell_quote(tmp / "out3") + " --no-plots").status, 109);
 }
 
 TEST_F(SkyCli, TableRefusesABadCellNamingFileLineColumnAndValue) {

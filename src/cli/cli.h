@@ -25,7 +25,8 @@ struct OutputOptions {
   std::string out;
   bool force = false;
   bool no_plots = false;
-  void add_to(CLI::App& app);
+  // `plots`: the command draws plots, so it takes --no-plots.
+  void add_to(CLI::App& app, bool plots = true);
   // Fails early (before any computation) if gnuplot is needed and missing, or the destination
   // exists without --force.
   OutputDir open(bool plots_needed = true) const;

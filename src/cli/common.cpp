@@ -36,10 +36,10 @@ void set_command_line(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) g_command_line += " " + shell_word(argv[i]);
 }
 
-void OutputOptions::add_to(CLI::App& app) {
+void OutputOptions::add_to(CLI::App& app, bool plots) {
   app.add_option("-o,--out", out, "output folder (written whole or not at all)")->required();
   app.add_flag("--force", force, "replace the output folder if it exists");
-  app.add_flag("--no-plots", no_plots, "write the CSV files only, no PNG plots");
+  if (plots) app.add_flag("--no-plots", no_plots, "write the CSV files only, no PNG plots");
 }
 
 OutputDir OutputOptions::open(bool plots_needed) const {

@@ -1,6 +1,7 @@
 // `polrig sky` (an all-sky map of the Rayleigh sky) and `polrig sky table` (the sun and the sky's
 // polarization along given directions at given times and places).
 #include <cmath>
+#include <future>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -10,6 +11,8 @@
 #include "cli.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/sky_files.h"
+#include "polrig/report/sky_reports.h"
+#include "polrig/sky/sun_rows.h"
 #include "polrig/sky/sky.h"
 #include "polrig/sky/sky_map.h"
 
@@ -67,16 +70,24 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     auto opts = std::make_shared<SkyOptions>();
     app->add_option("INPUT", *input, "CSV with columns utc, lat_deg, lon_deg, view_az_deg, view_el_deg")
         ->required();
-    out->add_to(*app);
+    out->add_to(*app, false);
     opts->add_to(*app, false);
+    add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const Sky sky = opts->sky();
       const CsvFile in = CsvFile::read(*input);
-      const std::string csv = sky_table_csv(in, sky.model, sky.sun);  // all rows checked first
+      const std::vector<SkyQuery> queries = read_sky_table_input(in);  // every cell checked
+      // Opened before the work, so that an existing destination fails at once.
       OutputDir dir = out->open(false);
-      write_text_file(dir.staging() / "sky.csv", csv);
+      std::vector<SkySample> samples;
+      try {
+        samples = sky_along(queries, sky.model, sky.sun, progress());
+      } catch (const SunRowError& e) {
+        throw DataError(fmt::format("{}:{}: column 'utc': {}", in.origin, in.line[e.row], e.what()));
+      }
+      write_text_file(dir.staging() / "sky.csv", sky_table_csv(in, samples));
       Manifest m{command_line(), nullptr,
-                 {{"sky.csv", 1, "the input rows with sun_az_deg, sun_el_deg, dop, aop_deg"}}};
+                 {{"sky.csv", 1, "the input's columns as written, then sun_az_deg, sun_el_deg, dop, aop_deg"}}};
       m.inputs.push_back(*input);
       write_manifest(dir.staging(), m);
       finish(dir);
@@ -88,6 +99,7 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     auto out = std::make_shared<OutputOptions>();
     auto opts = std::make_shared<SkyOptions>();
     auto size = std::make_shared<int>(1024);
+    auto compression = std::make_shared<std::string>("rle");
     // -o is checked when the map is made: `sky table` has its own.
     sky_app->add_option("-o,--out", out->out, "output folder (written whole or not at all); "
                                               "required unless a subcommand is given");
@@ -96,6 +108,10 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     opts->add_to(*sky_app, true);
     sky_app->add_option("--size", *size, "image width = height in pixels")
         ->check(CLI::Range(2, 8192))->capture_default_str();
+    sky_app->add_option("--exr-compression", *compression,
+                        "sky.exr's lossless compression: rle (fast), zip (a quarter smaller, "
+                        "5x slower to write) or none")
+        ->check(CLI::IsMember({"rle", "zip", "none"}))->capture_default_str();
     add_threads_option(*sky_app, threads);
     // -o is required for the map only; CLI11 cannot say "required unless a subcommand", so
     // the check runs once the line is parsed, with CLI11's error and exit code (106).
@@ -107,7 +123,17 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
       const Sky sky = opts->sky();
       OutputDir dir = out->open();
       const SkyMap map = sky_map(sky, *size);
-      write_manifest(dir.staging(), {command_line(), nullptr, write_sky_map(dir.staging(), map, sky, out->plots())});
+      const ExrCompression c = *compression == "none" ? ExrCompression::None
+                               : *compression == "zip" ? ExrCompression::Zip
+                                                       : ExrCompression::Rle;
+      // The previews (gnuplot, a process of its own) are drawn while the EXR is written.
+      std::future<std::vector<DatasetFile>> previews;
+      if (out->plots())
+        previews = std::async(std::launch::async, [&] { return report_sky_previews(dir.staging(), map, sky); });
+      std::vector<DatasetFile> files = write_sky_map(dir.staging(), map, sky, c);
+      if (previews.valid())
+        for (DatasetFile& f : previews.get()) files.push_back(std::move(f));
+      write_manifest(dir.staging(), {command_line(), nullptr, files});
       finish(dir);
     }});
   }

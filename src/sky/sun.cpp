@@ -263,6 +263,10 @@ SunPosition sun_position(UtcTime t, const Site& site, const SunSettings& setting
   return observe(a.cirs, a.era, a.astrom, site.lon_deg, settings);
 }
 
+void check_sun_inputs(UtcTime t, const Site& site, const SunSettings& settings) {
+  check_inputs(t, site, settings);
+}
+
 Vec3 sun_direction_enu(const SunPosition& sun) {
   const double h = sun.elevation_deg * kDeg, A = sun.azimuth_deg * kDeg;
   return {std::cos(h) * std::sin(A), std::cos(h) * std::cos(A), std::sin(h)};

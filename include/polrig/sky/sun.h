@@ -70,6 +70,8 @@ struct SunPosition {
 // Throws std::invalid_argument naming the value for a latitude outside [−90°, 90°], a
 // non-finite input, or a date ERFA cannot handle.
 SunPosition sun_position(UtcTime t, const Site& site, const SunSettings& settings = {});
+// The checks alone: throws what sun_position would throw for these inputs, computes nothing.
+void check_sun_inputs(UtcTime t, const Site& site, const SunSettings& settings = {});
 
 // The fast path: exact apparent places at nodes `node_spacing_s` apart over [begin, end], and
 // between them 4-point Lagrange interpolation of the sun's apparent direction in CIRS (the

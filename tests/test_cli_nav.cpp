@@ -72,6 +72,21 @@ TEST_F(CliNav, HeadingRecoversTheTruthAndWritesEveryRow) {
   EXPECT_EQ(t.rows[0][t.col("status")], "sun-near-zenith-or-vertical-e");
   EXPECT_EQ(t.rows[0][t.col("heading_deg")], "nan");
   EXPECT_EQ(t.rows[0][t.col("heading_alt_deg")], "nan");
+
+  // --ut1-minus-utc and --refraction reach the sun: the same place as sky/sun gives with them.
+  ok("heading " + shell_quote(tmp / "in.csv") + " --site 38.879167,121.543889 --ut1-minus-utc 0.5 "
+     "--refraction -o " + shell_quote(tmp / "u"));
+  const Csv u = read_csv(tmp / "u" / "heading.csv");
+  polrig::SunSettings settings;
+  settings.ut1_minus_utc_s = 0.5;
+  settings.refraction = true;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const polrig::SunPosition sun = polrig::sun_position(polrig::parse_utc(rows[k].utc), dalian, settings);
+    EXPECT_EQ(std::stod(u.rows[k][u.col("sun_az_deg")]), sun.azimuth_deg);
+    EXPECT_EQ(std::stod(u.rows[k][u.col("sun_el_deg")]), sun.elevation_deg);
+    // 0.5 s of UT1 turns the sky by 0.0021° of hour angle: the azimuth moves.
+    EXPECT_NE(u.rows[k][u.col("sun_az_deg")], csv.rows[k][csv.col("sun_az_deg")]);
+  }
 }
 
 TEST_F(CliNav, HeadingRefusesBadRowsAndWritesNothing) {
@@ -120,4 +135,9 @@ TEST_F(CliNav, StudyHeadingIsDeterministicAndSyncErrorIsTurnTimesOffset) {
   }
   EXPECT_HAS(polrig("study heading " + shell_quote(kDefaultRigFile) +
                     " --utc 2019-07-01T11:01:00 -o " + shell_quote(tmp / "c")).err, "--utc");
+  // The sun's settings, as for heading and sky: UT1 − UTC within [−1, 1] s.
+  ok("study heading " + shell_quote(kDefaultRigFile) + " --trials 20 --no-plots --refraction "
+     "--ut1-minus-utc -0.3 -o " + shell_quote(tmp / "d"));
+  EXPECT_EQ(polrig("study heading " + shell_quote(kDefaultRigFile) + " --trials 20 --no-plots "
+                   "--ut1-minus-utc 2 -o " + shell_quote(tmp / "e")).status, 105);
 }

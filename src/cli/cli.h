@@ -52,6 +52,9 @@ CLI::Validator finite_range(double lo, double hi, const std::string& unit = "");
 Site parse_site(const std::string& text, const std::string& option = "--site");
 // An ISO 8601 UTC time with a Z (sky/sun.h's parse_utc); DataError naming `option` otherwise.
 UtcTime parse_utc_option(const std::string& text, const std::string& option = "--utc");
+// --refraction and --ut1-minus-utc, the sun's settings shared by sky, sky table, heading and
+// study heading (sky/sun.h's SunSettings; refraction at 1010 hPa and 10 °C).
+void add_sun_options(CLI::App& app, SunSettings& sun);
 // --quiet on `app` and every command below it: no progress line.
 void add_quiet_option(CLI::App& app);
 // Where the library reports progress: a line on stderr, rewritten in place, when stderr is a

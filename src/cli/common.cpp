@@ -114,6 +114,14 @@ UtcTime parse_utc_option(const std::string& text, const std::string& option) {
   }
 }
 
+void add_sun_options(CLI::App& app, SunSettings& sun) {
+  app.add_flag("--refraction", sun.refraction,
+               "refract the sun (Saemundsson, 1010 hPa, 10 °C); off: geometric");
+  app.add_option("--ut1-minus-utc", sun.ut1_minus_utc_s,
+                 "UT1 - UTC in seconds (IERS Bulletin A; 1 s turns the sky by 0.004°)")
+      ->check(finite_range(-1, 1, "s"))->capture_default_str();
+}
+
 void add_threads_option(CLI::App& app, int& threads) {
   app.add_option("--threads", threads,
                  "worker threads (default: all cores); results do not depend on it")

@@ -12,6 +12,7 @@
 #include "polrig/io/measured.h"
 #include "polrig/nav/heading.h"
 #include "polrig/sky/sun.h"
+#include "polrig/sky/sun_rows.h"
 #include "polrig/report/heading_reports.h"
 #include "polrig/study/heading_trials.h"
 
@@ -77,7 +78,8 @@ std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional
   return rows;
 }
 
-void run_heading(const std::string& input, const std::string& site_text, const OutputOptions& out) {
+void run_heading(const std::string& input, const std::string& site_text, const SunSettings& sun_settings,
+                 const OutputOptions& out) {
   const std::optional<Site> site =
       site_text.empty() ? std::nullopt : std::optional<Site>(parse_site(site_text));
   const CsvFile f = CsvFile::read(input);
@@ -89,19 +91,22 @@ void run_heading(const std::string& input, const std::string& site_text, const O
   // Opened first, so that an existing destination fails before any work; an error below (a
   // date the ephemeris refuses is that row's error) removes the staging folder.
   OutputDir dir = out.open(false);
+  std::vector<SunRow> at(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) at[r] = {rows[r].utc, rows[r].site};
+  std::vector<SunPosition> suns;
+  try {
+    suns = sun_positions(at, sun_settings, progress());
+  } catch (const SunRowError& e) {
+    throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[e.row],
+                                f.rows[e.row][f.column("utc")], e.what()));
+  }
   std::string text;
   for (std::size_t c = 0; c < f.header.size(); ++c) text += f.header[c] + ",";
   text += "sun_az_deg,sun_el_deg,heading_deg,heading_alt_deg,status\n";
   int solved = 0;
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const HeadingRow& h = rows[r];
-    SunPosition sun;
-    try {
-      sun = sun_position(h.utc, h.site);
-    } catch (const std::invalid_argument& e) {
-      throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
-                                  f.rows[r][f.column("utc")], e.what()));
-    }
+    const SunPosition& sun = suns[r];
     const HeadingSolution s = solve_heading(sun_direction_enu(sun), h.aop_deg, h.tilt, h.prior_deg);
     // Every number finite, except the heading columns of a row without a heading: `nan`
     // (formats.md §5).
@@ -141,12 +146,15 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     auto input = std::make_shared<std::string>();
     auto site = std::make_shared<std::string>();
     auto out = std::make_shared<OutputOptions>();
+    auto sun = std::make_shared<SunSettings>();
     app->add_option("INPUT", *input, "CSV with utc, roll_deg, pitch_deg, aop_deg and optionally "
                                      "heading_prior_deg, lat_deg, lon_deg")->required();
     app->add_option("--site", *site, "LAT,LON in degrees (north, east positive), unless the "
                                      "input has lat_deg and lon_deg columns");
     out->add_to(*app);
-    commands.push_back({app, [=] { run_heading(*input, *site, *out); }});
+    add_sun_options(*app, *sun);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] { run_heading(*input, *site, *sun, *out); }});
   }
   {
     auto* app = study.add_subcommand(
@@ -162,6 +170,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     app->add_option("--site", *site, "LAT,LON in degrees (default: W19's Dalian site, 38.879167,121.543889)");
     app->add_option("--utc", *utc, "time of the run, ISO 8601 with Z (default: W19's dynamic run)")
         ->capture_default_str();
+    add_sun_options(*app, s->sun);
     app->add_option("--roll-sd", s->roll_sd_deg, "SD of the roll drawn, degrees")
         ->check(finite_range(0, 30, "°"))->capture_default_str();
     app->add_option("--pitch-sd", s->pitch_sd_deg, "SD of the pitch drawn, degrees")

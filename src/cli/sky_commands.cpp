@@ -27,14 +27,12 @@ SkyRadiance parse_radiance(const std::string& name) {
 
 struct SkyOptions {
   std::string site, utc, radiance = "uniform";
-  double p_max = 0.7, ut1_minus_utc = 0;
-  bool refraction = false;
+  double p_max = 0.7;
+  SunSettings sun;
   void add_to(CLI::App& app, bool map) {
     app.add_option("--p-max", p_max, "maximum degree of polarization P_max, (0, 1]")
         ->check(finite_range(1e-6, 1.0))->capture_default_str();
-    app.add_flag("--refraction", refraction, "refract the sun (Saemundsson, 1010 hPa, 10 °C); off: geometric");
-    app.add_option("--ut1-minus-utc", ut1_minus_utc, "UT1 - UTC in seconds (IERS Bulletin A)")
-        ->check(finite_range(-1, 1, "s"))->capture_default_str();
+    add_sun_options(app, sun);
     if (!map) return;
     app.add_option("--site", site, "LAT,LON in degrees, north and east positive (default: W19's roof in Dalian, 38.879167,121.543889)");
     app.add_option("--utc", utc, "ISO 8601 UTC time with a Z (default: 2018-11-16T08:09:40Z, W19 Outdoor1)");
@@ -47,8 +45,8 @@ struct SkyOptions {
     if (!utc.empty()) s.first_stop = parse_utc_option(utc);
     s.model.P_max.constant = p_max;
     s.model.radiance = parse_radiance(radiance);
-    s.sun.refraction = refraction;
-    s.sun.ut1_minus_utc_s = ut1_minus_utc;
+    s.sun.refraction = sun.refraction;
+    s.sun.ut1_minus_utc_s = sun.ut1_minus_utc_s;
     return s;
   }
 };

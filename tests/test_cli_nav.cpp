@@ -69,9 +69,24 @@ TEST_F(CliNav, HeadingRecoversTheTruthAndWritesEveryRow) {
   const Csv t = read_csv(tmp / "t" / "heading.csv");
   ASSERT_EQ(t.rows.size(), 1u);
   ASSERT_EQ(t.rows[0].size(), t.header.size());
-  EXPECT_EQ(t.rows[0][t.col("status")], "sun-near-zenith");
-  EXPECT_EQ(t.rows[0][t.col("heading_deg")], "");
-  EXPECT_EQ(t.rows[0][t.col("heading_alt_deg")], "");
+  EXPECT_EQ(t.rows[0][t.col("status")], "sun-near-zenith-or-vertical-e");
+  EXPECT_EQ(t.rows[0][t.col("heading_deg")], "nan");
+  EXPECT_EQ(t.rows[0][t.col("heading_alt_deg")], "nan");
+
+  // --ut1-minus-utc and --refraction reach the sun: the same place as sky/sun gives with them.
+  ok("heading " + shell_quote(tmp / "in.csv") + " --site 38.879167,121.543889 --ut1-minus-utc 0.5 "
+     "--refraction -o " + shell_quote(tmp / "u"));
+  const Csv u = read_csv(tmp / "u" / "heading.csv");
+  polrig::SunSettings settings;
+  settings.ut1_minus_utc_s = 0.5;
+  settings.refraction = true;
+  for (std::size_t k = 0; k < 3; ++k) {
+    const polrig::SunPosition sun = polrig::sun_position(polrig::parse_utc(rows[k].utc), dalian, settings);
+    EXPECT_EQ(std::stod(u.rows[k][u.col("sun_az_deg")]), sun.azimuth_deg);
+    EXPECT_EQ(std::stod(u.rows[k][u.col("sun_el_deg")]), sun.elevation_deg);
+    // 0.5 s of UT1 turns the sky by 0.0021° of hour angle: the azimuth moves.
+    EXPECT_NE(u.rows[k][u.col("sun_az_deg")], csv.rows[k][csv.col("sun_az_deg")]);
+  }
 }
 
 TEST_F(CliNav, HeadingRefusesBadRowsAndWritesNothing) {
@@ -90,11 +105,14 @@ TEST_F(CliNav, HeadingRefusesBadRowsAndWritesNothing) {
     EXPECT_HAS(r.err, c.message);
     EXPECT_FALSE(fs::exists(tmp / "o"));
   }
+  write_file(tmp / "nocol.csv", "utc,roll_deg,aop_deg\n2019-07-01T11:01:00Z,0,30\n");
+  EXPECT_HAS(polrig("heading " + shell_quote(tmp / "nocol.csv") + " --site 38,121 -o " + shell_quote(tmp / "o")).err,
+             "nocol.csv:1: missing column 'pitch_deg' (see docs/formats.md, \"6.13 polrig heading\")");
   write_file(tmp / "in.csv", good);
   EXPECT_HAS(polrig("heading " + shell_quote(tmp / "in.csv") + " -o " + shell_quote(tmp / "o")).err,
              "no site");
   EXPECT_HAS(polrig("heading " + shell_quote(tmp / "in.csv") + " --site 38,200 -o " + shell_quote(tmp / "o")).err,
-             "--site 38,200");
+             "--site '38,200': longitude 200 is outside [-180, 180]");
   EXPECT_FALSE(fs::exists(tmp / "o"));
   ok("heading " + shell_quote(tmp / "in.csv") + " --site 38,121 -o " + shell_quote(tmp / "o"));
   EXPECT_NE(polrig("heading " + shell_quote(tmp / "in.csv") + " --site 38,121 -o " + shell_quote(tmp / "o")).status, 0);
@@ -117,4 +135,9 @@ TEST_F(CliNav, StudyHeadingIsDeterministicAndSyncErrorIsTurnTimesOffset) {
   }
   EXPECT_HAS(polrig("study heading " + shell_quote(kDefaultRigFile) +
                     " --utc 2019-07-01T11:01:00 -o " + shell_quote(tmp / "c")).err, "--utc");
+  // The sun's settings, as for heading and sky: UT1 − UTC within [−1, 1] s.
+  ok("study heading " + shell_quote(kDefaultRigFile) + " --trials 20 --no-plots --refraction "
+     "--ut1-minus-utc -0.3 -o " + shell_quote(tmp / "d"));
+  EXPECT_EQ(polrig("study heading " + shell_quote(kDefaultRigFile) + " --trials 20 --no-plots "
+                   "--ut1-minus-utc 2 -o " + shell_quote(tmp / "e")).status, 105);
 }

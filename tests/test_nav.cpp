@@ -94,8 +94,10 @@ TEST(Heading, TurningAnticlockwiseLowersTheHeading) {
     const Matrix3d C0 = body_to_n(p.H, p.roll, p.pitch);
     const Matrix3d C1 = AngleAxisd(rad(10.0), Vector3d::UnitZ()).toRotationMatrix() * C0;
     const HeadingSolution r0 = solve_heading(to_vec3(s), theta_b(C0, s), {p.roll, p.pitch}, p.H);
-    // The turned body's roll and pitch are unchanged (the turn is about the vertical).
-    const HeadingSolution r1 = solve_heading(to_vec3(s), theta_b(C1, s), {p.roll, p.pitch}, p.H - 10);
+    // The turned body's roll and pitch are unchanged (the turn is about the vertical). The
+    // prior is the unturned heading, not the answer: of the roots H − 10 and H + 170 it picks
+    // the one 10° away.
+    const HeadingSolution r1 = solve_heading(to_vec3(s), theta_b(C1, s), {p.roll, p.pitch}, p.H);
     EXPECT_NEAR(heading_difference_deg(r1.heading_deg, r0.heading_deg), -10.0, 1e-9) << k;
   }
 }
@@ -150,12 +152,27 @@ TEST(Heading, BodyToEnuIsTheSpecsRotation) {
 
 TEST(Heading, NoSolutionWithTheSunAtTheZenith) {
   const HeadingSolution r = solve_heading({0, 0, 1}, 30.0, {3, -2});
-  EXPECT_EQ(r.status, HeadingStatus::SunNearZenith);
+  EXPECT_EQ(r.status, HeadingStatus::SunNearZenithOrVerticalE);
+  EXPECT_EQ(heading_status_name(r.status), "sun-near-zenith-or-vertical-e");
   EXPECT_FALSE(has_heading(r.status));
   EXPECT_TRUE(std::isnan(r.heading_deg));
   // Just inside the default threshold (horizontal part sin 1°): 89.5° elevation, level.
-  EXPECT_EQ(solve_heading(to_vec3(sun_enu(40, 89.5)), 30.0, {}).status, HeadingStatus::SunNearZenith);
+  EXPECT_EQ(solve_heading(to_vec3(sun_enu(40, 89.5)), 30.0, {}).status,
+            HeadingStatus::SunNearZenithOrVerticalE);
   EXPECT_EQ(solve_heading(to_vec3(sun_enu(40, 88.5)), 30.0, {}).status, HeadingStatus::Ok);
+}
+
+// The same test fires with a low sun when the E-vector is nearly vertical: pitch 89.5°,
+// θ_b = 90° (e_b forward) gives u = Rx(89.5°)·Y = (0, cos 89.5°, sin 89.5°), so
+// √(a²+b²) = cos 89.5°·cos h_s < sin 1° for any sun.
+TEST(Heading, NoSolutionWithTheEVectorNearlyVertical) {
+  for (const double el : {0.0, 20.0, 45.0}) {
+    EXPECT_EQ(solve_heading(to_vec3(sun_enu(40, el)), 90.0, {0, 89.5}).status,
+              HeadingStatus::SunNearZenithOrVerticalE) << el;
+    // Pitch 80°: √(a²+b²) = cos 80°·cos h_s is above sin 1° (the tangent test then decides).
+    EXPECT_NE(solve_heading(to_vec3(sun_enu(40, el)), 90.0, {0, 80}).status,
+              HeadingStatus::SunNearZenithOrVerticalE) << el;
+  }
 }
 
 // Pitch 15°, θ_b = 90° (e_b forward): q = c/√(a² + b²) = −tan 15°·tan h_s, so |q| = 1 at

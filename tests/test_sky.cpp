@@ -17,6 +17,7 @@
 #include "polrig/sky/rayleigh.h"
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
+#include "polrig/sky/sun_rows.h"
 #include "support.h"
 
 namespace polrig {
@@ -174,6 +175,14 @@ double angle_deg(const Vec3& a, const Vec3& b) {
   return std::atan2(vec3::norm(vec3::cross(a, b)), vec3::dot(a, b)) / kDeg;
 }
 
+// Past the leap-second table (2027 on, ERFA 2.0) ΔT must be given: the table's last value,
+// TT − UTC = 37 s + 32.184 s (UT1 = UTC), as ERFA itself would have extrapolated.
+SunSettings delta_T_past_the_table(double unix_s) {
+  SunSettings s;
+  if (unix_s >= 1798761600.0) s.delta_T_s = 69.184;  // 2027-01-01T00:00:00Z
+  return s;
+}
+
 TEST(SunPosition, AgreesWithTheAlmanacFormulaToItsAccuracy) {
   // 2000 random instants of 1990–2040 at random sites. Michalsky quotes "0.01°" for 1950–2050;
   // the worst case here is 0.0104°, so the bound is 0.011°.
@@ -181,7 +190,7 @@ TEST(SunPosition, AgreesWithTheAlmanacFormulaToItsAccuracy) {
   for (std::uint64_t i = 0; i < 2000; ++i) {
     const double t = 631152000.0 + uniform_unit(7, i, 0, 0) * 50 * 365.25 * 86400;
     const Site site{-89 + 178 * uniform_unit(7, i, 1, 0), -180 + 360 * uniform_unit(7, i, 2, 0), 0};
-    SunPosition sun = sun_position({t}, site);
+    SunPosition sun = sun_position({t}, site, delta_T_past_the_table(t));
     sun.elevation_deg = geocentric_elevation(sun);  // the formula is geocentric
     const Vec3 ours = sun_direction_enu(sun);
     worst = std::max(worst, angle_deg(ours, almanac_sun_enu(t, site)));
@@ -250,7 +259,8 @@ TEST(SunPosition, HourAngleAndDeclinationGiveTheElevation) {
   for (std::uint64_t i = 0; i < 200; ++i) {
     const Site site{-89 + 178 * uniform_unit(17, i, 1, 0), -180 + 360 * uniform_unit(17, i, 2, 0),
                     3000 * uniform_unit(17, i, 3, 0)};
-    const SunPosition s = sun_position({1.5e9 + 3e8 * uniform_unit(17, i, 0, 0)}, site);
+    const double t = 1.5e9 + 3e8 * uniform_unit(17, i, 0, 0);
+    const SunPosition s = sun_position({t}, site, delta_T_past_the_table(t));
     const double phi = site.lat_deg * kDeg, d = s.declination_deg * kDeg, H = s.lha_deg * kDeg;
     const double sin_h = std::sin(phi) * std::sin(d) + std::cos(phi) * std::cos(d) * std::cos(H);
     EXPECT_NEAR(std::asin(sin_h) / kDeg, s.elevation_deg, 1e-6) << i;
@@ -291,6 +301,80 @@ TEST(SunPosition, RefusesBadInput) {
   s.refraction = true;
   s.pressure_hPa = -2;
   EXPECT_THROW(sun_position({0}, Site{}, s), std::invalid_argument);
+}
+
+// The ephemeris (eraEpv00) holds over 1900–2100 and the leap-second table from 1960 to its
+// release year + 5: outside, ERFA only warns ("dubious year"); polrig refuses.
+TEST(SunPosition, RefusesTimesOutsideTheEphemerisAndTheLeapSecondTable) {
+  const auto message = [](auto&& f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_PRED_FORMAT2(test::HasText, message([] { parse_utc("1899-12-31T23:59:59Z"); }),
+                      "year 1899 is outside 1900-2100");
+  EXPECT_PRED_FORMAT2(test::HasText, message([] { parse_utc("2101-01-01T00:00:00Z"); }),
+                      "year 2101 is outside 1900-2100");
+  EXPECT_NO_THROW(parse_utc("1900-01-01T00:00:00Z"));
+  EXPECT_NO_THROW(parse_utc("2100-12-31T23:59:59Z"));
+  // Through the API, a time that did not come from parse_utc.
+  EXPECT_PRED_FORMAT2(test::HasText, message([] { sun_position({-2300000000.0}, Site{}); }),
+                      "outside 1900-2100");
+  // Before 1960 or past the table: only with ΔT given.
+  const UtcTime y1950 = parse_utc("1950-06-01T12:00:00Z"), y2090 = parse_utc("2090-06-01T12:00:00Z");
+  EXPECT_PRED_FORMAT2(test::HasText, message([&] { sun_position(y1950, Site{}); }),
+                      "leap-second table");
+  EXPECT_PRED_FORMAT2(test::HasText, message([&] { sun_position(y2090, Site{}); }),
+                      "leap-second table");
+  EXPECT_PRED_FORMAT2(test::HasText, message([&] { SunTrack(y2090, y2090.plus_seconds(60), Site{}); }),
+                      "leap-second table");
+  SunSettings dt;
+  dt.delta_T_s = 29.0;
+  EXPECT_NO_THROW(sun_position(y1950, Site{}, dt));
+  EXPECT_NO_THROW(sun_position(y2090, Site{}, dt));
+  EXPECT_NO_THROW(sun_position(parse_utc("1960-01-01T00:00:00Z"), Site{}));
+}
+
+// Many rows: one site's rows go through a SunTrack (so < 1e-6° from exact), another site's few
+// rows are exact; the same for 1 and all threads; a refused row is named by its index.
+TEST(SunRows, TrackForManyRowsExactForFewSameForAnyThreadCount) {
+  const Site dalian{38.879167, 121.543889, 0}, beijing{39.979, 116.339, 0};
+  const double t0 = parse_utc("2018-11-16T00:00:00Z").unix_s;
+  std::vector<SunRow> rows;
+  for (int i = 0; i < 3000; ++i) rows.push_back({{t0 + 28.8 * i}, dalian});  // 1 day, 52 nodes
+  for (int i = 0; i < 5; ++i) rows.push_back({{t0 + 3600.0 * i}, beijing});
+  std::vector<SunPosition> one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = sun_positions(rows);
+  }
+  const std::vector<SunPosition> all = sun_positions(rows);
+  ASSERT_EQ(one.size(), rows.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    EXPECT_EQ(one[i].azimuth_deg, all[i].azimuth_deg);
+    EXPECT_EQ(one[i].elevation_deg, all[i].elevation_deg);
+    const SunPosition exact = sun_position(rows[i].utc, rows[i].site);
+    if (i >= 3000) {
+      EXPECT_EQ(all[i].azimuth_deg, exact.azimuth_deg);  // few rows: exact
+      EXPECT_EQ(all[i].elevation_deg, exact.elevation_deg);
+    } else {
+      worst = std::max(worst, angle_deg(sun_direction_enu(all[i]), sun_direction_enu(exact)));
+    }
+  }
+  EXPECT_GT(worst, 0.0);  // interpolated, not exact
+  EXPECT_LT(worst, 1e-6);
+  std::printf("3000 rows of one site along a SunTrack: worst %.3g deg from exact\n", worst);
+  rows[1000].utc = parse_utc("2090-01-01T00:00:00Z");
+  try {
+    sun_positions(rows);
+    ADD_FAILURE() << "2090 without delta T accepted";
+  } catch (const SunRowError& e) {
+    EXPECT_EQ(e.row, 1000u);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -559,6 +643,14 @@ TEST_F(SkyCli, MapWritesExrSunYamlAndPreviews) {
     EXPECT_TRUE(test::starts_with_png_signature(tmp / "map" / "aop.png"));
     EXPECT_TRUE(test::starts_with_png_signature(tmp / "map" / "dop.png"));
   }
+  // Every compression gives the same pixels back.
+  for (const char* c : {"zip", "none"}) {
+    ok("sky -o " + test::shell_quote(tmp / c) + " --size 64 --site 39.979,116.339 --utc 2019-09-18T08:14:00Z --no-plots --exr-compression " + c);
+    int w2 = 0, h2 = 0;
+    const auto again = read_exr(tmp / c / "sky.exr", w2, h2);
+    ASSERT_EQ(again.size(), layers.size());
+    for (std::size_t k = 0; k < layers.size(); ++k) EXPECT_EQ(again[k].pixels, layers[k].pixels) << c;
+  }
   // An existing folder is not replaced without --force; a bad option writes nothing.
   EXPECT_NE(polrig("sky -o " + test::shell_quote(tmp / "map") + " --no-plots").status, 0);
   const Result bad = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --site 95,10 --no-plots");
@@ -567,6 +659,15 @@ TEST_F(SkyCli, MapWritesExrSunYamlAndPreviews) {
   EXPECT_FALSE(fs::exists(tmp / "bad"));
   const Result bad_utc = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --utc 2019-09-18T08:14:00 --no-plots");
   EXPECT_PRED_FORMAT2(test::HasText, bad_utc.err, "\"2019-09-18T08:14:00\"");
+  EXPECT_FALSE(fs::exists(tmp / "bad"));
+  // Bad input is exit 2 (as every command's), one site range for every command, and a
+  // missing -o is CLI11's "required" (106) unless a subcommand is given.
+  EXPECT_EQ(bad.status, 2);
+  EXPECT_EQ(bad_utc.status, 2);
+  const Result east = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --site 10,200 --no-plots");
+  EXPECT_EQ(east.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, east.err, "--site '10,200': longitude 200 is outside [-180, 180]");
+  EXPECT_EQ(polrig("sky --size 8 --no-plots").status, 106);
   EXPECT_FALSE(fs::exists(tmp / "bad"));
 }
 
@@ -597,6 +698,44 @@ TEST_F(SkyCli, TableAddsTheSunAndTheSkyToEveryRow) {
   EXPECT_LT(std::stod(csv.rows[1][csv.col("sun_el_deg")]), 0);
 }
 
+// The input's cells are carried through as written (extra columns too); nothing is reformatted.
+TEST_F(SkyCli, TableCopiesTheInputColumnsVerbatim) {
+  test::write_file(tmp / "in.csv",
+                   "id,utc,lat_deg,lon_deg,view_az_deg,view_el_deg,note\n"
+                   "a,2018-11-16T08:09:40.000Z,+38.8791670,121.543889000,0,90.0,x y\n");
+  ok("sky table " + test::shell_quote(tmp / "in.csv") + " -o " + test::shell_quote(tmp / "out"));
+  const std::string text = test::read_file(tmp / "out" / "sky.csv");
+  EXPECT_EQ(text.substr(0, text.find('\n')),
+            "id,utc,lat_deg,lon_deg,view_az_deg,view_el_deg,note,sun_az_deg,sun_el_deg,dop,aop_deg");
+  EXPECT_PRED_FORMAT2(test::HasText, text, "\na,2018-11-16T08:09:40.000Z,+38.8791670,121.543889000,0,90.0,x y,241.");
+}
+
+TEST_F(SkyCli, TableRefusesEmptyInputOrAddedColumnsAndFailsFastOnAnExistingFolder) {
+  const std::string header = "utc,lat_deg,lon_deg,view_az_deg,view_el_deg\n";
+  test::write_file(tmp / "empty.csv", header);
+  Result r = polrig("sky table " + test::shell_quote(tmp / "empty.csv") + " -o " + test::shell_quote(tmp / "out"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "empty.csv: no data rows after the header");
+  test::write_file(tmp / "dop.csv", "utc,lat_deg,lon_deg,view_az_deg,view_el_deg,dop\n2018-11-16T08:09:40Z,38,121,0,90,1\n");
+  r = polrig("sky table " + test::shell_quote(tmp / "dop.csv") + " -o " + test::shell_quote(tmp / "out"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "dop.csv:1: column 'dop' is one sky table writes");
+  EXPECT_FALSE(fs::exists(tmp / "out"));
+  // The folder is opened before the sun is computed: an existing one is reported even though
+  // the row's 2090 (past the leap-second table) would fail later.
+  fs::create_directories(tmp / "out");
+  test::write_file(tmp / "late.csv", header + "2090-01-01T00:00:00Z,38,121,0,90\n");
+  r = polrig("sky table " + test::shell_quote(tmp / "late.csv") + " -o " + test::shell_quote(tmp / "out"));
+  EXPECT_EQ(r.status, 1);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "-o/--out");
+  r = polrig("sky table " + test::shell_quote(tmp / "late.csv") + " -o " + test::shell_quote(tmp / "out2"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_PRED_FORMAT2(test::HasText, r.err, "late.csv:2: column 'utc': sun position: 2090-01-01T00:00:00Z");
+  EXPECT_FALSE(fs::exists(tmp / "out2"));
+  // sky table draws no plots: --no-plots is not an option of it.
+  EXPECT_EQ(polrig("sky table " + test::shell_quote(tmp / "late.csv") + " -o " + test::shell_quote(tmp / "out3") + " --no-plots").status, 109);
+}
+
 TEST_F(SkyCli, TableRefusesABadCellNamingFileLineColumnAndValue) {
   const std::string header = "utc,lat_deg,lon_deg,view_az_deg,view_el_deg\n";
   const std::string good = "2018-11-16T08:09:40Z,38.9,121.5,0,90\n";
@@ -615,7 +754,8 @@ TEST_F(SkyCli, TableRefusesABadCellNamingFileLineColumnAndValue) {
   }
   test::write_file(tmp / "nocol.csv", "utc,lat_deg,lon_deg,view_az_deg\n");
   const Result r = polrig("sky table " + test::shell_quote(tmp / "nocol.csv") + " -o " + test::shell_quote(tmp / "out"));
-  EXPECT_PRED_FORMAT2(test::HasText, r.err, "view_el_deg");
+  EXPECT_PRED_FORMAT2(test::HasText, r.err,
+                     "nocol.csv:1: missing column 'view_el_deg' (see docs/formats.md, \"6.12 polrig sky table\")");
 }
 
 }  // namespace

@@ -238,6 +238,22 @@ TEST(EffectiveDegree, RefusesImpossibleInput) {
   EXPECT_THROW(effective_degree(film, lamp, Spectrum(x, {0, 0, 0})), SpectrumError);
 }
 
+// τM dips between τm's samples: s·τm ≤ τM holds at every τm sample but not at τM's 500 nm one
+// (τm(500) = 0.1, τM(500) = 0.15: scale 2 gives 0.2 > 0.15).
+TEST(EffectiveDegree, RefusesLeakageAbovePassAtAPassSampleOnly) {
+  const FilmSpectra film{Spectrum({320, 500, 730}, {0.8, 0.15, 0.8}, "M"),
+                         Spectrum({320, 730}, {0.1, 0.1}, "m")};
+  const Spectrum response({320, 730}, {1, 1});
+  const Spectrum lamp = blackbody(2856, 320, 730);
+  EXPECT_NO_THROW(effective_degree(film, lamp, response, 1.0));
+  try {
+    effective_degree(film, lamp, response, 2.0);
+    ADD_FAILURE() << "leakage 0.2 above pass 0.15 at 500 nm accepted";
+  } catch (const SpectrumError& e) {
+    EXPECT_NE(std::string(e.what()).find("at 500 nm"), std::string::npos) << e.what();
+  }
+}
+
 // ---- CSV files
 
 class SpectrumCsv : public ::testing::Test {

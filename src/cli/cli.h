@@ -12,6 +12,7 @@
 #include "polrig/io/output_dir.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/progress.h"
+#include "polrig/sky/sun.h"
 
 namespace polrig::cli {
 
@@ -24,7 +25,8 @@ struct OutputOptions {
   std::string out;
   bool force = false;
   bool no_plots = false;
-  void add_to(CLI::App& app);
+  // `plots`: the command draws plots, so it takes --no-plots.
+  void add_to(CLI::App& app, bool plots = true);
   // Fails early (before any computation) if gnuplot is needed and missing, or the destination
   // exists without --force.
   OutputDir open(bool plots_needed = true) const;
@@ -45,6 +47,14 @@ void add_threads_option(CLI::App& app, int& threads);
 // A check for a real-valued option: a finite number in [lo, hi] ("nan" and "inf", which
 // CLI::Range lets through, are refused). `unit` is shown after the range.
 CLI::Validator finite_range(double lo, double hi, const std::string& unit = "");
+// "LAT,LON" in degrees, north and east positive, latitude in [−90, 90] and longitude in
+// [−180, 180]; DataError (exit 2) naming `option` and the text otherwise.
+Site parse_site(const std::string& text, const std::string& option = "--site");
+// An ISO 8601 UTC time with a Z (sky/sun.h's parse_utc); DataError naming `option` otherwise.
+UtcTime parse_utc_option(const std::string& text, const std::string& option = "--utc");
+// --refraction and --ut1-minus-utc, the sun's settings shared by sky, sky table, heading and
+// study heading (sky/sun.h's SunSettings; refraction at 1010 hPa and 10 °C).
+void add_sun_options(CLI::App& app, SunSettings& sun);
 // --quiet on `app` and every command below it: no progress line.
 void add_quiet_option(CLI::App& app);
 // Where the library reports progress: a line on stderr, rewritten in place, when stderr is a

@@ -1,12 +1,16 @@
 #include <unistd.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <stdexcept>
+#include <string_view>
 
 #include <fmt/format.h>
 
 #include "cli.h"
+#include "polrig/io/measured.h"
 #include "polrig/io/plot.h"
 
 namespace polrig::cli {
@@ -32,10 +36,10 @@ void set_command_line(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) g_command_line += " " + shell_word(argv[i]);
 }
 
-void OutputOptions::add_to(CLI::App& app) {
+void OutputOptions::add_to(CLI::App& app, bool plots) {
   app.add_option("-o,--out", out, "output folder (written whole or not at all)")->required();
   app.add_flag("--force", force, "replace the output folder if it exists");
-  app.add_flag("--no-plots", no_plots, "write the CSV files only, no PNG plots");
+  if (plots) app.add_flag("--no-plots", no_plots, "write the CSV files only, no PNG plots");
 }
 
 OutputDir OutputOptions::open(bool plots_needed) const {
@@ -76,6 +80,46 @@ CLI::Validator finite_range(double lo, double hi, const std::string& unit) {
         return {};
       },
       range);
+}
+
+Site parse_site(const std::string& text, const std::string& option) {
+  const auto number = [](std::string_view s, double& v) {
+    const char* b = s.data();
+    const char* e = s.data() + s.size();
+    if (b != e && *b == '+') ++b;
+    const auto [end, err] = std::from_chars(b, e, v);
+    return !s.empty() && err == std::errc() && end == e && std::isfinite(v);
+  };
+  const auto comma = text.find(',');
+  Site site;
+  if (comma == std::string::npos || text.find(',', comma + 1) != std::string::npos ||
+      !number(std::string_view(text).substr(0, comma), site.lat_deg) ||
+      !number(std::string_view(text).substr(comma + 1), site.lon_deg))
+    throw DataError(fmt::format("{} '{}': expected LAT,LON in degrees (finite numbers), e.g. "
+                                "38.879167,121.543889", option, text));
+  if (std::abs(site.lat_deg) > 90)
+    throw DataError(fmt::format("{} '{}': latitude {} is outside [-90, 90] (degrees, north "
+                                "positive)", option, text, site.lat_deg));
+  if (std::abs(site.lon_deg) > 180)
+    throw DataError(fmt::format("{} '{}': longitude {} is outside [-180, 180] (degrees, east "
+                                "positive)", option, text, site.lon_deg));
+  return site;
+}
+
+UtcTime parse_utc_option(const std::string& text, const std::string& option) {
+  try {
+    return parse_utc(text);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("{} {}: {}", option, text, e.what()));
+  }
+}
+
+void add_sun_options(CLI::App& app, SunSettings& sun) {
+  app.add_flag("--refraction", sun.refraction,
+               "refract the sun (Saemundsson, 1010 hPa, 10 °C); off: geometric");
+  app.add_option("--ut1-minus-utc", sun.ut1_minus_utc_s,
+                 "UT1 - UTC in seconds (IERS Bulletin A; 1 s turns the sky by 0.004°)")
+      ->check(finite_range(-1, 1, "s"))->capture_default_str();
 }
 
 void add_threads_option(CLI::App& app, int& threads) {

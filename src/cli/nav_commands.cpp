@@ -1,9 +1,9 @@
 // Commands that navigate: heading (the W19 compass on recorded attitudes and angles) and
 // study heading (its Monte-Carlo on a moving platform).
-#include <charconv>
 #include <cmath>
 #include <iostream>
 #include <optional>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -12,41 +12,13 @@
 #include "polrig/io/measured.h"
 #include "polrig/nav/heading.h"
 #include "polrig/sky/sun.h"
+#include "polrig/sky/sun_rows.h"
 #include "polrig/report/heading_reports.h"
 #include "polrig/study/heading_trials.h"
 
 namespace polrig::cli {
 
 namespace {
-
-// "LAT,LON" in degrees, north and east positive.
-Site parse_site(const std::string& text) {
-  const auto comma = text.find(',');
-  const auto number = [&](std::string_view s, double& v) {
-    const char* b = s.data();
-    const char* e = s.data() + s.size();
-    if (b != e && *b == '+') ++b;
-    const auto [end, err] = std::from_chars(b, e, v);
-    return !s.empty() && err == std::errc() && end == e && std::isfinite(v);
-  };
-  Site site;
-  if (comma == std::string::npos ||
-      !number(std::string_view(text).substr(0, comma), site.lat_deg) ||
-      !number(std::string_view(text).substr(comma + 1), site.lon_deg))
-    throw DataError(fmt::format("--site {}: expected LAT,LON in degrees, e.g. 38.879167,121.543889", text));
-  if (std::abs(site.lat_deg) > 90.0 || std::abs(site.lon_deg) > 180.0)
-    throw DataError(fmt::format("--site {}: latitude must be in [−90°, 90°] and longitude in "
-                                "[−180°, 180°]", text));
-  return site;
-}
-
-UtcTime parse_utc_option(const std::string& text) {
-  try {
-    return parse_utc(text);
-  } catch (const std::invalid_argument& e) {
-    throw DataError(fmt::format("--utc {}: {}", text, e.what()));
-  }
-}
 
 struct HeadingRow {
   UtcTime utc;
@@ -58,8 +30,9 @@ struct HeadingRow {
 
 // Reads and checks every row before anything is computed or written.
 std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional<Site>& site) {
-  const std::size_t c_utc = f.column("utc"), c_roll = f.column("roll_deg"),
-                    c_pitch = f.column("pitch_deg"), c_aop = f.column("aop_deg");
+  constexpr std::string_view section = "6.13 polrig heading";
+  const std::size_t c_utc = f.column("utc", section), c_roll = f.column("roll_deg", section),
+                    c_pitch = f.column("pitch_deg", section), c_aop = f.column("aop_deg", section);
   const auto c_prior = f.find_column("heading_prior_deg");
   const auto c_lat = f.find_column("lat_deg"), c_lon = f.find_column("lon_deg");
   if (c_lat.has_value() != c_lon.has_value())
@@ -105,7 +78,8 @@ std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional
   return rows;
 }
 
-void run_heading(const std::string& input, const std::string& site_text, const OutputOptions& out) {
+void run_heading(const std::string& input, const std::string& site_text, const SunSettings& sun_settings,
+                 const OutputOptions& out) {
   const std::optional<Site> site =
       site_text.empty() ? std::nullopt : std::optional<Site>(parse_site(site_text));
   const CsvFile f = CsvFile::read(input);
@@ -117,28 +91,36 @@ void run_heading(const std::string& input, const std::string& site_text, const O
   // Opened first, so that an existing destination fails before any work; an error below (a
   // date the ephemeris refuses is that row's error) removes the staging folder.
   OutputDir dir = out.open(false);
+  std::vector<SunRow> at(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) at[r] = {rows[r].utc, rows[r].site};
+  std::vector<SunPosition> suns;
+  try {
+    suns = sun_positions(at, sun_settings, progress());
+  } catch (const SunRowError& e) {
+    throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[e.row],
+                                f.rows[e.row][f.column("utc")], e.what()));
+  }
   std::string text;
   for (std::size_t c = 0; c < f.header.size(); ++c) text += f.header[c] + ",";
   text += "sun_az_deg,sun_el_deg,heading_deg,heading_alt_deg,status\n";
   int solved = 0;
   for (std::size_t r = 0; r < rows.size(); ++r) {
     const HeadingRow& h = rows[r];
-    SunPosition sun;
-    try {
-      sun = sun_position(h.utc, h.site);
-    } catch (const std::invalid_argument& e) {
-      throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
-                                  f.rows[r][f.column("utc")], e.what()));
-    }
+    const SunPosition& sun = suns[r];
     const HeadingSolution s = solve_heading(sun_direction_enu(sun), h.aop_deg, h.tilt, h.prior_deg);
+    // Every number finite, except the heading columns of a row without a heading: `nan`
+    // (formats.md §5).
+    const auto cell = [&](double v, const char* column, bool undefined_ok = false) {
+      if (!std::isfinite(v) && !(std::isnan(v) && undefined_ok))
+        throw std::runtime_error(fmt::format("{}:{}: a result is not finite: column '{}' is {}; "
+                                             "nothing was written", f.origin, f.line[r], column, v));
+      return fmt::format("{},", v);
+    };
     for (const std::string& v : f.rows[r]) text += v + ",";
-    text += fmt::format("{},{},", sun.azimuth_deg, sun.elevation_deg);
-    if (has_heading(s.status)) {
-      ++solved;
-      text += fmt::format("{},{},", s.heading_deg, s.heading_alt_deg);
-    } else {
-      text += ",,";
-    }
+    text += cell(sun.azimuth_deg, "sun_az_deg") + cell(sun.elevation_deg, "sun_el_deg");
+    const bool ok = has_heading(s.status);
+    solved += ok ? 1 : 0;
+    text += cell(s.heading_deg, "heading_deg", !ok) + cell(s.heading_alt_deg, "heading_alt_deg", !ok);
     text += fmt::format("{}\n", heading_status_name(s.status));
   }
   write_text_file(dir.staging() / "heading.csv", text);
@@ -164,12 +146,15 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     auto input = std::make_shared<std::string>();
     auto site = std::make_shared<std::string>();
     auto out = std::make_shared<OutputOptions>();
+    auto sun = std::make_shared<SunSettings>();
     app->add_option("INPUT", *input, "CSV with utc, roll_deg, pitch_deg, aop_deg and optionally "
                                      "heading_prior_deg, lat_deg, lon_deg")->required();
     app->add_option("--site", *site, "LAT,LON in degrees (north, east positive), unless the "
                                      "input has lat_deg and lon_deg columns");
     out->add_to(*app);
-    commands.push_back({app, [=] { run_heading(*input, *site, *out); }});
+    add_sun_options(*app, *sun);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] { run_heading(*input, *site, *sun, *out); }});
   }
   {
     auto* app = study.add_subcommand(
@@ -185,6 +170,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     app->add_option("--site", *site, "LAT,LON in degrees (default: W19's Dalian site, 38.879167,121.543889)");
     app->add_option("--utc", *utc, "time of the run, ISO 8601 with Z (default: W19's dynamic run)")
         ->capture_default_str();
+    add_sun_options(*app, s->sun);
     app->add_option("--roll-sd", s->roll_sd_deg, "SD of the roll drawn, degrees")
         ->check(finite_range(0, 30, "°"))->capture_default_str();
     app->add_option("--pitch-sd", s->pitch_sd_deg, "SD of the pitch drawn, degrees")

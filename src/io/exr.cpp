@@ -60,9 +60,12 @@ class CheckedOStream : public Imf::OStream {
 }  // namespace
 
 void write_exr(const std::filesystem::path& path, int width, int height,
-               const std::vector<ExrChannel>& channels) {
+               const std::vector<ExrChannel>& channels, ExrCompression compression) {
   try {
     Imf::Header header(width, height);
+    header.compression() = compression == ExrCompression::None  ? Imf::NO_COMPRESSION
+                           : compression == ExrCompression::Rle ? Imf::RLE_COMPRESSION
+                                                                : Imf::ZIP_COMPRESSION;
     Imf::FrameBuffer fb;
     for (const ExrChannel& c : channels) {
       if (c.pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))

@@ -74,10 +74,10 @@ std::optional<std::size_t> CsvFile::find_column(std::string_view name) const {
   return std::nullopt;
 }
 
-std::size_t CsvFile::column(std::string_view name) const {
+std::size_t CsvFile::column(std::string_view name, std::string_view section) const {
   if (auto c = find_column(name)) return *c;
-  throw DataError(fmt::format("{}:{}: missing column '{}' (see docs/formats.md, \"Measured "
-                              "data\")", origin, header_line, name));
+  throw DataError(fmt::format("{}:{}: missing column '{}' (see docs/formats.md, \"{}\")", origin,
+                              header_line, name, section));
 }
 
 double CsvFile::number(std::size_t row, std::size_t col) const {

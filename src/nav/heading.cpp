@@ -21,7 +21,7 @@ std::string_view heading_status_name(HeadingStatus s) {
   switch (s) {
     case HeadingStatus::Ok: return "ok";
     case HeadingStatus::Clamped: return "clamped";
-    case HeadingStatus::SunNearZenith: return "sun-near-zenith";
+    case HeadingStatus::SunNearZenithOrVerticalE: return "sun-near-zenith-or-vertical-e";
     case HeadingStatus::Inconsistent: return "inconsistent";
   }
   return "?";
@@ -69,7 +69,7 @@ HeadingSolution solve_heading(const Vec3& s, double aop_body_deg, const Tilt& ti
   const double R = std::hypot(r.a, r.b);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   if (!(R >= settings.min_horizontal)) {
-    r.status = HeadingStatus::SunNearZenith;
+    r.status = HeadingStatus::SunNearZenithOrVerticalE;
     r.heading_deg = r.heading_alt_deg = r.sun_forward = nan;
     return r;
   }

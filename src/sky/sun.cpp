@@ -31,6 +31,7 @@ namespace {
 constexpr double kDeg = M_PI / 180;
 constexpr double kUnixEpochJd = 2440587.5;
 constexpr double kDay = 86400;
+constexpr int kFirstYear = 1900, kLastYear = 2100;  // eraEpv00's range; parse_utc's years
 
 // Howard Hinnant's days_from_civil / civil_from_days (proleptic Gregorian).
 long long days_from_civil(long long y, unsigned m, unsigned d) {
@@ -71,9 +72,33 @@ void two_part_jd(double unix_s, double& jd1, double& jd2) {
   jd2 = (unix_s - days * kDay) / kDay;
 }
 
+// The last year of ERFA's leap-second table's validity: eraDat calls a year "dubious" (status
+// 1) after its release year + 5, and before 1960, when UTC began.
+int leap_second_table_last_year() {
+  static const int last = [] {
+    int y = 1960;
+    double dat = 0;
+    while (y < kLastYear && eraDat(y + 1, 1, 1, 0.0, &dat) == 0) ++y;
+    return y;
+  }();
+  return last;
+}
+
 void check_inputs(UtcTime t, const Site& site, const SunSettings& s) {
   auto bad = [](const std::string& what) { throw std::invalid_argument("sun position: " + what); };
   if (!std::isfinite(t.unix_s)) bad(fmt::format("time {} is not finite", t.unix_s));
+  // eraEpv00 (the Earth's ephemeris) is valid over 1900–2100 only (status 1 outside).
+  const long long day = static_cast<long long>(std::floor(t.unix_s / kDay));
+  const Civil c = civil_from_days(day);
+  if (c.y < kFirstYear || c.y > kLastYear)
+    bad(fmt::format("{} is outside {}-{}, the range of ERFA's Earth ephemeris (eraEpv00)",
+                    format_utc(t), kFirstYear, kLastYear));
+  // Without ΔT, TT comes from the leap-second table: ERFA's status 1 ("dubious year") before
+  // 1960 or after the table's release year + 5.
+  if (!s.delta_T_s && (c.y < 1960 || c.y > leap_second_table_last_year()))
+    bad(fmt::format("{} is outside 1960-{}, where ERFA's leap-second table gives TT - UTC; "
+                    "set delta T (TT - UT1) for other dates", format_utc(t),
+                    leap_second_table_last_year()));
   if (!(std::abs(site.lat_deg) <= 90)) bad(fmt::format("latitude {}° is outside [-90°, 90°]", site.lat_deg));
   if (!(std::abs(site.lon_deg) <= 360)) bad(fmt::format("longitude {}° is outside [-360°, 360°]", site.lon_deg));
   if (!(std::abs(site.height_m) <= 1e5)) bad(fmt::format("height {} m is outside [-1e5, 1e5] m", site.height_m));
@@ -110,7 +135,8 @@ Apparent apparent_sun(UtcTime t, const Site& site, const SunSettings& s) {
       throw std::invalid_argument("sun position: ERFA cannot convert the UTC time " + format_utc(t));
   }
   double ehpv[2][3], ebpv[2][3];
-  eraEpv00(tt1, tt2, ehpv, ebpv);  // status 1 (outside 1900–2100) only lowers the accuracy
+  eraEpv00(tt1, tt2, ehpv, ebpv);  // status 1 (outside 1900–2100): refused by check_inputs, but
+                                   // for a track's nodes up to 2 h past the range's ends
   double x, y, cio_s;
   eraXys06a(tt1, tt2, &x, &y, &cio_s);
   const double era = eraEra00(ut11, ut12);
@@ -184,6 +210,9 @@ UtcTime parse_utc(std::string_view text) {
     return v;
   };
   const int year = num(0, 4), month = num(5, 2), day = num(8, 2);
+  if (year < kFirstYear || year > kLastYear)
+    bad_utc(text, fmt::format("year {} is outside {}-{}, the range of the sun's ephemeris", year,
+                              kFirstYear, kLastYear));
   const int hour = num(11, 2), minute = num(14, 2), second = num(17, 2);
   std::size_t pos = pattern.size();
   double fraction = 0;
@@ -232,6 +261,10 @@ SunPosition sun_position(UtcTime t, const Site& site, const SunSettings& setting
   check_inputs(t, site, settings);
   Apparent a = apparent_sun(t, site, settings);
   return observe(a.cirs, a.era, a.astrom, site.lon_deg, settings);
+}
+
+void check_sun_inputs(UtcTime t, const Site& site, const SunSettings& settings) {
+  check_inputs(t, site, settings);
 }
 
 Vec3 sun_direction_enu(const SunPosition& sun) {

@@ -32,8 +32,9 @@ struct CsvFile {
   static CsvFile read(const std::filesystem::path& path);
   // The same from the file's text; `origin` names it in error messages.
   static CsvFile parse(std::string_view text, std::string_view origin);
-  // Index of a column, or DataError naming the file and the missing column.
-  std::size_t column(std::string_view name) const;
+  // Index of a column, or DataError naming the file, the missing column and the section of
+  // docs/formats.md that describes the file.
+  std::size_t column(std::string_view name, std::string_view section = "Measured data") const;
   std::optional<std::size_t> find_column(std::string_view name) const;
   // The cell as a finite number, or DataError naming file:line and the column.
   double number(std::size_t row, std::size_t column) const;

@@ -1,24 +1,30 @@
 #pragma once
-// The files of `polrig sky` and `polrig sky table` (docs/formats.md).
+// The files of `polrig sky` and `polrig sky table` (docs/formats.md §6.11, §6.12): reading and
+// formatting only; the values come from sky/ (sky_map, sky_along), the previews from report/.
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
+#include "polrig/io/exr.h"
 #include "polrig/io/manifest.h"
 #include "polrig/io/measured.h"
 #include "polrig/sky/sky.h"
 #include "polrig/sky/sky_map.h"
+#include "polrig/sky/sun_rows.h"
 
 namespace polrig {
 
-// DIR/sky.exr (layers S0, S1, S2, AoP, DoP, A), DIR/sun.yaml and, with plots, DIR/aop.png and
-// DIR/dop.png (gnuplot, from DIR/aop.f32 and DIR/dop.f32, with DIR/sky.gp).
+// DIR/sky.exr (layers S0, S1, S2, AoP, DoP, A) and DIR/sun.yaml.
 std::vector<DatasetFile> write_sky_map(const std::filesystem::path& dir, const SkyMap& map,
-                                       const Sky& sky, bool plots);
+                                       const Sky& sky, ExrCompression compression);
 
-// `polrig sky table`: every row of INPUT (columns utc, lat_deg, lon_deg, view_az_deg,
-// view_el_deg) with sun_az_deg, sun_el_deg, dop, aop_deg added, as CSV text. Throws DataError
-// naming the file, line, column and value of the first bad cell.
-std::string sky_table_csv(const CsvFile& input, const SkyModel& model, const SunSettings& sun);
+// `polrig sky table`'s input: every row of INPUT (columns utc, lat_deg, lon_deg, view_az_deg,
+// view_el_deg; others are carried through) as a query. Throws DataError naming the file, line,
+// column and value of the first bad cell, for a file without data rows, or for an input column
+// named like one sky table adds.
+std::vector<SkyQuery> read_sky_table_input(const CsvFile& input);
+// sky.csv: the input's columns as written, then sun_az_deg, sun_el_deg, dop, aop_deg.
+std::string sky_table_csv(const CsvFile& input, std::span<const SkySample> samples);
 
 }  // namespace polrig

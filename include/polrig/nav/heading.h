@@ -35,18 +35,22 @@ enum class HeadingStatus {
   Ok,             // two roots
   Clamped,        // |c|/√(a²+b²) exceeded 1 by at most the tolerance (noise): clamped to 1, the
                   // two roots coincide
-  SunNearZenith,  // √(a²+b²) below the threshold: the sun (in the tilted body's view) too close
-                  // to the zenith for the E-vector to fix a heading
+  SunNearZenithOrVerticalE,  // √(a²+b²) = √(1 − u_z²)·cos h_s below the threshold: the sun
+                             // too close to the zenith, or the E-vector (u = Rx(λ)·Ry(γ)·e_b,
+                             // in the levelled frame) too close to vertical under a steep tilt,
+                             // for Eq. 25 to fix a heading
   Inconsistent    // |c| > √(a²+b²) beyond the tolerance: no heading puts e_b ⊥ s_b
 };
-std::string_view heading_status_name(HeadingStatus s);  // "ok", "clamped", "sun-near-zenith", "inconsistent"
+std::string_view heading_status_name(HeadingStatus s);  // "ok", "clamped", "sun-near-zenith-or-vertical-e",
+                                                        // "inconsistent"
 inline bool has_heading(HeadingStatus s) {
   return s == HeadingStatus::Ok || s == HeadingStatus::Clamped;
 }
 
 struct HeadingSettings {
   // √(a²+b²) = √(1 − u_z²)·cos h_s below this: no solution. sin 1° ≈ 0.01745: for small tilts
-  // a sun above about 89° elevation. The heading's sensitivity to an error ε (rad) in the sun's
+  // a sun above about 89° elevation; at any sun elevation, a levelled E-vector within about
+  // 1°/cos h_s of vertical (e.g. pitch 89.5° with θ_b = 90°). The heading's sensitivity to an error ε (rad) in the sun's
   // or the E-vector's direction grows as ε/√(a²+b²), so this caps it at about 57·ε.
   double min_horizontal = 0.01745240643728351;
   // |c|/√(a²+b²) − 1 up to this is clamped (status Clamped); beyond it, Inconsistent. Near the

@@ -25,7 +25,8 @@ struct UtcTime {
 
 // "2018-11-16T08:09:40Z" or with fractional seconds "…:40.25Z"; a trailing 'Z' (UTC) is
 // required. Throws std::invalid_argument naming the text on anything else (no local times,
-// no offsets, out-of-range fields such as month 13 or 24:00).
+// no offsets, out-of-range fields such as month 13 or 24:00, years outside 1900–2100, the
+// range of ERFA's Earth ephemeris).
 UtcTime parse_utc(std::string_view iso8601);
 // ISO 8601 with a 'Z', milliseconds shown only when not whole seconds.
 std::string format_utc(UtcTime t);
@@ -40,7 +41,10 @@ struct Site {
 // argument) comes by default from UTC through ERFA's leap-second table, TT = UTC + ΔAT + 32.184 s,
 // so that ΔT = TT − UT1 = ΔAT + 32.184 s − (UT1 − UTC) follows and needs no setting. delta_T_s
 // overrides it (TT = UT1 + ΔT), e.g. to reproduce NREL SPA's test case (ΔT = 67 s) or for dates
-// beyond the leap-second table; 1 s of ΔT moves the sun by only 1.1e-5°.
+// beyond the leap-second table; 1 s of ΔT moves the sun by only 1.1e-5°. Times are refused
+// (std::invalid_argument) outside 1900–2100 (eraEpv00's range) and, without delta_T_s, outside
+// 1960 to the leap-second table's last valid year (ERFA's release year + 5; 2026 for ERFA 2.0),
+// where ERFA would only warn of a "dubious year".
 struct SunSettings {
   std::optional<double> delta_T_s;  // ΔT = TT − UT1 in s; empty: from leap seconds (above)
   double ut1_minus_utc_s = 0;       // |UT1 − UTC| < 0.9 s; 1 s is 0.0042° of hour angle
@@ -66,6 +70,8 @@ struct SunPosition {
 // Throws std::invalid_argument naming the value for a latitude outside [−90°, 90°], a
 // non-finite input, or a date ERFA cannot handle.
 SunPosition sun_position(UtcTime t, const Site& site, const SunSettings& settings = {});
+// The checks alone: throws what sun_position would throw for these inputs, computes nothing.
+void check_sun_inputs(UtcTime t, const Site& site, const SunSettings& settings = {});
 
 // The fast path: exact apparent places at nodes `node_spacing_s` apart over [begin, end], and
 // between them 4-point Lagrange interpolation of the sun's apparent direction in CIRS (the

@@ -1,0 +1,55 @@
+#pragma once
+// The sun and the sky for many rows of (time, site): the tables of `polrig sky table` and
+// `polrig heading`. Values only; reading and writing the files is io/'s.
+#include <cstddef>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "polrig/progress.h"
+#include "polrig/sky/rayleigh.h"
+#include "polrig/sky/sun.h"
+
+namespace polrig {
+
+// A row the ephemeris refuses: `row` is its 0-based index, what() sun_position's message.
+class SunRowError : public std::invalid_argument {
+ public:
+  SunRowError(const std::string& what, std::size_t row) : std::invalid_argument(what), row(row) {}
+  std::size_t row;
+};
+
+struct SunRow {
+  UtcTime utc;
+  Site site;
+};
+
+// sun_position for every row, in the rows' order. Every row is checked first (SunRowError
+// naming the first bad one). The rows of one site are interpolated along a SunTrack over their
+// time span (< 1e-6°, tests/test_sky.cpp) when they outnumber the track's nodes (one per 30 min
+// of the span, each an exact position) by kRowsPerTrackNode or more; otherwise, and for few
+// rows, each is exact. The choice depends on the rows alone, and the rows are computed in
+// parallel (TBB), each into its own slot: the result is the same for any thread count.
+inline constexpr std::size_t kRowsPerTrackNode = 8;
+std::vector<SunPosition> sun_positions(std::span<const SunRow> rows,
+                                       const SunSettings& settings = {},
+                                       const Progress& progress = {});
+
+// A direction on the sky at a time and place: geographic azimuth (from north towards east) and
+// elevation of the viewing direction, degrees.
+struct SkyQuery {
+  SunRow at;
+  double view_az_deg = 0, view_el_deg = 90;
+};
+struct SkySample {
+  SunPosition sun;
+  SkyLight light;  // along the viewing direction; χ in its local meridian frame (at the zenith,
+                   // the limit along view_az_deg)
+};
+// The sun (sun_positions) and the single-scattering sky (sky_light) for every query, in order.
+std::vector<SkySample> sky_along(std::span<const SkyQuery> queries, const SkyModel& model,
+                                 const SunSettings& settings = {},
+                                 const Progress& progress = {});
+
+}  // namespace polrig

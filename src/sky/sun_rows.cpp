@@ -1,0 +1,88 @@
+#include "polrig/sky/sun_rows.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <optional>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace polrig {
+
+namespace {
+constexpr double kTrackNodeSpacing_s = 1800;  // SunTrack's default
+}  // namespace
+
+std::vector<SunPosition> sun_positions(std::span<const SunRow> rows, const SunSettings& settings,
+                                       const Progress& progress) {
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    try {
+      check_sun_inputs(rows[i].utc, rows[i].site, settings);
+    } catch (const std::invalid_argument& e) {
+      throw SunRowError(e.what(), i);
+    }
+  }
+  // The rows of each site (in order of first appearance) and their time span.
+  struct Group {
+    Site site;
+    std::size_t rows = 0;
+    UtcTime begin, end;
+    std::optional<SunTrack> track;
+  };
+  std::map<std::array<double, 3>, std::size_t> index;
+  std::vector<Group> groups;
+  std::vector<std::size_t> group_of(rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const Site& s = rows[i].site;
+    const auto [it, added] = index.try_emplace({s.lat_deg, s.lon_deg, s.height_m}, groups.size());
+    if (added) groups.push_back({s, 0, rows[i].utc, rows[i].utc, std::nullopt});
+    Group& g = groups[it->second];
+    ++g.rows;
+    g.begin = std::min(g.begin, rows[i].utc);
+    g.end = std::max(g.end, rows[i].utc);
+    group_of[i] = it->second;
+  }
+  for (Group& g : groups) {
+    const double nodes = std::ceil((g.end.unix_s - g.begin.unix_s) / kTrackNodeSpacing_s) + 4;
+    if (static_cast<double>(g.rows) >= static_cast<double>(kRowsPerTrackNode) * nodes)
+      g.track.emplace(g.begin, g.end, g.site, settings, kTrackNodeSpacing_s);
+  }
+  std::vector<SunPosition> out(rows.size());
+  progress.begin("sun positions", static_cast<long long>(rows.size()));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        const Group& g = groups[group_of[i]];
+                        out[i] = g.track ? g.track->at(rows[i].utc)
+                                         : sun_position(rows[i].utc, rows[i].site, settings);
+                      }
+                      progress.advance(static_cast<long long>(r.size()));
+                    });
+  progress.finish();
+  return out;
+}
+
+std::vector<SkySample> sky_along(std::span<const SkyQuery> queries, const SkyModel& model,
+                                 const SunSettings& settings, const Progress& progress) {
+  std::vector<SunRow> at(queries.size());
+  for (std::size_t i = 0; i < queries.size(); ++i) at[i] = queries[i].at;
+  const std::vector<SunPosition> sun = sun_positions(at, settings, progress);
+  std::vector<SkySample> out(queries.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                        // The viewing direction as a "position" on the sky, so that at the
+                        // zenith the frame is the limit along view_az_deg (cos 90° ≠ 0 in
+                        // doubles).
+                        const SunPosition view{queries[i].view_az_deg, queries[i].view_el_deg,
+                                               90 - queries[i].view_el_deg, 0, 0, 0};
+                        out[i] = {sun[i], sky_light(sun_direction_enu(sun[i]),
+                                                    sun_direction_enu(view), model)};
+                      }
+                    });
+  return out;
+}
+
+}  // namespace polrig

@@ -72,18 +72,6 @@ void two_part_jd(double unix_s, double& jd1, double& jd2) {
   jd2 = (unix_s - days * kDay) / kDay;
 }
 
-// The last year of ERFA's leap-second table's validity: eraDat calls a year "dubious" (status
-// 1) after its release year + 5, and before 1960, when UTC began.
-int leap_second_table_last_year() {
-  static const int last = [] {
-    int y = 1960;
-    double dat = 0;
-    while (y < kLastYear && eraDat(y + 1, 1, 1, 0.0, &dat) == 0) ++y;
-    return y;
-  }();
-  return last;
-}
-
 void check_inputs(UtcTime t, const Site& site, const SunSettings& s) {
   auto bad = [](const std::string& what) { throw std::invalid_argument("sun position: " + what); };
   if (!std::isfinite(t.unix_s)) bad(fmt::format("time {} is not finite", t.unix_s));
@@ -93,12 +81,9 @@ void check_inputs(UtcTime t, const Site& site, const SunSettings& s) {
   if (c.y < kFirstYear || c.y > kLastYear)
     bad(fmt::format("{} is outside {}-{}, the range of ERFA's Earth ephemeris (eraEpv00)",
                     format_utc(t), kFirstYear, kLastYear));
-  // Without ΔT, TT comes from the leap-second table: ERFA's status 1 ("dubious year") before
-  // 1960 or after the table's release year + 5.
-  if (!s.delta_T_s && (c.y < 1960 || c.y > leap_second_table_last_year()))
-    bad(fmt::format("{} is outside 1960-{}, where ERFA's leap-second table gives TT - UTC; "
-                    "set delta T (TT - UT1) for other dates", format_utc(t),
-                    leap_second_table_last_year()));
+  // Without ΔT, outside the leap-second table (before 1960, after its release year + 5) ERFA
+  // guesses TT − UTC (status +1, accepted): TT only moves the sun along its orbit, 1.14e-5°/s,
+  // so tens of seconds of error stay below 1e-3° (docs/physics.md §9.2, "Range").
   if (!(std::abs(site.lat_deg) <= 90)) bad(fmt::format("latitude {}° is outside [-90°, 90°]", site.lat_deg));
   if (!(std::abs(site.lon_deg) <= 360)) bad(fmt::format("longitude {}° is outside [-360°, 360°]", site.lon_deg));
   if (!(std::abs(site.height_m) <= 1e5)) bad(fmt::format("height {} m is outside [-1e5, 1e5] m", site.height_m));

@@ -140,4 +140,19 @@ TEST_F(CliNav, StudyHeadingIsDeterministicAndSyncErrorIsTurnTimesOffset) {
      "--ut1-minus-utc -0.3 -o " + shell_quote(tmp / "d"));
   EXPECT_EQ(polrig("study heading " + shell_quote(kDefaultRigFile) + " --trials 20 --no-plots "
                    "--ut1-minus-utc 2 -o " + shell_quote(tmp / "e")).status, 105);
+  // No sky in the rig: W19's dynamic run, Dalian 2019-07-01 19:01 Beijing (spec §1.1: h_s = 2.9°,
+  // A_s = 297.6°).
+  const std::string d = read_file(tmp / "d" / "sun.yaml");
+  EXPECT_HAS(d, "utc: 2019-07-01T11:01:00Z");
+  EXPECT_HAS(d, "azimuth_deg: 297.6");
+  // A sky rig's block gives the site and the time (Outdoor1's first stop: spec §1.1's Dalian sun
+  // at h_s = 4.42°); --utc overrides it.
+  const std::string outdoor = POLRIG_SOURCE_DIR "/rigs/wang2019-outdoor1.yaml";
+  ok("study heading " + shell_quote(outdoor) + " --trials 20 --no-plots -o " + shell_quote(tmp / "f"));
+  const std::string f = read_file(tmp / "f" / "sun.yaml");
+  EXPECT_HAS(f, "utc: 2018-11-16T08:09:40Z");
+  EXPECT_HAS(f, "elevation_deg: 4.41");
+  ok("study heading " + shell_quote(outdoor) + " --trials 20 --no-plots --utc 2018-11-16T08:11:28Z -o " +
+     shell_quote(tmp / "g"));
+  EXPECT_HAS(read_file(tmp / "g" / "sun.yaml"), "elevation_deg: 4.1");
 }

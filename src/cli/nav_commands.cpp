@@ -197,11 +197,19 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
       if (settings.p_max_min > settings.p_max_max)
         throw DataError(fmt::format("--p-max-min {} is above --p-max-max {}", settings.p_max_min,
                                     settings.p_max_max));
-      // Site and time: the options (a rig's `sky:` block, once rigs have one, is the hook for
-      // defaults taken from the rig).
-      if (!site->empty()) settings.site = parse_site(*site);
-      settings.utc = parse_utc_option(*utc);
       const LoadedRig r = rig->load();
+      // Site, time and the sun's settings: a sky rig's `sky:` block (site, first stop, UT1 − UTC,
+      // refraction), else W19's dynamic run; an option given on the command line overrides either.
+      if (r.rig.light->has(Source::kTimeDependent)) {
+        const Sky sky = r.rig.source.sky.resolved_sky();
+        settings.site = sky.site;
+        settings.utc = sky.first_stop;
+        if (app->count("--ut1-minus-utc") == 0) settings.sun.ut1_minus_utc_s = sky.sun.ut1_minus_utc_s;
+        if (app->count("--refraction") == 0) settings.sun.refraction = sky.sun.refraction;
+      }
+      if (!site->empty()) settings.site = parse_site(*site);
+      if (app->count("--utc") > 0 || !r.rig.light->has(Source::kTimeDependent))
+        settings.utc = parse_utc_option(*utc);
       OutputDir dir = out->open();
       const std::vector<HeadingTrial> result = heading_trials(r.rig, settings, progress());
       write_manifest(dir.staging(), {command_line(), &r,

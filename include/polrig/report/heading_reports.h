@@ -9,7 +9,7 @@
 
 namespace polrig {
 
-// trials.csv, summary.csv, cdf.csv and, with plots, error_vs_*.png and error_cdf.png.
+// trials.csv, summary.csv, cdf.csv, sun.yaml and, with plots, error_vs_*.png and error_cdf.png.
 std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
                                                const std::vector<HeadingTrial>& trials,
                                                const HeadingStudySettings& settings, bool plots);

@@ -16,8 +16,8 @@ namespace polrig {
 struct HeadingStudySettings {
   int trials = 1000;
   // Where and when. Defaults: W19's dynamic run (Dalian, 2019-07-01 19:01 Beijing time, the static
-  // site's coordinates; spec §1.1: h_s = 2.9°, A_s = 297.6°). A rig's `sky:` block can supply
-  // them once rigs carry one (the CLI's --site/--utc are the only source today).
+  // site's coordinates; spec §1.1: h_s = 2.9°, A_s = 297.6°). `polrig study heading` takes them
+  // from a sky rig's `sky:` block when the rig has one, and from --site/--utc over either.
   Site site;
   UtcTime utc{1561978860.0};  // 2019-07-01T11:01:00Z
   SunSettings sun;

@@ -519,22 +519,22 @@ TEST_F(CliOutdoor, DriftNeedsTimesASiteAndRawStops) {
   const fs::path csv = write_run(table2()[0]);
   const std::string in = "calibrate " + test::shell_quote(csv) + " --no-plots -o " + test::shell_quote(tmp / "x");
   Result r = polrig(in + " --method nc --drift per-stop");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2);
   EXPECT_HAS(r.err, "--drift per-stop needs --site LAT,LON");
   r = polrig(in + " --method cs-nc --drift angle --site 38.9,121.5");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2);
   EXPECT_HAS(r.err, "needs --method nc or section");
   r = polrig(in + " --method nc --drift sideways --site 38.9,121.5");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2);
   EXPECT_HAS(r.err, "--drift sideways: expected none, angle, per-stop or linear");
   r = polrig(in + " --method nc --drift angle --site 95,121.5");
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2);
   EXPECT_HAS(r.err, "--site 95,121.5: expected LAT,LON");
   std::string text = test::read_file(csv);
   text.replace(text.find("2018-11-16T08:09:43Z"), 20, "2018-11-16 08:09:43");
   test::write_file(tmp / "bad.csv", text);
   r = polrig("calibrate " + test::shell_quote(tmp / "bad.csv") + " --method nc --drift angle --site 38.9,121.5 -o " + test::shell_quote(tmp / "y"));
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2);
   EXPECT_HAS(r.err, "bad.csv:3: column 'utc'");
   EXPECT_HAS(r.err, "'2018-11-16 08:09:43'");
   EXPECT_FALSE(fs::exists(tmp / "x"));
@@ -542,7 +542,7 @@ TEST_F(CliOutdoor, DriftNeedsTimesASiteAndRawStops) {
   // Without a utc column.
   test::write_file(tmp / "noutc.csv", "theta_R_deg,V1,V2,V3\n0,0.1,0.1,0.1\n");
   r = polrig("calibrate " + test::shell_quote(tmp / "noutc.csv") + " --method nc --drift angle --site 38.9,121.5 -o " + test::shell_quote(tmp / "z"));
-  EXPECT_NE(r.status, 0);
+  EXPECT_EQ(r.status, 2);
   EXPECT_HAS(r.err, "has no 'utc' column");
 }
 
@@ -686,6 +686,33 @@ TEST_F(CliOutdoorRigs, SkyMapOfARigUsesItsSkyBlock) {
   EXPECT_EQ(bad.status, 2);
   EXPECT_HAS(bad.err, "wang2019-indoor.yaml: source.model cos4 has no sky (expected source.model sky)");
   EXPECT_FALSE(fs::exists(tmp / "x"));
+}
+
+// A sky rig's light drifts during the run: the indoor paths refuse it with the way out; its
+// device.d is derived, so --set sky.* may change the light; a run that leaves the ephemeris's
+// years is refused when the rig loads, naming the key; refraction reaches the drift corrections.
+TEST_F(CliOutdoorRigs, SkyRigsRefuseIndoorPathsAndLateRunsAndTakeSkyOverrides) {
+  const fs::path sim = simulate(0, " --set electronics.noise_sigma_V=0 --set electronics.adc_bits=31");
+  Result r = polrig("calibrate " + test::shell_quote(sim) + " --no-plots -o " + test::shell_quote(tmp / "cs"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "use --method nc --drift per-stop");
+  EXPECT_FALSE(fs::exists(tmp / "cs"));
+  r = polrig("run " + test::shell_quote(rig_file(0)) + " -o " + test::shell_quote(tmp / "run"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "polrig run is the indoor job");
+  EXPECT_FALSE(fs::exists(tmp / "run"));
+  r = polrig("simulate " + test::shell_quote(rig_file(0)) + " --set sky.first_stop_utc=2100-12-31T23:59:59Z -o " +
+             test::shell_quote(tmp / "late"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "sky.first_stop_utc");
+  EXPECT_HAS(r.err, "outside 1900-2100");
+  EXPECT_FALSE(fs::exists(tmp / "late"));
+  // Refracted: the sun is higher, the d ratio differs; the corrections see the same sun.
+  const fs::path refr = simulate(0, " --set electronics.noise_sigma_V=0 --set electronics.adc_bits=31 "
+                                    "--set sky.refraction=on");
+  const ParamError e = error_of(calibrate(refr, "per-stop"), table2()[0].truth);
+  EXPECT_LT(e.alpha_deg, 1e-6);
+  EXPECT_LT(e.kd, 1e-6);
 }
 
 }  // namespace

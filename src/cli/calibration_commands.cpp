@@ -129,9 +129,17 @@ StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSe
   } else {
     throw DataError(fmt::format("--drift {} needs --site LAT,LON (the sun's position)", drift.mode));
   }
-  // The d ratio does not depend on a constant P_max; a sky rig's P_max(h_s) table enters it.
-  const MaxDegree P_max = sky_rig ? rig.source.sky.resolved_sky().model.P_max : MaxDegree{};
-  const SkyDrift d = drift_corrections(times, site, SunSettings{}, P_max, *mode);
+  // The d ratio does not depend on a constant P_max; a sky rig's P_max(h_s) table enters it. A
+  // sky rig's sun (refraction, UT1 − UTC) is the one its simulation saw; otherwise geometric.
+  const Sky sky = sky_rig ? rig.source.sky.resolved_sky() : Sky{};
+  const MaxDegree P_max = sky_rig ? sky.model.P_max : MaxDegree{};
+  const SunSettings sun = sky_rig ? sky.sun : SunSettings{};
+  SkyDrift d;
+  try {
+    d = drift_corrections(times, site, sun, P_max, *mode);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("--drift {} on {}: {}", drift.mode, data.origin, e.what()));
+  }
   return {d.dtheta_deg, d.d_ratio,
           fmt::format("{} (stop times from {}, the sun from ERFA at {}{})", drift.mode, times_from,
                       site_from,
@@ -161,6 +169,13 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   std::optional<LoadedRig> given;
   if (!rig_path.empty()) given = load_rig(rig_path);
   const Rig rig = given ? given->rig : data.rig ? *data.rig : Rig{};
+  // A sky dataset's light turns with the sun during the run: a CS point would mix two times.
+  if (rig.light->has(Source::kTimeDependent))
+    for (CalibrationMethod m : methods)
+      if (m != CalibrationMethod::Section && m != CalibrationMethod::Noncontinuous)
+        throw DataError(fmt::format("--method {} on {}: its rig's light is the sky, which drifts "
+                                    "with the sun during the run; use --method nc --drift per-stop "
+                                    "(or angle, linear, none)", method_text, data.origin));
   const StopCorrections corrections = drift_of(data, rig, drift);
   const std::optional<double> rig_d =
       given ? std::optional<double>(given->rig.device.d)

@@ -229,6 +229,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
+      if (r.rig.light->has(Source::kTimeDependent))
+        throw RigError(fmt::format("{}: polrig run is the indoor job (CS calibration of a fixed "
+                                   "light); this rig's light is the sky: use polrig simulate, then "
+                                   "polrig calibrate DIR --method nc --drift per-stop", r.origin));
       OutputDir dir = out->open();
       const Progress p = progress();
       const Simulation sim = simulate(r.rig, false, p);

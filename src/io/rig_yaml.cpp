@@ -13,6 +13,7 @@
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/scene_yaml.h"
 #include "polrig/rig/keys.h"
+#include "polrig/sky/sun.h"
 #include "yaml_load.h"
 
 namespace polrig {
@@ -274,6 +275,22 @@ class RigParser {
       rig.light = make_source(rig.source, load);
     } catch (const SourceSettingError& e) {
       fail(e.key, e.what());
+    }
+    // A sky's run must lie where the ephemeris holds (1900–2100), its last stop and its clock
+    // offset included: say so here, naming the key, rather than at a stop of the simulation.
+    if (rig.light->has(Source::kTimeDependent)) {
+      const Sky sky = rig.source.sky.resolved_sky();
+      const std::vector<double> t = rig.schedule.stop_times_s();
+      for (double t_k : {t.front(), t.back()}) {
+        try {
+          check_sun_inputs(sky.first_stop.plus_seconds(t_k + rig.source.sky.mount.time_offset_s),
+                           sky.site, sky.sun);
+        } catch (const std::invalid_argument& e) {
+          fail("sky.first_stop_utc",
+               fmt::format("the run's stop at t = {} s (with sky.time_offset_s = {} s): {}", t_k,
+                           rig.source.sky.mount.time_offset_s, e.what()));
+        }
+      }
     }
     // A source that sets the light's d itself (the traced port film; the sky's at the first
     // stop): it is the rig's d, for decoupling and the rig's checks; a device.d in the file must

@@ -319,7 +319,7 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
     app->add_option("--method", *method, "section | cs | cs-nc | nc | all (nc: the raw stops, "
                                          "noncontinuous + section, as outdoors)")->capture_default_str();
     app->add_option("--drift", drift->mode, "sun-drift correction of an outdoor run: none | angle | "
-                                            "per-stop | linear (needs a utc column and --site)")
+                                            "per-stop | linear (needs the stops' times and the site: a utc column and --site, or a sky rig's simulate folder)")
         ->capture_default_str();
     app->add_option("--site", drift->site, "the observer for --drift: LAT,LON in degrees (north, "
                                            "east positive)");

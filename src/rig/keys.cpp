@@ -219,7 +219,7 @@ std::vector<RigKey> make_keys() {
   keys.push_back(reads(real<RealRange{0.0, 1.0, true, false}>(
       "sky.p_max", "", "a degree of polarization",
       "P_max of the single-scattering sky, P = P_max·sin²γ/(1 + cos²γ)",
-      "0 is an unpolarized sky, 1 the single-scattering limit (clear skies: 0.65–0.75)",
+      "near 0 a nearly unpolarized sky, 1 the single-scattering limit (clear skies: 0.65–0.75)",
       [](Rig& r) -> double& { return r.source.sky.sky.model.P_max.constant; }), kSimulate, "sky"));
   for (const bool values : {false, true}) {
     constexpr RealRange kElevation{-90.0, 90.0}, kPmax{0.0, 1.0, true, false};

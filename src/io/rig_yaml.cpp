@@ -281,7 +281,7 @@ class RigParser {
     if (rig.light->has(Source::kTimeDependent)) {
       const Sky sky = rig.source.sky.resolved_sky();
       const std::vector<double> t = rig.schedule.stop_times_s();
-      for (double t_k : {t.front(), t.back()}) {
+      for (double t_k : t.empty() ? std::vector<double>{} : std::vector<double>{t.front(), t.back()}) {
         try {
           check_sun_inputs(sky.first_stop.plus_seconds(t_k + rig.source.sky.mount.time_offset_s),
                            sky.site, sky.sun);

@@ -23,6 +23,7 @@
 #include "polrig/rig/error.h"
 #include "polrig/sky/drift.h"
 #include "polrig/sky/sensor_view.h"
+#include "almanac_sun.h"
 #include "support.h"
 
 namespace polrig {
@@ -31,28 +32,9 @@ namespace {
 namespace fs = std::filesystem;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// The Astronomical Almanac's low-precision sun (spec §1.1), good to ~0.01° absolute and far
-// better in its change over a minute. Returns A_s (clockwise from north) and the zenith angle.
-struct AaSun {
-  double azimuth_deg, zenith_deg;
-};
-AaSun aa_sun(double unix_s, double lat_deg, double lon_deg) {
-  const double n = unix_s / 86400.0 + 2440587.5 - 2451545.0;
-  const double ut_h = std::fmod(unix_s, 86400.0) / 3600.0;
-  const double L = 280.460 + 0.9856474 * n, g = (357.528 + 0.9856003 * n) * kDeg;
-  const double lam = (L + 1.915 * std::sin(g) + 0.020 * std::sin(2 * g)) * kDeg;
-  const double eps = (23.439 - 0.0000004 * n) * kDeg;
-  const double ra = std::atan2(std::cos(eps) * std::sin(lam), std::cos(lam));
-  const double dec = std::asin(std::sin(eps) * std::sin(lam));
-  const double gmst_h = 6.697375 + 0.0657098242 * n + ut_h;
-  const double lha = 15.0 * gmst_h * kDeg + lon_deg * kDeg - ra;
-  const double phi = lat_deg * kDeg;
-  const double sin_h = std::sin(phi) * std::sin(dec) + std::cos(phi) * std::cos(dec) * std::cos(lha);
-  double A = std::atan2(-std::sin(lha) * std::cos(dec),
-                        std::cos(phi) * std::sin(dec) - std::sin(phi) * std::cos(dec) * std::cos(lha)) / kDeg;
-  if (A < 0) A += 360.0;
-  return {A, 90.0 - std::asin(sin_h) / kDeg};
-}
+// The sun: the Astronomical Almanac's formula (tests/almanac_sun.h), independent of sky/sun.
+using AaSun = test::AlmanacSun;
+AaSun aa_sun(double unix_s, double lat_deg, double lon_deg) { return test::almanac_sun(unix_s, lat_deg, lon_deg); }
 
 // Dalian, W19's roof: 38°52′45″N, 121°32′38″E.
 constexpr double kLat = 38.0 + 52.0 / 60 + 45.0 / 3600, kLon = 121.0 + 32.0 / 60 + 38.0 / 3600;
@@ -709,6 +691,16 @@ TEST_F(CliOutdoorRigs, SkyRigsRefuseIndoorPathsAndLateRunsAndTakeSkyOverrides) {
   EXPECT_HAS(r.err, "sky.first_stop_utc");
   EXPECT_HAS(r.err, "outside 1900-2100");
   EXPECT_FALSE(fs::exists(tmp / "late"));
+  // The clock offset moves the first stop out too, before the sky's d there is derived.
+  r = polrig("simulate " + test::shell_quote(rig_file(0)) + " --set sky.first_stop_utc=2100-12-31T23:00:00Z "
+             "--set sky.time_offset_s=86400 -o " + test::shell_quote(tmp / "late"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "key 'sky.first_stop_utc': the run's stop at t = 0 s");
+  // A bad schedule is named as such, not met by the sky's checks.
+  r = polrig("simulate " + test::shell_quote(rig_file(0)) + " --set schedule.start_deg=100 "
+             "--set schedule.stop_deg=0 -o " + test::shell_quote(tmp / "late"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "expected an angle ≥ schedule.start_deg");
   // Refracted: the sun is higher, the d ratio differs; the corrections see the same sun.
   const fs::path refr = simulate(0, " --set electronics.noise_sigma_V=0 --set electronics.adc_bits=31 "
                                     "--set sky.refraction=on");

@@ -18,6 +18,7 @@
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
 #include "polrig/sky/sun_rows.h"
+#include "almanac_sun.h"
 #include "support.h"
 
 namespace polrig {
@@ -152,23 +153,11 @@ TEST(SunPosition, NrelSpaTestCase) {
 // Independent checks
 // ---------------------------------------------------------------------------------------------
 
-// The Astronomical Almanac's low-precision formula (spec §1.1; Michalsky 1988), ~0.01°.
+// The Astronomical Almanac's low-precision formula (tests/almanac_sun.h), ~0.01°, as an ENU vector.
 Vec3 almanac_sun_enu(double unix_s, const Site& site) {
-  const double n = unix_s / 86400.0 + 2440587.5 - 2451545.0;
-  const double ut_h = std::fmod(unix_s / 3600.0, 24.0);
-  const double L = 280.460 + 0.9856474 * n, g = (357.528 + 0.9856003 * n) * kDeg;
-  const double lambda = (L + 1.915 * std::sin(g) + 0.020 * std::sin(2 * g)) * kDeg;
-  const double eps = (23.439 - 0.0000004 * n) * kDeg;
-  const double ra = std::atan2(std::cos(eps) * std::sin(lambda), std::cos(lambda));
-  const double dec = std::asin(std::sin(eps) * std::sin(lambda));
-  const double gmst_h = 6.697375 + 0.0657098242 * n + ut_h;
-  const double lha = 15 * gmst_h * kDeg + site.lon_deg * kDeg - ra;
-  const double phi = site.lat_deg * kDeg;
-  const double sin_h = std::sin(phi) * std::sin(dec) + std::cos(phi) * std::cos(dec) * std::cos(lha);
-  const double A = std::atan2(-std::sin(lha) * std::cos(dec),
-                              std::cos(phi) * std::sin(dec) - std::sin(phi) * std::cos(dec) * std::cos(lha));
-  const double cos_h = std::sqrt(1 - sin_h * sin_h);
-  return {cos_h * std::sin(A), cos_h * std::cos(A), sin_h};
+  const test::AlmanacSun a = test::almanac_sun(unix_s, site.lat_deg, site.lon_deg);
+  const double cos_h = std::cos(a.elevation_rad);
+  return {cos_h * std::sin(a.azimuth_rad), cos_h * std::cos(a.azimuth_rad), std::sin(a.elevation_rad)};
 }
 
 double angle_deg(const Vec3& a, const Vec3& b) {

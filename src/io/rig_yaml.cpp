@@ -49,6 +49,7 @@ class RigParser {
       throw RigError(fmt::format("{}: key '{}': {}{}", where(problem->path), problem->path,
                                  problem->message, also));
     }
+    check_sky_time(rig, rig.schedule.stop_times_s().back());
     return rig;
   }
 
@@ -276,22 +277,7 @@ class RigParser {
     } catch (const SourceSettingError& e) {
       fail(e.key, e.what());
     }
-    // A sky's run must lie where the ephemeris holds (1900–2100), its last stop and its clock
-    // offset included: say so here, naming the key, rather than at a stop of the simulation.
-    if (rig.light->has(Source::kTimeDependent)) {
-      const Sky sky = rig.source.sky.resolved_sky();
-      const std::vector<double> t = rig.schedule.stop_times_s();
-      for (double t_k : t.empty() ? std::vector<double>{} : std::vector<double>{t.front(), t.back()}) {
-        try {
-          check_sun_inputs(sky.first_stop.plus_seconds(t_k + rig.source.sky.mount.time_offset_s),
-                           sky.site, sky.sun);
-        } catch (const std::invalid_argument& e) {
-          fail("sky.first_stop_utc",
-               fmt::format("the run's stop at t = {} s (with sky.time_offset_s = {} s): {}", t_k,
-                           rig.source.sky.mount.time_offset_s, e.what()));
-        }
-      }
-    }
+    check_sky_time(rig, 0);
     // A source that sets the light's d itself (the traced port film; the sky's at the first
     // stop): it is the rig's d, for decoupling and the rig's checks; a device.d in the file must
     // agree.
@@ -300,6 +286,23 @@ class RigParser {
         fail("device.d", fmt::format("expected the source's d = {} with source.model {} (or leave "
                                      "device.d out), got {}", *d, rig.source.model, rig.device.d));
       rig.device.d = *d;
+    }
+  }
+
+  // A sky's run must lie where the ephemeris holds (1900–2100), its clock offset included: say so
+  // when the rig loads, naming the key, rather than at a stop of the simulation. The first stop is
+  // checked before the sky's d there is derived (make_light), the last once the schedule has
+  // passed check_rig.
+  void check_sky_time(const Rig& rig, double t_k) const {
+    if (!rig.light->has(Source::kTimeDependent)) return;
+    const Sky sky = rig.source.sky.resolved_sky();
+    try {
+      check_sun_inputs(sky.first_stop.plus_seconds(t_k + rig.source.sky.mount.time_offset_s),
+                       sky.site, sky.sun);
+    } catch (const std::invalid_argument& e) {
+      fail("sky.first_stop_utc",
+           fmt::format("the run's stop at t = {} s (with sky.time_offset_s = {} s): {}", t_k,
+                       rig.source.sky.mount.time_offset_s, e.what()));
     }
   }
 

@@ -13,26 +13,22 @@ namespace polrig {
 
 namespace fs = std::filesystem;
 
-namespace {
-
-std::string sun_yaml(const SkyMap& map, const Sky& sky) {
+std::string sun_yaml(std::string_view what, UtcTime t, const Sky& sky, const SunPosition& sun) {
   std::string y;
-  y += "# The sun at the map's time (polrig sky; docs/formats.md). Angles in degrees; azimuth from\n";
+  y += fmt::format("# The sun {}; docs/formats.md. Angles in degrees; azimuth from\n", what);
   y += "# north towards east; hour angles westwards; topocentric apparent place (ERFA).\n";
-  y += fmt::format("utc: {}\n", format_utc(map.time));
+  y += fmt::format("utc: {}\n", format_utc(t));
   y += fmt::format("site:\n  lat_deg: {}\n  lon_deg: {}\n  height_m: {}\n", sky.site.lat_deg,
                    sky.site.lon_deg, sky.site.height_m);
   y += fmt::format("refraction: {}\n", sky.sun.refraction ? "true" : "false");
   y += fmt::format("ut1_minus_utc_s: {}\n", sky.sun.ut1_minus_utc_s);
   if (sky.sun.delta_T_s) y += fmt::format("delta_T_s: {}\n", *sky.sun.delta_T_s);
-  y += fmt::format("azimuth_deg: {}\nelevation_deg: {}\nzenith_deg: {}\n", map.sun.azimuth_deg,
-                   map.sun.elevation_deg, map.sun.zenith_deg);
-  y += fmt::format("declination_deg: {}\ngha_deg: {}\nlha_deg: {}\n", map.sun.declination_deg,
-                   map.sun.gha_deg, map.sun.lha_deg);
+  y += fmt::format("azimuth_deg: {}\nelevation_deg: {}\nzenith_deg: {}\n", sun.azimuth_deg,
+                   sun.elevation_deg, sun.zenith_deg);
+  y += fmt::format("declination_deg: {}\ngha_deg: {}\nlha_deg: {}\n", sun.declination_deg,
+                   sun.gha_deg, sun.lha_deg);
   return y;
 }
-
-}  // namespace
 
 std::vector<DatasetFile> write_sky_map(const fs::path& dir, const SkyMap& map, const Sky& sky,
                                        ExrCompression compression) {
@@ -44,7 +40,7 @@ std::vector<DatasetFile> write_sky_map(const fs::path& dir, const SkyMap& map, c
   files.push_back({"sky.exr", 1,
                    "all-sky equidistant fisheye seen from below (N up, E left): S0 S1 S2 (reference "
                    "axis e_theta), AoP (deg, [0,180)), DoP, A (1 inside the horizon)"});
-  write_text_file(dir / "sun.yaml", sun_yaml(map, sky));
+  write_text_file(dir / "sun.yaml", sun_yaml("at the map's time (polrig sky)", map.time, sky, map.sun));
   files.push_back({"sun.yaml", 1, "the sun: azimuth, elevation, declination, hour angles, site, UTC"});
   return files;
 }

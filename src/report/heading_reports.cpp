@@ -11,7 +11,7 @@
 
 #include "polrig/io/csv.h"
 #include "polrig/io/plot.h"
-#include "polrig/sky/sun.h"
+#include "polrig/io/sky_files.h"
 
 namespace polrig {
 
@@ -169,15 +169,10 @@ std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
   write_text_file(dir / "cdf.csv", cdf);
 
   // Where and when the trials were run, and the sun they saw.
-  const SunPosition sun = sun_position(settings.utc, settings.site, settings.sun);
+  const Sky sky{settings.site, settings.utc, settings.sun, {}};
   write_text_file(dir / "sun.yaml",
-                  fmt::format("# The sun of every trial (polrig study heading; docs/formats.md). Degrees; azimuth\n"
-                              "# from north towards east; topocentric apparent place (ERFA).\n"
-                              "utc: {}\nsite:\n  lat_deg: {}\n  lon_deg: {}\n  height_m: {}\n"
-                              "refraction: {}\nut1_minus_utc_s: {}\nazimuth_deg: {}\nelevation_deg: {}\n",
-                              format_utc(settings.utc), settings.site.lat_deg, settings.site.lon_deg,
-                              settings.site.height_m, settings.sun.refraction,
-                              settings.sun.ut1_minus_utc_s, sun.azimuth_deg, sun.elevation_deg));
+                  sun_yaml("of every trial (polrig study heading)", settings.utc, sky,
+                           sun_position(settings.utc, settings.site, settings.sun)));
 
   std::vector<DatasetFile> files{
       {"sun.yaml", 1, "the site, the time and the sun's azimuth and elevation of every trial"},

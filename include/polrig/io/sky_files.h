@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "polrig/io/exr.h"
@@ -14,6 +15,10 @@
 #include "polrig/sky/sun_rows.h"
 
 namespace polrig {
+
+// A sun.yaml: the site, time and sun settings, then A_s, h_s, θ_s, δ, GHA and LHA; `what` says
+// which sun in its header comment ("at the map's time (polrig sky)").
+std::string sun_yaml(std::string_view what, UtcTime t, const Sky& sky, const SunPosition& sun);
 
 // DIR/sky.exr (layers S0, S1, S2, AoP, DoP, A) and DIR/sun.yaml.
 std::vector<DatasetFile> write_sky_map(const std::filesystem::path& dir, const SkyMap& map,

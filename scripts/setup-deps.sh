@@ -11,6 +11,8 @@ packages=(
   libembree-dev libopenexr-dev
   liberfa-dev                 # the sun's apparent position (IAU SOFA-derived ERFA, as astropy)
   gnuplot-nox fonts-dejavu-core
+  python3-dev pybind11-dev    # the Python module (docs/python.md)
+  python3-numpy python3-pytest python3-matplotlib  # its arrays, its tests, its examples' plots
 )
 
 missing=()

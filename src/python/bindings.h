@@ -1,0 +1,16 @@
+#pragma once
+// The parts of the Python module polrig._polrig (docs/python.md), one function per part of the
+// library it exposes; module.cpp calls them in order. A thin layer: every binding converts
+// arguments, calls polrig_lib and converts the result. No physics here.
+#include <pybind11/pybind11.h>
+
+namespace polrig::python {
+
+void bind_errors(pybind11::module_& m);       // module.cpp: exceptions carrying the CLI's messages
+void bind_rig(pybind11::module_& m);          // rig_bindings.cpp: Rig, its keys and YAML
+void bind_studies(pybind11::module_& m);      // study_bindings.cpp: simulate, CS study, sweep, adc, trials
+void bind_calibration(pybind11::module_& m);  // calibration_bindings.cpp: calibrate, params, apply
+void bind_sky(pybind11::module_& m);          // sky_bindings.cpp: sun, sky, drift, spectral
+void bind_nav(pybind11::module_& m);          // nav_bindings.cpp: heading, study heading
+
+}  // namespace polrig::python

@@ -1,0 +1,91 @@
+#include "convert.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include <fmt/format.h>
+
+namespace polrig::python {
+
+py::array_t<double> empty_array(std::vector<py::ssize_t> shape) {
+  return py::array_t<double>(std::move(shape));
+}
+
+namespace {
+std::string shape_text(const py::array& a) {
+  std::string s = "(";
+  for (py::ssize_t d = 0; d < a.ndim(); ++d) s += fmt::format("{}{}", d ? ", " : "", a.shape(d));
+  return s + (a.ndim() == 1 ? ",)" : ")");
+}
+}  // namespace
+
+DoubleArray as_array(const py::handle& obj, const char* name, int ndim, py::ssize_t columns) {
+  DoubleArray a;
+  try {
+    a = DoubleArray::ensure(obj);
+  } catch (const py::error_already_set&) {
+  }
+  if (!a) {
+    PyErr_Clear();
+    throw py::type_error(fmt::format("{}: expected an array of numbers, got {}", name,
+                                     py::str(py::type::of(obj)).cast<std::string>()));
+  }
+  const bool shape_ok = (ndim == 0 || a.ndim() == ndim) &&
+                        (columns == 0 || (a.ndim() >= 1 && a.shape(a.ndim() - 1) == columns));
+  if (!shape_ok) {
+    const std::string want =
+        columns ? (ndim == 2 ? fmt::format("a 2-D array of shape (N, {})", columns)
+                             : fmt::format("an array whose last dimension is {}", columns))
+                : fmt::format("a {}-D array", ndim);
+    throw py::value_error(fmt::format("{}: expected {}, got shape {}", name, want, shape_text(a)));
+  }
+  return a;
+}
+
+std::vector<double> finite_values(const DoubleArray& a, const char* name) {
+  std::vector<double> v(a.data(), a.data() + a.size());
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (!std::isfinite(v[i]))
+      throw py::value_error(fmt::format("{}: element {} is {}; expected a finite number", name, i, v[i]));
+  return v;
+}
+
+ThreadLimit::ThreadLimit(std::optional<int> threads) {
+  if (!threads) return;
+  if (*threads < 1 || *threads > 1024)
+    throw py::value_error(fmt::format("threads={}: expected a whole number in [1, 1024] or None", *threads));
+  control_ = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                   static_cast<std::size_t>(*threads));
+}
+
+ThreadLimit::~ThreadLimit() = default;
+
+Progress progress_from(const py::object& progress) {
+  if (progress.is_none()) return {};
+  if (PyBool_Check(progress.ptr())) {
+    if (!progress.cast<bool>()) return {};
+    return Progress([](const ProgressReport& r) {
+      const bool done = r.fraction >= 1;
+      std::fprintf(stderr, "\rpolrig: %s\033[K%s", format_progress(r).c_str(), done ? "\n" : "");
+      std::fflush(stderr);
+    }, 0.5);
+  }
+  if (!PyCallable_Check(progress.ptr()))
+    throw py::type_error("progress: expected None, a bool or a callable f(stage, fraction, eta_s)");
+  // The callable outlives this call only inside the Progress, which the call's computation owns;
+  // it is released with the GIL held.
+  auto f = std::shared_ptr<py::object>(new py::object(progress), [](py::object* p) {
+    py::gil_scoped_acquire gil;
+    delete p;
+  });
+  return Progress([f](const ProgressReport& r) {
+    py::gil_scoped_acquire gil;
+    try {
+      (*f)(r.stage, r.fraction, r.eta_s);
+    } catch (py::error_already_set& e) {
+      e.discard_as_unraisable("polrig progress callback");
+    }
+  }, 0.5);
+}
+
+}  // namespace polrig::python

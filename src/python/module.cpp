@@ -1,0 +1,37 @@
+// The compiled part of the Python package polrig (python/polrig/__init__.py re-exports it).
+#include <pybind11/pybind11.h>
+
+#include "bindings.h"
+#include "polrig/calib/fit.h"
+#include "polrig/io/measured.h"
+#include "polrig/rig/error.h"
+#include "polrig/version.h"
+
+namespace polrig::python {
+
+void bind_errors(pybind11::module_& m) {
+  // The library's errors keep their messages (file, line, key and value, as the CLI prints
+  // them). Bad rigs and data are ValueErrors; a calibration that cannot be formed is a
+  // RuntimeError. std::invalid_argument and std::out_of_range become ValueError and IndexError.
+  pybind11::register_exception<RigError>(m, "RigError", PyExc_ValueError).doc() =
+      "A bad rig: a rig file, a key's value, a grid or a scene it names (the CLI's exit 2).";
+  pybind11::register_exception<DataError>(m, "DataError", PyExc_ValueError).doc() =
+      "Bad data: a CSV or YAML file's file, line, column and value (the CLI's exit 2).";
+  pybind11::register_exception<CalibrationError>(m, "CalibrationError", PyExc_RuntimeError).doc() =
+      "Stops that cannot form a calibration (unpaired CS stops, d_a outside (0, 1)).";
+}
+
+}  // namespace polrig::python
+
+PYBIND11_MODULE(_polrig, m) {
+  m.doc() = "polrig: simulation and calibration of polarization-sensor calibration rigs "
+            "(docs/python.md).";
+  m.attr("__version__") = POLRIG_VERSION;
+  m.attr("git_revision") = POLRIG_GIT_REVISION;
+  polrig::python::bind_errors(m);
+  polrig::python::bind_rig(m);
+  polrig::python::bind_studies(m);
+  polrig::python::bind_calibration(m);
+  polrig::python::bind_sky(m);
+  polrig::python::bind_nav(m);
+}

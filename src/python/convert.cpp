@@ -50,6 +50,58 @@ std::vector<double> finite_values(const DoubleArray& a, const char* name) {
   return v;
 }
 
+namespace {
+UtcTime one_utc(const py::handle& obj, const std::string& where) {
+  if (py::isinstance<py::str>(obj)) {
+    try {
+      return parse_utc(obj.cast<std::string>());
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(fmt::format("{}: {}", where, e.what()));
+    }
+  }
+  const py::module_ datetime = py::module_::import("datetime");
+  if (py::isinstance(obj, datetime.attr("datetime"))) {
+    if (obj.attr("utcoffset")().is_none())
+      throw py::value_error(fmt::format("{}: {} has no time zone; give a UTC time "
+                                        "(tzinfo=datetime.timezone.utc) or an ISO 8601 string with Z",
+                                        where, py::repr(obj).cast<std::string>()));
+    return {obj.attr("timestamp")().cast<double>()};
+  }
+  const py::module_ np = py::module_::import("numpy");
+  if (py::isinstance(obj, np.attr("datetime64"))) {
+    const py::object ns = np.attr("datetime64")(obj, "ns");
+    if (py::bool_(np.attr("isnat")(ns)))
+      throw py::value_error(fmt::format("{}: NaT is not a time", where));
+    return {static_cast<double>(ns.attr("astype")("int64").cast<long long>()) * 1e-9};
+  }
+  throw py::type_error(fmt::format("{}: expected a UTC time (ISO 8601 string with Z, aware "
+                                   "datetime or numpy.datetime64), got {}", where,
+                                   py::str(py::type::of(obj)).cast<std::string>()));
+}
+}  // namespace
+
+std::vector<UtcTime> utc_times(const py::handle& obj, const char* name) {
+  const py::module_ np = py::module_::import("numpy");
+  if (py::isinstance<py::array>(obj) &&
+      py::bool_(np.attr("issubdtype")(obj.attr("dtype"), np.attr("datetime64")))) {
+    const py::array ns = np.attr("ravel")(obj).attr("astype")("datetime64[ns]");
+    if (py::bool_(np.attr("any")(np.attr("isnat")(ns))))
+      throw py::value_error(fmt::format("{}: NaT is not a time (element {})", name,
+                                        np.attr("argmax")(np.attr("isnat")(ns)).cast<long long>()));
+    const auto ints = ns.attr("view")("int64").cast<py::array_t<long long, py::array::c_style | py::array::forcecast>>();
+    std::vector<UtcTime> out(static_cast<std::size_t>(ints.size()));
+    for (std::size_t i = 0; i < out.size(); ++i) out[i].unix_s = static_cast<double>(ints.data()[i]) * 1e-9;
+    return out;
+  }
+  if (py::isinstance<py::str>(obj) || !py::isinstance<py::iterable>(obj)) return {one_utc(obj, name)};
+  std::vector<UtcTime> out;
+  std::size_t i = 0;
+  for (const py::handle item : py::iter(obj)) out.push_back(one_utc(item, fmt::format("{}[{}]", name, i++)));
+  return out;
+}
+
+UtcTime utc_time(const py::handle& obj, const char* name) { return one_utc(obj, name); }
+
 ThreadLimit::ThreadLimit(std::optional<int> threads) {
   if (!threads) return;
   if (*threads < 1 || *threads > 1024)

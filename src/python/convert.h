@@ -14,6 +14,7 @@
 #include <tbb/global_control.h>
 
 #include "polrig/progress.h"
+#include "polrig/sky/sun.h"
 
 namespace polrig::python {
 namespace py = pybind11;
@@ -50,6 +51,14 @@ py::array_t<double> to_array(const std::array<double, N>& a) {
 DoubleArray as_array(const py::handle& obj, const char* name, int ndim = 1, py::ssize_t columns = 0);
 // The array's values in a vector; each must be finite, else ValueError naming `name` and the index.
 std::vector<double> finite_values(const DoubleArray& a, const char* name);
+
+// UTC instants from Python: an ISO 8601 string with a Z ("2018-11-16T08:09:40Z", as the CLI's
+// --utc), a timezone-aware datetime.datetime, a numpy.datetime64 (read as UTC), or a sequence or
+// array of these (a datetime64 array converts without per-element Python work). ValueError naming
+// `name`, the index and the text otherwise (sky/sun.h's parse_utc message).
+std::vector<UtcTime> utc_times(const py::handle& obj, const char* name);
+// Exactly one instant (a scalar of the forms above).
+UtcTime utc_time(const py::handle& obj, const char* name);
 
 // `threads=` of every parallel call: the most worker threads TBB may use while it lives (None:
 // all cores). Results do not depend on it. ValueError outside [1, 1024].

@@ -1,5 +1,6 @@
 // polrig.Rig: built from a file, a YAML string or a dict; every rig key readable and settable
 // with the checks of --set; written back as YAML. polrig.rig_keys(): the one table of keys.
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,12 +51,9 @@ void flatten(const py::dict& d, const std::string& prefix, std::vector<RigOverri
   }
 }
 
-std::vector<RigOverride> overrides_of(const py::object& set) {
+std::vector<RigOverride> overrides_of(const std::optional<py::dict>& set) {
   std::vector<RigOverride> out;
-  if (set.is_none()) return out;
-  if (!py::isinstance<py::dict>(set))
-    throw py::type_error("set: expected a dict of rig keys and values, e.g. {\"eccentricity.L_S\": 0.05}");
-  flatten(set.cast<py::dict>(), "", out);
+  if (set) flatten(*set, "", out);
   return out;
 }
 
@@ -119,7 +117,7 @@ CLI's --set: a bad value raises polrig.RigError and leaves the rig unchanged.
 )doc");
   rig.def(py::init([] { return PyRig{parse_rig("", "(default rig)")}; }),
           "The default rig (the values of rigs/wang2019-indoor.yaml).")
-      .def_static("load", [](const std::string& path, const py::object& set) {
+      .def_static("load", [](const std::string& path, const std::optional<py::dict>& set) {
             return PyRig{load_rig(path, overrides_of(set))};
           }, py::arg("path"), py::kw_only(), py::arg("set") = py::none(),
           R"doc(Reads a rig file (YAML).
@@ -128,13 +126,13 @@ path: the rig file, e.g. "rigs/wang2019-indoor.yaml"; a scene it names is found 
 set: overrides, as the CLI's --set: {"eccentricity.L_S": 0.05} or nested
      {"eccentricity": {"L_S": 0.05}}; values in the key's unit.
 Raises polrig.RigError naming the file, line, key and value.)doc")
-      .def_static("from_yaml", [](const std::string& text, const py::object& set, const std::string& origin) {
+      .def_static("from_yaml", [](const std::string& text, const std::optional<py::dict>& set, const std::string& origin) {
             return PyRig{parse_rig(text, origin, overrides_of(set))};
           }, py::arg("text"), py::kw_only(), py::arg("set") = py::none(),
           py::arg("origin") = "(yaml string)",
           "A rig from YAML text; `origin` names it in error messages (and is the folder a "
           "relative scene path is read from when it is a file path).")
-      .def_static("from_dict", [](const py::dict& d, const py::object& set) {
+      .def_static("from_dict", [](const py::dict& d, const std::optional<py::dict>& set) {
             std::vector<RigOverride> o;
             flatten(d, "", o);
             const std::vector<RigOverride> more = overrides_of(set);

@@ -1,0 +1,29 @@
+"""The examples under examples/ run as scripts and make what they say."""
+import os
+import subprocess
+import sys
+
+import pytest
+
+from conftest import ROOT
+
+EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
+
+
+@pytest.mark.parametrize("script", EXAMPLES, ids=[p.name for p in EXAMPLES])
+def test_example_runs(script, tmp_path):
+    env = dict(os.environ, MPLBACKEND="Agg")
+    p = subprocess.run([sys.executable, str(script), str(tmp_path)], env=env, cwd=tmp_path,
+                       capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    pngs = list(tmp_path.glob("*.png"))
+    assert pngs, "the example wrote no plot"
+    assert all(png.stat().st_size > 10_000 for png in pngs)
+
+
+def test_fig11_example_gives_the_validated_asd_range(tmp_path):
+    # docs/validation.md, Figs. 11–12: "ASD 0.29213–0.29283 mV over L_S: 0.24 % range".
+    p = subprocess.run([sys.executable, str(ROOT / "examples" / "fig11_sweep.py"), str(tmp_path)],
+                       env=dict(os.environ, MPLBACKEND="Agg"), capture_output=True, text=True,
+                       check=True)
+    assert "0.29213–0.29283 mV" in p.stdout and "0.24 % range" in p.stdout, p.stdout

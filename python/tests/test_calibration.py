@@ -251,6 +251,9 @@ def test_apply_refuses_what_the_cli_refuses(tmp_path):
         p.apply([[0.1, 0.1, 0.1]], volts_per_decade=0)
     with pytest.raises(ValueError, match="inversion='x'"):
         p.apply([[0.1, 0.1, 0.1]], inversion="x")
+    flat = polrig.CalibrationParams(alpha_deg=np.zeros(6))
+    with pytest.raises(polrig.DataError, match="V row 0: V1 = 0.1, V2 = 0.2, V3 = 0.1 give no finite angle"):
+        flat.apply([[0.1, 0.2, 0.1]])
     # Voltages beyond 300 decades of light ratio: the CLI's message for the same row.
     params = tmp_path / "params.yaml"
     params.write_text("alpha_deg: [0, 0, -120, -120, 120, 120]\nk_mV: [0, 0, 0]\nkv: [0.5, 1, 1]\n"
@@ -283,8 +286,9 @@ def test_read_measured_errors_name_file_line_column(tmp_path):
         polrig.read_measured(str(f))
 
 
-def test_result_threads_do_not_matter(indoor):
-    # The fit runs in one thread; the arrays of two calls are identical.
+def test_calibrate_is_deterministic(indoor):
+    # The fit is serial (no threads= argument, as the CLI's calibrate uses none): two calls agree
+    # bit for bit.
     data = polrig.read_measured(str(indoor))
     a = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
     b = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)

@@ -190,6 +190,11 @@ def test_fit_failure_is_data_not_an_exception():
     assert not res.usable() and res.fit.termination == "too_few_observations"
     assert "not usable" in repr(res)
     assert res.errors["errsec_deg"].shape == (0,)
+    assert res.fitted.shape == (3, 3) and not res.fitted.any()
+    with pytest.raises(polrig.CalibrationError, match="method section: the fit is not usable: too_few_observations"):
+        res.to_yaml()
+    with pytest.raises(polrig.CalibrationError, match="not usable"):
+        res.model([0.0])
 
 
 def test_replacement_analysis_function_matches_the_result(indoor):
@@ -234,6 +239,8 @@ def test_bad_arguments_name_themselves(indoor, tmp_path):
         polrig.calibrate(theta, V, method="nc", drift="angle", site=(95, 121.5))
     with pytest.raises(ValueError, match="drift='sideways': expected none, angle, per-stop or linear"):
         polrig.calibrate(theta, V, method="nc", drift="sideways")
+    with pytest.raises(TypeError, match="rig: expected a polrig.Rig or None, got <class 'str'>"):
+        polrig.calibrate(theta, V, rig=INDOOR)
     with pytest.raises(ValueError, match="method='cs-nc': the rig's light is the sky"):
         polrig.calibrate(theta, V, rig=polrig.Rig.load(OUTDOOR))
     # An unpaired CS stop: the library's CalibrationError.

@@ -51,7 +51,14 @@ struct AppliedAngles {
 struct PyMeasured {
   MeasuredData data;
   bool have_angles = true;
+  std::optional<PyRig> rig;  // the dataset's rig.yaml, as a polrig.Rig
 };
+
+PyMeasured measured_of(MeasuredData&& data) {
+  PyMeasured m{std::move(data), true, std::nullopt};
+  if (m.data.rig) m.rig = PyRig{load_rig(m.data.rig_origin)};
+  return m;
+}
 
 constexpr const char* kMethods = "section, cs, cs-nc or nc";
 
@@ -85,6 +92,15 @@ PairInversion inversion_of(const std::string& name) {
   if (name == "atan2") return PairInversion::Atan2;
   if (name == "arctan-sign") return PairInversion::ArctanSignExtension;
   throw py::value_error(fmt::format("inversion='{}': expected 'atan2' or 'arctan-sign'", name));
+}
+
+// The CLI's refusal of a fit that is not usable, for what only a usable fit has (the model,
+// params.yaml, the replacement analysis).
+const PyCalibration& usable_or_throw(const PyCalibration& c) {
+  if (!c.result.usable())
+    throw CalibrationError(fmt::format("method {}: the fit is not usable: {}",
+                                       method_name(c.result.method), c.result.fit.summary.brief_report()));
+  return c;
 }
 
 py::array_t<double> rows_array(const std::vector<std::array<double, 3>>& rows) {
@@ -191,9 +207,9 @@ py::dict accuracy_dict(const std::array<AngleAccuracy, 4>& a) {
 }
 
 PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
-                            const std::string& method_name_text, const py::object& d_a,
+                            const std::string& method_name_text, std::optional<double> d_a,
                             const py::object& rig_obj, double nc_threshold, int nc_min_points,
-                            const py::object& film_axes_deg, const py::object& volts_per_decade,
+                            const py::object& film_axes_deg, std::optional<double> volts_per_decade,
                             const std::string& drift, const py::object& utc, const py::object& t_s,
                             const py::object& site, const FitOptions& fit) {
   const std::optional<CalibrationMethod> method = parse_method(method_name_text);
@@ -225,6 +241,9 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
   }
 
   // The sensor (film axes, amplifier) and d_a, as `polrig calibrate --rig`.
+  if (!rig_obj.is_none() && !py::isinstance<PyRig>(rig_obj))
+    throw py::type_error(fmt::format("rig: expected a polrig.Rig or None, got {}",
+                                     py::str(py::type::of(rig_obj)).cast<std::string>()));
   const Rig rig = rig_obj.is_none() ? Rig{} : rig_obj.cast<const PyRig&>().rig();
   if (rig.light->has(Source::kTimeDependent) && !raw_stops)
     throw py::value_error(fmt::format("method='{}': the rig's light is the sky, which drifts with "
@@ -232,8 +251,8 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
                                       "'per-stop' (or 'angle', 'linear', 'none')", method_name_text));
   CalibrationOptions o;
   o.method = *method;
-  if (!d_a.is_none()) {
-    const double v = d_a.cast<double>();
+  if (d_a) {
+    const double v = *d_a;
     if (!(v > 0 && v < 1))
       throw py::value_error(fmt::format("d_a: expected a degree of polarization in (0, 1), got {}", v));
     o.d_a = v;
@@ -244,9 +263,8 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
   }
   o.film_axis_deg = film_axes_deg.is_none() ? rig.device.film_axis_deg
                                             : fixed_array<6>(film_axes_deg, "film_axes_deg");
-  o.volts_per_decade = volts_per_decade.is_none()
-                           ? rig.electronics.volts_per_decade
-                           : positive_finite(volts_per_decade.cast<double>(), "volts_per_decade");
+  o.volts_per_decade = volts_per_decade ? positive_finite(*volts_per_decade, "volts_per_decade")
+                                       : rig.electronics.volts_per_decade;
   o.noncontinuous = {nc_threshold, nc_min_points};
   o.fit = fit;
 
@@ -506,6 +524,7 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
             return point_column(c.result.points, [](const EvalPoint& p) { return p.d_ratio; });
           }, "(M,) the light's d at each point over d at the first stop (1 without drift corrections).")
       .def_property_readonly("V_model", [](const PyCalibration& c) {
+            usable_or_throw(c);
             std::vector<std::array<double, 3>> rows;
             for (const EvalPoint& p : c.result.points) {
               std::array<double, 3> v{};
@@ -515,17 +534,21 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
               rows.push_back(v);
             }
             return rows_array(rows);
-          }, "(M, 3) the fitted Eq. 15 at each point, V (points.csv's V*_model).")
+          }, "(M, 3) the fitted Eq. 15 at each point, V (points.csv's V*_model). Raises "
+             "polrig.CalibrationError when the fit is not usable.")
       .def_property_readonly("fitted", [](const PyCalibration& c) {
             const std::size_t n = c.result.points.size();
+            const bool known = c.result.fitted.size() == 3;  // only a usable fit records them
             py::array_t<bool> a({static_cast<py::ssize_t>(n), py::ssize_t{3}});
             auto w = a.mutable_unchecked<2>();
             for (std::size_t k = 0; k < n; ++k)
               for (std::size_t i = 0; i < 3; ++i)
-                w(static_cast<py::ssize_t>(k), static_cast<py::ssize_t>(i)) = c.result.fitted[i][k];
+                w(static_cast<py::ssize_t>(k), static_cast<py::ssize_t>(i)) = known && c.result.fitted[i][k];
             return a;
-          }, "(M, 3) bool: voltage V_i of point m entered the fit (points.csv's V*_fitted).")
+          }, "(M, 3) bool: voltage V_i of point m entered the fit (points.csv's V*_fitted); all "
+             "False when the fit is not usable.")
       .def("model", [](const PyCalibration& c, const py::handle& theta_deg, const py::handle& d_ratio) {
+            usable_or_throw(c);
             const std::vector<double> t = finite_values(as_array(theta_deg, "theta_deg", 1), "theta_deg");
             std::vector<double> r(t.size(), 1.0);
             if (!d_ratio.is_none()) {
@@ -542,7 +565,8 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
           }, py::arg("theta_deg"), py::arg("d_ratio") = py::none(),
           "The fitted Eq. 15 at polarization angles theta_deg ((N,) degrees): (N, 3) volts, NaN "
           "where Eq. 15 is undefined (model_curve.csv is model(np.arange(721) * 0.5)). d_ratio "
-          "((N,), default 1) scales d as the drift corrections do.")
+          "((N,), default 1) scales d as the drift corrections do. Raises polrig.CalibrationError "
+          "when the fit is not usable.")
       .def_property_readonly("errors", [](const PyCalibration& c) {
             const auto& e = c.result.errors;
             py::dict d;
@@ -565,17 +589,21 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
       .def("usable", [](const PyCalibration& c) { return c.result.usable(); },
            "True when the fit converged and the parameters can be used.")
       .def("replacement", [](const PyCalibration& c) {
+            usable_or_throw(c);
             return replacement_list(replacement_analysis(
                 c.result.params, CalibrationParams::theory(c.options.film_axis_deg),
                 c.options.volts_per_decade, c.result.points));
           }, "replacement.csv (§4.6, Fig. 21): [(label, mask, accuracy_deg)] for the 16 subsets of "
              "{α, k, kv, kd} put back to their theory values (for the rig's film axes); mask bit 0 "
-             "α, 1 k, 2 kv, 3 kd; accuracy_deg is θ_sec's, degrees.")
-      .def("to_yaml", [](const PyCalibration& c) { return params_to_yaml(c.result, c.options.volts_per_decade); },
-           "params.yaml's text, as `polrig calibrate` writes it (read back by polrig.read_params "
-           "and a rig's device.truth_from).")
+             "α, 1 k, 2 kv, 3 kd; accuracy_deg is θ_sec's, degrees. Raises polrig.CalibrationError "
+             "when the fit is not usable.")
+      .def("to_yaml", [](const PyCalibration& c) {
+            return params_to_yaml(usable_or_throw(c).result, c.options.volts_per_decade);
+          }, "params.yaml's text, as `polrig calibrate` writes it (read back by polrig.read_params "
+             "and a rig's device.truth_from). Raises polrig.CalibrationError when the fit is not "
+             "usable, as the CLI refuses to write it.")
       .def("save", [](const PyCalibration& c, const std::string& path) {
-            write_text_file(path, params_to_yaml(c.result, c.options.volts_per_decade));
+            write_text_file(path, params_to_yaml(usable_or_throw(c).result, c.options.volts_per_decade));
           }, py::arg("path"), "Writes to_yaml() to a file (params.yaml).")
       .def("__repr__", [](const PyCalibration& c) {
         const CalibrationResult& r = c.result;
@@ -614,16 +642,16 @@ void bind_measured(py::module_& m) {
             return take(std::vector<double>(d.data.t_s));
           }, "(N,) seconds since the first stop (a time-dependent source's stops.csv), or None.")
       .def_property_readonly("rig", [](const PyMeasured& d) -> py::object {
-            if (!d.data.rig) return py::none();
-            return py::cast(PyRig{load_rig(d.data.rig_origin)});
-          }, "The dataset's rig (its rig.yaml, a polrig.Rig), or None.")
+            if (!d.rig) return py::none();
+            return py::cast(*d.rig);
+          }, "The dataset's rig (its rig.yaml, a polrig.Rig; a new copy on each access), or None.")
       .def("__len__", [](const PyMeasured& d) { return d.data.stops.size(); })
       .def("__repr__", [](const PyMeasured& d) {
         return fmt::format("<polrig.MeasuredData {}: {} rows{}{}>", d.data.origin, d.data.stops.size(),
                            d.data.utc.empty() ? "" : ", utc", d.data.rig ? ", rig.yaml" : "");
       });
 
-  m.def("read_measured", [](const std::string& path) { return PyMeasured{read_measured(path), true}; },
+  m.def("read_measured", [](const std::string& path) { return measured_of(read_measured(path)); },
         py::arg("path"),
         "Reads voltages to calibrate, as `polrig calibrate INPUT` does: a folder written by "
         "`polrig simulate` (its stops.csv and rig.yaml) or a CSV with theta_R_deg,V1,V2,V3 "
@@ -631,7 +659,7 @@ void bind_measured(py::module_& m) {
         "polrig.DataError naming the file, the line and the column (polrig.RigError for the "
         "dataset's rig.yaml).");
   m.def("read_voltages", [](const std::string& path) {
-          PyMeasured d{read_voltages(path), true};
+          PyMeasured d = measured_of(read_voltages(path));
           d.have_angles = !d.data.stops.empty() && !std::isnan(d.data.stops.front().theta_R_deg);
           return d;
         }, py::arg("path"),
@@ -649,8 +677,8 @@ void bind_calibration(py::module_& m) {
 
   m.def("calibrate",
         [](const py::handle& theta_R_deg, const py::handle& V, const std::string& method,
-           const py::object& d_a, const py::object& rig, double nc_threshold, int nc_min_points,
-           const py::object& film_axes_deg, const py::object& volts_per_decade,
+           std::optional<double> d_a, const py::object& rig, double nc_threshold, int nc_min_points,
+           const py::object& film_axes_deg, std::optional<double> volts_per_decade,
            const std::string& drift, const py::object& utc, const py::object& t_s,
            const py::object& site, int max_iterations, int max_evaluations,
            double function_tolerance, double parameter_tolerance, double gradient_tolerance,

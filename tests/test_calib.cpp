@@ -124,6 +124,36 @@ TEST(Section, BadVoltageHasZeroSlopeAtTheSectionCentre) {
   EXPECT_EQ(bad_voltage_of(5), 1);  // V2 at 150°
 }
 
+// `polrig apply`'s rules for measured voltages (calib/angles.h): the angles of sensor_angles
+// and the d of θ_sec's pair, or why there are none, in the order the CLI reports them.
+TEST(MeasuredAngles, AreSensorAnglesOrSayWhyNot) {
+  const CalibrationParams t = CalibrationParams::theory(kWang2019FilmAxesDeg);
+  const Electronics e;
+  const std::array<double, 3> V = voltages(t, 40.0, 0.55);
+  const MeasuredAngles m = measured_angles(t, e, V);
+  const SensorAngles a = sensor_angles(t, e, V);
+  EXPECT_EQ(m.problem, "");
+  EXPECT_EQ(m.angles.theta_sec_deg, a.theta_sec_deg);
+  EXPECT_EQ(m.angles.section, 1);  // 40° is in the section centred on 30°: its bad voltage is V3
+  EXPECT_EQ(m.d, a.theta12.d);
+  EXPECT_NEAR(m.d, 0.55, 1e-12);
+  EXPECT_EQ(adc_range_problem({0.1, -100.0, 0.2}), "");
+  EXPECT_EQ(adc_range_problem({0.1, 100.5, 0.2}),
+            "column 'V2': 100.5 V is outside any ADC's range (|V| ≤ 100 V)");
+  EXPECT_EQ(measured_angles(t, e, {0.1, 0.1, -101}).problem,
+            "column 'V3': -101 V is outside any ADC's range (|V| ≤ 100 V)");
+  CalibrationParams low = t;
+  low.kv[0] = 0.5;  // 80 V is 320 decades at 0.25 V per decade
+  EXPECT_EQ(measured_angles(low, e, {80, 0.1, 0.1}).problem,
+            "column 'V1': 80 V is 320 decades of light ratio from the pair's offset at 0.5 V per "
+            "decade (kv = 0.5): no light gives that");
+  // All films at one angle: the linear system in d·cos2θ, d·sin2θ is singular.
+  CalibrationParams flat = t;
+  flat.alpha_deg = {0, 0, 0, 0, 0, 0};
+  EXPECT_EQ(measured_angles(flat, e, {0.1, 0.2, 0.1}).problem,
+            "V1 = 0.1, V2 = 0.2, V3 = 0.1 give no finite angle with these parameters");
+}
+
 TEST(Section, ThetaSecIsThePairWithoutTheBadVoltage) {
   // Spec's example: θ12 = 60° lies in [45, 75), whose bad voltage is V2, so θ_sec = θ13.
   // Perturb V2 slightly: θ12 and θ23 move, θ13 (and so θ_sec) does not.

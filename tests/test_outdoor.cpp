@@ -18,6 +18,7 @@
 #include <fmt/format.h>
 
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/stop_corrections.h"
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/error.h"
@@ -167,6 +168,55 @@ TEST(OutdoorDrift, AStoppedTableSeesTheSkyTurnAt0_00273DegPerSecond) {
   const SkyDrift ps = drift_corrections({a, a.plus_seconds(108)}, dalian, {}, MaxDegree{},
                                         DriftMode::PerStop);
   EXPECT_NEAR(ps.d_ratio[1] - 1.0, 0.0016, 0.00005);
+}
+
+// calib/stop_corrections.h finds the stop times and the site and hands them to the ephemeris
+// unchanged: a plain rig with utc and a site gives drift_corrections' own numbers; a sky rig
+// supplies its first stop's time (+ t_s), its site, P_max table and sun settings. Missing times
+// or site are named in the caller's spelling.
+TEST(OutdoorDrift, StopCorrectionsFindTimesAndSiteAndNameWhatIsMissing) {
+  const UtcTime a = parse_utc("2018-11-16T08:09:40Z");
+  const std::vector<UtcTime> times{a, a.plus_seconds(54), a.plus_seconds(108)};
+  const Site dalian{kLat, kLon, 0};
+  DriftRequest r;
+  r.mode = DriftMode::PerStop;
+  r.utc = times;
+  r.origin = "run.csv";
+  r.drift_option = "--drift per-stop";
+  r.site_option = "--site LAT,LON";
+  r.times_missing = "no times";
+  const Rig plain;
+  const StopCorrections c = sun_drift_corrections(r, dalian, "--site X", plain);
+  const SkyDrift d = drift_corrections(times, dalian, {}, MaxDegree{}, DriftMode::PerStop);
+  EXPECT_EQ(c.dtheta_deg, d.dtheta_deg);
+  EXPECT_EQ(c.d_ratio, d.d_ratio);
+  EXPECT_EQ(c.source, "per-stop (stop times from the utc column, the sun from ERFA at --site X)");
+  try {
+    sun_drift_corrections(r, std::nullopt, "", plain);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "--drift per-stop needs --site LAT,LON (the sun's position)");
+  }
+  r.utc.clear();
+  r.t_s = {0, 54, 108};  // t_s alone needs a sky rig's first stop
+  try {
+    sun_drift_corrections(r, dalian, "--site X", plain);
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "--drift per-stop: no times");
+  }
+  const Rig sky = load_rig(POLRIG_SOURCE_DIR "/rigs/wang2019-outdoor1.yaml").rig;
+  const StopCorrections s = sun_drift_corrections(r, std::nullopt, "", sky);
+  const UtcTime t0 = parse_utc(sky.source.sky.first_stop_utc);
+  const Sky resolved = sky.source.sky.resolved_sky();
+  const SkyDrift e = drift_corrections({t0, t0.plus_seconds(54), t0.plus_seconds(108)},
+                                       sky.source.sky.sky.site, resolved.sun, resolved.model.P_max,
+                                       DriftMode::PerStop);
+  EXPECT_EQ(s.dtheta_deg, e.dtheta_deg);
+  EXPECT_EQ(s.d_ratio, e.d_ratio);
+  EXPECT_HAS(s.source, "stop times from the rig's sky.first_stop_utc + t_s");
+  r.mode = DriftMode::None;
+  EXPECT_TRUE(sun_drift_corrections(r, std::nullopt, "", plain).empty());
 }
 
 TEST(OutdoorCalibration, CorrectionsOfZeroAndOneLeaveTheFitBitIdentical) {

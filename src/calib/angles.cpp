@@ -3,6 +3,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include <Eigen/Dense>
 
 #include "polrig/device/sensor.h"
@@ -79,6 +81,52 @@ SensorAngles sensor_angles(const CalibrationParams& p, const Electronics& e,
     default: s.theta_sec_deg = s.theta12.theta_deg; break;
   }
   return s;
+}
+
+std::string adc_range_problem(const std::array<double, 3>& V) {
+  for (int i = 0; i < 3; ++i) {
+    const double v = V[static_cast<std::size_t>(i)];
+    if (!(std::abs(v) <= kMaxAdcVolts))
+      return fmt::format("column 'V{}': {} V is outside any ADC's range (|V| ≤ {} V)", i + 1, v,
+                         kMaxAdcVolts);
+  }
+  return {};
+}
+
+MeasuredAngles measured_angles(const CalibrationParams& p, const Electronics& e,
+                               const std::array<double, 3>& V, PairInversion method) {
+  MeasuredAngles out;
+  out.problem = adc_range_problem(V);
+  if (!out.problem.empty()) return out;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const double decades = (V[i] - p.k_mV[i] * 1e-3) / (p.kv[i] * e.volts_per_decade);
+    if (!(std::abs(decades) <= kMaxDecades)) {
+      out.problem = fmt::format(
+          "column 'V{}': {} V is {:.3g} decades of light ratio from the pair's offset at {} V "
+          "per decade (kv = {}): no light gives that", i + 1, V[i], decades, e.volts_per_decade,
+          p.kv[i]);
+      return out;
+    }
+  }
+  const std::string no_angle = fmt::format(
+      "V1 = {}, V2 = {}, V3 = {} give no finite angle with these parameters", V[0], V[1], V[2]);
+  try {
+    out.angles = sensor_angles(p, e, V, method);
+  } catch (const std::invalid_argument&) {
+    out.problem = no_angle;
+    return out;
+  }
+  const SensorAngles& a = out.angles;
+  for (double x : {a.theta12.theta_deg, a.theta13.theta_deg, a.theta23.theta_deg, a.theta_sec_deg,
+                   a.theta12.d, a.theta13.d, a.theta23.d})
+    if (!std::isfinite(x)) {
+      out.problem = no_angle;
+      return out;
+    }
+  // d of the pair the section algorithm used: the one without the section's bad voltage.
+  const int bad = bad_voltage_of(a.section);
+  out.d = bad == 0 ? a.theta23.d : bad == 1 ? a.theta13.d : a.theta12.d;
+  return out;
 }
 
 }  // namespace polrig

@@ -10,6 +10,7 @@
 #include "cli.h"
 #include "polrig/calib/angles.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/stop_corrections.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/params_yaml.h"
@@ -60,21 +61,10 @@ struct CalibrationSettings {
   }
 };
 
-// The largest ADC reference a rig accepts (electronics.vref_V): no converter polrig models
-// reads beyond it.
-constexpr double kMaxAdcVolts = 100.0;
-// 10^x overflows or underflows a double beyond about ±308 decades: a pair's light ratio that
-// large is not light.
-constexpr double kMaxDecades = 300.0;
-
 // A DataError naming the file, line, column and value for a voltage no ADC can give.
 void check_adc_range(const StopVoltages& s) {
-  for (int i = 0; i < 3; ++i) {
-    const double v = s.V[static_cast<std::size_t>(i)];
-    if (!(std::abs(v) <= kMaxAdcVolts))
-      throw DataError(fmt::format("{}: column 'V{}': {} V is outside any ADC's range (|V| ≤ {} V)",
-                                  s.label, i + 1, v, kMaxAdcVolts));
-  }
+  const std::string problem = adc_range_problem(s.V);
+  if (!problem.empty()) throw DataError(fmt::format("{}: {}", s.label, problem));
 }
 
 // The sun-drift settings of an outdoor calibration (spec sky-and-compasses.md §1.4).
@@ -105,45 +95,23 @@ StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSe
   if (!mode)
     throw DataError(fmt::format("--drift {}: expected none, angle, per-stop or linear", drift.mode));
   if (*mode == DriftMode::None) return {};
-  // A time-dependent source's rig (the sky) carries the site and the first stop's time.
-  const bool sky_rig = rig.light->has(Source::kTimeDependent);
-  std::vector<UtcTime> times = data.utc;
-  std::string times_from = "the utc column";
-  if (times.empty() && sky_rig && !data.t_s.empty()) {
-    const UtcTime t0 = parse_utc(rig.source.sky.first_stop_utc);
-    for (double t : data.t_s) times.push_back(t0.plus_seconds(t));
-    times_from = "the rig's sky.first_stop_utc + t_s";
-  }
-  if (times.empty())
-    throw DataError(fmt::format("--drift {}: {} has no 'utc' column giving each stop's time "
-                                "(ISO 8601, Z; see docs/formats.md, \"Measured data\")",
-                                drift.mode, data.origin));
-  Site site;
-  std::string site_from;
-  if (!drift.site.empty()) {
-    site = parse_site(drift.site);
-    site_from = "--site " + drift.site;
-  } else if (sky_rig) {
-    site = rig.source.sky.sky.site;
-    site_from = fmt::format("the rig's site {},{}", site.lat_deg, site.lon_deg);
-  } else {
-    throw DataError(fmt::format("--drift {} needs --site LAT,LON (the sun's position)", drift.mode));
-  }
-  // The d ratio does not depend on a constant P_max; a sky rig's P_max(h_s) table enters it. A
-  // sky rig's sun (refraction, UT1 − UTC) is the one its simulation saw; otherwise geometric.
-  const Sky sky = sky_rig ? rig.source.sky.resolved_sky() : Sky{};
-  const MaxDegree P_max = sky_rig ? sky.model.P_max : MaxDegree{};
-  const SunSettings sun = sky_rig ? sky.sun : SunSettings{};
-  SkyDrift d;
+  DriftRequest request;
+  request.mode = *mode;
+  request.utc = data.utc;
+  request.t_s = data.t_s;
+  request.origin = data.origin;
+  request.drift_option = "--drift " + drift.mode;
+  request.site_option = "--site LAT,LON";
+  request.times_missing = fmt::format("{} has no 'utc' column giving each stop's time (ISO 8601, "
+                                      "Z; see docs/formats.md, \"Measured data\")", data.origin);
   try {
-    d = drift_corrections(times, site, sun, P_max, *mode);
+    const StopTimes times = drift_stop_times(request, rig);
+    std::optional<Site> site;
+    if (!drift.site.empty()) site = parse_site(drift.site);
+    return sun_drift_corrections(request, times, site, "--site " + drift.site, rig);
   } catch (const std::invalid_argument& e) {
-    throw DataError(fmt::format("--drift {} on {}: {}", drift.mode, data.origin, e.what()));
+    throw DataError(e.what());
   }
-  return {d.dtheta_deg, d.d_ratio,
-          fmt::format("{} (stop times from {}, the sun from ERFA at {}{})", drift.mode, times_from,
-                      site_from,
-                      *mode == DriftMode::Linear ? ", interpolated between the first and last stop" : "")};
 }
 
 void run_calibrate(const std::string& input, const std::string& method_text,
@@ -237,33 +205,12 @@ void run_calibrate(const std::string& input, const std::string& method_text,
               << fmt::format("{:8s} fit: {}\n", "", r.fit.summary.brief_report());
 }
 
-// The angles of one voltage row; a DataError naming the file, line, column and value for a
-// voltage no ADC can give, one that no light ratio can give, or a row without a finite angle.
-SensorAngles angles_of_row(const StopVoltages& s, const LoadedParams& p, const Electronics& e) {
-  check_adc_range(s);
-  for (int i = 0; i < 3; ++i) {
-    const double v = s.V[static_cast<std::size_t>(i)];
-    const double decades = (v - p.params.k_mV[static_cast<std::size_t>(i)] * 1e-3) /
-                           (p.params.kv[static_cast<std::size_t>(i)] * e.volts_per_decade);
-    if (!(std::abs(decades) <= kMaxDecades))
-      throw DataError(fmt::format(
-          "{}: column 'V{}': {} V is {:.3g} decades of light ratio from the pair's offset at {} V "
-          "per decade (kv = {}): no light gives that", s.label, i + 1, v, decades,
-          e.volts_per_decade, p.params.kv[static_cast<std::size_t>(i)]));
-  }
-  const auto refuse = [&] {
-    return DataError(fmt::format("{}: V1 = {}, V2 = {}, V3 = {} give no finite angle with these "
-                                 "parameters", s.label, s.V[0], s.V[1], s.V[2]));
-  };
-  SensorAngles a;
-  try {
-    a = sensor_angles(p.params, e, s.V);
-  } catch (const std::invalid_argument&) {
-    throw refuse();
-  }
-  for (double x : {a.theta12.theta_deg, a.theta13.theta_deg, a.theta23.theta_deg, a.theta_sec_deg,
-                   a.theta12.d, a.theta13.d, a.theta23.d})
-    if (!std::isfinite(x)) throw refuse();
+// The angles of one voltage row and the d of the section's pair; a DataError naming the file,
+// line, column and value for a voltage no ADC can give, one that no light ratio can give, or a
+// row without a finite angle.
+MeasuredAngles angles_of_row(const StopVoltages& s, const LoadedParams& p, const Electronics& e) {
+  MeasuredAngles a = measured_angles(p.params, e, s.V);
+  if (!a.problem.empty()) throw DataError(fmt::format("{}: {}", s.label, a.problem));
   return a;
 }
 
@@ -278,12 +225,11 @@ void run_apply(const std::string& params_path, const std::string& voltages_path,
   std::string text = "row,theta_R_deg,theta12_deg,theta13_deg,theta23_deg,theta_sec_deg,section,d,error_deg\n";
   for (std::size_t n = 0; n < data.stops.size(); ++n) {
     const StopVoltages& s = data.stops[n];
-    const SensorAngles a = angles_of_row(s, p, e);
+    const MeasuredAngles m = angles_of_row(s, p, e);
+    const SensorAngles& a = m.angles;
     const double err = have_reference ? axis_difference_deg(a.theta_sec_deg, s.theta_R_deg)
                                       : std::numeric_limits<double>::quiet_NaN();
-    // d of the pair the section algorithm used.
-    const int bad = bad_voltage_of(a.section);
-    const double d = bad == 0 ? a.theta23.d : bad == 1 ? a.theta13.d : a.theta12.d;
+    const double d = m.d;
     text += fmt::format("{},{},{},{},{},{},{},{},{}\n", n, s.theta_R_deg, a.theta12.theta_deg,
                         a.theta13.theta_deg, a.theta23.theta_deg, a.theta_sec_deg, a.section, d, err);
   }

@@ -2,6 +2,7 @@
 // Polarization angle from the three pair voltages (spec §2 Eq. 2; §4 Eqs. 16–19) and the
 // section algorithm. With theory parameters Eqs. 16–19 reduce to Eq. 2.
 #include <array>
+#include <string>
 
 #include "polrig/device/params.h"
 #include "polrig/device/electronics.h"
@@ -44,5 +45,29 @@ int bad_voltage_of(int section);
 SensorAngles sensor_angles(const CalibrationParams& p, const Electronics& e,
                            const std::array<double, 3>& V,
                            PairInversion method = PairInversion::Atan2);
+
+// The largest |V| a reading may have: no ADC polrig models reads beyond its reference, and a rig
+// accepts electronics.vref_V up to 100 V.
+inline constexpr double kMaxAdcVolts = 100.0;
+// 10^x overflows or underflows a double beyond about ±308 decades: a pair's light ratio that
+// large is not light.
+inline constexpr double kMaxDecades = 300.0;
+
+// Why V (volts) is no reading of any ADC ("column 'V2': 150 V is outside any ADC's range
+// (|V| ≤ 100 V)"), or "" when every |V_i| ≤ kMaxAdcVolts.
+std::string adc_range_problem(const std::array<double, 3>& V);
+
+// sensor_angles of measured voltages (`polrig apply`): the angles and the d of the pair the
+// section algorithm used, or `problem` saying why there are none: a voltage outside any ADC's
+// range, one more than kMaxDecades of light ratio from its pair's offset, or angles or d that
+// are not finite with these parameters.
+struct MeasuredAngles {
+  SensorAngles angles{};
+  double d = 0;
+  std::string problem;  // "" when the angles are valid
+};
+MeasuredAngles measured_angles(const CalibrationParams& p, const Electronics& e,
+                               const std::array<double, 3>& V,
+                               PairInversion method = PairInversion::Atan2);
 
 }  // namespace polrig

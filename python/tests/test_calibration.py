@@ -1,0 +1,302 @@
+"""polrig.calibrate, CalibrationParams.apply and the readers: the CLI's calibrate and apply outputs,
+bit for bit, on data from `polrig simulate`; errors with the CLI's messages."""
+import pickle
+
+import numpy as np
+import pytest
+
+import polrig
+from conftest import ROOT, read_csv, run_cli
+
+INDOOR = str(ROOT / "rigs" / "wang2019-indoor.yaml")
+OUTDOOR = str(ROOT / "rigs" / "wang2019-outdoor1.yaml")
+
+
+@pytest.fixture(scope="module")
+def indoor(tmp_path_factory):
+    """A `polrig simulate` folder of the indoor rig."""
+    out = tmp_path_factory.mktemp("indoor") / "sim"
+    run_cli("simulate", INDOOR, "--no-plots", "-o", out)
+    return out
+
+
+@pytest.fixture(scope="module")
+def outdoor(tmp_path_factory):
+    """A `polrig simulate` folder of an outdoor (sky) rig: stops.csv has t_s."""
+    out = tmp_path_factory.mktemp("outdoor") / "sim"
+    run_cli("simulate", OUTDOOR, "--no-plots", "-o", out)
+    return out
+
+
+def cli_calibrate(data, out, *args):
+    run_cli("calibrate", data, "--no-plots", "-o", out, *args)
+    return out
+
+
+def assert_same_as_cli(res, out):
+    """The result against the files `polrig calibrate` wrote: params.yaml as text, the CSVs as
+    exact doubles."""
+    assert res.to_yaml() == (out / "params.yaml").read_text()
+    pts = read_csv(out / "points.csv")
+    np.testing.assert_array_equal(res.theta_ref_deg, pts["theta_ref_deg"])
+    np.testing.assert_array_equal(res.V, np.column_stack([pts["V1"], pts["V2"], pts["V3"]]))
+    np.testing.assert_array_equal(res.V_model,
+                                  np.column_stack([pts["V1_model"], pts["V2_model"], pts["V3_model"]]))
+    np.testing.assert_array_equal(res.fitted,
+                                  np.column_stack([pts["V1_fitted"], pts["V2_fitted"], pts["V3_fitted"]]) == 1)
+    err = read_csv(out / "errors.csv")
+    assert set(res.errors) == set(err)
+    for name, column in err.items():
+        np.testing.assert_array_equal(res.errors[name], column, err_msg=name)
+    acc = read_csv(out / "accuracy.csv")
+    for k, name in enumerate(acc["angle"]):
+        a = res.accuracy[name]
+        assert (a.max_deg, a.min_deg, a.accuracy_deg) == (
+            acc["max_deg"][k], acc["min_deg"][k], acc["accuracy_deg"][k]), name
+    rep = read_csv(out / "replacement.csv")
+    got = res.replacement()
+    assert [r[0] for r in got] == list(rep["replaced"])
+    np.testing.assert_array_equal([r[2] for r in got], rep["accuracy_deg"])
+    curve = read_csv(out / "model_curve.csv")
+    np.testing.assert_array_equal(res.model(curve["theta_deg"]),
+                                  np.column_stack([curve["V1_model"], curve["V2_model"], curve["V3_model"]]))
+
+
+@pytest.mark.parametrize("method", ["section", "cs", "cs-nc", "nc"])
+def test_calibrate_is_the_cli_for_each_method(indoor, tmp_path, method):
+    out = cli_calibrate(indoor, tmp_path / method, "--method", method)
+    data = polrig.read_measured(str(indoor))
+    res = polrig.calibrate(data.theta_R_deg, data.V, method=method, rig=data.rig)
+    assert res.usable() and res.fit.usable() and res.fit.termination == "converged"
+    assert res.method == method and res.d_a_source == "the rig's device.d"
+    assert_same_as_cli(res, out)
+    # params.yaml reads back to the same parameters.
+    back = polrig.read_params(str(out / "params.yaml"))
+    assert back.params == res.params and back.d_a == res.d_a
+    assert back.volts_per_decade == res.volts_per_decade == 0.5
+
+
+def test_d_a_given_is_the_cli_d_a(indoor, tmp_path):
+    out = cli_calibrate(indoor, tmp_path / "d", "--method", "cs-nc", "--d-a", "0.55")
+    data = polrig.read_measured(str(indoor))
+    res = polrig.calibrate(data.theta_R_deg, data.V, d_a=0.55, rig=data.rig)
+    assert res.d_a == 0.55 and res.d_a_source == "d_a"
+    assert res.to_yaml() == (out / "params.yaml").read_text().replace("d_a_source: --d-a", "d_a_source: d_a")
+    np.testing.assert_array_equal(res.errors["errsec_deg"], read_csv(out / "errors.csv")["errsec_deg"])
+
+
+def test_outdoor_per_stop_drift_is_the_cli(outdoor, tmp_path):
+    out = cli_calibrate(outdoor, tmp_path / "ps", "--method", "nc", "--drift", "per-stop")
+    data = polrig.read_measured(str(outdoor))
+    assert data.t_s is not None and data.t_s.shape == data.theta_R_deg.shape
+    res = polrig.calibrate(data.theta_R_deg, data.V, method="nc", rig=data.rig, drift="per-stop",
+                           t_s=data.t_s)
+    assert res.drift.startswith("per-stop (stop times from the rig's sky.first_stop_utc + t_s")
+    assert_same_as_cli(res, out)
+    assert not np.all(res.d_ratio == 1)
+    # Without the correction the result differs (the test can fail).
+    plain = polrig.calibrate(data.theta_R_deg, data.V, method="nc", rig=data.rig)
+    assert plain.drift == "" and not np.array_equal(plain.params.alpha_deg, res.params.alpha_deg)
+
+
+def test_drift_from_utc_and_site_is_the_cli(tmp_path):
+    # A CSV with a utc column and --site, as a researcher's outdoor run.
+    sim = tmp_path / "sim"
+    run_cli("simulate", INDOOR, "--no-plots", "-o", sim)
+    stops = read_csv(sim / "stops.csv")
+    n = len(stops["theta_R_deg"])
+    utc = np.datetime64("2018-11-16T08:09:40") + np.arange(n) * np.timedelta64(3, "s")
+    csv = tmp_path / "run.csv"
+    with open(csv, "w") as f:
+        f.write("theta_R_deg,V1,V2,V3,utc\n")
+        for k in range(n):
+            f.write(f"{stops['theta_R_deg'][k]!r},{stops['V1'][k]!r},{stops['V2'][k]!r},"
+                    f"{stops['V3'][k]!r},{np.datetime_as_string(utc[k])}Z\n")
+    out = cli_calibrate(csv, tmp_path / "cal", "--method", "nc", "--drift", "angle",
+                        "--site", "38.879167,121.543889")
+    data = polrig.read_measured(str(csv))
+    np.testing.assert_array_equal(data.utc, utc.astype("datetime64[ns]"))
+    res = polrig.calibrate(data.theta_R_deg, data.V, method="nc", drift="angle", utc=data.utc,
+                           site=(38.879167, 121.543889))
+    cli_yaml = (out / "params.yaml").read_text()
+    assert res.to_yaml() == cli_yaml.replace("--site 38.879167,121.543889", "site 38.879167,121.543889")
+    np.testing.assert_array_equal(res.theta_ref_deg, read_csv(out / "points.csv")["theta_ref_deg"])
+    # ISO strings give the same.
+    iso = [np.datetime_as_string(t) + "Z" for t in utc]
+    again = polrig.calibrate(data.theta_R_deg, data.V, method="nc", drift="angle", utc=iso,
+                             site=(38.879167, 121.543889))
+    assert again.to_yaml() == res.to_yaml()
+
+
+def test_apply_is_the_cli_apply(indoor, tmp_path):
+    cal = cli_calibrate(indoor, tmp_path / "cal", "--method", "cs-nc")
+    run_cli("apply", cal / "params.yaml", indoor / "stops.csv", "--no-plots", "-o", tmp_path / "ap")
+    cli = read_csv(tmp_path / "ap" / "angles.csv")
+    pf = polrig.read_params(str(cal / "params.yaml"))
+    data = polrig.read_voltages(str(indoor / "stops.csv"))
+    a = pf.angles(data.V, theta_R_deg=data.theta_R_deg)
+    for name in ("theta_R_deg", "theta12_deg", "theta13_deg", "theta23_deg", "theta_sec_deg", "d",
+                 "error_deg"):
+        np.testing.assert_array_equal(getattr(a, name), cli[name], err_msg=name)
+    np.testing.assert_array_equal(a.section, cli["section"])
+    assert a.section.dtype == np.int64 and a.theta_sec_deg.dtype == np.float64
+    theta, d = pf.params.apply(data.V, volts_per_decade=pf.volts_per_decade)
+    np.testing.assert_array_equal(theta, cli["theta_sec_deg"])
+    np.testing.assert_array_equal(d, cli["d"])
+    # The issue's form: the result's parameters applied to more voltages.
+    res = polrig.calibrate(data.theta_R_deg, data.V, method="cs-nc", rig=polrig.Rig.load(INDOOR))
+    theta2, d2 = res.params.apply(data.V)
+    np.testing.assert_array_equal(theta2, theta)
+    # Without reference angles error_deg is None.
+    assert pf.angles(data.V).error_deg is None
+    # The paper's arctan inversion agrees with atan2 to rounding on good data.
+    t3, _ = pf.apply(data.V, inversion="arctan-sign")
+    assert np.max(np.abs((t3 - theta + 90) % 180 - 90)) < 1e-9
+
+
+def test_read_measured_shapes_and_rig(indoor):
+    data = polrig.read_measured(str(indoor))
+    stops = read_csv(indoor / "stops.csv")
+    assert data.V.shape == (len(stops["theta_R_deg"]), 3) and data.V.dtype == np.float64
+    np.testing.assert_array_equal(data.theta_R_deg, stops["theta_R_deg"])
+    np.testing.assert_array_equal(data.V[:, 1], stops["V2"])
+    assert data.utc is None and data.t_s is None
+    assert isinstance(data.rig, polrig.Rig) and data.rig.to_yaml() == polrig.Rig.load(INDOOR).to_yaml()
+    assert len(data) == len(stops["theta_R_deg"])
+
+
+def test_params_fields_theory_table2_and_pickle():
+    p = polrig.CalibrationParams()
+    assert p == polrig.CalibrationParams.theory([0, 90, 60, 150, 120, 210])
+    np.testing.assert_array_equal(p.alpha_deg, [0, 0, -120, -120, 120, 120])
+    w = polrig.CalibrationParams.wang2019_indoor()
+    assert w != p
+    q = w.copy()
+    q.kd = q.kd + 0.01
+    assert q != w
+    assert pickle.loads(pickle.dumps(w)) == w
+    with pytest.raises(ValueError, match="kv: expected 3 values, got 2"):
+        p.kv = [1, 1]
+    with pytest.raises(ValueError, match=r"alpha_deg: element 2 is nan"):
+        polrig.CalibrationParams(alpha_deg=[0, 0, np.nan, 0, 0, 0])
+    assert p != "not params"
+
+
+def test_fit_failure_is_data_not_an_exception():
+    # Three stops: too few observations for six unknowns per pair.
+    theta = np.array([0.0, 10.0, 20.0])
+    V = np.array([[0.1, -0.1, 0.05], [0.12, -0.08, 0.02], [0.1, -0.05, 0.0]])
+    res = polrig.calibrate(theta, V, method="section")
+    assert not res.usable() and res.fit.termination == "too_few_observations"
+    assert "not usable" in repr(res)
+    assert res.errors["errsec_deg"].shape == (0,)
+    assert res.fitted.shape == (3, 3) and not res.fitted.any()
+    with pytest.raises(polrig.CalibrationError, match="method section: the fit is not usable: too_few_observations"):
+        res.to_yaml()
+    with pytest.raises(polrig.CalibrationError, match="not usable"):
+        res.model([0.0])
+
+
+def test_replacement_analysis_function_matches_the_result(indoor):
+    data = polrig.read_measured(str(indoor))
+    res = polrig.calibrate(data.theta_R_deg, data.V, method="section", rig=data.rig)
+    theory = polrig.CalibrationParams.theory(data.rig["device.film_axes_deg"])
+    got = polrig.replacement_analysis(res.params, theory, res.theta_ref_deg, res.V)
+    assert got == res.replacement() and len(got) == 16 and got[0][:2] == ("none", 0)
+
+
+def test_bad_arguments_name_themselves(indoor, tmp_path):
+    theta = np.arange(0, 370, 10.0)
+    V = np.zeros((len(theta), 3))
+    with pytest.raises(ValueError, match=r"V: expected a 2-D array of shape \(N, 3\), got shape \(37,\)"):
+        polrig.calibrate(theta, theta)
+    bad = V.copy()
+    bad[4, 1] = np.inf
+    with pytest.raises(ValueError, match="V: element 13 is inf"):
+        polrig.calibrate(theta, bad)
+    with pytest.raises(ValueError, match="method='all': expected section, cs, cs-nc or nc"):
+        polrig.calibrate(theta, V, method="all")
+    # d_a outside (0, 1): the CLI's message.
+    cli = run_cli("calibrate", indoor, "--d-a", "1.5", "-o", tmp_path / "x", check=False)
+    assert cli.returncode != 0
+    with pytest.raises(ValueError) as e:
+        polrig.calibrate(theta, V, d_a=1.5)
+    assert "expected a degree of polarization in (0, 1), got 1.5" in str(e.value)
+    assert "expected a degree of polarization in (0, 1), got 1.5" in cli.stderr
+    with pytest.raises(ValueError, match="V: 36 rows for 37 values of theta_R_deg"):
+        polrig.calibrate(theta, V[1:])
+    big = V.copy()
+    big[3, 2] = 150
+    with pytest.raises(polrig.DataError, match=r"V row 3: column 'V3': 150 V is outside any ADC's range"):
+        polrig.calibrate(theta, big)
+    with pytest.raises(ValueError, match="drift='per-stop' needs method 'nc' or 'section'"):
+        polrig.calibrate(theta, V, drift="per-stop")
+    with pytest.raises(polrig.DataError, match=r"drift='angle': needs the stops' times"):
+        polrig.calibrate(theta, V, method="nc", drift="angle", site=(38.9, 121.5))
+    with pytest.raises(polrig.DataError, match=r"drift='angle' needs site=\(lat, lon\)"):
+        polrig.calibrate(theta, V, method="nc", drift="angle", utc=["2018-11-16T08:09:40Z"] * 37)
+    with pytest.raises(ValueError, match=r"site=\(95, 121.5\): expected \(lat, lon\)"):
+        polrig.calibrate(theta, V, method="nc", drift="angle", site=(95, 121.5))
+    with pytest.raises(ValueError, match="drift='sideways': expected none, angle, per-stop or linear"):
+        polrig.calibrate(theta, V, method="nc", drift="sideways")
+    with pytest.raises(TypeError, match="rig: expected a polrig.Rig or None, got <class 'str'>"):
+        polrig.calibrate(theta, V, rig=INDOOR)
+    with pytest.raises(ValueError, match="method='cs-nc': the rig's light is the sky"):
+        polrig.calibrate(theta, V, rig=polrig.Rig.load(OUTDOOR))
+    # An unpaired CS stop: the library's CalibrationError.
+    with pytest.raises(polrig.CalibrationError, match="stop 0"):
+        polrig.calibrate(np.array([0.0, 10.0]), np.zeros((2, 3)) + 0.1, method="cs")
+
+
+def test_apply_refuses_what_the_cli_refuses(tmp_path):
+    p = polrig.CalibrationParams()
+    with pytest.raises(polrig.DataError, match=r"V row 1: column 'V2': 200 V is outside any ADC's range"):
+        p.apply([[0.1, 0.1, 0.1], [0.1, 200.0, 0.1]])
+    with pytest.raises(ValueError, match="V: element 0 is nan"):
+        p.apply([[np.nan, 0.1, 0.1]])
+    with pytest.raises(ValueError, match="volts_per_decade: expected a positive finite number"):
+        p.apply([[0.1, 0.1, 0.1]], volts_per_decade=0)
+    with pytest.raises(ValueError, match="inversion='x'"):
+        p.apply([[0.1, 0.1, 0.1]], inversion="x")
+    flat = polrig.CalibrationParams(alpha_deg=np.zeros(6))
+    with pytest.raises(polrig.DataError, match="V row 0: V1 = 0.1, V2 = 0.2, V3 = 0.1 give no finite angle"):
+        flat.apply([[0.1, 0.2, 0.1]])
+    # Voltages beyond 300 decades of light ratio: the CLI's message for the same row.
+    params = tmp_path / "params.yaml"
+    params.write_text("alpha_deg: [0, 0, -120, -120, 120, 120]\nk_mV: [0, 0, 0]\nkv: [0.5, 1, 1]\n"
+                      "kd: [0, 0, 0, 0, 0, 0]\nd_a: 0.5\n")
+    volts = tmp_path / "v.csv"
+    volts.write_text("V1,V2,V3\n0.1,0.1,0.1\n80,0.1,0.1\n")
+    cli = run_cli("apply", params, volts, "--no-plots", "-o", tmp_path / "out", check=False)
+    assert cli.returncode == 2
+    pf = polrig.read_params(str(params))
+    with pytest.raises(polrig.DataError) as e:
+        pf.apply([[0.1, 0.1, 0.1], [80, 0.1, 0.1]])
+    why = str(e.value).removeprefix("V row 1: ")
+    assert "decades of light ratio" in why and f"v.csv:3: {why}" in cli.stderr
+
+
+def test_params_file_errors_name_file_and_line(tmp_path):
+    f = tmp_path / "params.yaml"
+    f.write_text("alpha_deg: [0, 0, -120, -120, 120, 120]\nk_mV: [0, 0, 0]\nkv: [1, 1, 1]\n"
+                 "kd: [0, 0, 0, 0, 0, 0]\nd_a: 0.5\nbogus: 1\n")
+    with pytest.raises(polrig.DataError, match=r"params.yaml:6: key 'bogus': unknown key"):
+        polrig.read_params(str(f))
+    with pytest.raises(polrig.DataError, match="no such file"):
+        polrig.read_params(str(tmp_path / "none.yaml"))
+
+
+def test_read_measured_errors_name_file_line_column(tmp_path):
+    f = tmp_path / "m.csv"
+    f.write_text("theta_R_deg,V1,V2,V3\n0,0.1,0.1,0.1\n10,0.1,x,0.1\n")
+    with pytest.raises(polrig.DataError, match=r"m.csv:3: column 'V2': expected a finite number, got 'x'"):
+        polrig.read_measured(str(f))
+
+
+def test_calibrate_is_deterministic(indoor):
+    # The fit is serial (no threads= argument, as the CLI's calibrate uses none): two calls agree
+    # bit for bit.
+    data = polrig.read_measured(str(indoor))
+    a = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
+    b = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
+    assert a.to_yaml() == b.to_yaml() and np.array_equal(a.V_model, b.V_model)

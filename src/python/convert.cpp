@@ -72,7 +72,7 @@ UtcTime one_utc(const py::handle& obj, const std::string& where) {
     const py::object ns = np.attr("datetime64")(obj, "ns");
     if (py::bool_(np.attr("isnat")(ns)))
       throw py::value_error(fmt::format("{}: NaT is not a time", where));
-    return {static_cast<double>(ns.attr("astype")("int64").cast<long long>())  / 1e9};
+    return {static_cast<double>(ns.attr("astype")("int64").cast<long long>()) / 1e9};
   }
   throw py::type_error(fmt::format("{}: expected a UTC time (ISO 8601 string with Z, aware "
                                    "datetime or numpy.datetime64), got {}", where,
@@ -90,7 +90,7 @@ std::vector<UtcTime> utc_times(const py::handle& obj, const char* name) {
                                         np.attr("argmax")(np.attr("isnat")(ns)).cast<long long>()));
     const auto ints = ns.attr("view")("int64").cast<py::array_t<long long, py::array::c_style | py::array::forcecast>>();
     std::vector<UtcTime> out(static_cast<std::size_t>(ints.size()));
-    for (std::size_t i = 0; i < out.size(); ++i) out[i].unix_s = static_cast<double>(ints.data()[i])  / 1e9;
+    for (std::size_t i = 0; i < out.size(); ++i) out[i].unix_s = static_cast<double>(ints.data()[i]) / 1e9;
     return out;
   }
   if (py::isinstance<py::str>(obj) || !py::isinstance<py::iterable>(obj)) return {one_utc(obj, name)};

@@ -255,3 +255,53 @@ def test_light_at_pose_is_a_simulated_stop():
     assert_equal(many["theta_deg"], s.theta_deg)
     with pytest.raises(ValueError, match="theta_R_deg: element 1 is nan"):
         indoor.light_at_pose([0.0, np.nan])
+
+
+# ---- a traced sphere (small): standard errors and the coaxial reference
+
+@pytest.fixture(scope="module")
+def traced_rig(tmp_path_factory):
+    """rigs/wang2019-indoor-traced.yaml with a scene traced with few photons (quick)."""
+    d = tmp_path_factory.mktemp("traced")
+    scene = (ROOT / "scenes" / "jf500.yaml").read_text()
+    for a, b in (("photons: 2000000", "photons: 20000"), ("batches: 16", "batches: 4"),
+                 ("wall_bins_theta: 90", "wall_bins_theta: 18"), ("wall_bins_phi: 180", "wall_bins_phi: 36"),
+                 ("plane_samples: 4096", "plane_samples: 256")):
+        assert a in scene
+        scene = scene.replace(a, b)
+    (d / "scene.yaml").write_text(scene)
+    rig = (ROOT / "rigs" / "wang2019-indoor-traced.yaml").read_text()
+    (d / "rig.yaml").write_text(rig.replace("scene: ../scenes/jf500.yaml", "scene: scene.yaml"))
+    return str(d / "rig.yaml")
+
+
+def test_traced_study_cs_has_standard_errors_and_the_coaxial_summary(tmp_path, traced_rig):
+    cs = polrig.Rig.load(traced_rig).study_cs(8, threads=2)
+    run_cli("study", "cs", traced_rig, "--steps", 8, "-o", tmp_path / "cs", "--no-plots", "--quiet")
+    assert cs.standard_errors and cs.coaxial_reference and not cs.eq6
+    check_cs_is_the_cli(cs, tmp_path / "cs")
+    dev, summary = read_csv(tmp_path / "cs" / "deviations.csv"), read_csv(tmp_path / "cs" / "summary.csv")
+    for i in range(3):
+        assert_equal(cs.deviations_se_mV[:, i, 1], dev["dv_mr_stderr_mV"][dev["pair"] == i + 1])
+    for f in ("bsd", "asd", "mean_br", "mean_mr"):
+        assert_equal(cs.summary[f + "_se_mV"], summary[f + "_stderr_mV"])
+    assert np.isnan(cs.summary["eq6_mV"]).all()
+
+
+def test_traced_sweep_and_simulate_equal_the_cli(tmp_path, traced_rig):
+    rig = polrig.Rig.load(traced_rig)
+    res = rig.sweep({"eccentricity.L_IS": "0:0.2:3"}, steps=8, threads=1)
+    run_cli("sweep", traced_rig, "--grid", "eccentricity.L_IS=0:0.2:3", "--steps", 8, "-o", tmp_path / "sw",
+            "--no-plots", "--quiet")
+    csv = read_csv(tmp_path / "sw" / "sweep.csv")
+    assert res.standard_errors and res.asd_se_mV.shape == (3, 3)
+    for field in ("bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV", "eq6_mV", "eq6_dev_pct"):
+        for i in range(3):
+            assert_equal(getattr(res, field)[:, i], csv[f"pair{i + 1}_{field}"])
+    # The standard errors (not in sweep.csv) are each point's CS study's.
+    at = polrig.Rig.load(traced_rig, set={"eccentricity.L_IS": 0.1}).study_cs(8)
+    assert np.array_equal(res.asd_se_mV[1], at.summary["asd_se_mV"])
+    sim = rig.simulate(threads=2)
+    run_cli("simulate", traced_rig, "-o", tmp_path / "s", "--no-plots", "--quiet")
+    check_simulation_is_stops_csv(sim, tmp_path / "s")
+    assert np.array_equal(sim.V_mean, rig.simulate(threads=1).V_mean)

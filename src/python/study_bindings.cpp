@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -33,12 +34,16 @@ using Shape = std::vector<py::ssize_t>;
 
 // ---- arguments
 
-// The CLI's --steps check (an even number of table angles per turn in [2, 3600000]).
-CsTurn turn_of(int steps) {
+// The turn of `steps` table angles, after the CLI's --steps check (even, in [2, 3600000]).
+// The last one is kept (its cos/sin tables cost about as much as a 360-angle study); called with
+// the GIL held, which guards the cache.
+std::shared_ptr<const CsTurn> turn_of(int steps) {
   if (steps < 2 || steps > 3600000 || steps % 2 != 0)
     throw py::value_error(fmt::format(
         "steps={}: expected an even number of table angles per turn in [2, 3600000]", steps));
-  return CsTurn(steps);
+  static std::shared_ptr<const CsTurn> last;
+  if (!last || last->steps() != steps) last = std::make_shared<const CsTurn>(steps);
+  return last;
 }
 
 double finite_in(double v, double lo, double hi, const char* name, const char* unit) {
@@ -181,7 +186,7 @@ GridAxis axis_of(const std::string& key, const py::handle& values) {
   return GridAxis::list(key, std::vector<double>(a.data(), a.data() + a.size()));
 }
 
-PySweep run_sweep(const PyRig& self, const py::handle& grid, int steps, std::optional<int> threads,
+PySweep run_sweep(const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
                   const py::object& progress) {
   if (!py::hasattr(grid, "items"))
     throw py::type_error("grid: expected a dict {key: values or 'start:stop:count'}");
@@ -197,7 +202,7 @@ PySweep run_sweep(const PyRig& self, const py::handle& grid, int steps, std::opt
   }
   if (axes.empty()) throw py::value_error("grid: expected at least one key");
   const Rig rig = self.rig();
-  const CsTurn turn = turn_of(steps);
+  const std::shared_ptr<const CsTurn> turn = turn_of(steps);
   const py::module_ warnings = py::module_::import("warnings");
   for (const GridAxis& a : axes)
     if (!(a.key->studies & RigKey::kCs))  // the CLI's note
@@ -233,7 +238,7 @@ PySweep run_sweep(const PyRig& self, const py::handle& grid, int steps, std::opt
     rig.light->prepare(p);
     p.begin("sweep: grid points", static_cast<long long>(grid_points(axes)));
     std::size_t reported = 0;
-    sweep(rig, axes, turn,
+    sweep(rig, axes, *turn,
           [&](std::size_t first, std::span<const CsSummary> block) {
             for (const auto& [out, get] : outputs)
               for (std::size_t k = 0; k < block.size(); ++k)
@@ -453,7 +458,7 @@ void bind_studies(py::module_& m) {
                            "The stops of a simulated calibration run (Rig.simulate): stops.csv's "
                            "columns as NumPy arrays; volts unless named otherwise.")
       .def_readonly("theta_R_deg", &PySimulation::theta_R_deg, "(N,) table angle of each stop, deg")
-      .def_readonly("t_s", &PySimulation::t_s, "(N,) seconds since the first stop (stops.csv's t_s for a time-dependent source; 0 otherwise)")
+      .def_readonly("t_s", &PySimulation::t_s, "(N,) seconds since the first stop, from the schedule's speed and dwell (stops.csv has this column only for a time-dependent light)")
       .def_readonly("theta_deg", &PySimulation::theta_deg, "(N,) polarization angle in the sensor frame, deg, [0, 180)")
       .def_readonly("d", &PySimulation::d, "(N,) degree of linear polarization of the light")
       .def_readonly("E_Wm2", &PySimulation::E_Wm2, "(N, 6) irradiance at each photodiode, W/m² (E1_Wm2..E6_Wm2)")
@@ -599,14 +604,14 @@ void bind_studies(py::module_& m) {
 
   rig.def("study_cs", [](const PyRig& self, int steps, std::optional<int> threads,
                          const py::object& progress) {
-    const CsTurn turn = turn_of(steps);
+    const std::shared_ptr<const CsTurn> turn = turn_of(steps);
     const Rig r = self.rig();
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     PyCsStudy out;
     {
       py::gil_scoped_release release;
-      out.s = cs_study(r, turn, p);
+      out.s = cs_study(r, *turn, p);
     }
     return out;
   }, doc(kStudyCsDoc).c_str(), py::arg("steps") = 360, py::kw_only(),

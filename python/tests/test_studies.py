@@ -113,10 +113,28 @@ def test_study_cs_is_the_same_for_any_thread_count_and_checks_steps():
         rig.study_cs(36, threads=0)
 
 
-def test_progress_callable_sees_the_stages():
-    seen = []
-    polrig.Rig().study_cs(3600, progress=lambda stage, f, eta: seen.append((stage, f)))
-    assert all(0 <= f <= 1 for _, f in seen)  # quick studies may report nothing at all
+def test_a_long_sweep_reports_progress_and_releases_the_gil():
+    """A sweep of about a second in a thread: its progress reaches the callable, and Python
+    code runs in the main thread meanwhile (the GIL is released around the library call)."""
+    import threading
+    import time
+    seen, result = [], {}
+    grid = {"eccentricity.L_S": "0.001:1:400", "eccentricity.alpha_S": "0:359:360"}
+    worker = threading.Thread(target=lambda: result.setdefault(
+        "r", polrig.Rig().sweep(grid, progress=lambda stage, f, eta: seen.append((stage, f)))))
+    t0 = last = time.perf_counter()
+    worker.start()
+    longest_pause = 0.0
+    while worker.is_alive():
+        now = time.perf_counter()
+        longest_pause, last = max(longest_pause, now - last), now
+    elapsed = time.perf_counter() - t0
+    assert result["r"].asd_mV.shape == (400, 360, 3)
+    assert elapsed > 0.6, "the sweep was too quick to test this"
+    # A held GIL would stop this loop for the whole sweep.
+    assert longest_pause < 0.25 * elapsed, (longest_pause, elapsed)
+    assert seen and all(stage == "sweep: grid points" for stage, _ in seen)
+    assert seen[-1][1] == 1.0 and all(0 <= f <= 1 for _, f in seen)
 
 
 # ---- sweep
@@ -215,6 +233,10 @@ def test_study_adc_equals_the_cli(tmp_path):
     assert_equal(again["limit_deg"], res["limit_deg"][[1, 3]])
     with pytest.raises(ValueError, match=r"d: element 1 is 1;"):
         rig.study_adc(d=[0.5, 1.0])
+    with pytest.raises(ValueError, match="d='0.1,0.5': expected 'start:stop:count' or an array"):
+        rig.study_adc(d="0.1,0.5")
+    with pytest.raises(polrig.RigError, match="device.d"):
+        rig.study_adc(d="0.5:1.5:3")
     with pytest.raises(ValueError, match="step=0"):
         rig.study_adc(step=0)
 

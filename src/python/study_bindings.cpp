@@ -258,6 +258,8 @@ PySweep run_sweep(const PyRig& self, const py::object& grid, int steps, std::opt
 std::vector<double> d_values(const py::handle& d) {
   if (py::isinstance<py::str>(d)) {  // the CLI's start:stop:count, through device.d's check
     const std::string text = d.cast<std::string>();
+    if (std::count(text.begin(), text.end(), ':') != 2)
+      throw py::value_error(fmt::format("d='{}': expected 'start:stop:count' or an array of values", text));
     const GridAxis axis = GridAxis::parse("device.d=" + text);
     std::vector<double> ds;
     for (int i = 0; i < axis.count; ++i) ds.push_back(axis.value(i));

@@ -393,6 +393,37 @@ TEST(Sweep, AHundredMillionValuesAreCheckedWithoutText) {
   EXPECT_EQ(a.value(99999999), 1.0);
 }
 
+TEST(Sweep, AnAxisOfListedValuesEqualsTheParsedAxisWithTheSameValues) {
+  const GridAxis parsed = GridAxis::parse("eccentricity.L_S=0.001:1:5");
+  std::vector<double> v;
+  for (int i = 0; i < parsed.count; ++i) v.push_back(parsed.value(i));
+  const GridAxis listed = GridAxis::list("eccentricity.L_S", v);
+  EXPECT_EQ(listed.count, 5);
+  EXPECT_EQ(listed.text(), "eccentricity.L_S=[0.001 … 1] (5 values)");
+  const GridAxis other = GridAxis::parse("eccentricity.L_IS=0:0.2:3");
+  const SweepResult a = sweep(Rig{}, {parsed, other}, CsTurn(36));
+  const SweepResult b = sweep(Rig{}, {listed, other}, CsTurn(36));
+  for (std::size_t p = 0; p < a.points(); ++p)
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_EQ(a.summaries[p][i].asd_mV, b.summaries[p][i].asd_mV);
+  // Values in any order, checked one by one by the key's own check; NaN is not a value.
+  EXPECT_EQ(GridAxis::list("eccentricity.alpha_S", {350, 10, 10}).value(1), 10.0);
+  const auto message = [](std::string_view key, std::vector<double> values) {
+    try {
+      GridAxis::list(key, std::move(values));
+    } catch (const RigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(message("eccentricity.L_S", {0.1, 200, -1}),
+            "grid eccentricity.L_S: value 1: expected a length in [0, 100] mm, got 200");
+  EXPECT_NE(message("eccentricity.L_S", {0.1, std::nan("")}).find("value 1: expected a length in [0, 100] mm, got nan"),
+            std::string::npos);
+  EXPECT_NE(message("eccentricity.nope", {1}).find("unknown key 'eccentricity.nope'"), std::string::npos);
+  EXPECT_NE(message("source.model", {1}).find("is not a single real number"), std::string::npos);
+  EXPECT_NE(message("eccentricity.L_S", {}).find("expected 1 to 1e8 values, got 0"), std::string::npos);
+}
+
 TEST(Sweep, StreamsBlocksInGridOrderWithBoundedMemory) {
   const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
                                    GridAxis::parse("eccentricity.alpha_S=0:359:250")};

@@ -1,10 +1,707 @@
+// The rig's studies from Python (docs/python.md §4): Rig.simulate, Rig.study_cs, Rig.sweep,
+// Rig.study_adc, Rig.study_calibration and Rig.light_at_pose. Each converts its arguments, runs
+// the library with the GIL released and hands back NumPy arrays named as the CLI's CSV columns.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
 #include "bindings.h"
 #include "convert.h"
+#include "polrig/calib/pipeline.h"
+#include "polrig/rig/keys.h"
+#include "polrig/sim/simulate.h"
+#include "polrig/source/source.h"
+#include "polrig/study/adc_limit.h"
+#include "polrig/study/calibration_trials.h"
+#include "polrig/study/cs.h"
+#include "polrig/study/sweep.h"
+#include "rig_handle.h"
 
 namespace polrig::python {
+namespace {
+
+using Shape = std::vector<py::ssize_t>;
+
+// ---- arguments
+
+// The turn of `steps` table angles, after the CLI's --steps check (even, in [2, 3600000]).
+// The last one is kept (its cos/sin tables cost about as much as a 360-angle study); called with
+// the GIL held, which guards the cache.
+std::shared_ptr<const CsTurn> turn_of(int steps) {
+  if (steps < 2 || steps > 3600000 || steps % 2 != 0)
+    throw py::value_error(fmt::format(
+        "steps={}: expected an even number of table angles per turn in [2, 3600000]", steps));
+  static std::shared_ptr<const CsTurn> last;
+  if (!last || last->steps() != steps) last = std::make_shared<const CsTurn>(steps);
+  return last;
+}
+
+double finite_in(double v, double lo, double hi, const char* name, const char* unit) {
+  if (!(v >= lo && v <= hi))
+    throw py::value_error(fmt::format("{}={}: expected a number in [{}, {}]{}{}", name, v, lo, hi,
+                                      *unit ? " " : "", unit));
+  return v;
+}
+
+// ---- results: fixed-size per-row C++ arrays as (N, K) NumPy arrays, filled in one pass.
+
+template <class Row, class Get>
+py::array_t<double> rows_of(const std::vector<Row>& rows, py::ssize_t k, const Get& get) {
+  std::vector<double> out;
+  out.reserve(rows.size() * static_cast<std::size_t>(k));
+  for (const Row& r : rows) {
+    const auto& a = get(r);
+    out.insert(out.end(), a.begin(), a.end());
+  }
+  return take(std::move(out), {static_cast<py::ssize_t>(rows.size()), k});
+}
+
+template <class Row, class Get>
+py::array_t<double> column_of(const std::vector<Row>& rows, const Get& get) {
+  std::vector<double> out;
+  out.reserve(rows.size());
+  for (const Row& r : rows) out.push_back(get(r));
+  return take(std::move(out));
+}
+
+// ---- simulate
+
+struct PySimulation {
+  py::array_t<double> theta_R_deg, t_s, theta_deg, d, E_Wm2, V_ideal, V_ecc, V_mean, V_std;
+  py::object samples = py::none();
+  int samples_per_stop = 0;
+  bool time_dependent = false;
+};
+
+PySimulation to_python(const Simulation& sim) {
+  PySimulation r;
+  const auto& st = sim.stops;
+  r.theta_R_deg = column_of(st, [](const Stop& s) { return s.theta_R_deg; });
+  r.t_s = column_of(st, [](const Stop& s) { return s.t_s; });
+  r.theta_deg = column_of(st, [](const Stop& s) { return s.light.theta_deg; });
+  r.d = column_of(st, [](const Stop& s) { return s.light.d; });
+  r.E_Wm2 = rows_of(st, 6, [](const Stop& s) -> const auto& { return s.light.E_Wm2; });
+  r.V_ideal = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_ideal; });
+  r.V_ecc = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_ecc; });
+  r.V_mean = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_mean; });
+  r.V_std = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_std; });
+  r.samples_per_stop = sim.samples_per_stop;
+  r.time_dependent = sim.time_dependent;
+  if (!sim.samples.empty()) {
+    auto a = empty_array({static_cast<py::ssize_t>(st.size()), sim.samples_per_stop, 3});
+    std::memcpy(a.mutable_data(), sim.samples.data(), sim.samples.size() * sizeof(sim.samples[0]));
+    r.samples = std::move(a);
+  }
+  return r;
+}
+
+// ---- study cs: the study kept in C++, its arrays made on first access (a call costs the
+// study, not its conversion).
+
+struct PyCsStudy {
+  CsStudy s;
+  py::object deviations = py::none(), deviations_se = py::none(), summary = py::none(),
+             coaxial = py::none();  // caches
+
+  py::array_t<double> pairs_mV(const std::array<std::vector<double>, 3>& br,
+                               const std::array<std::vector<double>, 3>& mr) const {
+    const std::size_t n = s.theta_R_deg.size();
+    auto a = empty_array({static_cast<py::ssize_t>(n), 3, 2});
+    double* out = a.mutable_data();
+    for (std::size_t k = 0; k < n; ++k)
+      for (std::size_t i = 0; i < 3; ++i) {
+        out[(k * 3 + i) * 2] = br[i][k] * 1e3;  // as deviations.csv: volts × 1e3
+        out[(k * 3 + i) * 2 + 1] = mr[i][k] * 1e3;
+      }
+    return a;
+  }
+};
+
+// One array (3,) per field of a CS summary, over the pairs.
+py::dict summary_dict(const CsSummary& s, bool standard_errors) {
+  py::dict d;
+  const auto field = [&](const char* name, double CsPairSummary::*f) {
+    d[name] = to_array(std::array<double, 3>{s[0].*f, s[1].*f, s[2].*f});
+  };
+  field("bsd_mV", &CsPairSummary::bsd_mV);
+  field("asd_mV", &CsPairSummary::asd_mV);
+  field("mean_br_mV", &CsPairSummary::mean_br_mV);
+  field("mean_mr_mV", &CsPairSummary::mean_mr_mV);
+  field("eq6_mV", &CsPairSummary::eq6_mV);
+  if (standard_errors) {
+    field("bsd_se_mV", &CsPairSummary::bsd_se_mV);
+    field("asd_se_mV", &CsPairSummary::asd_se_mV);
+    field("mean_br_se_mV", &CsPairSummary::mean_br_se_mV);
+    field("mean_mr_se_mV", &CsPairSummary::mean_mr_se_mV);
+  }
+  return d;
+}
+
+// ---- sweep: per-point fields written straight from the sink into preallocated arrays.
+
+struct SweepField {
+  const char* name;
+  double (*get)(const CsPairSummary&);
+  bool standard_error;
+};
+constexpr SweepField kSweepFields[] = {
+    {"bsd_mV", [](const CsPairSummary& s) { return s.bsd_mV; }, false},
+    {"asd_mV", [](const CsPairSummary& s) { return s.asd_mV; }, false},
+    {"asd_bsd_pct", &asd_bsd_pct, false},
+    {"mean_br_mV", [](const CsPairSummary& s) { return s.mean_br_mV; }, false},
+    {"mean_mr_mV", [](const CsPairSummary& s) { return s.mean_mr_mV; }, false},
+    {"eq6_mV", [](const CsPairSummary& s) { return s.eq6_mV; }, false},
+    {"eq6_dev_pct", &eq6_dev_pct, false},
+    {"bsd_se_mV", [](const CsPairSummary& s) { return s.bsd_se_mV; }, true},
+    {"asd_se_mV", [](const CsPairSummary& s) { return s.asd_se_mV; }, true},
+    {"mean_br_se_mV", [](const CsPairSummary& s) { return s.mean_br_se_mV; }, true},
+    {"mean_mr_se_mV", [](const CsPairSummary& s) { return s.mean_mr_se_mV; }, true},
+};
+
+struct PySweep {
+  std::vector<std::string> keys;
+  py::dict axes;    // key → (count,) values
+  py::tuple shape;  // the grid's shape
+  py::dict fields;  // field → (*shape, 3)
+  int steps = 0;
+  bool standard_errors = false, eq6 = true;
+};
+
+GridAxis axis_of(const std::string& key, const py::handle& values) {
+  if (py::isinstance<py::str>(values)) return GridAxis::parse(key + "=" + values.cast<std::string>());
+  const DoubleArray a = as_array(values, ("grid['" + key + "']").c_str(), 0);
+  if (a.ndim() > 1)
+    throw py::value_error(fmt::format("grid['{}']: expected a 1-D array of values or a string "
+                                      "'start:stop:count', got a {}-D array", key, a.ndim()));
+  return GridAxis::list(key, std::vector<double>(a.data(), a.data() + a.size()));
+}
+
+PySweep run_sweep(const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
+                  const py::object& progress) {
+  if (!py::hasattr(grid, "items"))
+    throw py::type_error("grid: expected a dict {key: values or 'start:stop:count'}");
+  PySweep r;
+  std::vector<GridAxis> axes;
+  for (const py::handle item : py::iter(grid.attr("items")())) {
+    const auto kv = item.cast<py::tuple>();
+    if (!py::isinstance<py::str>(kv[0]))
+      throw py::type_error(fmt::format("grid: keys are rig key names (str), got {}",
+                                       py::repr(kv[0]).cast<std::string>()));
+    r.keys.push_back(kv[0].cast<std::string>());
+    axes.push_back(axis_of(r.keys.back(), kv[1]));
+  }
+  if (axes.empty()) throw py::value_error("grid: expected at least one key");
+  const Rig rig = self.rig();
+  const std::shared_ptr<const CsTurn> turn = turn_of(steps);
+  const py::module_ warnings = py::module_::import("warnings");
+  for (const GridAxis& a : axes)
+    if (!(a.key->studies & RigKey::kCs))  // the CLI's note
+      warnings.attr("warn")(fmt::format("the CS study does not depend on '{}'; every point along "
+                                        "that axis will be the same", a.key->path));
+  check_grid(rig, axes);
+
+  Shape shape;
+  for (std::size_t a = 0; a < axes.size(); ++a) {
+    std::vector<double> v(static_cast<std::size_t>(axes[a].count));
+    for (int i = 0; i < axes[a].count; ++i) v[static_cast<std::size_t>(i)] = axes[a].value(i);
+    r.axes[py::str(r.keys[a])] = take(std::move(v));
+    shape.push_back(axes[a].count);
+  }
+  r.shape = py::tuple(py::cast(shape));
+  r.steps = steps;
+  r.standard_errors = rig.light->has(Source::kStandardErrors);
+  r.eq6 = rig.light->has(Source::kClosedFormEq6);
+  Shape field_shape = shape;
+  field_shape.push_back(3);
+  std::vector<std::pair<double*, double (*)(const CsPairSummary&)>> outputs;
+  for (const SweepField& f : kSweepFields) {
+    if (f.standard_error && !r.standard_errors) continue;
+    auto a = empty_array(field_shape);
+    outputs.emplace_back(a.mutable_data(), f.get);
+    r.fields[f.name] = std::move(a);
+  }
+
+  const ThreadLimit limit(threads);
+  const Progress p = progress_from(progress);
+  {
+    py::gil_scoped_release release;
+    rig.light->prepare(p);
+    p.begin("sweep: grid points", static_cast<long long>(grid_points(axes)));
+    std::size_t reported = 0;
+    sweep(rig, axes, *turn,
+          [&](std::size_t first, std::span<const CsSummary> block) {
+            for (const auto& [out, get] : outputs)
+              for (std::size_t k = 0; k < block.size(); ++k)
+                for (std::size_t i = 0; i < 3; ++i) out[(first + k) * 3 + i] = get(block[k][i]);
+          },
+          [&](std::size_t done, std::size_t) {
+            p.advance(static_cast<long long>(done - reported));
+            reported = done;
+          });
+    p.finish();
+  }
+  return r;
+}
+
+// ---- study adc
+
+std::vector<double> d_values(const py::handle& d) {
+  if (py::isinstance<py::str>(d)) {  // the CLI's start:stop:count, through device.d's check
+    const std::string text = d.cast<std::string>();
+    if (std::count(text.begin(), text.end(), ':') != 2)
+      throw py::value_error(fmt::format("d='{}': expected 'start:stop:count' or an array of values", text));
+    const GridAxis axis = GridAxis::parse("device.d=" + text);
+    std::vector<double> ds;
+    for (int i = 0; i < axis.count; ++i) ds.push_back(axis.value(i));
+    return ds;
+  }
+  const DoubleArray a = as_array(d, "d", 0);
+  std::vector<double> ds(a.data(), a.data() + a.size());
+  for (std::size_t i = 0; i < ds.size(); ++i)
+    if (!(ds[i] > 0.0 && ds[i] < 1.0))
+      throw py::value_error(fmt::format("d: element {} is {}; expected degrees of polarization in (0, 1)",
+                                        i, ds[i]));
+  if (ds.empty()) throw py::value_error("d: expected at least one degree of polarization");
+  return ds;
+}
+
+// ---- study calibration
+
+struct PyTrials {
+  py::array_t<std::int64_t> trial;
+  py::array_t<std::uint64_t> seed;
+  py::array_t<double> L_IS, alpha_IS, L_S, alpha_S, accuracy_deg;
+  py::list failures;
+  py::dict summary;
+};
+
+PyTrials to_python(const std::vector<Trial>& trials) {
+  PyTrials r;
+  std::vector<std::int64_t> index;
+  std::vector<std::uint64_t> seed;
+  for (const Trial& t : trials) {
+    index.push_back(t.index);
+    seed.push_back(t.seed);
+  }
+  r.trial = take(std::move(index));
+  r.seed = take(std::move(seed));
+  r.L_IS = column_of(trials, [](const Trial& t) { return t.eccentricity.L_IS; });
+  r.alpha_IS = column_of(trials, [](const Trial& t) { return t.eccentricity.alpha_IS; });
+  r.L_S = column_of(trials, [](const Trial& t) { return t.eccentricity.L_S; });
+  r.alpha_S = column_of(trials, [](const Trial& t) { return t.eccentricity.alpha_S; });
+  r.accuracy_deg = rows_of(trials, 3, [](const Trial& t) -> const auto& { return t.accuracy_deg; });
+  for (const Trial& t : trials)
+    for (std::size_t m = 0; m < 3; ++m)
+      if (!t.fit[m].usable()) {
+        py::dict f;
+        f["trial"] = t.index;
+        f["method"] = std::string(method_name(kAllMethods[m]));
+        f["termination"] = std::string(termination_name(t.fit[m].termination));
+        f["iterations"] = t.fit[m].iterations;
+        f["evaluations"] = t.fit[m].evaluations;
+        f["reason"] = t.fit[m].message;
+        r.failures.append(f);
+      }
+  for (const TrialSummary& s : summarize_trials(trials)) {
+    py::dict d, ends;
+    d["succeeded"] = s.succeeded;
+    d["failed"] = s.failed;
+    d["median_deg"] = s.median_deg;
+    d["p05_deg"] = s.p05_deg;
+    d["p95_deg"] = s.p95_deg;
+    d["mean_deg"] = s.mean_deg;
+    for (std::size_t k = 0; k < s.terminations.size(); ++k)
+      ends[py::str(std::string(termination_name(kAllTerminations[k])))] = s.terminations[k];
+    d["terminations"] = ends;
+    r.summary[py::str(std::string(method_name(s.method)))] = d;
+  }
+  return r;
+}
+
+// ---- docstrings
+
+constexpr const char* kSimulateDoc = R"doc(
+Simulates the rig's calibration run over its table schedule (the CLI's `polrig simulate`):
+table pose → light at the six photodiodes → films and log amplifiers → noise → ADC, every stop.
+
+Arguments:
+  samples: also return every quantized sample (the CLI's --samples, samples.csv).
+  {threads}
+  {progress}
+
+Returns a polrig.Simulation whose arrays are the columns of the CLI's stops.csv, bit for bit
+(N stops, S samples per stop; volts unless named otherwise):
+  theta_R_deg (N,) table angle, deg;  t_s (N,) seconds since the first stop;
+  theta_deg (N,) the light's angle in the sensor frame, deg;  d (N,) its degree of polarization;
+  E_Wm2 (N, 6) irradiance at each photodiode, W/m²;
+  V_ideal, V_ecc, V_mean, V_std (N, 3) pair voltages: eccentricity-free, with eccentricity,
+  the mean and sample standard deviation of the noisy quantized samples (stops.csv's V1..V3
+  are V_mean);  samples (N, S, 3) or None.
+The result does not depend on `threads` (each noise value is a function of seed, stop, channel
+and sample).
+
+Raises polrig.RigError for a rig the source cannot run (the CLI's message).
+)doc";
+
+constexpr const char* kStudyCsDoc = R"doc(
+The central-symmetry (CS) study over a full turn of the table (the CLI's `polrig study cs`;
+paper Figs. 8–9): ΔV_br(θ_R) = V − V_ideal for each pair, its CS average ΔV_mr(θ_R) =
+[ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2, and their BSD, ASD and means. No noise, no ADC.
+
+Arguments:
+  steps: table angles per turn, even, in [2, 3600000] (θ_R = 360°·k/steps).
+  {threads}
+  {progress}
+
+Returns a polrig.CsStudy: theta_R_deg (steps,); deviations_mV (steps, 3, 2) in mV, [angle,
+pair, (br, mr)] as deviations.csv; deviations_se_mV (same shape) or None; summary, a dict of
+(3,) arrays over the pairs in mV (summary.csv); coaxial (dict) or None; flags.
+
+Raises ValueError for a bad `steps`; polrig.RigError from the rig's source.
+)doc";
+
+constexpr const char* kSweepDoc = R"doc(
+The CS study at every point of a grid of rig keys (the CLI's `polrig sweep`; paper Figs. 10–12).
+
+Arguments:
+  grid: a dict {key: values}, in axis order (the last key varies fastest, as sweep.csv's rows).
+    values is either a 1-D array-like of explicit values (np.linspace(1e-3, 1, 200),
+    np.arange(360), [0.1, 0.2]) in the key's unit, or a string "start:stop:count" read exactly as
+    the CLI's --grid key=start:stop:count (count values, both ends included, rounded to 15
+    significant digits). Keys are real-valued rig keys (polrig.rig_keys()).
+  steps: table angles per turn of each CS study, even, in [2, 3600000].
+  {threads}
+  {progress}
+
+Returns a polrig.SweepResult: keys (axis order), axes {key: (count,) values}, shape (the grid's
+shape), and per-point arrays of shape (*shape, 3) over the pairs, written straight from the
+library into NumPy (no Python object per point): bsd_mV, asd_mV, asd_bsd_pct, mean_br_mV,
+mean_mr_mV, eq6_mV, eq6_dev_pct (sweep.csv's pairN_* columns) and, for a source with standard
+errors, bsd_se_mV, asd_se_mV, mean_br_se_mV, mean_mr_se_mV.
+
+Raises polrig.RigError naming the key and value for an unknown or non-real key, a value outside
+the key's range or NaN (an explicit list also names the value's index), a key the rig's source
+does not read, or a grid point the rig's cross-key rules refuse; TypeError for a grid that is
+not a dict. Warns (UserWarning) for a key the CS study does not read, as the CLI notes.
+)doc";
+
+constexpr const char* kStudyAdcDoc = R"doc(
+The accuracy limit the ADC alone sets (the CLI's `polrig study adc`; paper Fig. 6): an ideal
+sensor with the rig's electronics and film axes, uniform light, no noise.
+
+Arguments:
+  d: degrees of polarization, each in (0, 1): an array-like, or a string "start:stop:count" read
+    as the CLI's --d (default "0.05:0.95:19").
+  step: the θ step of the search, deg, in [1e-4, 10].
+  {threads}
+
+Returns a dict of (len(d),) arrays, accuracy_limit.csv's columns: d; vmax_mV, the largest
+pair voltage over θ (mV); limit_deg, max |θ12 − θ| over θ with quantized voltages (deg).
+
+Raises ValueError (or polrig.RigError for a bad "start:stop:count") naming the value.
+)doc";
+
+constexpr const char* kStudyCalibrationDoc = R"doc(
+Monte-Carlo calibrations (the CLI's `polrig study calibration`): `trials` simulated calibration
+runs, each with its own noise seed and an eccentricity drawn uniformly (L_IS in [0, L_IS_max],
+L_S in [0, L_S_max] mm, both angles in [0°, 360°)), calibrated by all three types.
+
+Arguments:
+  trials: the number of runs, in [1, 1e7].
+  L_IS_max, L_S_max: the largest offsets drawn, mm, in [0, 100]; None: twice the rig's offset
+    (at most 100), as the CLI.
+  d_a: the stated degree of polarization for decoupling, in (0, 1); None: the rig's device.d.
+  nc_threshold: noncontinuous rule, keep a voltage where |dV/dθ| ≥ this × its largest slope, [0, 1].
+  nc_min_points: noncontinuous rule, keep at least this many points per voltage, [6, 100000].
+  {threads}
+  {progress}
+
+Returns a polrig.CalibrationTrials: per trial (T,) arrays trial, seed (uint64), L_IS, alpha_IS,
+L_S, alpha_S and accuracy_deg (T, 3), the θ_sec accuracy in degrees of the types (methods:
+"section", "cs", "cs-nc"; NaN where the fit failed), as trials.csv; failures, a list of dicts
+as failures.csv; summary {method: {succeeded, failed, median_deg, p05_deg, p95_deg, mean_deg,
+terminations}} as summary.csv. Independent of `threads`.
+)doc";
+
+constexpr const char* kLightDoc = R"doc(
+The light reaching the six photodiodes at table angle theta_R_deg (deg), t_s seconds after the
+first stop (a time-dependent source such as the sky; ignored otherwise): the stops.csv columns
+theta_deg, d and E1..E6_Wm2 of a simulated stop at that pose.
+
+theta_R_deg: a number or an array-like of N angles (finite). t_s: finite seconds.
+Returns a dict: E_Wm2 (6,) W/m², theta_deg (deg, [0, 180)), d; for an array of angles
+E_Wm2 (N, 6), theta_deg (N,), d (N,).
+)doc";
+
+// The docstring with the shared arguments' documentation in place of {threads} and {progress}.
+std::string doc(const char* text) {
+  std::string s = text;
+  for (const auto& [mark, what] : {std::pair{"{threads}", kThreadsDoc}, std::pair{"{progress}", kProgressDoc}})
+    if (const auto at = s.find(mark); at != std::string::npos) s.replace(at, std::strlen(mark), what);
+  return s;
+}
+
+}  // namespace
 
 void bind_studies(py::module_& m) {
-  (void)m;
+  auto rig = rig_class(m);
+
+  py::class_<PySimulation>(m, "Simulation",
+                           "The stops of a simulated calibration run (Rig.simulate): stops.csv's "
+                           "columns as NumPy arrays; volts unless named otherwise.")
+      .def_readonly("theta_R_deg", &PySimulation::theta_R_deg, "(N,) table angle of each stop, deg")
+      .def_readonly("t_s", &PySimulation::t_s, "(N,) seconds since the first stop, from the schedule's speed and dwell (stops.csv has this column only for a time-dependent light)")
+      .def_readonly("theta_deg", &PySimulation::theta_deg, "(N,) polarization angle in the sensor frame, deg, [0, 180)")
+      .def_readonly("d", &PySimulation::d, "(N,) degree of linear polarization of the light")
+      .def_readonly("E_Wm2", &PySimulation::E_Wm2, "(N, 6) irradiance at each photodiode, W/m² (E1_Wm2..E6_Wm2)")
+      .def_readonly("V_ideal", &PySimulation::V_ideal, "(N, 3) pair voltages without eccentricity, V (V1_ideal..)")
+      .def_readonly("V_ecc", &PySimulation::V_ecc, "(N, 3) pair voltages with the pose's light, before noise and ADC, V")
+      .def_readonly("V_mean", &PySimulation::V_mean, "(N, 3) mean of the noisy quantized samples, V (stops.csv's V1..V3)")
+      .def_readonly("V_std", &PySimulation::V_std, "(N, 3) their sample standard deviation (n - 1), V; 0 for one sample")
+      .def_readonly("samples", &PySimulation::samples, "(N, S, 3) every quantized sample, V, or None unless simulate(samples=True)")
+      .def_readonly("samples_per_stop", &PySimulation::samples_per_stop, "S, samples per stop")
+      .def_readonly("time_dependent", &PySimulation::time_dependent, "whether the light changes during the run (the sky)")
+      .def("__len__", [](const PySimulation& s) { return s.theta_R_deg.size(); })
+      .def("__repr__", [](const PySimulation& s) {
+        return fmt::format("<polrig.Simulation: {} stops × {} samples{}>", s.theta_R_deg.size(),
+                           s.samples_per_stop, s.time_dependent ? ", time-dependent light" : "");
+      });
+
+  py::class_<PyCsStudy>(m, "CsStudy",
+                        "A central-symmetry study over a full turn (Rig.study_cs): deviations.csv "
+                        "and summary.csv as NumPy arrays, in mV.")
+      .def_property_readonly("theta_R_deg", [](const PyCsStudy& c) {
+        return take(std::vector<double>(c.s.theta_R_deg));
+      }, "(steps,) table angles, deg: 360·k/steps")
+      .def_property_readonly("deviations_mV", [](PyCsStudy& c) -> py::object {
+        if (c.deviations.is_none()) c.deviations = c.pairs_mV(c.s.dv_br_V, c.s.dv_mr_V);
+        return c.deviations;
+      }, "(steps, 3, 2) deviations in mV, [angle, pair, (br, mr)]: ΔV_br = V − V_ideal before CS, "
+         "ΔV_mr after (deviations.csv's dv_br_mV, dv_mr_mV)")
+      .def_property_readonly("deviations", [](py::object self) { return self.attr("deviations_mV"); },
+                             "the same array as deviations_mV (mV)")
+      .def_property_readonly("deviations_se_mV", [](PyCsStudy& c) -> py::object {
+        if (!c.s.standard_errors) return py::none();
+        if (c.deviations_se.is_none()) c.deviations_se = c.pairs_mV(c.s.dv_br_se_V, c.s.dv_mr_se_V);
+        return c.deviations_se;
+      }, "(steps, 3, 2) standard errors of deviations_mV, mV (dv_*_stderr_mV), or None when the "
+         "source has none (standard_errors False)")
+      .def_property_readonly("summary", [](PyCsStudy& c) -> py::object {
+        if (c.summary.is_none()) c.summary = summary_dict(c.s.summary, c.s.standard_errors);
+        return c.summary;
+      }, "dict of (3,) arrays over the pairs, mV (summary.csv): bsd_mV, asd_mV, mean_br_mV, "
+         "mean_mr_mV, eq6_mV (NaN without Eq. 6's closed form) and, with standard errors, "
+         "bsd_se_mV, asd_se_mV, mean_br_se_mV, mean_mr_se_mV (summary.csv's *_stderr_mV)")
+      .def_property_readonly("coaxial", [](PyCsStudy& c) -> py::object {
+        if (!c.s.coaxial_reference) return py::none();
+        if (c.coaxial.is_none()) {
+          const py::dict all = summary_dict(c.s.coaxial, false);
+          py::dict d;
+          for (const char* k : {"bsd_mV", "asd_mV", "mean_br_mV"}) d[k] = all[k];
+          c.coaxial = d;
+        }
+        return c.coaxial;
+      }, "when coaxial_reference: the coaxial rig's own deviations, a dict of (3,) arrays in mV "
+         "(summary.csv's coaxial_bsd_mV, coaxial_asd_mV, coaxial_mean_br_mV); else None")
+      .def_property_readonly("standard_errors", [](const PyCsStudy& c) { return c.s.standard_errors; },
+                             "whether the source gives standard errors (several shifts)")
+      .def_property_readonly("coaxial_reference", [](const PyCsStudy& c) { return c.s.coaxial_reference; },
+                             "whether ΔV refers to the coaxial rig (no uniform reference)")
+      .def_property_readonly("eq6", [](const PyCsStudy& c) { return c.s.eq6; },
+                             "whether Eq. 6's closed form exists (else eq6_mV is NaN)")
+      .def("__repr__", [](const PyCsStudy& c) {
+        return fmt::format("<polrig.CsStudy: {} table angles; ASD {:.6g}, {:.6g}, {:.6g} mV>",
+                           c.s.theta_R_deg.size(), c.s.summary[0].asd_mV, c.s.summary[1].asd_mV,
+                           c.s.summary[2].asd_mV);
+      });
+
+  auto sweep_class = py::class_<PySweep>(
+      m, "SweepResult",
+      "The CS study over a grid of rig keys (Rig.sweep). Per-point fields have shape (*shape, 3): "
+      "grid index per key, in key order, then the pair; sweep.csv's row p is the C-order "
+      "(row-major) point p, i.e. field.reshape(-1, 3)[p].");
+  sweep_class
+      .def_readonly("keys", &PySweep::keys, "the swept keys, in axis order")
+      .def_readonly("axes", &PySweep::axes, "{key: (count,) values} in the key's unit")
+      .def_readonly("shape", &PySweep::shape, "the grid's shape: one count per key")
+      .def_readonly("fields", &PySweep::fields, "{field: (*shape, 3) array}: every per-point field below")
+      .def_readonly("steps", &PySweep::steps, "table angles per turn of each CS study")
+      .def_readonly("standard_errors", &PySweep::standard_errors, "whether the *_se_mV fields exist")
+      .def_readonly("eq6", &PySweep::eq6, "whether Eq. 6's closed form exists (else eq6_mV is NaN)")
+      .def("__len__", [](const PySweep& s) {
+        py::ssize_t n = 1;
+        for (const auto& c : s.shape) n *= c.cast<py::ssize_t>();
+        return n;
+      }, "the number of grid points")
+      .def("__repr__", [](const PySweep& s) {
+        std::string keys;
+        for (const auto& k : s.keys) keys += (keys.empty() ? "" : ", ") + k;
+        return fmt::format("<polrig.SweepResult: {} over ({}), steps={}>",
+                           py::repr(s.shape).cast<std::string>(), keys, s.steps);
+      });
+  for (const SweepField& f : kSweepFields) {
+    const std::string name = f.name;
+    std::string what = fmt::format("(*shape, 3) sweep.csv's pairN_{}", name);
+    if (name == "asd_bsd_pct") what = "(*shape, 3) ASD/BSD, %; NaN where BSD is rounding (< 1e-9 mV)";
+    if (name == "eq6_dev_pct") what = "(*shape, 3) (eq6 − mean_mr)/mean_mr, %; NaN where mean_mr is rounding";
+    if (f.standard_error) what = fmt::format("(*shape, 3) standard error of {}, mV; None without standard errors",
+                                             name.substr(0, name.size() - 6) + "_mV");
+    sweep_class.def_property_readonly(f.name, [name](const PySweep& s) -> py::object {
+      if (!s.fields.contains(name)) return py::none();
+      return s.fields[py::str(name)];
+    }, what.c_str());
+  }
+
+  py::class_<PyTrials>(m, "CalibrationTrials",
+                       "Monte-Carlo calibrations (Rig.study_calibration): trials.csv, "
+                       "failures.csv and summary.csv as arrays and dicts.")
+      .def_readonly("trial", &PyTrials::trial, "(T,) trial index (int64)")
+      .def_readonly("seed", &PyTrials::seed, "(T,) each trial's noise seed (uint64)")
+      .def_readonly("L_IS", &PyTrials::L_IS, "(T,) drawn port offset, mm")
+      .def_readonly("alpha_IS", &PyTrials::alpha_IS, "(T,) its direction, deg")
+      .def_readonly("L_S", &PyTrials::L_S, "(T,) drawn sensor offset, mm")
+      .def_readonly("alpha_S", &PyTrials::alpha_S, "(T,) its direction, deg")
+      .def_readonly("accuracy_deg", &PyTrials::accuracy_deg,
+                    "(T, 3) θ_sec accuracy, deg, per type in `methods` order; NaN where the fit failed")
+      .def_property_readonly("methods", [](const PyTrials&) {
+        std::vector<std::string> names;
+        for (CalibrationMethod mm : kAllMethods) names.emplace_back(method_name(mm));
+        return names;
+      }, "the calibration types of accuracy_deg's columns: section, cs, cs-nc")
+      .def_readonly("failures", &PyTrials::failures,
+                    "list of dicts (trial, method, termination, iterations, evaluations, reason) "
+                    "for every fit that is not usable (failures.csv)")
+      .def_readonly("summary", &PyTrials::summary,
+                    "{method: {succeeded, failed, median_deg, p05_deg, p95_deg, mean_deg, "
+                    "terminations: {name: count}}} (summary.csv)")
+      .def("__len__", [](const PyTrials& t) { return t.trial.size(); })
+      .def("__repr__", [](const PyTrials& t) {
+        return fmt::format("<polrig.CalibrationTrials: {} trials, {} failed fits>", t.trial.size(),
+                           t.failures.size());
+      });
+
+  rig.def("simulate", [](const PyRig& self, bool samples, std::optional<int> threads,
+                         const py::object& progress) {
+    const Rig r = self.rig();
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    Simulation sim;
+    {
+      py::gil_scoped_release release;
+      sim = simulate(r, samples, p);
+    }
+    return to_python(sim);
+  }, doc(kSimulateDoc).c_str(), py::kw_only(), py::arg("samples") = false,
+     py::arg("threads") = py::none(), py::arg("progress") = py::none());
+
+  rig.def("study_cs", [](const PyRig& self, int steps, std::optional<int> threads,
+                         const py::object& progress) {
+    const std::shared_ptr<const CsTurn> turn = turn_of(steps);
+    const Rig r = self.rig();
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    PyCsStudy out;
+    {
+      py::gil_scoped_release release;
+      out.s = cs_study(r, *turn, p);
+    }
+    return out;
+  }, doc(kStudyCsDoc).c_str(), py::arg("steps") = 360, py::kw_only(),
+     py::arg("threads") = py::none(), py::arg("progress") = py::none());
+
+  rig.def("sweep", &run_sweep, doc(kSweepDoc).c_str(), py::arg("grid"), py::arg("steps") = 360,
+          py::kw_only(), py::arg("threads") = py::none(), py::arg("progress") = py::none());
+
+  rig.def("study_adc", [](const PyRig& self, const py::object& d, double step,
+                          std::optional<int> threads) {
+    const std::vector<double> ds = d_values(d);
+    finite_in(step, 1e-4, 10.0, "step", "deg");
+    const Rig r = self.rig();
+    const ThreadLimit limit(threads);
+    std::vector<AdcLimit> limits;
+    {
+      py::gil_scoped_release release;
+      for (double v : ds) limits.push_back(adc_accuracy_limit(v, r.electronics, r.device.film_axis_deg, step));
+    }
+    py::dict out;
+    out["d"] = column_of(limits, [](const AdcLimit& l) { return l.d; });
+    out["vmax_mV"] = column_of(limits, [](const AdcLimit& l) { return l.vmax_mV; });
+    out["limit_deg"] = column_of(limits, [](const AdcLimit& l) { return l.limit_deg; });
+    return out;
+  }, doc(kStudyAdcDoc).c_str(), py::kw_only(), py::arg("d") = "0.05:0.95:19", py::arg("step") = 0.1,
+     py::arg("threads") = py::none());
+
+  rig.def("study_calibration", [](const PyRig& self, int trials, std::optional<double> L_IS_max,
+                                  std::optional<double> L_S_max, std::optional<double> d_a,
+                                  double nc_threshold, int nc_min_points, std::optional<int> threads,
+                                  const py::object& progress) {
+    if (trials < 1 || trials > 10000000)
+      throw py::value_error(fmt::format("trials={}: expected a whole number in [1, 10000000]", trials));
+    if (L_IS_max) finite_in(*L_IS_max, 0.0, 100.0, "L_IS_max", "mm");
+    if (L_S_max) finite_in(*L_S_max, 0.0, 100.0, "L_S_max", "mm");
+    if (d_a && !(*d_a > 0 && *d_a < 1))
+      throw py::value_error(fmt::format("d_a={}: expected a degree of polarization in (0, 1)", *d_a));
+    finite_in(nc_threshold, 0.0, 1.0, "nc_threshold", "");
+    if (nc_min_points < 6 || nc_min_points > 100000)
+      throw py::value_error(fmt::format("nc_min_points={}: expected a whole number in [6, 100000]", nc_min_points));
+    const Rig r = self.rig();
+    TrialSettings s;  // as `polrig study calibration`
+    s.trials = trials;
+    s.L_IS_max = L_IS_max.value_or(std::min(2.0 * r.eccentricity.L_IS, 100.0));
+    s.L_S_max = L_S_max.value_or(std::min(2.0 * r.eccentricity.L_S, 100.0));
+    s.calibration.d_a = d_a ? d_a : std::optional<double>(r.device.d);
+    s.calibration.d_a_source = d_a ? "d_a" : "the rig's device.d";
+    s.calibration.film_axis_deg = r.device.film_axis_deg;
+    s.calibration.volts_per_decade = r.electronics.volts_per_decade;
+    s.calibration.noncontinuous = {nc_threshold, nc_min_points};
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    std::vector<Trial> result;
+    {
+      py::gil_scoped_release release;
+      result = calibration_trials(r, s, p);
+    }
+    return to_python(result);
+  }, doc(kStudyCalibrationDoc).c_str(), py::kw_only(), py::arg("trials") = 100,
+     py::arg("L_IS_max") = py::none(), py::arg("L_S_max") = py::none(), py::arg("d_a") = py::none(),
+     py::arg("nc_threshold") = NoncontinuousRule{}.min_relative_slope,
+     py::arg("nc_min_points") = NoncontinuousRule{}.min_points, py::arg("threads") = py::none(),
+     py::arg("progress") = py::none());
+
+  rig.def("light_at_pose", [](const PyRig& self, const py::object& theta_R_deg, double t_s) {
+    const DoubleArray a = as_array(theta_R_deg, "theta_R_deg", 0);
+    if (a.ndim() > 1) throw py::value_error("theta_R_deg: expected a number or a 1-D array");
+    const std::vector<double> angles = finite_values(a, "theta_R_deg");
+    if (!std::isfinite(t_s)) throw py::value_error(fmt::format("t_s={}: expected a finite number of seconds", t_s));
+    const Rig r = self.rig();
+    std::vector<PoseLight> lights;
+    {
+      py::gil_scoped_release release;
+      r.light->prepare({});
+      for (double th : angles) lights.push_back(light_at_pose(r, th, t_s));
+    }
+    py::dict out;
+    if (a.ndim() == 0) {
+      out["E_Wm2"] = to_array(lights[0].E_Wm2);
+      out["theta_deg"] = lights[0].theta_deg;
+      out["d"] = lights[0].d;
+    } else {
+      out["E_Wm2"] = rows_of(lights, 6, [](const PoseLight& l) -> const auto& { return l.E_Wm2; });
+      out["theta_deg"] = column_of(lights, [](const PoseLight& l) { return l.theta_deg; });
+      out["d"] = column_of(lights, [](const PoseLight& l) { return l.d; });
+    }
+    return out;
+  }, kLightDoc, py::arg("theta_R_deg"), py::arg("t_s") = 0.0);
 }
 
 }  // namespace polrig::python

@@ -13,8 +13,6 @@
 namespace polrig {
 
 namespace {
-// Deviations below this are rounding (a centred rig gives ~1e-14 mV): ratios there are NaN.
-constexpr double kRounding_mV = 1e-9;
 const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
 
 std::string axis_label(const GridAxis& a) {
@@ -149,16 +147,9 @@ void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
     for (std::size_t a = 0; a < axes_.size(); ++a) row.push_back(axes_[a].value(idx[a]));
     for (int i = 0; i < 3; ++i) {
       const CsPairSummary& s = block[k][static_cast<std::size_t>(i)];
-      const double nan = std::numeric_limits<double>::quiet_NaN();
-      // Ratios only where the denominator is above rounding (1e-9 mV; a centred rig's
-      // deviations are ~1e-14 mV of rounding), else NaN.
-      row.insert(row.end(),
-                 {s.bsd_mV, s.asd_mV, s.bsd_mV > kRounding_mV ? 100.0 * s.asd_mV / s.bsd_mV : nan,
-                  s.mean_br_mV, s.mean_mr_mV, s.eq6_mV,
-                  std::abs(s.mean_mr_mV) > kRounding_mV
-                      ? 100.0 * (s.eq6_mV - s.mean_mr_mV) / s.mean_mr_mV
-                      : nan});
-      ratio_defined_[static_cast<std::size_t>(i)] |= s.bsd_mV > kRounding_mV;
+      row.insert(row.end(), {s.bsd_mV, s.asd_mV, asd_bsd_pct(s), s.mean_br_mV, s.mean_mr_mV,
+                             s.eq6_mV, eq6_dev_pct(s)});
+      ratio_defined_[static_cast<std::size_t>(i)] |= s.bsd_mV > kCsRounding_mV;
     }
     table_.add_row(row);
   }

@@ -152,6 +152,15 @@ CsSummary cs_summary(const Rig& rig, const CsTurn& turn, std::vector<double>& sc
   return shifted_summary(rig, turn, scratch, nullptr, nullptr);
 }
 
+double asd_bsd_pct(const CsPairSummary& s) {
+  return s.bsd_mV > kCsRounding_mV ? 100.0 * s.asd_mV / s.bsd_mV : std::numeric_limits<double>::quiet_NaN();
+}
+
+double eq6_dev_pct(const CsPairSummary& s) {
+  return std::abs(s.mean_mr_mV) > kCsRounding_mV ? 100.0 * (s.eq6_mV - s.mean_mr_mV) / s.mean_mr_mV
+                                                 : std::numeric_limits<double>::quiet_NaN();
+}
+
 CsStudy cs_study(const Rig& rig, const CsTurn& turn, const Progress& progress) {
   const int n = turn.steps();
   std::vector<double> scratch;

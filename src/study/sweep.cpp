@@ -16,6 +16,38 @@
 
 namespace polrig {
 
+namespace {
+// The real-valued key `path`, or RigError from `fail`: what --grid and a list share.
+template <class Fail>
+const RigKey* sweepable_key(std::string_view path, const Fail& fail) {
+  const RigKey* key = find_rig_key(path);
+  if (!key) fail(fmt::format("unknown key '{}' (see docs/formats.md)", path));
+  if (key->kind != RigKey::Kind::Real)
+    fail(fmt::format("key '{}' is not a single real number and cannot be swept", path));
+  return key;
+}
+
+// The index of the first of the axis's values the key's own check (or, for a list, finiteness)
+// refuses, or count: every value computed, in parallel.
+int first_invalid(const GridAxis& axis) {
+  const bool listed = axis.values != nullptr;
+  if (!axis.key->valid_real && !listed) return axis.count;
+  std::atomic<int> first_bad{axis.count};
+  tbb::parallel_for(tbb::blocked_range<int>(0, axis.count, 65536), [&](const tbb::blocked_range<int>& r) {
+    for (int i = r.begin(); i != r.end() && i < first_bad.load(std::memory_order_relaxed); ++i) {
+      const double v = axis.value(i);
+      if ((listed && !std::isfinite(v)) || (axis.key->valid_real && !axis.key->valid_real(v))) {
+        int seen = first_bad.load();
+        while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
+        }
+        return;
+      }
+    }
+  });
+  return first_bad;
+}
+}  // namespace
+
 GridAxis GridAxis::parse(std::string_view arg) {
   const auto fail = [&](const std::string& why) -> GridAxis {
     throw RigError(fmt::format("--grid {}: {}", arg, why));
@@ -25,10 +57,7 @@ GridAxis GridAxis::parse(std::string_view arg) {
   const std::string_view path = arg.substr(0, eq);
   const std::string_view spec = arg.substr(eq + 1);
   GridAxis axis;
-  axis.key = find_rig_key(path);
-  if (!axis.key) return fail(fmt::format("unknown key '{}' (see docs/formats.md)", path));
-  if (axis.key->kind != RigKey::Kind::Real)
-    return fail(fmt::format("key '{}' is not a single real number and cannot be swept", path));
+  axis.key = sweepable_key(path, fail);
   const auto c1 = spec.find(':');
   const auto c2 = c1 == std::string_view::npos ? c1 : spec.find(':', c1 + 1);
   if (c2 == std::string_view::npos) return fail("expected key=start:stop:count");
@@ -45,23 +74,26 @@ GridAxis GridAxis::parse(std::string_view arg) {
   }
   if (axis.count == 1 && axis.start != axis.stop)
     return fail("a single point needs start = stop");
-  // Every value through the key's own check, computed (no text), in parallel; the first bad
-  // value in grid order is named.
-  if (axis.key->valid_real) {
-    std::atomic<int> first_bad{axis.count};
-    tbb::parallel_for(tbb::blocked_range<int>(0, axis.count, 65536), [&](const tbb::blocked_range<int>& r) {
-      for (int i = r.begin(); i != r.end() && i < first_bad.load(std::memory_order_relaxed); ++i)
-        if (!axis.key->valid_real(axis.value(i))) {
-          int seen = first_bad.load();
-          while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
-          }
-          return;
-        }
-    });
-    if (first_bad < axis.count)
-      return fail(fmt::format("key '{}': expected {}, got {}", path, axis.key->expects,
-                              axis.value(first_bad)));
-  }
+  // The first bad value in grid order is named.
+  if (const int bad = first_invalid(axis); bad < axis.count)
+    return fail(fmt::format("key '{}': expected {}, got {}", path, axis.key->expects, axis.value(bad)));
+  return axis;
+}
+
+GridAxis GridAxis::list(std::string_view path, std::vector<double> values) {
+  const auto fail = [&](const std::string& why) -> GridAxis {
+    throw RigError(fmt::format("grid {}: {}", path, why));
+  };
+  GridAxis axis;
+  axis.key = sweepable_key(path, fail);
+  if (values.empty() || values.size() > 100'000'000)
+    return fail(fmt::format("expected 1 to 1e8 values, got {}", values.size()));
+  axis.count = static_cast<int>(values.size());
+  axis.start = values.front();
+  axis.stop = values.back();
+  axis.values = std::make_shared<const std::vector<double>>(std::move(values));
+  if (const int bad = first_invalid(axis); bad < axis.count)
+    return fail(fmt::format("value {}: expected {}, got {}", bad, axis.key->expects, axis.value(bad)));
   return axis;
 }
 
@@ -109,6 +141,7 @@ double round_to_15_digits(double v) {
 }
 
 double GridAxis::value(int index) const {
+  if (values) return (*values)[static_cast<std::size_t>(index)];
   if (count == 1) return start;
   if (index == count - 1) return stop;  // exact end point
   // Weighted form, exact at both ends; then rounded to 15 significant digits, so that a decimal
@@ -118,6 +151,7 @@ double GridAxis::value(int index) const {
 }
 
 std::string GridAxis::text() const {
+  if (values) return fmt::format("{}=[{} … {}] ({} values)", key->path, start, stop, count);
   return fmt::format("{}={}:{}:{}", key->path, start, stop, count);
 }
 

@@ -27,6 +27,13 @@ struct CsPairSummary {
 };
 using CsSummary = std::array<CsPairSummary, 3>;
 
+// Deviations below this are rounding (a centred rig's are ~1e-14 mV): ratios over them are NaN.
+inline constexpr double kCsRounding_mV = 1e-9;
+// A sweep's ratios (sweep.csv), in %: ASD/BSD, and Eq. 6's deviation from the expectation
+// after CS, (eq6 − mean_mr)/mean_mr; NaN where the denominator is below kCsRounding_mV.
+double asd_bsd_pct(const CsPairSummary& s);
+double eq6_dev_pct(const CsPairSummary& s);
+
 struct CsStudy {
   // What the rig's source can do (Source::flags): reports choose their columns from them.
   bool standard_errors = false;  // per-value standard errors (several shifts)

@@ -2,6 +2,7 @@
 // Sweeps of the CS study over a grid of rig keys (paper Figs. 10–12).
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -12,18 +13,23 @@
 
 namespace polrig {
 
-// One `--grid key=start:stop:count`: count values linearly spaced, both ends included. A value
-// type: the values are computed on demand, never stored.
+// One axis of a sweep's grid: either `--grid key=start:stop:count`, count values linearly
+// spaced, both ends included (computed on demand, never stored), or an explicit list of values
+// (shared, so that the axis stays a cheap value type). start and stop are the first and last value.
 struct GridAxis {
   const RigKey* key = nullptr;  // a real-valued rig key
   double start = 0, stop = 0;
   int count = 1;
+  std::shared_ptr<const std::vector<double>> values;  // the explicit values; null for start:stop:count
 
   // Throws RigError naming the argument, also when a value is outside the key's range (each
   // value is computed and given to the key's own check).
   static GridAxis parse(std::string_view arg);
+  // The explicit values of `key` in this order (1 to 1e8 of them). Throws RigError naming the
+  // key, and the index and value of the first value the key's own check refuses (NaN included).
+  static GridAxis list(std::string_view key, std::vector<double> values);
   double value(int index) const;
-  std::string text() const;
+  std::string text() const;  // "key=start:stop:count", or "key=[first … last] (count values)"
 };
 
 // v rounded to 15 significant decimal digits: the double nearest to {fmt}'s "{:.15g}" of v,

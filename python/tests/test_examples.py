@@ -3,17 +3,22 @@ import os
 import subprocess
 import sys
 
+import pathlib
+
 import pytest
 
+import polrig
 from conftest import ROOT
+
+# The package this test imported, for the scripts (which run in a scratch folder).
+ENV = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(pathlib.Path(polrig.__file__).parents[1]))
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.py"))
 
 
 @pytest.mark.parametrize("script", EXAMPLES, ids=[p.name for p in EXAMPLES])
 def test_example_runs(script, tmp_path):
-    env = dict(os.environ, MPLBACKEND="Agg")
-    p = subprocess.run([sys.executable, str(script), str(tmp_path)], env=env, cwd=tmp_path,
+    p = subprocess.run([sys.executable, str(script), str(tmp_path)], env=ENV, cwd=tmp_path,
                        capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr
     pngs = list(tmp_path.glob("*.png"))
@@ -24,6 +29,6 @@ def test_example_runs(script, tmp_path):
 def test_fig11_example_gives_the_validated_asd_range(tmp_path):
     # docs/validation.md, Figs. 11–12: "ASD 0.29213–0.29283 mV over L_S: 0.24 % range".
     p = subprocess.run([sys.executable, str(ROOT / "examples" / "fig11_sweep.py"), str(tmp_path)],
-                       env=dict(os.environ, MPLBACKEND="Agg"), capture_output=True, text=True,
+                       env=ENV, cwd=tmp_path, capture_output=True, text=True,
                        check=True)
     assert "0.29213–0.29283 mV" in p.stdout and "0.24 % range" in p.stdout, p.stdout

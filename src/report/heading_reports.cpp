@@ -69,8 +69,8 @@ std::string stats_row(const std::string& factor, const std::string& error, doubl
                      num(s.max_abs));
 }
 
-double sync_heading(const HeadingTrial& t) { return t.turn_rate_dps * t.sync_s; }
-double mount_tilt(const HeadingTrial& t) { return std::hypot(t.mount_x_deg, t.mount_y_deg); }
+double sync_heading(const HeadingTrial& t) { return t.sync_heading_deg(); }
+double mount_tilt(const HeadingTrial& t) { return t.mount_tilt_deg(); }
 double tilt(const HeadingTrial& t) { return std::hypot(t.roll_deg, t.pitch_deg); }
 
 }  // namespace

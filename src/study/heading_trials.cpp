@@ -138,6 +138,16 @@ HeadingTrial run_trial(const Rig& rig, const HeadingStudySettings& s, const Vec3
 
 }  // namespace
 
+bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings) {
+  if (!rig.light->has(Source::kTimeDependent)) return false;
+  const Sky sky = rig.source.sky.resolved_sky();
+  settings.site = sky.site;
+  settings.utc = sky.first_stop;
+  settings.sun.ut1_minus_utc_s = sky.sun.ut1_minus_utc_s;
+  settings.sun.refraction = sky.sun.refraction;
+  return true;
+}
+
 std::vector<HeadingTrial> heading_trials(const Rig& rig, const HeadingStudySettings& s,
                                          const Progress& progress) {
   const Vec3 sun = sun_direction_enu(sun_position(s.utc, s.site, s.sun));

@@ -3,6 +3,7 @@
 // sky-and-compasses.md §1.5, W19 §5.2): per trial a random attitude, a time-sync error during a
 // turn, a mount misalignment, the sky's P_max and sensor noise through the device model
 // (device/sensor pair voltages, ADC, calib/angles), then the heading from nav/heading.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -57,7 +58,17 @@ struct HeadingTrial {
   // each factor alone (the others off): sync (ω·Δt), INS tilt, mount, sensor noise.
   double error_deg = 0;
   double error_sync_deg = 0, error_ins_tilt_deg = 0, error_mount_deg = 0, error_noise_deg = 0;
+
+  // The heading the platform turns during the sync error, ω·Δt (degrees), and the sensor axis'
+  // mount tilt √(m_x² + m_y²) (degrees): trials.csv's sync_heading_deg and mount_tilt_deg.
+  double sync_heading_deg() const { return turn_rate_dps * sync_s; }
+  double mount_tilt_deg() const { return std::hypot(mount_x_deg, mount_y_deg); }
 };
+
+// A sky rig's run (a rig whose source is time-dependent): its `sky:` block's site, first stop,
+// UT1 − UTC and refraction replace those of `settings`; returns false, `settings` unchanged, for
+// any other rig. `polrig study heading` then applies the options given on its command line.
+bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings);
 
 // Sun at settings.utc and site; trials in parallel (TBB), each a pure function of
 // (rig, settings, index): identical for any thread count.

@@ -3,8 +3,10 @@
 // sky-and-compasses.md §1.5, W19 §5.2): per trial a random attitude, a time-sync error during a
 // turn, a mount misalignment, the sky's P_max and sensor noise through the device model
 // (device/sensor pair voltages, ADC, calib/angles), then the heading from nav/heading.
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "polrig/nav/heading.h"
@@ -69,6 +71,26 @@ struct HeadingTrial {
 // UT1 − UTC and refraction replace those of `settings`; returns false, `settings` unchanged, for
 // any other rig. `polrig study heading` then applies the options given on its command line.
 bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings);
+
+// summary.csv's rows: the heading error's statistics over the trials with a heading (NaN where
+// none has one), overall for the full error and each factor alone (factor "all", bin NaN), then
+// the full error in 8 equal bins of each factor's range (sync_heading_deg, tilt_deg = √(roll² +
+// pitch²), mount_tilt_deg, mount_z_deg, p_max, dop; a factor without spread has no bins).
+struct HeadingErrorStats {
+  std::string factor, error;
+  double bin_lo = NAN, bin_hi = NAN;  // the factor's bin [lo, hi) (the last closed)
+  int trials = 0, solved = 0;
+  double mean_deg = NAN, rms_deg = NAN, p50_abs_deg = NAN, p95_abs_deg = NAN, max_abs_deg = NAN;
+};
+std::vector<HeadingErrorStats> summarize_heading_trials(const std::vector<HeadingTrial>& trials);
+
+// cdf.csv: at fraction (k + ½)/n, the k-th smallest |error| of the full error and of each factor
+// alone (sync, INS tilt, mount, noise), each sorted on its own; NaN past a column's solved trials.
+struct HeadingErrorCdf {
+  std::vector<double> fraction;
+  std::array<std::vector<double>, 5> abs_error_deg;  // all, sync, ins_tilt, mount, noise
+};
+HeadingErrorCdf heading_error_cdf(const std::vector<HeadingTrial>& trials);
 
 // Sun at settings.utc and site; trials in parallel (TBB), each a pure function of
 // (rig, settings, index): identical for any thread count.

@@ -109,10 +109,43 @@ def test_study_heading_is_the_cli_trials_csv(tmp_path):
     t2 = polrig.study_heading(polrig.Rig.load(INDOOR), trials=120, roll_sd_deg=12, sync_max_s=0.2,
                               refraction=True, threads=2)
     trials_equal_csv(t1, csv)
+    summary = read_csv(tmp_path / "a" / "summary.csv")
+    for k in summary:
+        got = getattr(t1.summary, k)
+        if got.dtype == object:
+            assert list(got) == list(summary[k]), k
+        else:
+            assert np.array_equal(got, summary[k], equal_nan=True), k
+    cdf = read_csv(tmp_path / "a" / "cdf.csv")
+    for k in cdf:
+        assert np.array_equal(getattr(t1.cdf, k), cdf[k], equal_nan=True), k
+    # an independent look: the "all" row's RMS is the RMS of trials.csv's error_deg
+    assert np.isclose(t1.summary.rms_deg[0], np.sqrt(np.nanmean(csv["error_deg"] ** 2)), rtol=1e-12)
     for k in t1.keys():
         a, b = getattr(t1, k), getattr(t2, k)
-        assert np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), k
+        if k in ("summary", "cdf"):
+            for j in a.keys():
+                x, y = getattr(a, j), getattr(b, j)
+                assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), (k, j)
+        else:
+            assert np.array_equal(a, b, equal_nan=a.dtype.kind == "f"), k
     assert t1.seed.dtype == np.uint64 and t1.trial.dtype == np.int64
+
+
+def test_study_heading_near_the_zenith_summarises_only_solved_trials(tmp_path):
+    # The sun 1° from the zenith: some trials have no heading (NaN errors, shorter CDF columns).
+    args = dict(trials=300, site=(23.4, 116.0), utc="2019-06-21T04:13:00Z", roll_sd_deg=1, pitch_sd_deg=1)
+    run_cli("study", "heading", INDOOR, "--trials", 300, "--no-plots", "--site", "23.4,116.0", "--utc",
+            "2019-06-21T04:13:00Z", "--roll-sd", 1, "--pitch-sd", 1, "-o", tmp_path / "z")
+    t = polrig.study_heading(polrig.Rig.load(INDOOR), **args)
+    trials_equal_csv(t, read_csv(tmp_path / "z" / "trials.csv"))
+    assert 0 < np.sum(t.status != 0) < 300 and np.all(np.isnan(t.error_deg[t.status >= 2]))
+    summary = read_csv(tmp_path / "z" / "summary.csv")
+    for k in ["bin_lo", "bin_hi", "trials", "solved", "mean_deg", "rms_deg", "p50_abs_deg", "max_abs_deg"]:
+        assert np.array_equal(getattr(t.summary, k), summary[k], equal_nan=True), k
+    cdf = read_csv(tmp_path / "z" / "cdf.csv")
+    assert all(np.array_equal(getattr(t.cdf, k), cdf[k], equal_nan=True) for k in cdf)
+    assert t.summary.solved[0] == np.sum(t.status <= 1)
 
 
 def test_study_heading_takes_a_sky_rigs_run(tmp_path):

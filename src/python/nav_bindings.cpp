@@ -30,6 +30,8 @@ namespace {
 struct HeadingTag {};
 struct BodySkyViewTag {};
 struct HeadingTrialsTag {};
+struct HeadingSummaryTag {};
+struct HeadingCdfTag {};
 
 constexpr HeadingStatus kStatuses[] = {HeadingStatus::Ok, HeadingStatus::Clamped,
                                        HeadingStatus::SunNearZenithOrVerticalE,
@@ -67,6 +69,40 @@ HeadingSettings heading_settings(double min_horizontal, double tangent_tolerance
   check_option(min_horizontal, "min_horizontal", 0, 1, "");
   check_option(tangent_tolerance, "tangent_tolerance", 0, 1, "");
   return {min_horizontal, tangent_tolerance};
+}
+
+RecordOf<HeadingSummaryTag> summary_record(const std::vector<HeadingErrorStats>& rows) {
+  const py::module_ np = py::module_::import("numpy");
+  py::list factor, error;
+  std::vector<double> lo, hi, mean, rms, p50, p95, max;
+  std::vector<std::int64_t> trials, solved;
+  for (const HeadingErrorStats& s : rows) {
+    factor.append(s.factor), error.append(s.error);
+    lo.push_back(s.bin_lo), hi.push_back(s.bin_hi), trials.push_back(s.trials), solved.push_back(s.solved);
+    mean.push_back(s.mean_deg), rms.push_back(s.rms_deg), p50.push_back(s.p50_abs_deg);
+    p95.push_back(s.p95_abs_deg), max.push_back(s.max_abs_deg);
+  }
+  Record r;
+  r.add("factor", np.attr("array")(factor, "dtype"_a = "object"));
+  r.add("error", np.attr("array")(error, "dtype"_a = "object"));
+  r.add("bin_lo", take(std::move(lo)));
+  r.add("bin_hi", take(std::move(hi)));
+  r.add("trials", take(std::move(trials)));
+  r.add("solved", take(std::move(solved)));
+  r.add("mean_deg", take(std::move(mean)));
+  r.add("rms_deg", take(std::move(rms)));
+  r.add("p50_abs_deg", take(std::move(p50)));
+  r.add("p95_abs_deg", take(std::move(p95)));
+  r.add("max_abs_deg", take(std::move(max)));
+  return RecordOf<HeadingSummaryTag>(std::move(r));
+}
+
+RecordOf<HeadingCdfTag> cdf_record(HeadingErrorCdf c) {
+  Record r;
+  r.add("fraction", take(std::move(c.fraction)));
+  const char* names[] = {"all_deg", "sync_deg", "ins_tilt_deg", "mount_deg", "noise_deg"};
+  for (std::size_t m = 0; m < c.abs_error_deg.size(); ++m) r.add(names[m], take(std::move(c.abs_error_deg[m])));
+  return RecordOf<HeadingCdfTag>(std::move(r));
 }
 
 constexpr const char* kFrames =
@@ -143,7 +179,28 @@ void bind_nav(py::module_& m) {
       {"heading_est_deg", "estimated heading, degrees; NaN without a solution."},
       {"error_deg", "estimate − truth, [−180, 180) degrees, all factors; NaN without a solution."},
       {"error_sync_deg", "the error from the sync alone."}, {"error_ins_tilt_deg", "from the INS tilt alone."},
-      {"error_mount_deg", "from the mount alone."}, {"error_noise_deg", "from the sensor noise alone."}});
+      {"error_mount_deg", "from the mount alone."}, {"error_noise_deg", "from the sensor noise alone."},
+      {"summary", "polrig.HeadingSummary: summary.csv's columns."},
+      {"cdf", "polrig.HeadingCdf: cdf.csv's columns."}});
+  bind_record<HeadingSummaryTag>(m, "HeadingSummary",
+      "summary.csv of `polrig study heading`: the heading error's statistics overall and for each "
+      "factor alone (factor 'all', bins NaN), then the full error in 8 bins of each factor's range "
+      "(study/heading_trials.h); NaN where no trial of a row has a heading.", {
+      {"factor", "'all' or the binned factor (sync_heading_deg, tilt_deg, mount_tilt_deg, "
+                 "mount_z_deg, p_max, dop), object array of str."},
+      {"error", "which error: error_deg (all factors) or one factor alone, object array of str."},
+      {"bin_lo", "the bin's lower edge in the factor's unit (NaN for 'all')."},
+      {"bin_hi", "the bin's upper edge (NaN for 'all')."},
+      {"trials", "trials in the row (int64)."}, {"solved", "of which with a heading (int64)."},
+      {"mean_deg", "mean error, degrees."}, {"rms_deg", "RMS error, degrees."},
+      {"p50_abs_deg", "median |error|, degrees."}, {"p95_abs_deg", "95th percentile of |error|, degrees."},
+      {"max_abs_deg", "largest |error|, degrees."}});
+  bind_record<HeadingCdfTag>(m, "HeadingCdf",
+      "cdf.csv of `polrig study heading`: at fraction (k + ½)/n the k-th smallest |error| of each "
+      "column, each sorted on its own; NaN past a column's solved trials.", {
+      {"fraction", "(k + ½)/n."}, {"all_deg", "|error| with all factors, degrees."},
+      {"sync_deg", "|error| from the sync alone."}, {"ins_tilt_deg", "from the INS tilt alone."},
+      {"mount_deg", "from the mount alone."}, {"noise_deg", "from the sensor noise alone."}});
 
   m.def("heading", [](const py::object& utc, const py::object& lat, const py::object& lon,
                       const py::object& roll, const py::object& pitch, const py::object& aop,
@@ -340,9 +397,13 @@ void bind_nav(py::module_& m) {
         const Progress p = progress_from(progress);
         ThreadLimit limit(threads);
         std::vector<HeadingTrial> result;
+        std::vector<HeadingErrorStats> summary;
+        HeadingErrorCdf cdf;
         {
           py::gil_scoped_release release;
           result = heading_trials(rig.rig(), s, p);
+          summary = summarize_heading_trials(result);
+          cdf = heading_error_cdf(result);
         }
         const std::size_t n = result.size();
         std::vector<std::int64_t> index(n);
@@ -392,6 +453,8 @@ void bind_nav(py::module_& m) {
         r.add("status", codes);
         r.add("status_name", np.attr("array")(status_names(), "dtype"_a = "object")[codes]);
         for (const auto& [name, get] : after) r.add(name, column(get));
+        r.add("summary", py::cast(summary_record(summary)));
+        r.add("cdf", py::cast(cdf_record(std::move(cdf))));
         return RecordOf<HeadingTrialsTag>(std::move(r));
       }, "rig"_a, py::kw_only(), "trials"_a = 1000, "site"_a = py::none(), "utc"_a = py::none(),
       "refraction"_a = py::none(), "ut1_minus_utc_s"_a = py::none(), "roll_sd_deg"_a = 5.0,
@@ -413,7 +476,7 @@ void bind_nav(py::module_& m) {
        "1e5] averaged per heading.\n" +
        kThreadsDoc + "\n" + kProgressDoc +
        "\nReturns polrig.HeadingTrials: trials.csv's columns as arrays of shape (trials,) (errors "
-       "NaN for a trial without a heading). The summary and CDF files stay the CLI's.").c_str());
+       "NaN for a trial without a heading), .summary (summary.csv) and .cdf (cdf.csv).").c_str());
 }
 
 }  // namespace polrig::python

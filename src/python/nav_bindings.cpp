@@ -327,10 +327,7 @@ void bind_nav(py::module_& m) {
         SkyModel model;
         check_option(p_max, "p_max", 1e-6, 1.0, "");
         model.P_max.constant = p_max;
-        if (radiance != "uniform" && radiance != "rayleigh" && radiance != "cie-clear")
-          throw py::value_error(fmt::format("radiance '{}': expected one of uniform, rayleigh, cie-clear", radiance));
-        model.radiance = radiance == "uniform" ? SkyRadiance::Uniform
-                         : radiance == "rayleigh" ? SkyRadiance::Rayleigh : SkyRadiance::CieClear;
+        model.radiance = radiance_of(radiance);
         std::vector<double> aop(b.size), dop(b.size);
         {
           py::gil_scoped_release release;

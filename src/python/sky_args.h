@@ -68,6 +68,14 @@ inline SiteArrays site_arrays(const py::handle& obj, const char* name) {
           a.shape(a.ndim() - 1) == 3 ? column(2) : np.attr("zeros_like")(column(0))};
 }
 
+// The radiance model by the CLI's --radiance name.
+inline SkyRadiance radiance_of(const std::string& name) {
+  if (name == "uniform") return SkyRadiance::Uniform;
+  if (name == "rayleigh") return SkyRadiance::Rayleigh;
+  if (name == "cie-clear") return SkyRadiance::CieClear;
+  throw py::value_error(fmt::format("radiance '{}': expected one of uniform, rayleigh, cie-clear", name));
+}
+
 // None, or an (N, 2) array of (sun elevation in degrees, P_max) rows.
 inline std::vector<std::pair<double, double>> p_max_table_of(const py::handle& obj) {
   std::vector<std::pair<double, double>> table;

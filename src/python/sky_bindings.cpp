@@ -50,12 +50,6 @@ struct PySky {
   explicit PySky(const Sky& s) : sky(s), sun(sun_position(s.first_stop, s.site, s.sun)) {}
 };
 
-SkyRadiance radiance_of(const std::string& name) {
-  if (name == "uniform") return SkyRadiance::Uniform;
-  if (name == "rayleigh") return SkyRadiance::Rayleigh;
-  if (name == "cie-clear") return SkyRadiance::CieClear;
-  throw py::value_error(fmt::format("radiance '{}': expected one of uniform, rayleigh, cie-clear", name));
-}
 std::string radiance_name(SkyRadiance r) {
   return r == SkyRadiance::Uniform ? "uniform" : r == SkyRadiance::Rayleigh ? "rayleigh" : "cie-clear";
 }

@@ -11,6 +11,7 @@
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
 #include "polrig/nav/heading.h"
+#include "polrig/nav/heading_rows.h"
 #include "polrig/sky/sun.h"
 #include "polrig/sky/sun_rows.h"
 #include "polrig/report/heading_reports.h"
@@ -20,16 +21,8 @@ namespace polrig::cli {
 
 namespace {
 
-struct HeadingRow {
-  UtcTime utc;
-  Site site;
-  Tilt tilt;
-  double aop_deg = 0;
-  std::optional<double> prior_deg;
-};
-
 // Reads and checks every row before anything is computed or written.
-std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional<Site>& site) {
+std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::optional<Site>& site) {
   constexpr std::string_view section = "6.13 polrig heading";
   const std::size_t c_utc = f.column("utc", section), c_roll = f.column("roll_deg", section),
                     c_pitch = f.column("pitch_deg", section), c_aop = f.column("aop_deg", section);
@@ -53,11 +46,11 @@ std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional
                                   f.line[r], f.header[c], f.rows[r][c], lo, hi, what));
     return v;
   };
-  std::vector<HeadingRow> rows;
+  std::vector<HeadingQuery> rows;
   for (std::size_t r = 0; r < f.rows.size(); ++r) {
-    HeadingRow h;
+    HeadingQuery h;
     try {
-      h.utc = parse_utc(f.rows[r][c_utc]);
+      h.at.utc = parse_utc(f.rows[r][c_utc]);
     } catch (const std::invalid_argument& e) {
       throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
                                   f.rows[r][c_utc], e.what()));
@@ -68,10 +61,10 @@ std::vector<HeadingRow> read_heading_input(const CsvFile& f, const std::optional
     if (c_prior && !f.rows[r][*c_prior].empty())
       h.prior_deg = ranged(r, *c_prior, -360, 360, "degrees clockwise from north; empty for none");
     if (c_lat) {
-      h.site.lat_deg = ranged(r, *c_lat, -90, 90, "degrees, north positive");
-      h.site.lon_deg = ranged(r, *c_lon, -180, 180, "degrees, east positive");
+      h.at.site.lat_deg = ranged(r, *c_lat, -90, 90, "degrees, north positive");
+      h.at.site.lon_deg = ranged(r, *c_lon, -180, 180, "degrees, east positive");
     } else {
-      h.site = *site;
+      h.at.site = *site;
     }
     rows.push_back(h);
   }
@@ -87,15 +80,13 @@ void run_heading(const std::string& input, const std::string& site_text, const S
     if (f.find_column(added))
       throw DataError(fmt::format("{}:{}: column '{}' is one heading writes: rename it", f.origin,
                                   f.header_line, added));
-  const std::vector<HeadingRow> rows = read_heading_input(f, site);
+  const std::vector<HeadingQuery> rows = read_heading_input(f, site);
   // Opened first, so that an existing destination fails before any work; an error below (a
   // date the ephemeris refuses is that row's error) removes the staging folder.
   OutputDir dir = out.open(false);
-  std::vector<SunRow> at(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) at[r] = {rows[r].utc, rows[r].site};
-  std::vector<SunPosition> suns;
+  std::vector<HeadingSample> samples;
   try {
-    suns = sun_positions(at, sun_settings, progress());
+    samples = headings_along(rows, sun_settings, {}, progress());
   } catch (const SunRowError& e) {
     throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[e.row],
                                 f.rows[e.row][f.column("utc")], e.what()));
@@ -105,9 +96,8 @@ void run_heading(const std::string& input, const std::string& site_text, const S
   text += "sun_az_deg,sun_el_deg,heading_deg,heading_alt_deg,status\n";
   int solved = 0;
   for (std::size_t r = 0; r < rows.size(); ++r) {
-    const HeadingRow& h = rows[r];
-    const SunPosition& sun = suns[r];
-    const HeadingSolution s = solve_heading(sun_direction_enu(sun), h.aop_deg, h.tilt, h.prior_deg);
+    const SunPosition& sun = samples[r].sun;
+    const HeadingSolution& s = samples[r].solution;
     // Every number finite, except the heading columns of a row without a heading: `nan`
     // (formats.md §5).
     const auto cell = [&](double v, const char* column, bool undefined_ok = false) {
@@ -200,16 +190,12 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
       const LoadedRig r = rig->load();
       // Site, time and the sun's settings: a sky rig's `sky:` block (site, first stop, UT1 − UTC,
       // refraction), else W19's dynamic run; an option given on the command line overrides either.
-      if (r.rig.light->has(Source::kTimeDependent)) {
-        const Sky sky = r.rig.source.sky.resolved_sky();
-        settings.site = sky.site;
-        settings.utc = sky.first_stop;
-        if (app->count("--ut1-minus-utc") == 0) settings.sun.ut1_minus_utc_s = sky.sun.ut1_minus_utc_s;
-        if (app->count("--refraction") == 0) settings.sun.refraction = sky.sun.refraction;
-      }
+      const SunSettings given = settings.sun;
+      const bool sky_rig = use_rig_sky(r.rig, settings);
+      if (app->count("--ut1-minus-utc") > 0) settings.sun.ut1_minus_utc_s = given.ut1_minus_utc_s;
+      if (app->count("--refraction") > 0) settings.sun.refraction = given.refraction;
       if (!site->empty()) settings.site = parse_site(*site);
-      if (app->count("--utc") > 0 || !r.rig.light->has(Source::kTimeDependent))
-        settings.utc = parse_utc_option(*utc);
+      if (app->count("--utc") > 0 || !sky_rig) settings.utc = parse_utc_option(*utc);
       OutputDir dir = out->open();
       const std::vector<HeadingTrial> result = heading_trials(r.rig, settings, progress());
       write_manifest(dir.staging(), {command_line(), &r,

@@ -12,6 +12,7 @@
 #include "polrig/io/plot.h"
 #include "polrig/io/spectrum_csv.h"
 #include "polrig/spectral/effective_degree.h"
+#include "polrig/spectral/kd.h"
 #include "polrig/spectral/sources.h"
 
 namespace polrig::cli {
@@ -27,25 +28,13 @@ struct SpectralKdOptions {
 
 constexpr int kChannels = 6;
 
-// The spectra a user looks at, on a 1 nm grid over the response's band: the films, their
-// single-wavelength degree, R, and each source's S·R normalised to its largest value.
-CsvTable spectra_table(const FilmSpectra& film, const Spectrum& response, const Spectrum& lamp,
-                       const Spectrum& sky) {
-  std::vector<double> grid;
-  for (double nm = std::ceil(response.min_nm()); nm < response.max_nm(); nm += 1) grid.push_back(nm);
-  grid.push_back(response.max_nm());
-  double lamp_max = 0, sky_max = 0;
-  for (double nm : grid) {
-    lamp_max = std::max(lamp_max, lamp(nm) * response(nm));
-    sky_max = std::max(sky_max, sky(nm) * response(nm));
-  }
+// spectra.csv: kd_spectra's columns.
+CsvTable spectra_table(const KdSpectra& k) {
   CsvTable t({"wavelength_nm", "tau_M", "tau_m", "film_d", "response", "lamp_weight", "sky_weight"});
   t.allow_undefined("film_d");  // τM + τm = 0: no light passes
-  for (double nm : grid) {
-    const double M = film.tau_M(nm), m = film.tau_m(nm);
-    t.add_row({nm, M, m, M + m > 0 ? (M - m) / (M + m) : std::nan(""), response(nm),
-               lamp(nm) * response(nm) / lamp_max, sky(nm) * response(nm) / sky_max});
-  }
+  for (std::size_t i = 0; i < k.wavelength_nm.size(); ++i)
+    t.add_row({k.wavelength_nm[i], k.tau_M[i], k.tau_m[i], k.film_d[i], k.response[i],
+               k.lamp_weight[i], k.sky_weight[i]});
   return t;
 }
 
@@ -78,17 +67,16 @@ void run_spectral_kd(const SpectralKdOptions& o, const OutputOptions& out) {
                "kd_sky_minus_lamp"});
   for (int c = 0; c < kChannels; ++c) {
     const double s = scale[static_cast<std::size_t>(c)];
-    EffectiveDegree lamp_d, sky_d;
+    ChannelKd k;
     try {
-      lamp_d = effective_degree(film, lamp, response, s);
-      sky_d = effective_degree(film, sky, response, s);
+      k = channel_kd(film, lamp, sky, response, s);
     } catch (const SpectrumError& e) {
       throw DataError(fmt::format("channel {} (--tau-m-scale {}): {}", c + 1, s, e.what()));
     }
-    kd.add_row({double(c + 1), s, lamp_d.d_eff, lamp_d.kd(), sky_d.d_eff, sky_d.kd(),
-                sky_d.kd() - lamp_d.kd()});
+    kd.add_row({double(c + 1), s, k.lamp.d_eff, k.lamp.kd(), k.sky.d_eff, k.sky.kd(),
+                k.kd_sky_minus_lamp()});
   }
-  const CsvTable spectra = spectra_table(film, response, lamp, sky);
+  const CsvTable spectra = spectra_table(kd_spectra(film, response, lamp, sky));
 
   OutputDir dir = out.open();
   write_text_file(dir.staging() / "kd.csv", kd.text());

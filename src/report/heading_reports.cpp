@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -25,53 +24,13 @@ std::string cell(double v, const char* column, int trial, bool undefined_ok = fa
   return fmt::format("{}", v);
 }
 
-double quantile(const std::vector<double>& sorted, double q) {  // type 7, as NumPy's default
-  if (sorted.empty()) return std::nan("");
-  const double pos = q * static_cast<double>(sorted.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
-  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
-}
-
-struct Stats {
-  int trials = 0, solved = 0;
-  double mean = NAN, rms = NAN, p50_abs = NAN, p95_abs = NAN, max_abs = NAN;
-};
-
-Stats stats_of(const std::vector<double>& errors) {
-  Stats s;
-  s.trials = static_cast<int>(errors.size());
-  std::vector<double> a;
-  double sum = 0, sum_sq = 0;
-  for (double e : errors)
-    if (!std::isnan(e)) {
-      a.push_back(std::abs(e));
-      sum += e;
-      sum_sq += e * e;
-    }
-  s.solved = static_cast<int>(a.size());
-  if (a.empty()) return s;
-  std::sort(a.begin(), a.end());
-  const double n = static_cast<double>(a.size());
-  s.mean = sum / n;
-  s.rms = std::sqrt(sum_sq / n);
-  s.p50_abs = quantile(a, 0.5);
-  s.p95_abs = quantile(a, 0.95);
-  s.max_abs = a.back();
-  return s;
-}
-
-std::string stats_row(const std::string& factor, const std::string& error, double lo, double hi,
-                      const Stats& s) {
+std::string stats_row(const HeadingErrorStats& s) {
   const auto num = [](double v) { return fmt::format("{}", v); };  // undefined: nan (formats.md §5)
-  return fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", factor, error, num(lo), num(hi), s.trials,
-                     s.solved, num(s.mean), num(s.rms), num(s.p50_abs), num(s.p95_abs),
-                     num(s.max_abs));
+  return fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", s.factor, s.error, num(s.bin_lo),
+                     num(s.bin_hi), s.trials, s.solved, num(s.mean_deg), num(s.rms_deg),
+                     num(s.p50_abs_deg), num(s.p95_abs_deg), num(s.max_abs_deg));
 }
 
-double sync_heading(const HeadingTrial& t) { return t.turn_rate_dps * t.sync_s; }
-double mount_tilt(const HeadingTrial& t) { return std::hypot(t.mount_x_deg, t.mount_y_deg); }
-double tilt(const HeadingTrial& t) { return std::hypot(t.roll_deg, t.pitch_deg); }
 
 }  // namespace
 
@@ -88,11 +47,11 @@ std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
     text += fmt::format("{},{}", k, t.seed);
     for (auto [v, name] : {std::pair{t.heading_deg, "heading_deg"}, {t.roll_deg, "roll_deg"},
                            {t.pitch_deg, "pitch_deg"}, {t.sync_s, "sync_s"},
-                           {t.turn_rate_dps, "turn_rate_dps"}, {sync_heading(t), "sync_heading_deg"},
+                           {t.turn_rate_dps, "turn_rate_dps"}, {t.sync_heading_deg(), "sync_heading_deg"},
                            {t.ins_roll_error_deg, "ins_roll_error_deg"},
                            {t.ins_pitch_error_deg, "ins_pitch_error_deg"},
                            {t.mount_x_deg, "mount_x_deg"}, {t.mount_y_deg, "mount_y_deg"},
-                           {mount_tilt(t), "mount_tilt_deg"}, {t.mount_z_deg, "mount_z_deg"},
+                           {t.mount_tilt_deg(), "mount_tilt_deg"}, {t.mount_z_deg, "mount_z_deg"},
                            {t.p_max, "p_max"}, {t.dop, "dop"}, {t.aop_true_deg, "aop_true_deg"},
                            {t.aop_meas_deg, "aop_meas_deg"}})
       (text += ',') += cell(v, name, k);
@@ -108,62 +67,19 @@ std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
   write_text_file(dir / "trials.csv", text);
 
   // Overall, each factor alone, then the full error binned by each factor.
-  using Get = std::function<double(const HeadingTrial&)>;
-  const auto column = [&](const Get& get) {
-    std::vector<double> v;
-    for (const HeadingTrial& t : trials) v.push_back(get(t));
-    return v;
-  };
   std::string summary =
       "factor,error,bin_lo,bin_hi,trials,solved,mean_deg,rms_deg,p50_abs_deg,p95_abs_deg,max_abs_deg\n";
-  const std::array<std::pair<const char*, Get>, 5> errors{{
-      {"error_deg", [](const HeadingTrial& t) { return t.error_deg; }},
-      {"error_sync_deg", [](const HeadingTrial& t) { return t.error_sync_deg; }},
-      {"error_ins_tilt_deg", [](const HeadingTrial& t) { return t.error_ins_tilt_deg; }},
-      {"error_mount_deg", [](const HeadingTrial& t) { return t.error_mount_deg; }},
-      {"error_noise_deg", [](const HeadingTrial& t) { return t.error_noise_deg; }},
-  }};
-  for (const auto& [name, get] : errors) summary += stats_row("all", name, NAN, NAN, stats_of(column(get)));
-  const std::array<std::pair<const char*, Get>, 6> factors{{
-      {"sync_heading_deg", sync_heading},
-      {"tilt_deg", tilt},
-      {"mount_tilt_deg", mount_tilt},
-      {"mount_z_deg", [](const HeadingTrial& t) { return t.mount_z_deg; }},
-      {"p_max", [](const HeadingTrial& t) { return t.p_max; }},
-      {"dop", [](const HeadingTrial& t) { return t.dop; }},
-  }};
-  constexpr int kBins = 8;
-  for (const auto& [name, get] : factors) {
-    const std::vector<double> x = column(get);
-    if (x.empty()) break;
-    const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
-    const double lo = *lo_it, hi = *hi_it;
-    if (!(hi > lo)) continue;
-    for (int b = 0; b < kBins; ++b) {
-      const double a = lo + (hi - lo) * b / kBins, z = lo + (hi - lo) * (b + 1) / kBins;
-      std::vector<double> e;
-      for (const HeadingTrial& t : trials) {
-        const double v = get(t);
-        if (v >= a && (v < z || (b == kBins - 1 && v <= z))) e.push_back(t.error_deg);
-      }
-      summary += stats_row(name, "error_deg", a, z, stats_of(e));
-    }
-  }
+  for (const HeadingErrorStats& row : summarize_heading_trials(trials)) summary += stats_row(row);
   write_text_file(dir / "summary.csv", summary);
 
   // The distribution of |error|, all factors and each alone, each column sorted on its own.
-  std::array<std::vector<double>, 5> sorted;
-  for (std::size_t m = 0; m < errors.size(); ++m) {
-    for (double e : column(errors[m].second))
-      if (!std::isnan(e)) sorted[m].push_back(std::abs(e));
-    std::sort(sorted[m].begin(), sorted[m].end());
-  }
+  const HeadingErrorCdf c = heading_error_cdf(trials);
   std::string cdf = "fraction,all_deg,sync_deg,ins_tilt_deg,mount_deg,noise_deg\n";
   const std::size_t n = trials.size();
   for (std::size_t k = 0; k < n; ++k) {
-    cdf += fmt::format("{}", (static_cast<double>(k) + 0.5) / static_cast<double>(n));
-    for (std::size_t m = 0; m < sorted.size(); ++m)
-      cdf += k < sorted[m].size() ? fmt::format(",{}", sorted[m][k]) : std::string(",nan");
+    cdf += fmt::format("{}", c.fraction[k]);
+    for (const std::vector<double>& column : c.abs_error_deg)
+      cdf += std::isnan(column[k]) ? std::string(",nan") : fmt::format(",{}", column[k]);
     cdf += "\n";
   }
   write_text_file(dir / "cdf.csv", cdf);

@@ -64,6 +64,27 @@ std::vector<SunPosition> sun_positions(std::span<const SunRow> rows, const SunSe
   return out;
 }
 
+SkyLight sky_light_toward(const SunPosition& sun, double view_az_deg, double view_el_deg,
+                          const SkyModel& model) {
+  // The viewing direction as a "position" on the sky, so that at the zenith the frame is the
+  // limit along view_az_deg (cos 90° ≠ 0 in doubles).
+  const SunPosition view{view_az_deg, view_el_deg, 90 - view_el_deg, 0, 0, 0};
+  return sky_light(sun_direction_enu(sun), sun_direction_enu(view), model);
+}
+
+std::vector<SkyLight> sky_light_toward(const SunPosition& sun, std::span<const double> view_az_deg,
+                                       std::span<const double> view_el_deg, const SkyModel& model) {
+  if (view_az_deg.size() != view_el_deg.size())
+    throw std::invalid_argument("sky_light_toward: one elevation per azimuth");
+  std::vector<SkyLight> out(view_az_deg.size());
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, out.size(), 1024),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        out[i] = sky_light_toward(sun, view_az_deg[i], view_el_deg[i], model);
+                    });
+  return out;
+}
+
 std::vector<SkySample> sky_along(std::span<const SkyQuery> queries, const SkyModel& model,
                                  const SunSettings& settings, const Progress& progress) {
   std::vector<SunRow> at(queries.size());
@@ -72,15 +93,9 @@ std::vector<SkySample> sky_along(std::span<const SkyQuery> queries, const SkyMod
   std::vector<SkySample> out(queries.size());
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, queries.size(), 1024),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i != r.end(); ++i) {
-                        // The viewing direction as a "position" on the sky, so that at the
-                        // zenith the frame is the limit along view_az_deg (cos 90° ≠ 0 in
-                        // doubles).
-                        const SunPosition view{queries[i].view_az_deg, queries[i].view_el_deg,
-                                               90 - queries[i].view_el_deg, 0, 0, 0};
-                        out[i] = {sun[i], sky_light(sun_direction_enu(sun[i]),
-                                                    sun_direction_enu(view), model)};
-                      }
+                      for (std::size_t i = r.begin(); i != r.end(); ++i)
+                        out[i] = {sun[i], sky_light_toward(sun[i], queries[i].view_az_deg,
+                                                           queries[i].view_el_deg, model)};
                     });
   return out;
 }

@@ -1,6 +1,8 @@
 #include "polrig/study/heading_trials.h"
 
 #include <algorithm>
+#include <array>
+#include <utility>
 #include <cmath>
 #include <limits>
 
@@ -137,6 +139,115 @@ HeadingTrial run_trial(const Rig& rig, const HeadingStudySettings& s, const Vec3
 }
 
 }  // namespace
+
+namespace {
+
+double quantile(const std::vector<double>& sorted, double q) {  // type 7, as NumPy's default
+  if (sorted.empty()) return std::nan("");
+  const double pos = q * static_cast<double>(sorted.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
+}
+
+HeadingErrorStats stats_of(std::string factor, std::string error, double lo, double hi,
+                           const std::vector<double>& errors) {
+  HeadingErrorStats s{std::move(factor), std::move(error), lo, hi};
+  s.trials = static_cast<int>(errors.size());
+  std::vector<double> a;
+  double sum = 0, sum_sq = 0;
+  for (double e : errors)
+    if (!std::isnan(e)) {
+      a.push_back(std::abs(e));
+      sum += e;
+      sum_sq += e * e;
+    }
+  s.solved = static_cast<int>(a.size());
+  if (a.empty()) return s;
+  std::sort(a.begin(), a.end());
+  const double n = static_cast<double>(a.size());
+  s.mean_deg = sum / n;
+  s.rms_deg = std::sqrt(sum_sq / n);
+  s.p50_abs_deg = quantile(a, 0.5);
+  s.p95_abs_deg = quantile(a, 0.95);
+  s.max_abs_deg = a.back();
+  return s;
+}
+
+using TrialValue = double (*)(const HeadingTrial&);
+
+// The full error, then each factor alone: summary.csv's "all" rows and cdf.csv's columns.
+constexpr std::array<std::pair<const char*, TrialValue>, 5> kErrors{{
+    {"error_deg", [](const HeadingTrial& t) { return t.error_deg; }},
+    {"error_sync_deg", [](const HeadingTrial& t) { return t.error_sync_deg; }},
+    {"error_ins_tilt_deg", [](const HeadingTrial& t) { return t.error_ins_tilt_deg; }},
+    {"error_mount_deg", [](const HeadingTrial& t) { return t.error_mount_deg; }},
+    {"error_noise_deg", [](const HeadingTrial& t) { return t.error_noise_deg; }},
+}};
+
+std::vector<double> column_of(const std::vector<HeadingTrial>& trials, TrialValue get) {
+  std::vector<double> v;
+  for (const HeadingTrial& t : trials) v.push_back(get(t));
+  return v;
+}
+
+}  // namespace
+
+std::vector<HeadingErrorStats> summarize_heading_trials(const std::vector<HeadingTrial>& trials) {
+  std::vector<HeadingErrorStats> rows;
+  for (const auto& [name, get] : kErrors) rows.push_back(stats_of("all", name, NAN, NAN, column_of(trials, get)));
+  const std::array<std::pair<const char*, TrialValue>, 6> factors{{
+      {"sync_heading_deg", [](const HeadingTrial& t) { return t.sync_heading_deg(); }},
+      {"tilt_deg", [](const HeadingTrial& t) { return std::hypot(t.roll_deg, t.pitch_deg); }},
+      {"mount_tilt_deg", [](const HeadingTrial& t) { return t.mount_tilt_deg(); }},
+      {"mount_z_deg", [](const HeadingTrial& t) { return t.mount_z_deg; }},
+      {"p_max", [](const HeadingTrial& t) { return t.p_max; }},
+      {"dop", [](const HeadingTrial& t) { return t.dop; }},
+  }};
+  constexpr int kBins = 8;
+  for (const auto& [name, get] : factors) {
+    const std::vector<double> x = column_of(trials, get);
+    if (x.empty()) break;
+    const auto [lo_it, hi_it] = std::minmax_element(x.begin(), x.end());
+    const double lo = *lo_it, hi = *hi_it;
+    if (!(hi > lo)) continue;
+    for (int b = 0; b < kBins; ++b) {
+      const double a = lo + (hi - lo) * b / kBins, z = lo + (hi - lo) * (b + 1) / kBins;
+      std::vector<double> e;
+      for (const HeadingTrial& t : trials) {
+        const double v = get(t);
+        if (v >= a && (v < z || (b == kBins - 1 && v <= z))) e.push_back(t.error_deg);
+      }
+      rows.push_back(stats_of(name, "error_deg", a, z, e));
+    }
+  }
+  return rows;
+}
+
+HeadingErrorCdf heading_error_cdf(const std::vector<HeadingTrial>& trials) {
+  HeadingErrorCdf c;
+  const std::size_t n = trials.size();
+  for (std::size_t k = 0; k < n; ++k)
+    c.fraction.push_back((static_cast<double>(k) + 0.5) / static_cast<double>(n));
+  for (std::size_t m = 0; m < kErrors.size(); ++m) {
+    std::vector<double>& col = c.abs_error_deg[m];
+    for (double e : column_of(trials, kErrors[m].second))
+      if (!std::isnan(e)) col.push_back(std::abs(e));
+    std::sort(col.begin(), col.end());
+    col.resize(n, std::nan(""));
+  }
+  return c;
+}
+
+bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings) {
+  if (!rig.light->has(Source::kTimeDependent)) return false;
+  const Sky sky = rig.source.sky.resolved_sky();
+  settings.site = sky.site;
+  settings.utc = sky.first_stop;
+  settings.sun.ut1_minus_utc_s = sky.sun.ut1_minus_utc_s;
+  settings.sun.refraction = sky.sun.refraction;
+  return true;
+}
 
 std::vector<HeadingTrial> heading_trials(const Rig& rig, const HeadingStudySettings& s,
                                          const Progress& progress) {

@@ -47,6 +47,17 @@ struct SkySample {
   SkyLight light;  // along the viewing direction; χ in its local meridian frame (at the zenith,
                    // the limit along view_az_deg)
 };
+// The single-scattering sky (sky_light) of one sun along a viewing direction given by its
+// geographic azimuth (from north towards east) and elevation, degrees: what sky_along computes per
+// query. The view is formed as sun_direction_enu forms the sun's, so that at the zenith the
+// meridian frame is the limit along view_az_deg.
+SkyLight sky_light_toward(const SunPosition& sun, double view_az_deg, double view_el_deg,
+                          const SkyModel& model);
+// The same for many directions (view_az_deg[i], view_el_deg[i]), in parallel (TBB), each into its
+// own slot. Throws std::invalid_argument when the sizes differ.
+std::vector<SkyLight> sky_light_toward(const SunPosition& sun, std::span<const double> view_az_deg,
+                                       std::span<const double> view_el_deg, const SkyModel& model);
+
 // The sun (sun_positions) and the single-scattering sky (sky_light) for every query, in order.
 std::vector<SkySample> sky_along(std::span<const SkyQuery> queries, const SkyModel& model,
                                  const SunSettings& settings = {},

@@ -3,7 +3,10 @@
 // sky-and-compasses.md §1.5, W19 §5.2): per trial a random attitude, a time-sync error during a
 // turn, a mount misalignment, the sky's P_max and sensor noise through the device model
 // (device/sensor pair voltages, ADC, calib/angles), then the heading from nav/heading.
+#include <array>
+#include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "polrig/nav/heading.h"
@@ -57,7 +60,37 @@ struct HeadingTrial {
   // each factor alone (the others off): sync (ω·Δt), INS tilt, mount, sensor noise.
   double error_deg = 0;
   double error_sync_deg = 0, error_ins_tilt_deg = 0, error_mount_deg = 0, error_noise_deg = 0;
+
+  // The heading the platform turns during the sync error, ω·Δt (degrees), and the sensor axis'
+  // mount tilt √(m_x² + m_y²) (degrees): trials.csv's sync_heading_deg and mount_tilt_deg.
+  double sync_heading_deg() const { return turn_rate_dps * sync_s; }
+  double mount_tilt_deg() const { return std::hypot(mount_x_deg, mount_y_deg); }
 };
+
+// A sky rig's run (a rig whose source is time-dependent): its `sky:` block's site, first stop,
+// UT1 − UTC and refraction replace those of `settings`; returns false, `settings` unchanged, for
+// any other rig. `polrig study heading` then applies the options given on its command line.
+bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings);
+
+// summary.csv's rows: the heading error's statistics over the trials with a heading (NaN where
+// none has one), overall for the full error and each factor alone (factor "all", bin NaN), then
+// the full error in 8 equal bins of each factor's range (sync_heading_deg, tilt_deg = √(roll² +
+// pitch²), mount_tilt_deg, mount_z_deg, p_max, dop; a factor without spread has no bins).
+struct HeadingErrorStats {
+  std::string factor, error;
+  double bin_lo = NAN, bin_hi = NAN;  // the factor's bin [lo, hi) (the last closed)
+  int trials = 0, solved = 0;
+  double mean_deg = NAN, rms_deg = NAN, p50_abs_deg = NAN, p95_abs_deg = NAN, max_abs_deg = NAN;
+};
+std::vector<HeadingErrorStats> summarize_heading_trials(const std::vector<HeadingTrial>& trials);
+
+// cdf.csv: at fraction (k + ½)/n, the k-th smallest |error| of the full error and of each factor
+// alone (sync, INS tilt, mount, noise), each sorted on its own; NaN past a column's solved trials.
+struct HeadingErrorCdf {
+  std::vector<double> fraction;
+  std::array<std::vector<double>, 5> abs_error_deg;  // all, sync, ins_tilt, mount, noise
+};
+HeadingErrorCdf heading_error_cdf(const std::vector<HeadingTrial>& trials);
 
 // Sun at settings.utc and site; trials in parallel (TBB), each a pure function of
 // (rig, settings, index): identical for any thread count.

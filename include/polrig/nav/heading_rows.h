@@ -1,0 +1,33 @@
+#pragma once
+// The heading for many rows of (time, site, attitude, E-vector angle): `polrig heading`'s table.
+// Values only; reading and writing the files is the CLI's and io/'s.
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "polrig/nav/heading.h"
+#include "polrig/progress.h"
+#include "polrig/sky/sun_rows.h"
+
+namespace polrig {
+
+struct HeadingQuery {
+  SunRow at;                        // UTC and site
+  Tilt tilt;                        // roll and pitch, degrees (heading.h's senses)
+  double aop_deg = 0;               // θ_b, degrees, anticlockwise from X_b seen from above
+  std::optional<double> prior_deg;  // clockwise from north; empty: the root with the sun in front
+};
+
+struct HeadingSample {
+  SunPosition sun;
+  HeadingSolution solution;
+};
+
+// The sun of every row (sun_positions: SunRowError naming the first row the ephemeris refuses),
+// then solve_heading on its ENU direction, in the rows' order; the same for any thread count.
+std::vector<HeadingSample> headings_along(std::span<const HeadingQuery> queries,
+                                          const SunSettings& sun_settings = {},
+                                          const HeadingSettings& settings = {},
+                                          const Progress& progress = {});
+
+}  // namespace polrig

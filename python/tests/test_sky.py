@@ -1,0 +1,240 @@
+"""polrig.Sky, sun_position, sky_table, drift_corrections, spectral_kd and read_exr: the CLI's
+files (sky.exr, sun.yaml, sky.csv, kd.csv, spectra.csv) bit for bit, shapes, errors, threads."""
+import datetime
+
+import numpy as np
+import pytest
+
+import polrig
+from conftest import ROOT, read_csv, run_cli
+
+OUTDOOR = str(ROOT / "rigs" / "wang2019-outdoor1.yaml")
+SITE = (38.879167, 121.543889)
+UTC = "2018-11-16T08:09:40Z"
+
+
+def read_sun_yaml(path):
+    """The numbers of a sun.yaml (shortest round-trip text, so float() is exact)."""
+    out = {}
+    for line in open(path):
+        if line.startswith("#") or ":" not in line:
+            continue
+        key, _, value = line.strip().partition(":")
+        try:
+            out[key] = float(value)
+        except ValueError:
+            out[key] = value.strip()
+    return out
+
+
+def test_sky_map_is_the_cli_exr_and_sun_yaml(tmp_path):
+    run_cli("sky", "-o", tmp_path / "s", "--size", 96, "--no-plots", "--utc", "2019-07-01T11:01:00Z",
+            "--site", "38.9,121.5", "--p-max", 0.6, "--radiance", "cie-clear", "--refraction",
+            "--ut1-minus-utc", 0.25, "--exr-compression", "none")
+    sky = polrig.Sky(site=(38.9, 121.5), utc="2019-07-01T11:01:00Z", p_max=0.6, radiance="cie-clear",
+                     refraction=True, ut1_minus_utc_s=0.25)
+    m = sky.map(96)
+    exr = polrig.read_exr(str(tmp_path / "s" / "sky.exr"))
+    for layer, name in [("S0", "S0"), ("S1", "S1"), ("S2", "S2"), ("AoP", "aop_deg"), ("DoP", "dop"),
+                        ("A", "inside")]:
+        got = getattr(m, name)
+        assert got.dtype == np.float32 and got.shape == (96, 96)
+        assert np.array_equal(exr[layer], got), layer
+    sun = read_sun_yaml(tmp_path / "s" / "sun.yaml")
+    s = sky.sun()
+    for k in ["azimuth_deg", "elevation_deg", "zenith_deg", "declination_deg", "gha_deg", "lha_deg"]:
+        assert getattr(s, k) == sun[k] and getattr(m.sun, k) == sun[k], k
+    assert m.utc == sky.utc == "2019-07-01T11:01:00Z"
+
+
+def test_sky_from_rig_is_polrig_sky_rig(tmp_path):
+    run_cli("sky", OUTDOOR, "-o", tmp_path / "s", "--size", 32, "--no-plots")
+    sky = polrig.Sky.from_rig(polrig.Rig.load(OUTDOOR))
+    assert np.array_equal(polrig.read_exr(str(tmp_path / "s" / "sky.exr"))["AoP"], sky.map(32).aop_deg)
+    with pytest.raises(polrig.RigError, match="has no sky"):
+        polrig.Sky.from_rig(polrig.Rig())
+
+
+def test_map_threads_do_not_change_it():
+    sky = polrig.Sky()
+    a, b = sky.map(64, threads=1), sky.map(64, threads=2)
+    assert all(np.array_equal(getattr(a, k), getattr(b, k)) for k in ["S0", "S1", "S2", "aop_deg", "dop"])
+
+
+def write_table_input(path, rows):
+    with open(path, "w") as f:
+        f.write("utc,lat_deg,lon_deg,view_az_deg,view_el_deg,note\n")
+        for r in rows:
+            f.write(",".join(map(str, r)) + ",x\n")
+
+
+def table_rows(n=300):
+    rng = np.random.default_rng(3)
+    t0 = np.datetime64("2018-11-16T08:00:00")
+    times = t0 + (rng.uniform(0, 6 * 3600, n) * 1000).astype("timedelta64[ms]")
+    iso = [str(t) + "Z" for t in times]
+    lat = np.round(rng.uniform(-60, 60, n), 4)
+    lon = np.round(rng.uniform(-180, 180, n), 4)
+    az = np.round(rng.uniform(-360, 360, n), 3)
+    el = np.round(rng.uniform(-10, 90, n), 3)
+    el[:3] = 90  # the zenith: the frame's limit along view_az_deg
+    lat[100:] = 38.879167  # one site with many rows: the SunTrack path
+    lon[100:] = 121.543889
+    return iso, lat, lon, az, el
+
+
+def test_sky_table_is_the_cli_csv(tmp_path):
+    iso, lat, lon, az, el = table_rows()
+    write_table_input(tmp_path / "in.csv", zip(iso, lat, lon, az, el))
+    run_cli("sky", "table", tmp_path / "in.csv", "-o", tmp_path / "t", "--p-max", 0.65, "--refraction")
+    csv = read_csv(tmp_path / "t" / "sky.csv")
+    got = polrig.sky_table(iso, lat, lon, az, el, p_max=0.65, refraction=True)
+    for k in ["sun_az_deg", "sun_el_deg", "dop", "aop_deg"]:
+        assert np.array_equal(getattr(got, k), csv[k]), k
+    # datetime64 input gives the same instants for whole seconds (fractions go through
+    # nanoseconds, which may differ from the text's parse by 0.1 µs)
+    whole = [s[:19] + "Z" for s in iso]
+    t64 = np.array([s[:19] for s in iso], dtype="datetime64[s]")
+    a = polrig.sky_table(whole, lat, lon, az, el, p_max=0.65, refraction=True, threads=1)
+    b = polrig.sky_table(t64, lat, lon, az, el, p_max=0.65, refraction=True, threads=2)
+    assert np.array_equal(a.aop_deg, b.aop_deg) and np.array_equal(a.sun_az_deg, b.sun_az_deg)
+    # sun_position over the same rows is the table's sun
+    sun = polrig.sun_position(iso, np.stack([lat, lon], axis=-1), refraction=True, threads=2)
+    assert np.array_equal(sun.azimuth_deg, csv["sun_az_deg"])
+    assert np.array_equal(sun.elevation_deg, csv["sun_el_deg"])
+
+
+def test_sky_light_and_stokes_are_sky_table_at_one_time(tmp_path):
+    az = np.linspace(-350, 350, 15)
+    el = np.linspace(-5, 90, 15)
+    write_table_input(tmp_path / "in.csv", [(UTC, *SITE, a, e) for a, e in zip(az, el)])
+    run_cli("sky", "table", tmp_path / "in.csv", "-o", tmp_path / "t")
+    csv = read_csv(tmp_path / "t" / "sky.csv")
+    sky = polrig.Sky(site=SITE, utc=UTC)
+    light = sky.light(az, el)
+    assert np.array_equal(light.dop, csv["dop"]) and np.array_equal(light.aop_deg, csv["aop_deg"])
+    assert sky.sun().azimuth_deg == csv["sun_az_deg"][0]
+    st = sky.stokes(az, el)
+    assert st.shape == (15, 4) and st.dtype == np.float64
+    # sky/rayleigh.h: S1 = L·P·cos 2χ, S2 = L·P·sin 2χ, S3 = 0 in the meridian frame
+    chi = np.radians(light.aop_deg)
+    assert np.allclose(st[:, 1], light.radiance * light.dop * np.cos(2 * chi), atol=1e-15)
+    assert np.allclose(st[:, 2], light.radiance * light.dop * np.sin(2 * chi), atol=1e-15)
+    assert np.all(st[:, 3] == 0) and np.array_equal(st[:, 0], light.radiance)
+
+
+def test_broadcasting_shapes():
+    sky = polrig.Sky()
+    az = np.arange(0, 360, 30.0)[None, :]
+    el = np.array([10.0, 45.0, 80.0])[:, None]
+    light = sky.light(az, el)
+    assert light.dop.shape == (3, 12) and light.e_vector.shape == (3, 12, 3)
+    assert sky.stokes(az, el).shape == (3, 12, 4)
+    assert sky.stokes(0, 45).shape == (4,)
+    # e is perpendicular to the sun and to the view (single scattering), unit length
+    s = sky.sun().enu
+    assert np.allclose(light.e_vector @ s, 0, atol=1e-12)
+    assert np.allclose(np.linalg.norm(light.e_vector, axis=-1), 1)
+    with pytest.raises(ValueError, match="do not broadcast"):
+        sky.light([1.0, 2.0], [1.0, 2.0, 3.0])
+
+
+def test_sun_position_independent_check():
+    # sky/sun.h: with refraction off, sin h = sin φ sin δ + cos φ cos δ cos LHA holds exactly.
+    times = np.datetime64("2018-11-16T00:00") + np.arange(0, 86400, 3600).astype("timedelta64[s]")
+    s = polrig.sun_position(times, SITE)
+    phi = np.radians(SITE[0])
+    d, H = np.radians(s.declination_deg), np.radians(s.lha_deg)
+    assert np.allclose(np.sin(np.radians(s.elevation_deg)),
+                       np.sin(phi) * np.sin(d) + np.cos(phi) * np.cos(d) * np.cos(H), atol=1e-12)
+    assert s.azimuth_deg.shape == (24,) and s.enu.shape == (24, 3)
+    one = polrig.sun_position(UTC, SITE)
+    assert one.azimuth_deg.shape == ()
+    assert float(one.azimuth_deg) == polrig.Sky(site=SITE, utc=UTC).sun().azimuth_deg
+    aware = datetime.datetime(2018, 11, 16, 8, 9, 40, tzinfo=datetime.timezone.utc)
+    assert polrig.Sky(utc=aware).sun().azimuth_deg == polrig.Sky(utc=UTC).sun().azimuth_deg
+    # many sites at one time
+    sites = np.array([[0.0, 0.0], [45.0, 90.0], [-30.0, -60.0, 1000.0][:2]])
+    assert polrig.sun_position(UTC, sites).elevation_deg.shape == (3,)
+
+
+def test_errors_name_the_argument():
+    with pytest.raises(ValueError, match=r"p_max: expected a finite number in \[1e-06, 1\], got 2"):
+        polrig.Sky(p_max=2)
+    with pytest.raises(ValueError, match=r"site: latitude 95 is outside \[-90, 90\]"):
+        polrig.Sky(site=(95, 0))
+    with pytest.raises(ValueError, match=r"ut1_minus_utc_s: expected a finite number in \[-1, 1\] s"):
+        polrig.Sky(ut1_minus_utc_s=1.5)
+    with pytest.raises(ValueError, match="radiance 'foggy'"):
+        polrig.Sky(radiance="foggy")
+    with pytest.raises(ValueError, match="utc: .*Z"):
+        polrig.Sky(utc="2018-11-16T08:09:40")
+    with pytest.raises(ValueError, match=r"view_el_deg: element 1 is 91"):
+        polrig.Sky().light([0, 0], [10, 91])
+    with pytest.raises(ValueError, match=r"view_az_deg: element 0 is nan"):
+        polrig.Sky().stokes([np.nan], [10])
+    with pytest.raises(ValueError, match=r"utc\[1\]: invalid UTC time .*2150"):
+        polrig.sun_position(["2018-01-01T00:00:00Z", "2150-01-01T00:00:00Z"], SITE)
+    with pytest.raises(ValueError, match="P_max"):
+        polrig.Sky(p_max_table=[[10, 0.5], [5, 0.6]])
+
+
+def test_p_max_table_is_used():
+    table = np.array([[-10.0, 0.5], [80.0, 0.8]])
+    sky = polrig.Sky(p_max_table=table)
+    assert np.array_equal(sky.p_max_table, table)
+    h = sky.sun().elevation_deg
+    p = np.interp(h, table[:, 0], table[:, 1])
+    # at 90° from the sun the degree is P_max: sin²γ/(1 + cos²γ) = 1
+    s = sky.sun().enu
+    v = np.cross(s, [0.0, 0.0, 1.0])
+    v /= np.linalg.norm(v)
+    az, el = np.degrees(np.arctan2(v[0], v[1])), np.degrees(np.arcsin(v[2]))
+    assert abs(sky.light(az, el).dop - p) < 1e-12
+
+
+def test_drift_corrections_follow_the_sun():
+    t = np.datetime64("2018-11-16T08:09:40") + np.arange(0, 600, 60).astype("timedelta64[s]")
+    d = polrig.drift_corrections(t, SITE, "per-stop", p_max=0.7)
+    sun = np.array([polrig.Sky(site=SITE, utc=x).sun().azimuth_deg for x in t])
+    assert np.allclose(d.dtheta_deg, -(sun - sun[0]), atol=1e-9)  # sky/drift.h: −ΔA_s
+    assert d.d_ratio[0] == 1 and d.d_ratio.shape == (10,)
+    assert polrig.drift_corrections(t, SITE, "none").dtheta_deg.shape == (0,)
+    assert polrig.drift_corrections(t, SITE, "angle").d_ratio.shape == (0,)
+    lin = polrig.drift_corrections(t, SITE, "linear")
+    assert np.allclose(lin.dtheta_deg, np.linspace(lin.dtheta_deg[0], lin.dtheta_deg[-1], 10), atol=1e-12)
+    with pytest.raises(ValueError, match="mode 'sideways'"):
+        polrig.drift_corrections(t, SITE, "sideways")
+
+
+SPECTRA = ROOT / "data" / "spectra"
+
+
+@pytest.mark.parametrize("sun", [None, "astm-g173.csv"])
+def test_spectral_kd_is_the_cli(tmp_path, sun):
+    films, resp = SPECTRA / "sheet-polarizer-synthetic.csv", SPECTRA / "blue-filter-photodiode-synthetic.csv"
+    scale = [1, 0.95, 0.9, 1, 0.8, 0.99]
+    args = ["spectral", "kd", "--films", films, "--response", resp, "--tau-m-scale",
+            ",".join(map(str, scale)), "--lamp-temperature", 3000, "--no-plots", "-o", tmp_path / "k"]
+    kw = {}
+    if sun:
+        args += ["--sun", SPECTRA / sun]
+        kw["sun"] = str(SPECTRA / sun)
+    run_cli(*args)
+    got = polrig.spectral_kd(str(films), str(resp), lamp_temperature_K=3000, tau_m_scale=scale, **kw)
+    kd = read_csv(tmp_path / "k" / "kd.csv")
+    for k in kd:
+        assert np.array_equal(getattr(got, k), kd[k]), k
+    spectra = read_csv(tmp_path / "k" / "spectra.csv")
+    for k in spectra:
+        assert np.array_equal(getattr(got.spectra, k), spectra[k], equal_nan=True), k
+
+
+def test_spectral_kd_errors():
+    films, resp = SPECTRA / "sheet-polarizer-synthetic.csv", SPECTRA / "blue-filter-photodiode-synthetic.csv"
+    with pytest.raises(ValueError, match="tau_m_scale: 2 values; expected 6"):
+        polrig.spectral_kd(str(films), str(resp), tau_m_scale=[1, 2])
+    with pytest.raises(ValueError, match=r"lamp_temperature_K: expected a finite number in \[500, 50000\] K"):
+        polrig.spectral_kd(str(films), str(resp), lamp_temperature_K=100)
+    with pytest.raises(polrig.DataError, match="nope.csv"):
+        polrig.spectral_kd(str(SPECTRA / "nope.csv"), str(resp))

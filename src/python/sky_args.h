@@ -1,0 +1,100 @@
+#pragma once
+// Arguments of the sky and navigation bindings, checked with the ranges and words of the CLI's
+// options (src/cli/common.cpp's finite_range and parse_site, the CSV readers' column ranges).
+#include <cmath>
+#include <span>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "convert.h"
+#include "polrig/sky/rayleigh.h"
+#include "polrig/sky/sun.h"
+#include "polrig/sky/sun_rows.h"
+
+namespace polrig::python {
+
+// A scalar option: a finite number in [lo, hi] (the CLI's finite_range), else ValueError
+// "p_max: expected a finite number in [1e-06, 1], got 2".
+inline void check_option(double v, const char* name, double lo, double hi, const char* unit) {
+  if (!std::isfinite(v) || v < lo || v > hi)
+    throw py::value_error(fmt::format("{}: expected a finite number in [{}, {}]{}{}, got {}", name, lo,
+                                      hi, *unit ? " " : "", unit, v));
+}
+
+// Every element in [lo, hi], else ValueError naming the argument, the flat index and the value.
+inline void check_range(std::span<const double> v, const char* name, double lo, double hi,
+                        const char* what) {
+  for (std::size_t i = 0; i < v.size(); ++i)
+    if (v[i] < lo || v[i] > hi)
+      throw py::value_error(fmt::format("{}: element {} is {}, outside [{}, {}] ({})", name, i,
+                                        v[i], lo, hi, what));
+}
+
+// (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m) with the CLI's --site checks.
+inline Site site_of(const py::handle& obj, const char* name) {
+  const DoubleArray a = as_array(obj, name, 1);
+  if (a.size() != 2 && a.size() != 3)
+    throw py::value_error(fmt::format("{}: expected (lat_deg, lon_deg) or (lat_deg, lon_deg, "
+                                      "height_m), got {} values", name, a.size()));
+  const std::vector<double> v = finite_values(a, name);
+  const Site s{v[0], v[1], v.size() == 3 ? v[2] : 0.0};
+  if (std::abs(s.lat_deg) > 90)
+    throw py::value_error(fmt::format("{}: latitude {} is outside [-90, 90] (degrees, north "
+                                      "positive)", name, s.lat_deg));
+  if (std::abs(s.lon_deg) > 180)
+    throw py::value_error(fmt::format("{}: longitude {} is outside [-180, 180] (degrees, east "
+                                      "positive)", name, s.lon_deg));
+  return s;
+}
+
+// Sites as arrays of shape (..., 2) or (..., 3): latitude, longitude and height (0 when absent)
+// as arrays of the leading shape.
+struct SiteArrays {
+  py::object lat, lon, height;
+};
+inline SiteArrays site_arrays(const py::handle& obj, const char* name) {
+  const DoubleArray a = as_array(obj, name, 0);
+  if (a.ndim() < 1 || (a.shape(a.ndim() - 1) != 2 && a.shape(a.ndim() - 1) != 3))
+    throw py::value_error(fmt::format("{}: expected (lat_deg, lon_deg[, height_m]) or an array "
+                                      "of shape (..., 2) or (..., 3)", name));
+  const auto column = [&](int k) {
+    return a.attr("__getitem__")(py::make_tuple(py::ellipsis(), k));
+  };
+  const py::module_ np = py::module_::import("numpy");
+  return {column(0), column(1),
+          a.shape(a.ndim() - 1) == 3 ? column(2) : np.attr("zeros_like")(column(0))};
+}
+
+// The radiance model by the CLI's --radiance name.
+inline SkyRadiance radiance_of(const std::string& name) {
+  if (name == "uniform") return SkyRadiance::Uniform;
+  if (name == "rayleigh") return SkyRadiance::Rayleigh;
+  if (name == "cie-clear") return SkyRadiance::CieClear;
+  throw py::value_error(fmt::format("radiance '{}': expected one of uniform, rayleigh, cie-clear", name));
+}
+
+// None, or an (N, 2) array of (sun elevation in degrees, P_max) rows.
+inline std::vector<std::pair<double, double>> p_max_table_of(const py::handle& obj) {
+  std::vector<std::pair<double, double>> table;
+  if (obj.is_none()) return table;
+  const std::vector<double> v = finite_values(as_array(obj, "p_max_table", 2, 2), "p_max_table");
+  for (std::size_t i = 0; i + 1 < v.size(); i += 2) table.emplace_back(v[i], v[i + 1]);
+  return table;
+}
+
+// sun_positions with a row the ephemeris refuses reported as ValueError naming `name` and the
+// (flat) element.
+inline std::vector<SunPosition> sun_rows_or_error(std::span<const SunRow> rows,
+                                                  const SunSettings& settings, const Progress& p,
+                                                  const char* name) {
+  try {
+    return sun_positions(rows, settings, p);
+  } catch (const SunRowError& e) {
+    throw py::value_error(fmt::format("{} (element {}): {}", name, e.row, e.what()));
+  }
+}
+
+}  // namespace polrig::python

@@ -63,6 +63,20 @@ TEST(Utc, ParsesAndFormatsIso8601) {
   EXPECT_EQ(format_utc({-1.0}), "1969-12-31T23:59:59Z");
 }
 
+// Numbers (seconds and nanoseconds, Python's datetime64) give the double the ISO text gives.
+TEST(Utc, FromUnixNanosecondsIsTheTextsInstant) {
+  EXPECT_EQ(utc_from_unix_ns(1542355780, 123000000).unix_s, parse_utc("2018-11-16T08:09:40.123Z").unix_s);
+  EXPECT_EQ(utc_from_unix_ns(1542355780, 123456789).unix_s,
+            parse_utc("2018-11-16T08:09:40.123456789Z").unix_s);
+  EXPECT_EQ(utc_from_unix_ns(-1, 500000000).unix_s, parse_utc("1969-12-31T23:59:59.5Z").unix_s);
+  EXPECT_EQ(utc_from_unix_ns(951868799, 250000000).unix_s, 951868799.25);
+  // The nearest double to 1542355780.123 is not what a float product of nanoseconds gives.
+  EXPECT_NE(static_cast<double>(1542355780123000000LL) * 1e-9,
+            parse_utc("2018-11-16T08:09:40.123Z").unix_s);
+  EXPECT_THROW(utc_from_unix_ns(0, 1000000000), std::invalid_argument);
+  EXPECT_THROW(utc_from_unix_ns(0, -1), std::invalid_argument);
+}
+
 TEST(Utc, RefusesAnythingElseNamingTheText) {
   for (const char* bad : {"2018-11-16T08:09:40", "2018-11-16 08:09:40Z", "2018-11-16T08:09:40+08:00",
                           "2018-13-01T00:00:00Z", "2018-02-29T00:00:00Z", "2018-11-16T24:00:00Z",

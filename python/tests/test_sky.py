@@ -91,13 +91,13 @@ def test_sky_table_is_the_cli_csv(tmp_path):
     got = polrig.sky_table(iso, lat, lon, az, el, p_max=0.65, refraction=True)
     for k in ["sun_az_deg", "sun_el_deg", "dop", "aop_deg"]:
         assert np.array_equal(getattr(got, k), csv[k]), k
-    # datetime64 input gives the same instants for whole seconds (fractions go through
-    # nanoseconds, which may differ from the text's parse by 0.1 µs)
-    whole = [s[:19] + "Z" for s in iso]
-    t64 = np.array([s[:19] for s in iso], dtype="datetime64[s]")
-    a = polrig.sky_table(whole, lat, lon, az, el, p_max=0.65, refraction=True, threads=1)
-    b = polrig.sky_table(t64, lat, lon, az, el, p_max=0.65, refraction=True, threads=2)
-    assert np.array_equal(a.aop_deg, b.aop_deg) and np.array_equal(a.sun_az_deg, b.sun_az_deg)
+    # datetime64 and aware datetime input give the instants of the ISO text, fractions included
+    t64 = np.array([s[:-1] for s in iso], dtype="datetime64[ns]")
+    aware = [datetime.datetime.fromisoformat(s[:-1]).replace(tzinfo=datetime.timezone.utc) for s in iso]
+    a = polrig.sky_table(iso, lat, lon, az, el, p_max=0.65, refraction=True, threads=1)
+    for times in (t64, aware):
+        b = polrig.sky_table(times, lat, lon, az, el, p_max=0.65, refraction=True, threads=2)
+        assert np.array_equal(a.aop_deg, b.aop_deg) and np.array_equal(a.sun_az_deg, b.sun_az_deg)
     # sun_position over the same rows is the table's sun
     sun = polrig.sun_position(iso, np.stack([lat, lon], axis=-1), refraction=True, threads=2)
     assert np.array_equal(sun.azimuth_deg, csv["sun_az_deg"])

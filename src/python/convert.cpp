@@ -1,6 +1,7 @@
 #include "convert.h"
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -51,6 +52,16 @@ std::vector<double> finite_values(const DoubleArray& a, const char* name) {
 }
 
 namespace {
+// Nanoseconds since the epoch (a datetime64[ns]) as parse_utc reads the same instant's ISO text.
+UtcTime from_unix_ns(long long ns) {
+  long long seconds = ns / 1000000000, rest = ns % 1000000000;
+  if (rest < 0) {
+    --seconds;
+    rest += 1000000000;
+  }
+  return utc_from_unix_ns(seconds, static_cast<std::int32_t>(rest));
+}
+
 UtcTime one_utc(const py::handle& obj, const std::string& where) {
   if (py::isinstance<py::str>(obj)) {
     try {
@@ -65,14 +76,17 @@ UtcTime one_utc(const py::handle& obj, const std::string& where) {
       throw py::value_error(fmt::format("{}: {} has no time zone; give a UTC time "
                                         "(tzinfo=datetime.timezone.utc) or an ISO 8601 string with Z",
                                         where, py::repr(obj).cast<std::string>()));
-    return {obj.attr("timestamp")().cast<double>()};
+    // Whole seconds and microseconds, exactly (timestamp() would round through a float).
+    const py::object utc = obj.attr("astimezone")(datetime.attr("timezone").attr("utc"));
+    const long long seconds = py::module_::import("calendar").attr("timegm")(utc.attr("utctimetuple")()).cast<long long>();
+    return utc_from_unix_ns(seconds, utc.attr("microsecond").cast<std::int32_t>() * 1000);
   }
   const py::module_ np = py::module_::import("numpy");
   if (py::isinstance(obj, np.attr("datetime64"))) {
     const py::object ns = np.attr("datetime64")(obj, "ns");
     if (py::bool_(np.attr("isnat")(ns)))
       throw py::value_error(fmt::format("{}: NaT is not a time", where));
-    return {static_cast<double>(ns.attr("astype")("int64").cast<long long>()) / 1e9};
+    return from_unix_ns(ns.attr("astype")("int64").cast<long long>());
   }
   throw py::type_error(fmt::format("{}: expected a UTC time (ISO 8601 string with Z, aware "
                                    "datetime or numpy.datetime64), got {}", where,
@@ -90,7 +104,7 @@ std::vector<UtcTime> utc_times(const py::handle& obj, const char* name) {
                                         np.attr("argmax")(np.attr("isnat")(ns)).cast<long long>()));
     const auto ints = ns.attr("view")("int64").cast<py::array_t<long long, py::array::c_style | py::array::forcecast>>();
     std::vector<UtcTime> out(static_cast<std::size_t>(ints.size()));
-    for (std::size_t i = 0; i < out.size(); ++i) out[i].unix_s = static_cast<double>(ints.data()[i]) / 1e9;
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = from_unix_ns(ints.data()[i]);
     return out;
   }
   if (py::isinstance<py::str>(obj) || !py::isinstance<py::iterable>(obj)) return {one_utc(obj, name)};

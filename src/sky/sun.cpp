@@ -177,6 +177,16 @@ SunPosition observe(const Vec3& cirs, double era, eraASTROM& astrom, double lon_
       text, why));
 }
 
+// The decimal fraction 0.d1d2d3… as parse_utc accumulates it, digit by digit.
+double decimal_fraction(std::string_view digits) {
+  double fraction = 0, scale = 0.1;
+  for (const char c : digits) {
+    fraction += (c - '0') * scale;
+    scale /= 10;
+  }
+  return fraction;
+}
+
 }  // namespace
 
 UtcTime parse_utc(std::string_view text) {
@@ -203,14 +213,10 @@ UtcTime parse_utc(std::string_view text) {
   double fraction = 0;
   if (text[pos] == '.') {
     ++pos;
-    double scale = 0.1;
     const std::size_t first = pos;
-    while (pos < text.size() && text[pos] >= '0' && text[pos] <= '9') {
-      fraction += (text[pos] - '0') * scale;
-      scale /= 10;
-      ++pos;
-    }
+    while (pos < text.size() && text[pos] >= '0' && text[pos] <= '9') ++pos;
     if (pos == first) bad_utc(text, "no digits after the decimal point");
+    fraction = decimal_fraction(text.substr(first, pos - first));
   }
   if (pos >= text.size() || text[pos] != 'Z')
     bad_utc(text, "the time must end in Z (UTC); offsets and local times are not accepted");
@@ -224,6 +230,13 @@ UtcTime parse_utc(std::string_view text) {
   if (second > 59) bad_utc(text, fmt::format("second {} is outside 0-59", second));
   const long long days = days_from_civil(year, static_cast<unsigned>(month), static_cast<unsigned>(day));
   return {static_cast<double>(days) * kDay + hour * 3600.0 + minute * 60.0 + second + fraction};
+}
+
+UtcTime utc_from_unix_ns(std::int64_t seconds, std::int32_t nanoseconds) {
+  if (nanoseconds < 0 || nanoseconds > 999999999)
+    throw std::invalid_argument(fmt::format("nanoseconds {} outside [0, 999999999]", nanoseconds));
+  // The nine digits parse_utc would read: the same double as the ISO text of this instant.
+  return {static_cast<double>(seconds) + decimal_fraction(fmt::format("{:09}", nanoseconds))};
 }
 
 std::string format_utc(UtcTime t) {

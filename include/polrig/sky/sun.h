@@ -5,6 +5,7 @@
 //
 // Frames and senses (spec §0): the n-frame is ENU (x east, y north, z up); the azimuth A_s is
 // geographic, from north towards east (clockwise seen from above); hour angles run westwards.
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -28,6 +29,10 @@ struct UtcTime {
 // no offsets, out-of-range fields such as month 13 or 24:00, years outside 1900–2100, the
 // range of ERFA's Earth ephemeris).
 UtcTime parse_utc(std::string_view iso8601);
+// The instant `seconds` + `nanoseconds`·10⁻⁹ s after 1970-01-01T00:00:00Z (POSIX; nanoseconds in
+// [0, 10⁹)), rounded exactly as parse_utc rounds the same instant written with nine decimals, so
+// that a time given as numbers (numpy.datetime64 in Python) and its ISO text are the same double.
+UtcTime utc_from_unix_ns(std::int64_t seconds, std::int32_t nanoseconds);
 // ISO 8601 with a 'Z', milliseconds shown only when not whole seconds.
 std::string format_utc(UtcTime t);
 

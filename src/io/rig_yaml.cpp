@@ -352,22 +352,18 @@ LoadedRig load_rig(const std::filesystem::path& file, const std::vector<RigOverr
 
 std::string rig_to_yaml(const Rig& rig_in) {
   Rig rig = rig_in;  // accessors hand out references into a mutable Rig
-  const bool explicit_stops = !rig.schedule.angles_deg.empty();
   YAML::Node root(YAML::NodeType::Map);
   for (const RigKey& k : rig_keys()) {
+    if (!written_for(k, rig)) continue;
     YAML::Node value;
     using K = RigKey::Kind;
     switch (k.kind) {
       case K::Real: value = number_text(k.real(rig)); break;
       case K::Integer: value = k.integer(rig); break;
       case K::Seed: value = k.seed(rig); break;
-      case K::Text:
-        if (k.text(rig).empty()) continue;  // an optional path that is not set
-        value = k.text(rig);
-        break;
+      case K::Text: value = k.text(rig); break;
       case K::RealArray:
       case K::RealList: {
-        if (k.kind == K::RealList && k.list(rig).empty()) continue;
         std::span<const double> src =
             k.kind == K::RealArray ? std::span<const double>(k.array(rig))
                                    : std::span<const double>(k.list(rig));
@@ -377,12 +373,6 @@ std::string rig_to_yaml(const Rig& rig_in) {
         break;
       }
     }
-    // An explicit list of stops replaces start/step/stop; the file may hold only one form.
-    if (explicit_stops && (k.path == "schedule.start_deg" || k.path == "schedule.step_deg" ||
-                           k.path == "schedule.stop_deg"))
-      continue;
-    // Keys the rig's source model does not read are refused on loading: leave them out.
-    if (!k.read_by_source(rig.source.model)) continue;
     std::stringstream ss{std::string(k.path)};
     std::vector<std::string> parts;
     for (std::string part; std::getline(ss, part, '.');) parts.push_back(part);

@@ -1,11 +1,13 @@
 // polrig.Rig: built from a file, a YAML string or a dict; every rig key readable and settable
 // with the checks of --set; written back as YAML. polrig.rig_keys(): the one table of keys.
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "bindings.h"
 #include "convert.h"
@@ -117,12 +119,13 @@ CLI's --set: a bad value raises polrig.RigError and leaves the rig unchanged.
 )doc");
   rig.def(py::init([] { return PyRig{parse_rig("", "(default rig)")}; }),
           "The default rig (the values of rigs/wang2019-indoor.yaml).")
-      .def_static("load", [](const std::string& path, const std::optional<py::dict>& set) {
+      .def_static("load", [](const std::filesystem::path& path, const std::optional<py::dict>& set) {
             return PyRig{load_rig(path, overrides_of(set))};
           }, py::arg("path"), py::kw_only(), py::arg("set") = py::none(),
           R"doc(Reads a rig file (YAML).
 
-path: the rig file, e.g. "rigs/wang2019-indoor.yaml"; a scene it names is found relative to it.
+path: the rig file (str or os.PathLike), e.g. "rigs/wang2019-indoor.yaml"; a scene it names is
+      found relative to it.
 set: overrides, as the CLI's --set: {"eccentricity.L_S": 0.05} or nested
      {"eccentricity": {"L_S": 0.05}}; values in the key's unit.
 Raises polrig.RigError naming the file, line, key and value.)doc")
@@ -147,9 +150,11 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
       .def("to_dict", [](const PyRig& r) {
             py::dict d;
             for (const RigKey& k : rig_keys())
-              if (k.read_by_source(r.rig().source.model)) d[py::str(std::string(k.path))] = value_of(r.rig(), k);
+              if (written_for(k, r.rig())) d[py::str(std::string(k.path))] = value_of(r.rig(), k);
             return d;
-          }, "Every key this rig's source reads, flat: {\"eccentricity.L_IS\": 0.01, ...}.")
+          }, "The effective rig as a flat dict, the keys to_yaml writes: {\"eccentricity.L_IS\": "
+             "0.05, ...}; Rig.from_dict reads it back to the same rig (unset optional keys are "
+             "left out).")
       .def("keys", [](const PyRig& r) {
             std::vector<std::string> out;
             for (const RigKey& k : rig_keys())
@@ -170,7 +175,10 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
             flatten(values, "", o);
             r = reparsed(r, o);
           }, py::arg("values"), "Sets several keys at once (all or none).")
-      .def("__contains__", [](const PyRig&, const std::string& path) { return find_rig_key(path) != nullptr; })
+      .def("__contains__", [](const PyRig& r, const std::string& path) {
+            const RigKey* k = find_rig_key(path);
+            return k && k->read_by_source(r.rig().source.model);
+          }, py::arg("key"), "Whether `key` is one of rig.keys() (a key this rig's source reads).")
       .def("copy", [](const PyRig& r) { return r; }, "An independent copy.")
       .def("__copy__", [](const PyRig& r) { return r; })
       .def("__deepcopy__", [](const PyRig& r, py::dict) { return r; }, py::arg("memo"))
@@ -189,7 +197,12 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
           [](const PyRig& r) {
             py::list o;
             for (const RigOverride& x : r.loaded.overrides) o.append(py::make_tuple(x.path, x.value));
-            return py::make_tuple(r.loaded.text, r.loaded.origin, o);
+            // A rig file's folder resolves the scene it names: keep it absolute, so that the rig
+            // unpickles in another working directory (a multiprocessing worker).
+            std::string origin = r.loaded.origin;
+            std::error_code ec;
+            if (std::filesystem::is_regular_file(origin, ec)) origin = std::filesystem::absolute(origin).string();
+            return py::make_tuple(r.loaded.text, origin, o);
           },
           [](const py::tuple& t) {
             std::vector<RigOverride> o;

@@ -415,4 +415,15 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
   return std::nullopt;
 }
 
+bool written_for(const RigKey& key, const Rig& rig_in) {
+  if (!key.read_by_source(rig_in.source.model)) return false;
+  Rig rig = rig_in;  // accessors hand out references into a mutable Rig
+  using K = RigKey::Kind;
+  if (key.kind == K::Text && key.text(rig).empty()) return false;
+  if (key.kind == K::RealList && key.list(rig).empty()) return false;
+  const bool explicit_stops = !rig.schedule.angles_deg.empty();
+  return !(explicit_stops && (key.path == "schedule.start_deg" || key.path == "schedule.step_deg" ||
+                              key.path == "schedule.stop_deg"));
+}
+
 }  // namespace polrig

@@ -63,6 +63,12 @@ struct RigKey {
 const std::vector<RigKey>& rig_keys();
 const RigKey* find_rig_key(std::string_view path);
 
+// Whether a rig file of `rig` writes the key (rig_to_yaml, Python's Rig.to_dict): not when the
+// rig's source does not read it, not an empty optional text or list (unset), and not
+// schedule.start/step/stop_deg when an explicit list of stops replaces them. What it writes reads
+// back to the same rig.
+bool written_for(const RigKey& key, const Rig& rig);
+
 // Checks that involve several keys at once. Returns the offending key's path and what is
 // expected, or nothing when the rig is consistent.
 struct RigProblem {

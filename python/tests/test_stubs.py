@@ -92,3 +92,72 @@ def test_every_public_callable_is_documented():
 def test_the_package_reexports_the_module():
     assert set(polrig.__all__) == public(dir(_polrig)) - {"git_revision"}
     assert polrig.__version__ == _polrig.__version__
+
+
+def split_params(text):
+    """Top-level comma-separated parameters of a signature's parenthesised text -> names."""
+    names, depth, cur = [], 0, ""
+    for ch in text + ",":
+        if ch in "([{":
+            depth += 1
+        elif ch in ")]}":
+            depth -= 1
+        if ch == "," and depth == 0:
+            name = re.split(r"[:=]", cur.strip(), maxsplit=1)[0].strip()
+            if name:
+                names.append(name)
+            cur = ""
+        else:
+            cur += ch
+    return names
+
+
+def module_signatures(doc, name):
+    """Parameter-name lists of each pybind11 signature line "name(...) -> ..." of a docstring."""
+    sigs = []
+    for line in (doc or "").splitlines():
+        m = re.match(rf"^\s*(?:\d+\. )?{re.escape(name)}\((.*)\)(?: -> .*)?$", line)
+        if m:
+            sigs.append(split_params(m.group(1)))
+    return sigs
+
+
+def stub_functions():
+    """(owner, name, parameter names) of every def in the stubs ('' for module level)."""
+    tree = ast.parse(STUBS.read_text())
+    out = []
+
+    def params(fn):
+        a = fn.args
+        names = [p.arg for p in a.posonlyargs + a.args]
+        if a.vararg:
+            names.append("*" + a.vararg.arg)
+        elif a.kwonlyargs:
+            names.append("*")
+        names += [p.arg for p in a.kwonlyargs]
+        return names
+
+    for node in tree.body:
+        if isinstance(node, ast.FunctionDef):
+            out.append(("", node.name, params(node), node))
+        elif isinstance(node, ast.ClassDef):
+            for fn in node.body:
+                if isinstance(fn, ast.FunctionDef):
+                    out.append((node.name, fn.name, params(fn), fn))
+    return out
+
+
+def test_stub_signatures_name_the_modules_parameters():
+    wrong = []
+    for owner, name, stub_params, fn in stub_functions():
+        if any(isinstance(d, ast.Name) and d.id == "property" for d in fn.decorator_list):
+            continue
+        obj = getattr(getattr(_polrig, owner) if owner else _polrig, name, None)
+        if obj is None or (name.startswith("__") and name != "__init__"):
+            continue
+        sigs = module_signatures(obj.__doc__, name)
+        if not sigs:
+            continue  # not a pybind11 function (e.g. a Python-level attribute)
+        if stub_params not in sigs:
+            wrong.append(f"{owner + '.' if owner else ''}{name}: stub {stub_params}, module {sigs}")
+    assert wrong == []

@@ -289,28 +289,24 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
         "calibration", "Monte-Carlo calibrations over noise and eccentricity, all three types");
     auto rig = std::make_shared<RigInput>();
     auto out = std::make_shared<OutputOptions>();
-    auto trials = std::make_shared<int>(100);
+    auto trials = std::make_shared<int>(TrialSettings{}.trials);
     auto L_IS_max = std::make_shared<std::optional<double>>();
     auto L_S_max = std::make_shared<std::optional<double>>();
     auto settings = std::make_shared<CalibrationSettings>();
     rig->add_to(*app, true);
     out->add_to(*app);
     app->add_option("--trials", *trials, "number of simulated calibration runs")
-        ->check(CLI::Range(1, 10000000))->capture_default_str();
+        ->check(CLI::Range(1, kMaxTrials))->capture_default_str();
     app->add_option("--L-IS-max", *L_IS_max, "largest port offset drawn, mm (default: 2 × the rig's L_IS, at most 100)")
-        ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
+        ->check(finite_range(0.0, kMaxTrialOffsetMm, "mm"));  // the range of eccentricity.L_IS and L_S
     app->add_option("--L-S-max", *L_S_max, "largest sensor offset drawn, mm (default: 2 × the rig's L_S, at most 100)")
-        ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
+        ->check(finite_range(0.0, kMaxTrialOffsetMm, "mm"));  // the range of eccentricity.L_IS and L_S
     settings->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
-      TrialSettings s;
-      s.trials = *trials;
-      // Twice the rig's offsets by default, within the keys' own range [0, 100] mm.
-      s.L_IS_max = L_IS_max->value_or(std::min(2.0 * r.rig.eccentricity.L_IS, 100.0));
-      s.L_S_max = L_S_max->value_or(std::min(2.0 * r.rig.eccentricity.L_S, 100.0));
-      s.calibration = settings->options(r.rig, r.rig.device.d);
+      const TrialSettings s = trial_settings_for(r.rig, *trials, *L_IS_max, *L_S_max,
+                                                 settings->options(r.rig, r.rig.device.d));
       OutputDir dir = out->open();
       const std::vector<Trial> result = calibration_trials(r.rig, s, progress());
       write_manifest(dir.staging(), {command_line(), &r, report_calibration_trials(dir.staging(), result, out->plots())});

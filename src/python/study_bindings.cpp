@@ -119,15 +119,13 @@ PySimulation to_python(const Simulation& sim) {
 
 struct PyCsStudy {
   CsStudy s;
-  py::array_t<double> theta_R_deg;  // s.theta_R_deg's storage, taken at the call
-  py::object deviations = py::none(), deviations_se = py::none(), summary = py::none(),
-             coaxial = py::none();  // caches
-
-  std::size_t steps() const { return static_cast<std::size_t>(theta_R_deg.size()); }
+  std::size_t steps = 0;
+  py::object theta_R_deg = py::none(), deviations = py::none(), deviations_se = py::none(),
+             summary = py::none(), coaxial = py::none();  // caches
 
   py::array_t<double> pairs_mV(const std::array<std::vector<double>, 3>& br,
                                const std::array<std::vector<double>, 3>& mr, const char* name) const {
-    const std::size_t n = steps();
+    const std::size_t n = steps;
     auto a = empty_array({static_cast<py::ssize_t>(n), 3, 2});
     double* out = a.mutable_data();
     for (std::size_t k = 0; k < n; ++k)
@@ -164,18 +162,37 @@ void check_summary(const CsSummary& s, bool standard_errors, bool eq6, const cha
   for (const SummaryField& f : kSummaryFields) {
     if (f.standard_error && !standard_errors) continue;
     const std::array<double, 3> v{s[0].*f.field, s[1].*f.field, s[2].*f.field};
-    check_finite(v.data(), 3, fmt::format("{}{}", prefix, f.name),
-                 !eq6 && std::string_view(f.name) == "eq6_mV");
+    const bool allow_nan = !eq6 && std::string_view(f.name) == "eq6_mV";
+    if (std::all_of(v.begin(), v.end(), [&](double x) { return std::isfinite(x) || (allow_nan && std::isnan(x)); }))
+      continue;  // the name is made only for the message
+    check_finite(v.data(), 3, fmt::format("{}{}", prefix, f.name), allow_nan);
   }
 }
 
-// One read-only array (3,) per field of a CS summary, over the pairs.
-py::dict summary_dict(const CsSummary& s, bool standard_errors) {
-  py::dict d;
+// A read-only view of a result's dict (types.MappingProxyType): the same object on every read,
+// and nothing a caller does to it changes the result.
+py::object read_only_mapping(const py::dict& d) {
+  // Never destroyed: a static py::object would be released after the interpreter is gone.
+  static const py::object* proxy = new py::object(py::module_::import("types").attr("MappingProxyType"));
+  return (*proxy)(d);
+}
+
+// One read-only (3,) array per field of a CS summary, over the pairs: rows of one (fields, 3)
+// array, made in one allocation.
+py::object summary_mapping(const CsSummary& s, bool standard_errors) {
+  std::vector<double> values;
+  std::vector<const char*> names;
   for (const SummaryField& f : kSummaryFields)
-    if (!f.standard_error || standard_errors)
-      d[f.name] = read_only(to_array(std::array<double, 3>{s[0].*f.field, s[1].*f.field, s[2].*f.field}));
-  return d;
+    if (!f.standard_error || standard_errors) {
+      for (const CsPairSummary& p : s) values.push_back(p.*f.field);
+      names.push_back(f.name);
+    }
+  const auto rows = static_cast<py::ssize_t>(names.size());
+  const py::array_t<double> all = take(std::move(values), {rows, 3});
+  py::dict d;
+  for (py::ssize_t k = 0; k < rows; ++k)  // row k as a (3,) view of `all`, which it keeps alive
+    d[names[static_cast<std::size_t>(k)]] = read_only(py::array_t<double>({3}, all.data(k, 0), all));
+  return read_only_mapping(d);
 }
 
 // ---- sweep: per-point fields written straight from the sink into preallocated arrays.
@@ -534,7 +551,10 @@ void bind_studies(py::module_& m) {
   py::class_<PyCsStudy>(m, "CsStudy",
                         "A central-symmetry study over a full turn (Rig.study_cs): deviations.csv "
                         "and summary.csv as NumPy arrays, in mV.")
-      .def_readonly("theta_R_deg", &PyCsStudy::theta_R_deg, "(steps,) table angles, deg: 360·k/steps")
+      .def_property_readonly("theta_R_deg", [](PyCsStudy& c) -> py::object {
+        if (c.theta_R_deg.is_none()) c.theta_R_deg = kept(take(std::move(c.s.theta_R_deg)), "theta_R_deg");
+        return c.theta_R_deg;
+      }, "(steps,) table angles, deg: 360·k/steps")
       .def_property_readonly("deviations_mV", [](PyCsStudy& c) -> py::object {
         if (c.deviations.is_none()) c.deviations = c.pairs_mV(c.s.dv_br_V, c.s.dv_mr_V, "deviations_mV");
         return c.deviations;
@@ -550,21 +570,21 @@ void bind_studies(py::module_& m) {
       }, "(steps, 3, 2) standard errors of deviations_mV, mV (deviations.csv's dv_br_stderr_mV, "
          "dv_mr_stderr_mV), or None when the source has none (standard_errors False)")
       .def_property_readonly("summary", [](PyCsStudy& c) -> py::object {
-        if (c.summary.is_none()) c.summary = summary_dict(c.s.summary, c.s.standard_errors);
-        return c.summary.attr("copy")();
-      }, "dict of read-only (3,) arrays over the pairs, mV, named as summary.csv's columns: "
+        if (c.summary.is_none()) c.summary = summary_mapping(c.s.summary, c.s.standard_errors);
+        return c.summary;
+      }, "read-only mapping (types.MappingProxyType) of read-only (3,) arrays over the pairs, mV, named as summary.csv's columns: "
          "bsd_mV, asd_mV, mean_br_mV, mean_mr_mV, eq6_mV (NaN without Eq. 6's closed form) and, "
          "with standard errors, bsd_stderr_mV, asd_stderr_mV, mean_br_stderr_mV, "
          "mean_mr_stderr_mV")
       .def_property_readonly("coaxial", [](PyCsStudy& c) -> py::object {
         if (!c.s.coaxial_reference) return py::none();
         if (c.coaxial.is_none()) {
-          const py::dict all = summary_dict(c.s.coaxial, false);
+          const py::object all = summary_mapping(c.s.coaxial, false);
           py::dict d;
           for (const char* k : {"bsd_mV", "asd_mV", "mean_br_mV"}) d[k] = all[k];
-          c.coaxial = d;
+          c.coaxial = read_only_mapping(d);
         }
-        return c.coaxial.attr("copy")();
+        return c.coaxial;
       }, "when coaxial_reference: the coaxial rig's own deviations, a dict of (3,) arrays in mV "
          "(summary.csv's coaxial_bsd_mV, coaxial_asd_mV, coaxial_mean_br_mV); else None")
       .def_property_readonly("standard_errors", [](const PyCsStudy& c) { return c.s.standard_errors; },
@@ -575,7 +595,7 @@ void bind_studies(py::module_& m) {
                              "whether Eq. 6's closed form exists (else eq6_mV is NaN)")
       .def("__repr__", [](const PyCsStudy& c) {
         return fmt::format("<polrig.CsStudy: {} table angles; ASD {:.6g}, {:.6g}, {:.6g} mV>",
-                           c.steps(), c.s.summary[0].asd_mV, c.s.summary[1].asd_mV,
+                           c.steps, c.s.summary[0].asd_mV, c.s.summary[1].asd_mV,
                            c.s.summary[2].asd_mV);
       });
 
@@ -586,11 +606,11 @@ void bind_studies(py::module_& m) {
       "(row-major) point p, i.e. field.reshape(-1, 3)[p].");
   sweep_class
       .def_readonly("keys", &PySweep::keys, "the swept keys, in axis order")
-      .def_property_readonly("axes", [](const PySweep& s) { return s.axes.attr("copy")(); },
-                             "{key: (count,) read-only values} in the key's unit")
+      .def_property_readonly("axes", [](const PySweep& s) { return read_only_mapping(s.axes); },
+                             "read-only mapping {key: (count,) read-only values} in the key's unit")
       .def_readonly("shape", &PySweep::shape, "the grid's shape: one count per key")
-      .def_property_readonly("fields", [](const PySweep& s) { return s.fields.attr("copy")(); },
-                             "{field: (*shape, 3) read-only array}: every per-point field below")
+      .def_property_readonly("fields", [](const PySweep& s) { return read_only_mapping(s.fields); },
+                             "read-only mapping {field: (*shape, 3) read-only array}: every per-point field below")
       .def_readonly("steps", &PySweep::steps, "table angles per turn of each CS study")
       .def_readonly("standard_errors", &PySweep::standard_errors, "whether the *_stderr_mV fields exist")
       .def_readonly("eq6", &PySweep::eq6, "whether Eq. 6's closed form exists (else eq6_mV is NaN)")
@@ -677,7 +697,7 @@ void bind_studies(py::module_& m) {
         const std::array<double, 3> v{out.s.coaxial[0].*f, out.s.coaxial[1].*f, out.s.coaxial[2].*f};
         check_finite(v.data(), 3, "coaxial", false);
       }
-    out.theta_R_deg = read_only(take(std::move(out.s.theta_R_deg)));  // no copy
+    out.steps = out.s.theta_R_deg.size();
     return out;
   }, doc(kStudyCsDoc).c_str(), py::arg("steps") = kDefaultCsSteps, py::kw_only(),
      py::arg("threads") = py::none(), py::arg("progress") = py::none());

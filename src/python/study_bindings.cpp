@@ -423,8 +423,9 @@ Arguments:
   {progress}
 
 Returns a polrig.CsStudy: theta_R_deg (steps,); deviations_mV (steps, 3, 2) in mV, [angle,
-pair, (br, mr)] as deviations.csv; deviations_stderr_mV (same shape) or None; summary, a dict
-of (3,) arrays over the pairs in mV (summary.csv's columns); coaxial (dict) or None; flags.
+pair, (br, mr)] as deviations.csv; deviations_stderr_mV (same shape) or None; summary, a read-only
+mapping of (3,) arrays over the pairs in mV (summary.csv's columns); coaxial (mapping) or None;
+flags.
 Its arrays are read-only (made on first read, then the same array on every read).
 
 Raises ValueError for a bad `steps`; polrig.RigError from the rig's source; RuntimeError

@@ -1,5 +1,6 @@
 """Rig.simulate, study_cs, sweep, study_adc, study_calibration and light_at_pose: the CLI's CSV
 columns as NumPy arrays, bit for bit, for any thread count."""
+import csv
 import tracemalloc
 
 import numpy as np
@@ -80,7 +81,7 @@ def check_cs_is_the_cli(cs, out):
         assert_equal(cs.deviations_mV[:, i, 0], dev["dv_br_mV"][rows])
         assert_equal(cs.deviations_mV[:, i, 1], dev["dv_mr_mV"][rows])
         if cs.standard_errors:
-            assert_equal(cs.deviations_se_mV[:, i, 0], dev["dv_br_stderr_mV"][rows])
+            assert_equal(cs.deviations_stderr_mV[:, i, 0], dev["dv_br_stderr_mV"][rows])
     for field in ("bsd_mV", "asd_mV", "mean_br_mV", "mean_mr_mV", "eq6_mV"):
         assert_equal(cs.summary[field], summary[field])
     assert cs.coaxial_reference == ("coaxial_bsd_mV" in summary)
@@ -156,7 +157,7 @@ def test_sweep_equals_the_cli_sweep_csv(tmp_path):
         assert arr is res.fields[field]
         for i in range(3):
             assert_equal(arr.reshape(-1, 3)[:, i], csv[f"pair{i + 1}_{field}"])
-    assert res.bsd_se_mV is None and not res.standard_errors
+    assert res.bsd_stderr_mV is None and not res.standard_errors
 
     # Explicit values equal the CLI's where they coincide (the CLI's values themselves here).
     listed = rig.sweep({k: res.axes[k] for k in grid}, steps=36, threads=1)
@@ -233,8 +234,12 @@ def test_study_adc_equals_the_cli(tmp_path):
     assert_equal(again["limit_deg"], res["limit_deg"][[1, 3]])
     with pytest.raises(ValueError, match=r"d: element 1 is 1;"):
         rig.study_adc(d=[0.5, 1.0])
-    with pytest.raises(ValueError, match="d='0.1,0.5': expected 'start:stop:count' or an array"):
-        rig.study_adc(d="0.1,0.5")
+    # Text is the CLI's --d, with its messages.
+    assert_equal(rig.study_adc(d="0.3,0.7", step=0.5)["limit_deg"], again["limit_deg"])
+    with pytest.raises(polrig.RigError, match="^--d 0.1:0.5: expected a,b,c or start:stop:count$"):
+        rig.study_adc(d="0.1:0.5")
+    with pytest.raises(polrig.RigError, match=r"^--d 0.1,1: expected degrees of polarization in \(0, 1\), got 1$"):
+        rig.study_adc(d="0.1,1")
     with pytest.raises(polrig.RigError, match="device.d"):
         rig.study_adc(d="0.5:1.5:3")
     with pytest.raises(ValueError, match="step=0"):
@@ -261,6 +266,80 @@ def test_study_calibration_equals_the_cli(tmp_path):
     assert res.methods == ["section", "cs", "cs-nc"]
     one = rig.study_calibration(trials=6, threads=1)
     assert np.array_equal(one.accuracy_deg, res.accuracy_deg, equal_nan=True)
+
+
+def test_study_calibration_failures_and_terminations_equal_the_cli(tmp_path):
+    """Offsets up to 100 mm: some fits end without converging (failures.csv)."""
+    rig = polrig.Rig.load(INDOOR)
+    res = rig.study_calibration(trials=6, L_IS_max=100, L_S_max=100)
+    run_cli("study", "calibration", INDOOR, "--trials", 6, "--L-IS-max", 100, "--L-S-max", 100,
+            "-o", tmp_path / "t", "--no-plots", "--quiet")
+    with open(tmp_path / "t" / "failures.csv", newline="") as f:
+        failures = list(csv.DictReader(f))
+    assert failures and len(res.failures) == len(failures)
+    for got, row in zip(res.failures, failures):
+        assert got["reason"].replace('"', "'") == row["reason"]
+        assert (got["method"], got["termination"]) == (row["method"], row["termination"])
+        for k in ("trial", "iterations", "evaluations"):
+            assert got[k] == int(row[k])
+    with open(tmp_path / "t" / "summary.csv", newline="") as f:
+        summary = list(csv.DictReader(f))
+    assert [r["method"] for r in summary] == list(res.summary)
+    for row in summary:
+        got = res.summary[row["method"]]
+        assert (got["succeeded"], got["failed"]) == (int(row["succeeded"]), int(row["failed"]))
+        for k in ("median_deg", "p05_deg", "p95_deg", "mean_deg"):
+            assert got[k] == float(row[k])
+        ends = got["terminations"]
+        assert list(ends) == list(row)[7:] and sum(ends.values()) == 6
+        assert all(ends[name] == int(row[name]) for name in ends)
+    assert sum(s["failed"] for s in res.summary.values()) == len(failures)
+    # Changing what a read returns leaves the result as it was.
+    res.failures.clear()
+    res.summary["cs"]["failed"] = -1
+    assert len(res.failures) == len(failures) and res.summary["cs"]["failed"] >= 0
+    with pytest.raises(polrig.RigError, match="trials=0: expected a whole number in"):
+        rig.study_calibration(trials=0)
+    with pytest.raises(polrig.RigError, match=r"L_S_max=101: expected a number in \[0, 100\] mm"):
+        rig.study_calibration(L_S_max=101)
+    with pytest.raises(ValueError, match=r"nc_min_points=5: expected a whole number in \[6, 100000\]"):
+        rig.study_calibration(nc_min_points=5)
+
+
+def test_result_arrays_are_read_only():
+    rig = polrig.Rig.load(INDOOR, set=SETS)
+    cs = rig.study_cs(36)
+    sim = rig.simulate(samples=True)
+    sw = rig.sweep({"eccentricity.L_IS": "0:1:3"}, steps=36)
+    trials = rig.study_calibration(trials=2)
+    arrays = [cs.theta_R_deg, cs.deviations_mV, cs.deviations, *cs.summary.values(),
+              sim.theta_R_deg, sim.V_mean, sim.E_Wm2, sim.samples, sw.asd_mV, *sw.fields.values(),
+              *sw.axes.values(), trials.accuracy_deg, trials.L_IS, trials.seed, trials.trial]
+    for a in arrays:
+        with pytest.raises(ValueError, match="read-only"):
+            a[...] = 0
+    for mapping in (cs.summary, sw.fields, sw.axes):  # read-only views of the result's dicts
+        with pytest.raises(TypeError):
+            mapping["asd_mV"] = None
+    assert cs.summary is cs.summary and cs.summary["asd_mV"] is cs.summary["asd_mV"]
+
+
+def test_a_sweep_too_large_for_memory_is_refused_before_allocating():
+    grid = {"eccentricity.L_IS": "0:1:1000", "eccentricity.alpha_S": "0:359:1000",
+            "eccentricity.L_S": "0:1:1000"}  # 1e9 points: check_grid's limit, 156 GiB of results
+    tracemalloc.start()
+    with pytest.raises(polrig.RigError, match=r"grid: 1000000000 points need 156\.5 GiB .* more than half"):
+        polrig.Rig().sweep(grid)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert peak < 1 << 20
+
+
+def test_progress_true_writes_the_clis_line_on_stderr(capfd):
+    """About 1 s on one thread: longer than the first report's 0.5 s."""
+    polrig.Rig().sweep({"eccentricity.L_IS": "0:1:80000"}, threads=1, progress=True)
+    err = capfd.readouterr().err
+    assert "polrig: sweep: grid points" in err and "100 %" in err, err
 
 
 def test_light_at_pose_is_a_simulated_stop():
@@ -304,9 +383,9 @@ def test_traced_study_cs_has_standard_errors_and_the_coaxial_summary(tmp_path, t
     check_cs_is_the_cli(cs, tmp_path / "cs")
     dev, summary = read_csv(tmp_path / "cs" / "deviations.csv"), read_csv(tmp_path / "cs" / "summary.csv")
     for i in range(3):
-        assert_equal(cs.deviations_se_mV[:, i, 1], dev["dv_mr_stderr_mV"][dev["pair"] == i + 1])
+        assert_equal(cs.deviations_stderr_mV[:, i, 1], dev["dv_mr_stderr_mV"][dev["pair"] == i + 1])
     for f in ("bsd", "asd", "mean_br", "mean_mr"):
-        assert_equal(cs.summary[f + "_se_mV"], summary[f + "_stderr_mV"])
+        assert_equal(cs.summary[f + "_stderr_mV"], summary[f + "_stderr_mV"])
     assert np.isnan(cs.summary["eq6_mV"]).all()
 
 
@@ -316,13 +395,13 @@ def test_traced_sweep_and_simulate_equal_the_cli(tmp_path, traced_rig):
     run_cli("sweep", traced_rig, "--grid", "eccentricity.L_IS=0:0.2:3", "--steps", 8, "-o", tmp_path / "sw",
             "--no-plots", "--quiet")
     csv = read_csv(tmp_path / "sw" / "sweep.csv")
-    assert res.standard_errors and res.asd_se_mV.shape == (3, 3)
+    assert res.standard_errors and res.asd_stderr_mV.shape == (3, 3)
     for field in ("bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV", "eq6_mV", "eq6_dev_pct"):
         for i in range(3):
             assert_equal(getattr(res, field)[:, i], csv[f"pair{i + 1}_{field}"])
     # The standard errors (not in sweep.csv) are each point's CS study's.
     at = polrig.Rig.load(traced_rig, set={"eccentricity.L_IS": 0.1}).study_cs(8)
-    assert np.array_equal(res.asd_se_mV[1], at.summary["asd_se_mV"])
+    assert np.array_equal(res.asd_stderr_mV[1], at.summary["asd_stderr_mV"])
     sim = rig.simulate(threads=2)
     run_cli("simulate", traced_rig, "-o", tmp_path / "s", "--no-plots", "--quiet")
     check_simulation_is_stops_csv(sim, tmp_path / "s")

@@ -10,6 +10,7 @@
 #include "cli.h"
 #include "polrig/calib/angles.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/rig_options.h"
 #include "polrig/calib/stop_corrections.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
@@ -43,20 +44,16 @@ struct CalibrationSettings {
             "(0, 1)"));
     app.add_option("--nc-threshold", nc_threshold,
                    "noncontinuous rule: keep a voltage where |dV/dθ| ≥ this × its largest slope")
-        ->check(finite_range(0.0, 1.0))
+        ->check(finite_range(kNcThresholdMin, kNcThresholdMax))
         ->capture_default_str();
     app.add_option("--nc-min-points", nc_min_points,
                    "noncontinuous rule: keep at least this many points per voltage")
-        ->check(CLI::Range(6, 100000))
+        ->check(CLI::Range(kNcMinPointsMin, kNcMinPointsMax))
         ->capture_default_str();
   }
   CalibrationOptions options(const Rig& rig, std::optional<double> rig_d) const {
-    CalibrationOptions o;
-    o.d_a = d_a ? d_a : rig_d;
+    CalibrationOptions o = calibration_options(rig, d_a ? d_a : rig_d, {nc_threshold, nc_min_points});
     o.d_a_source = d_a ? "--d-a" : "the rig's device.d";
-    o.film_axis_deg = rig.device.film_axis_deg;
-    o.volts_per_decade = rig.electronics.volts_per_decade;
-    o.noncontinuous = {nc_threshold, nc_min_points};
     return o;
   }
 };
@@ -292,28 +289,24 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
         "calibration", "Monte-Carlo calibrations over noise and eccentricity, all three types");
     auto rig = std::make_shared<RigInput>();
     auto out = std::make_shared<OutputOptions>();
-    auto trials = std::make_shared<int>(100);
+    auto trials = std::make_shared<int>(TrialSettings{}.trials);
     auto L_IS_max = std::make_shared<std::optional<double>>();
     auto L_S_max = std::make_shared<std::optional<double>>();
     auto settings = std::make_shared<CalibrationSettings>();
     rig->add_to(*app, true);
     out->add_to(*app);
     app->add_option("--trials", *trials, "number of simulated calibration runs")
-        ->check(CLI::Range(1, 10000000))->capture_default_str();
+        ->check(CLI::Range(1, kMaxTrials))->capture_default_str();
     app->add_option("--L-IS-max", *L_IS_max, "largest port offset drawn, mm (default: 2 × the rig's L_IS, at most 100)")
-        ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
+        ->check(finite_range(0.0, kMaxTrialOffsetMm, "mm"));  // the range of eccentricity.L_IS and L_S
     app->add_option("--L-S-max", *L_S_max, "largest sensor offset drawn, mm (default: 2 × the rig's L_S, at most 100)")
-        ->check(finite_range(0.0, 100.0, "mm"));  // the range of eccentricity.L_IS and L_S
+        ->check(finite_range(0.0, kMaxTrialOffsetMm, "mm"));  // the range of eccentricity.L_IS and L_S
     settings->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
-      TrialSettings s;
-      s.trials = *trials;
-      // Twice the rig's offsets by default, within the keys' own range [0, 100] mm.
-      s.L_IS_max = L_IS_max->value_or(std::min(2.0 * r.rig.eccentricity.L_IS, 100.0));
-      s.L_S_max = L_S_max->value_or(std::min(2.0 * r.rig.eccentricity.L_S, 100.0));
-      s.calibration = settings->options(r.rig, r.rig.device.d);
+      const TrialSettings s = trial_settings_for(r.rig, *trials, *L_IS_max, *L_S_max,
+                                                 settings->options(r.rig, r.rig.device.d));
       OutputDir dir = out->open();
       const std::vector<Trial> result = calibration_trials(r.rig, s, progress());
       write_manifest(dir.staging(), {command_line(), &r, report_calibration_trials(dir.staging(), result, out->plots())});

@@ -13,6 +13,7 @@
 
 #include "cli.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/rig_options.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
@@ -38,53 +39,13 @@ std::string read_text(const fs::path& p) {
 struct EvenSteps : CLI::Validator {
   EvenSteps() : CLI::Validator("EVEN") {
     func_ = [](const std::string& s) -> std::string {
-      int v = 0;
-      if (!CLI::detail::lexical_cast(s, v) || v < 2 || v > 3600000 || v % 2 != 0)
-        return "expected an even number of table angles per turn in [2, 3600000], got " + s;
+      long long v = 0;
+      if (!CLI::detail::lexical_cast(s, v)) v = 0;  // not a whole number: refused as 0 is
+      if (const auto problem = cs_steps_problem(v)) return *problem + ", got " + s;
       return {};
     };
   }
 };
-
-std::vector<double> parse_d_list(const std::string& text) {
-  const auto fail = [&](const std::string& why) -> std::vector<double> {
-    throw RigError(fmt::format("--d {}: {}", text, why));
-  };
-  std::vector<double> ds;
-  if (text.find(':') != std::string::npos) {
-    if (std::count(text.begin(), text.end(), ':') != 2)
-      return fail("expected a,b,c or start:stop:count");
-    GridAxis axis;
-    try {
-      axis = GridAxis::parse("device.d=" + text);
-    } catch (const RigError& e) {
-      const std::string msg = e.what();
-      return fail(msg.substr(msg.find(": ") + 2));  // drop the --grid prefix
-    }
-    for (int i = 0; i < axis.count; ++i) ds.push_back(axis.value(i));
-    return ds;
-  }
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', pos), text.size());
-    double d = 0;
-    try {
-      d = parse_finite_number(std::string_view(text).substr(pos, comma - pos), "value");
-    } catch (const RigError& e) {
-      return fail(e.what());
-    }
-    if (!(d > 0.0 && d < 1.0)) return fail(fmt::format("expected degrees of polarization in (0, 1), got {}", d));
-    ds.push_back(d);
-    pos = comma + 1;
-  }
-  return ds;
-}
-
-std::vector<AdcLimit> adc_limits(const Rig& rig, const std::vector<double>& ds, double step) {
-  std::vector<AdcLimit> limits;
-  for (double d : ds) limits.push_back(adc_accuracy_limit(d, rig.electronics, rig.device.film_axis_deg, step));
-  return limits;
-}
 
 // The stops of a simulation as calibration input: the same type a measured CSV becomes.
 std::vector<StopVoltages> stops_of(const Simulation& sim) {
@@ -95,12 +56,9 @@ std::vector<StopVoltages> stops_of(const Simulation& sim) {
 }
 
 CalibrationOptions calibration_options_for(const Rig& rig, CalibrationMethod m) {
-  CalibrationOptions o;
+  CalibrationOptions o = calibration_options(rig, rig.device.d, NoncontinuousRule{});
   o.method = m;
-  o.d_a = rig.device.d;
   o.d_a_source = "the rig's device.d";
-  o.film_axis_deg = rig.device.film_axis_deg;
-  o.volts_per_decade = rig.electronics.volts_per_decade;
   return o;
 }
 
@@ -136,7 +94,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     auto* app = study->add_subcommand("cs", "central-symmetry study over a full turn (Figs. 8-9)");
     auto rig = std::make_shared<RigInput>();
     auto out = std::make_shared<OutputOptions>();
-    auto steps = std::make_shared<int>(360);
+    auto steps = std::make_shared<int>(kDefaultCsSteps);
     rig->add_to(*app, true);
     out->add_to(*app);
     app->add_option("--steps", *steps, "table angles per turn (even)")->check(EvenSteps())->capture_default_str();
@@ -155,19 +113,19 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     auto* app = study->add_subcommand("adc", "ADC accuracy limit against d (Fig. 6)");
     auto rig = std::make_shared<RigInput>();
     auto out = std::make_shared<OutputOptions>();
-    auto d_list = std::make_shared<std::string>("0.05:0.95:19");
-    auto step = std::make_shared<double>(0.1);
+    auto d_list = std::make_shared<std::string>(kDefaultAdcD);
+    auto step = std::make_shared<double>(kDefaultAdcStep);
     rig->add_to(*app, false);
     out->add_to(*app);
     app->add_option("--d", *d_list, "degrees of polarization: a,b,c or start:stop:count")->capture_default_str();
-    app->add_option("--step", *step, "θ step in degrees")->check(finite_range(1e-4, 10.0, "deg"))->capture_default_str();
+    app->add_option("--step", *step, "θ step in degrees")->check(finite_range(kMinAdcStep, kMaxAdcStep, "deg"))->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       // Electronics and film axes come from the rig; without one, from the default rig.
       const LoadedRig r = rig->load();
       const std::vector<double> ds = parse_d_list(*d_list);
       OutputDir dir = out->open();
-      const auto files = report_adc_limits(dir.staging(), adc_limits(r.rig, ds, *step), out->plots());
+      const auto files = report_adc_limits(dir.staging(), adc_accuracy_limits(ds, r.rig.electronics, r.rig.device.film_axis_deg, *step), out->plots());
       write_manifest(dir.staging(), {command_line(), &r, files});
       finish(dir);
     }});
@@ -179,7 +137,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     auto rig = std::make_shared<RigInput>();
     auto out = std::make_shared<OutputOptions>();
     auto grids = std::make_shared<std::vector<std::string>>();
-    auto steps = std::make_shared<int>(360);
+    auto steps = std::make_shared<int>(kDefaultCsSteps);
     rig->add_to(*app, true);
     out->add_to(*app);
     app->add_option("--grid", *grids, "key=start:stop:count (repeatable: the product grid)")
@@ -192,26 +150,15 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       const LoadedRig r = rig->load();
       std::vector<GridAxis> axes;
       for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
-      for (const GridAxis& a : axes)
-        if (!(a.key->studies & RigKey::kCs))  // sweeping a key the CS study does not read repeats a row
-          std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
-                                   "row along that axis will be the same\n", a.key->path);
+      for (const RigKey* key : axes_the_cs_study_ignores(axes))
+        std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
+                                 "row along that axis will be the same\n", key->path);
       check_grid(r.rig, axes);
       OutputDir dir = out->open(axes.size() <= 2);
-      const Progress p = progress();
-      r.rig.light->prepare(p);
-      long long points = 1;
-      for (const GridAxis& a : axes) points *= a.count;
-      p.begin("sweep: grid points", points);
-      std::size_t reported = 0;
       SweepReport report(dir.staging(), axes, r.rig.light->has(Source::kClosedFormEq6));
       sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t first, std::span<const CsSummary> block) {
         report.write(first, block);
-      }, [&](std::size_t done, std::size_t) {
-        p.advance(static_cast<long long>(done - reported));
-        reported = done;
-      });
-      p.finish();
+      }, progress());
       write_manifest(dir.staging(), {command_line(), &r, report.finish(out->plots())});
       finish(dir);
     }});
@@ -248,10 +195,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                              "not usable: {}", method_name(m),
                                              calibrations.back().fit.summary.brief_report()));
       }
-      const CsStudy cs = cs_study(r.rig, CsTurn(360), p);
+      const CsStudy cs = cs_study(r.rig, CsTurn(kDefaultCsSteps), p);
       std::vector<double> ds;
       for (int k = 1; k <= 19; ++k) ds.push_back(k / 20.0);
-      const std::vector<AdcLimit> limits = adc_limits(r.rig, ds, 0.1);
+      const std::vector<AdcLimit> limits = adc_accuracy_limits(ds, r.rig.electronics, r.rig.device.film_axis_deg, kDefaultAdcStep);
 
       const fs::path base = dir.staging();
       for (const char* sub : {"simulate", "calibration", "cs", "adc"}) fs::create_directory(base / sub);

@@ -2,9 +2,17 @@
 
 #include <stdexcept>
 
+#include <fmt/format.h>
+
 #include "polrig/geometry/geometry.h"
 
 namespace polrig {
+
+std::optional<std::string> cs_steps_problem(long long steps) {
+  if (steps < 2 || steps > kMaxCsSteps || steps % 2 != 0)
+    return fmt::format("expected an even number of table angles per turn in [2, {}]", kMaxCsSteps);
+  return std::nullopt;
+}
 
 CsTurn::CsTurn(int steps_per_turn) {
   if (steps_per_turn < 2 || steps_per_turn % 2 != 0)

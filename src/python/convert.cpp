@@ -3,13 +3,46 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
+#include <stdexcept>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 namespace polrig::python {
 
 py::array_t<double> empty_array(std::vector<py::ssize_t> shape) {
   return py::array_t<double>(std::move(shape));
+}
+
+void check_finite(const double* values, std::size_t n, const std::string& name, bool allow_nan,
+                  const std::vector<py::ssize_t>& shape) {
+  // Fast path, branch-free so that it vectorizes: is any exponent all ones (inf or NaN)?
+  constexpr std::uint64_t kExponent = 0x7ff0000000000000ull;
+  bool any_not_finite = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t bits;
+    std::memcpy(&bits, values + i, sizeof bits);
+    any_not_finite |= (bits & kExponent) == kExponent;
+  }
+  if (!any_not_finite) return;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double v = values[i];
+    if (std::isfinite(v) || (allow_nan && std::isnan(v))) continue;
+    std::string index = fmt::format("{}", i);
+    if (shape.size() > 1) {  // the flat index as one index per dimension, C order
+      std::vector<std::size_t> at(shape.size());
+      std::size_t rest = i;
+      for (std::size_t d = shape.size(); d-- > 0;) {
+        at[d] = rest % static_cast<std::size_t>(shape[d]);
+        rest /= static_cast<std::size_t>(shape[d]);
+      }
+      index = fmt::format("{}", fmt::join(at, ", "));
+    }
+    throw std::runtime_error(fmt::format(
+        "a result is not finite: {}[{}] is {}; the inputs are beyond what the model can "
+        "represent (the CLI refuses to write it)", name, index, v));
+  }
 }
 
 namespace {

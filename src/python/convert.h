@@ -39,6 +39,25 @@ py::array_t<T> take(std::vector<T>&& values) {
 // A fresh array of the given shape, for results written in place (a sweep's columns).
 py::array_t<double> empty_array(std::vector<py::ssize_t> shape);
 
+// `a` made read-only (NumPy's writeable flag cleared): a result object hands out the same array
+// on every read, so writing into it would change what later reads see. Writing raises ValueError.
+template <class A>
+A read_only(A a) {
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+// No NaN or inf leaves a call where the CLI would refuse to write it (its CsvTable): every value
+// of a result must be finite, or NaN where `allow_nan` (a ratio over a zero denominator, a closed
+// form the source lacks: the CLI's allow_undefined columns). Else RuntimeError naming `name` and
+// the element's index in `shape` (the flat index when shape is empty).
+void check_finite(const double* values, std::size_t n, const std::string& name, bool allow_nan,
+                  const std::vector<py::ssize_t>& shape = {});
+inline void check_finite(const py::array_t<double>& a, const std::string& name, bool allow_nan) {
+  check_finite(a.data(), static_cast<std::size_t>(a.size()), name, allow_nan,
+               std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()));
+}
+
 // Copies of fixed-size C++ arrays: a (n,) array.
 template <std::size_t N>
 py::array_t<double> to_array(const std::array<double, N>& a) {

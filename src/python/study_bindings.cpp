@@ -1,6 +1,8 @@
 // The rig's studies from Python (docs/python.md §4): Rig.simulate, Rig.study_cs, Rig.sweep,
 // Rig.study_adc, Rig.study_calibration and Rig.light_at_pose. Each converts its arguments, runs
 // the library with the GIL released and hands back NumPy arrays named as the CLI's CSV columns.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -18,6 +20,7 @@
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/rig_options.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/source/source.h"
@@ -34,13 +37,12 @@ using Shape = std::vector<py::ssize_t>;
 
 // ---- arguments
 
-// The turn of `steps` table angles, after the CLI's --steps check (even, in [2, 3600000]).
+// The turn of `steps` table angles, after the CLI's --steps check (geometry/turn.h).
 // The last one is kept (its cos/sin tables cost about as much as a 360-angle study); called with
 // the GIL held, which guards the cache.
 std::shared_ptr<const CsTurn> turn_of(int steps) {
-  if (steps < 2 || steps > 3600000 || steps % 2 != 0)
-    throw py::value_error(fmt::format(
-        "steps={}: expected an even number of table angles per turn in [2, 3600000]", steps));
+  if (const auto problem = cs_steps_problem(steps))
+    throw py::value_error(fmt::format("steps={}: {}", steps, *problem));
   static std::shared_ptr<const CsTurn> last;
   if (!last || last->steps() != steps) last = std::make_shared<const CsTurn>(steps);
   return last;
@@ -54,6 +56,13 @@ double finite_in(double v, double lo, double hi, const char* name, const char* u
 }
 
 // ---- results: fixed-size per-row C++ arrays as (N, K) NumPy arrays, filled in one pass.
+
+// A result array as a result object keeps it: checked finite (NaN only where `allow_nan`, as
+// the CLI's CSV), then read-only.
+py::array_t<double> kept(py::array_t<double> a, const char* name, bool allow_nan = false) {
+  check_finite(a, name, allow_nan);
+  return read_only(std::move(a));
+}
 
 template <class Row, class Get>
 py::array_t<double> rows_of(const std::vector<Row>& rows, py::ssize_t k, const Get& get) {
@@ -86,21 +95,21 @@ struct PySimulation {
 PySimulation to_python(const Simulation& sim) {
   PySimulation r;
   const auto& st = sim.stops;
-  r.theta_R_deg = column_of(st, [](const Stop& s) { return s.theta_R_deg; });
-  r.t_s = column_of(st, [](const Stop& s) { return s.t_s; });
-  r.theta_deg = column_of(st, [](const Stop& s) { return s.light.theta_deg; });
-  r.d = column_of(st, [](const Stop& s) { return s.light.d; });
-  r.E_Wm2 = rows_of(st, 6, [](const Stop& s) -> const auto& { return s.light.E_Wm2; });
-  r.V_ideal = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_ideal; });
-  r.V_ecc = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_ecc; });
-  r.V_mean = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_mean; });
-  r.V_std = rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_std; });
+  r.theta_R_deg = kept(column_of(st, [](const Stop& s) { return s.theta_R_deg; }), "theta_R_deg");
+  r.t_s = kept(column_of(st, [](const Stop& s) { return s.t_s; }), "t_s");
+  r.theta_deg = kept(column_of(st, [](const Stop& s) { return s.light.theta_deg; }), "theta_deg");
+  r.d = kept(column_of(st, [](const Stop& s) { return s.light.d; }), "d");
+  r.E_Wm2 = kept(rows_of(st, 6, [](const Stop& s) -> const auto& { return s.light.E_Wm2; }), "E_Wm2");
+  r.V_ideal = kept(rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_ideal; }), "V_ideal");
+  r.V_ecc = kept(rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_ecc; }), "V_ecc");
+  r.V_mean = kept(rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_mean; }), "V_mean");
+  r.V_std = kept(rows_of(st, 3, [](const Stop& s) -> const auto& { return s.V_std; }), "V_std");
   r.samples_per_stop = sim.samples_per_stop;
   r.time_dependent = sim.time_dependent;
   if (!sim.samples.empty()) {
     auto a = empty_array({static_cast<py::ssize_t>(st.size()), sim.samples_per_stop, 3});
     std::memcpy(a.mutable_data(), sim.samples.data(), sim.samples.size() * sizeof(sim.samples[0]));
-    r.samples = std::move(a);
+    r.samples = kept(std::move(a), "samples");
   }
   return r;
 }
@@ -110,12 +119,13 @@ PySimulation to_python(const Simulation& sim) {
 
 struct PyCsStudy {
   CsStudy s;
-  py::object deviations = py::none(), deviations_se = py::none(), summary = py::none(),
-             coaxial = py::none();  // caches
+  std::size_t steps = 0;
+  py::object theta_R_deg = py::none(), deviations = py::none(), deviations_se = py::none(),
+             summary = py::none(), coaxial = py::none();  // caches
 
   py::array_t<double> pairs_mV(const std::array<std::vector<double>, 3>& br,
-                               const std::array<std::vector<double>, 3>& mr) const {
-    const std::size_t n = s.theta_R_deg.size();
+                               const std::array<std::vector<double>, 3>& mr, const char* name) const {
+    const std::size_t n = steps;
     auto a = empty_array({static_cast<py::ssize_t>(n), 3, 2});
     double* out = a.mutable_data();
     for (std::size_t k = 0; k < n; ++k)
@@ -123,28 +133,66 @@ struct PyCsStudy {
         out[(k * 3 + i) * 2] = br[i][k] * 1e3;  // as deviations.csv: volts × 1e3
         out[(k * 3 + i) * 2 + 1] = mr[i][k] * 1e3;
       }
-    return a;
+    return kept(std::move(a), name);
   }
 };
 
-// One array (3,) per field of a CS summary, over the pairs.
-py::dict summary_dict(const CsSummary& s, bool standard_errors) {
-  py::dict d;
-  const auto field = [&](const char* name, double CsPairSummary::*f) {
-    d[name] = to_array(std::array<double, 3>{s[0].*f, s[1].*f, s[2].*f});
-  };
-  field("bsd_mV", &CsPairSummary::bsd_mV);
-  field("asd_mV", &CsPairSummary::asd_mV);
-  field("mean_br_mV", &CsPairSummary::mean_br_mV);
-  field("mean_mr_mV", &CsPairSummary::mean_mr_mV);
-  field("eq6_mV", &CsPairSummary::eq6_mV);
-  if (standard_errors) {
-    field("bsd_se_mV", &CsPairSummary::bsd_se_mV);
-    field("asd_se_mV", &CsPairSummary::asd_se_mV);
-    field("mean_br_se_mV", &CsPairSummary::mean_br_se_mV);
-    field("mean_mr_se_mV", &CsPairSummary::mean_mr_se_mV);
+// The fields of a CS summary as summary.csv names them; eq6_mV may be NaN (no closed form).
+struct SummaryField {
+  const char* name;
+  double CsPairSummary::*field;
+  bool standard_error;
+};
+constexpr SummaryField kSummaryFields[] = {
+    {"bsd_mV", &CsPairSummary::bsd_mV, false},
+    {"asd_mV", &CsPairSummary::asd_mV, false},
+    {"mean_br_mV", &CsPairSummary::mean_br_mV, false},
+    {"mean_mr_mV", &CsPairSummary::mean_mr_mV, false},
+    {"eq6_mV", &CsPairSummary::eq6_mV, false},
+    {"bsd_stderr_mV", &CsPairSummary::bsd_se_mV, true},
+    {"asd_stderr_mV", &CsPairSummary::asd_se_mV, true},
+    {"mean_br_stderr_mV", &CsPairSummary::mean_br_se_mV, true},
+    {"mean_mr_stderr_mV", &CsPairSummary::mean_mr_se_mV, true},
+};
+
+// RuntimeError for a summary value the CLI's summary.csv would refuse. Checked at the call: a
+// NaN or inf deviation makes its pair's means NaN or inf, so this also catches the deviations
+// before their arrays are made (each is checked again then).
+void check_summary(const CsSummary& s, bool standard_errors, bool eq6, const char* prefix) {
+  for (const SummaryField& f : kSummaryFields) {
+    if (f.standard_error && !standard_errors) continue;
+    const std::array<double, 3> v{s[0].*f.field, s[1].*f.field, s[2].*f.field};
+    const bool allow_nan = !eq6 && std::string_view(f.name) == "eq6_mV";
+    if (std::all_of(v.begin(), v.end(), [&](double x) { return std::isfinite(x) || (allow_nan && std::isnan(x)); }))
+      continue;  // the name is made only for the message
+    check_finite(v.data(), 3, fmt::format("{}{}", prefix, f.name), allow_nan);
   }
-  return d;
+}
+
+// A read-only view of a result's dict (types.MappingProxyType): the same object on every read,
+// and nothing a caller does to it changes the result.
+py::object read_only_mapping(const py::dict& d) {
+  // Never destroyed: a static py::object would be released after the interpreter is gone.
+  static const py::object* proxy = new py::object(py::module_::import("types").attr("MappingProxyType"));
+  return (*proxy)(d);
+}
+
+// One read-only (3,) array per field of a CS summary, over the pairs: rows of one (fields, 3)
+// array, made in one allocation.
+py::object summary_mapping(const CsSummary& s, bool standard_errors) {
+  std::vector<double> values;
+  std::vector<const char*> names;
+  for (const SummaryField& f : kSummaryFields)
+    if (!f.standard_error || standard_errors) {
+      for (const CsPairSummary& p : s) values.push_back(p.*f.field);
+      names.push_back(f.name);
+    }
+  const auto rows = static_cast<py::ssize_t>(names.size());
+  const py::array_t<double> all = take(std::move(values), {rows, 3});
+  py::dict d;
+  for (py::ssize_t k = 0; k < rows; ++k)  // row k as a (3,) view of `all`, which it keeps alive
+    d[names[static_cast<std::size_t>(k)]] = read_only(py::array_t<double>({3}, all.data(k, 0), all));
+  return read_only_mapping(d);
 }
 
 // ---- sweep: per-point fields written straight from the sink into preallocated arrays.
@@ -162,10 +210,10 @@ constexpr SweepField kSweepFields[] = {
     {"mean_mr_mV", [](const CsPairSummary& s) { return s.mean_mr_mV; }, false},
     {"eq6_mV", [](const CsPairSummary& s) { return s.eq6_mV; }, false},
     {"eq6_dev_pct", &eq6_dev_pct, false},
-    {"bsd_se_mV", [](const CsPairSummary& s) { return s.bsd_se_mV; }, true},
-    {"asd_se_mV", [](const CsPairSummary& s) { return s.asd_se_mV; }, true},
-    {"mean_br_se_mV", [](const CsPairSummary& s) { return s.mean_br_se_mV; }, true},
-    {"mean_mr_se_mV", [](const CsPairSummary& s) { return s.mean_mr_se_mV; }, true},
+    {"bsd_stderr_mV", [](const CsPairSummary& s) { return s.bsd_se_mV; }, true},
+    {"asd_stderr_mV", [](const CsPairSummary& s) { return s.asd_se_mV; }, true},
+    {"mean_br_stderr_mV", [](const CsPairSummary& s) { return s.mean_br_se_mV; }, true},
+    {"mean_mr_stderr_mV", [](const CsPairSummary& s) { return s.mean_mr_se_mV; }, true},
 };
 
 struct PySweep {
@@ -186,6 +234,24 @@ GridAxis axis_of(const std::string& key, const py::handle& values) {
   return GridAxis::list(key, std::vector<double>(a.data(), a.data() + a.size()));
 }
 
+// The memory the result arrays may take: half the machine's physical memory.
+double result_memory_limit_bytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? 0.5 * static_cast<double>(pages) * static_cast<double>(page) : 8.0 * (1ull << 30);
+}
+
+// RigError, before anything is allocated, when the grid's result arrays would not fit.
+void check_sweep_memory(std::size_t points, std::size_t fields) {
+  const double bytes = static_cast<double>(points) * 3.0 * sizeof(double) * static_cast<double>(fields);
+  const double limit = result_memory_limit_bytes();
+  constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+  if (bytes > limit)
+    throw RigError(fmt::format(
+        "grid: {} points need {:.1f} GiB for the result arrays ({} fields × 3 pairs × 8 bytes a "
+        "point), more than half this machine's memory ({:.1f} GiB); sweep a smaller grid, or use "
+        "`polrig sweep`, which streams sweep.csv", points, bytes / kGiB, fields, limit / kGiB));
+}
+
 PySweep run_sweep(const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
                   const py::object& progress) {
   if (!py::hasattr(grid, "items"))
@@ -204,74 +270,65 @@ PySweep run_sweep(const PyRig& self, const py::object& grid, int steps, std::opt
   const Rig rig = self.rig();
   const std::shared_ptr<const CsTurn> turn = turn_of(steps);
   const py::module_ warnings = py::module_::import("warnings");
-  for (const GridAxis& a : axes)
-    if (!(a.key->studies & RigKey::kCs))  // the CLI's note
-      warnings.attr("warn")(fmt::format("the CS study does not depend on '{}'; every point along "
-                                        "that axis will be the same", a.key->path));
+  for (const RigKey* key : axes_the_cs_study_ignores(axes))  // the CLI's note
+    warnings.attr("warn")(fmt::format("the CS study does not depend on '{}'; every point along "
+                                      "that axis will be the same", key->path));
   check_grid(rig, axes);
+  r.steps = steps;
+  r.standard_errors = rig.light->has(Source::kStandardErrors);
+  r.eq6 = rig.light->has(Source::kClosedFormEq6);
+  std::size_t fields = 0;
+  for (const SweepField& f : kSweepFields) fields += !f.standard_error || r.standard_errors;
+  check_sweep_memory(grid_points(axes), fields);
 
   Shape shape;
   for (std::size_t a = 0; a < axes.size(); ++a) {
     std::vector<double> v(static_cast<std::size_t>(axes[a].count));
     for (int i = 0; i < axes[a].count; ++i) v[static_cast<std::size_t>(i)] = axes[a].value(i);
-    r.axes[py::str(r.keys[a])] = take(std::move(v));
+    r.axes[py::str(r.keys[a])] = read_only(take(std::move(v)));
     shape.push_back(axes[a].count);
   }
   r.shape = py::tuple(py::cast(shape));
-  r.steps = steps;
-  r.standard_errors = rig.light->has(Source::kStandardErrors);
-  r.eq6 = rig.light->has(Source::kClosedFormEq6);
   Shape field_shape = shape;
   field_shape.push_back(3);
   std::vector<std::pair<double*, double (*)(const CsPairSummary&)>> outputs;
+  std::vector<std::pair<py::array_t<double>, const SweepField*>> arrays;
   for (const SweepField& f : kSweepFields) {
     if (f.standard_error && !r.standard_errors) continue;
     auto a = empty_array(field_shape);
     outputs.emplace_back(a.mutable_data(), f.get);
-    r.fields[f.name] = std::move(a);
+    arrays.emplace_back(a, &f);
   }
 
   const ThreadLimit limit(threads);
   const Progress p = progress_from(progress);
   {
     py::gil_scoped_release release;
-    rig.light->prepare(p);
-    p.begin("sweep: grid points", static_cast<long long>(grid_points(axes)));
-    std::size_t reported = 0;
     sweep(rig, axes, *turn,
           [&](std::size_t first, std::span<const CsSummary> block) {
             for (const auto& [out, get] : outputs)
               for (std::size_t k = 0; k < block.size(); ++k)
                 for (std::size_t i = 0; i < 3; ++i) out[(first + k) * 3 + i] = get(block[k][i]);
           },
-          [&](std::size_t done, std::size_t) {
-            p.advance(static_cast<long long>(done - reported));
-            reported = done;
-          });
-    p.finish();
+          p);
+  }
+  // NaN where sweep.csv allows it: the ratios, and Eq. 6 without its closed form.
+  for (auto& [a, f] : arrays) {
+    const std::string_view name = f->name;
+    const bool allow_nan = name == "asd_bsd_pct" || name == "eq6_dev_pct" || (name == "eq6_mV" && !r.eq6);
+    r.fields[f->name] = kept(std::move(a), f->name, allow_nan);
   }
   return r;
 }
 
 // ---- study adc
 
+// `d=` of study_adc: the CLI's --d text (parse_d_list), or an array-like of values.
 std::vector<double> d_values(const py::handle& d) {
-  if (py::isinstance<py::str>(d)) {  // the CLI's start:stop:count, through device.d's check
-    const std::string text = d.cast<std::string>();
-    if (std::count(text.begin(), text.end(), ':') != 2)
-      throw py::value_error(fmt::format("d='{}': expected 'start:stop:count' or an array of values", text));
-    const GridAxis axis = GridAxis::parse("device.d=" + text);
-    std::vector<double> ds;
-    for (int i = 0; i < axis.count; ++i) ds.push_back(axis.value(i));
-    return ds;
-  }
+  if (py::isinstance<py::str>(d)) return parse_d_list(d.cast<std::string>());
   const DoubleArray a = as_array(d, "d", 0);
   std::vector<double> ds(a.data(), a.data() + a.size());
-  for (std::size_t i = 0; i < ds.size(); ++i)
-    if (!(ds[i] > 0.0 && ds[i] < 1.0))
-      throw py::value_error(fmt::format("d: element {} is {}; expected degrees of polarization in (0, 1)",
-                                        i, ds[i]));
-  if (ds.empty()) throw py::value_error("d: expected at least one degree of polarization");
+  if (const auto problem = d_values_problem(ds)) throw py::value_error("d: " + *problem);
   return ds;
 }
 
@@ -293,13 +350,15 @@ PyTrials to_python(const std::vector<Trial>& trials) {
     index.push_back(t.index);
     seed.push_back(t.seed);
   }
-  r.trial = take(std::move(index));
-  r.seed = take(std::move(seed));
-  r.L_IS = column_of(trials, [](const Trial& t) { return t.eccentricity.L_IS; });
-  r.alpha_IS = column_of(trials, [](const Trial& t) { return t.eccentricity.alpha_IS; });
-  r.L_S = column_of(trials, [](const Trial& t) { return t.eccentricity.L_S; });
-  r.alpha_S = column_of(trials, [](const Trial& t) { return t.eccentricity.alpha_S; });
-  r.accuracy_deg = rows_of(trials, 3, [](const Trial& t) -> const auto& { return t.accuracy_deg; });
+  r.trial = read_only(take(std::move(index)));
+  r.seed = read_only(take(std::move(seed)));
+  r.L_IS = kept(column_of(trials, [](const Trial& t) { return t.eccentricity.L_IS; }), "L_IS");
+  r.alpha_IS = kept(column_of(trials, [](const Trial& t) { return t.eccentricity.alpha_IS; }), "alpha_IS");
+  r.L_S = kept(column_of(trials, [](const Trial& t) { return t.eccentricity.L_S; }), "L_S");
+  r.alpha_S = kept(column_of(trials, [](const Trial& t) { return t.eccentricity.alpha_S; }), "alpha_S");
+  // NaN where a fit failed, as trials.csv.
+  r.accuracy_deg = kept(rows_of(trials, 3, [](const Trial& t) -> const auto& { return t.accuracy_deg; }),
+                        "accuracy_deg", true);
   for (const Trial& t : trials)
     for (std::size_t m = 0; m < 3; ++m)
       if (!t.fit[m].usable()) {
@@ -364,10 +423,13 @@ Arguments:
   {progress}
 
 Returns a polrig.CsStudy: theta_R_deg (steps,); deviations_mV (steps, 3, 2) in mV, [angle,
-pair, (br, mr)] as deviations.csv; deviations_se_mV (same shape) or None; summary, a dict of
-(3,) arrays over the pairs in mV (summary.csv); coaxial (dict) or None; flags.
+pair, (br, mr)] as deviations.csv; deviations_stderr_mV (same shape) or None; summary, a read-only
+mapping of (3,) arrays over the pairs in mV (summary.csv's columns); coaxial (mapping) or None;
+flags.
+Its arrays are read-only (made on first read, then the same array on every read).
 
-Raises ValueError for a bad `steps`; polrig.RigError from the rig's source.
+Raises ValueError for a bad `steps`; polrig.RigError from the rig's source; RuntimeError
+naming the field and index for a value that is not finite (the CLI refuses to write it).
 )doc";
 
 constexpr const char* kSweepDoc = R"doc(
@@ -386,13 +448,16 @@ Arguments:
 Returns a polrig.SweepResult: keys (axis order), axes {key: (count,) values}, shape (the grid's
 shape), and per-point arrays of shape (*shape, 3) over the pairs, written straight from the
 library into NumPy (no Python object per point): bsd_mV, asd_mV, asd_bsd_pct, mean_br_mV,
-mean_mr_mV, eq6_mV, eq6_dev_pct (sweep.csv's pairN_* columns) and, for a source with standard
-errors, bsd_se_mV, asd_se_mV, mean_br_se_mV, mean_mr_se_mV.
+mean_mr_mV, eq6_mV, eq6_dev_pct (sweep.csv's pairN_* columns; NaN only where sweep.csv allows
+it: the two ratios, and eq6_mV without Eq. 6's closed form) and, for a source with standard
+errors, bsd_stderr_mV, asd_stderr_mV, mean_br_stderr_mV, mean_mr_stderr_mV. All read-only.
 
 Raises polrig.RigError naming the key and value for an unknown or non-real key, a value outside
 the key's range or NaN (an explicit list also names the value's index), a key the rig's source
-does not read, or a grid point the rig's cross-key rules refuse; TypeError for a grid that is
-not a dict. Warns (UserWarning) for a key the CS study does not read, as the CLI notes.
+does not read, a grid point the rig's cross-key rules refuse, or a grid whose result arrays
+would need more than half the machine's physical memory (named with the points and GiB,
+before anything is allocated; `polrig sweep` streams instead); TypeError for a grid that is
+not a dict; RuntimeError naming the field and index for a value that is not finite. Warns (UserWarning) for a key the CS study does not read, as the CLI notes.
 )doc";
 
 constexpr const char* kStudyAdcDoc = R"doc(
@@ -400,15 +465,16 @@ The accuracy limit the ADC alone sets (the CLI's `polrig study adc`; paper Fig. 
 sensor with the rig's electronics and film axes, uniform light, no noise.
 
 Arguments:
-  d: degrees of polarization, each in (0, 1): an array-like, or a string "start:stop:count" read
-    as the CLI's --d (default "0.05:0.95:19").
+  d: degrees of polarization, each in (0, 1): an array-like, or a string read as the CLI's --d,
+    "a,b,c" or "start:stop:count" (default "0.05:0.95:19").
   step: the θ step of the search, deg, in [1e-4, 10].
   {threads}
 
 Returns a dict of (len(d),) arrays, accuracy_limit.csv's columns: d; vmax_mV, the largest
 pair voltage over θ (mV); limit_deg, max |θ12 − θ| over θ with quantized voltages (deg).
 
-Raises ValueError (or polrig.RigError for a bad "start:stop:count") naming the value.
+Raises ValueError naming the element for a bad array value; polrig.RigError with the CLI's
+message ("--d TEXT: …") for bad text.
 )doc";
 
 constexpr const char* kStudyCalibrationDoc = R"doc(
@@ -431,6 +497,9 @@ L_S, alpha_S and accuracy_deg (T, 3), the θ_sec accuracy in degrees of the type
 "section", "cs", "cs-nc"; NaN where the fit failed), as trials.csv; failures, a list of dicts
 as failures.csv; summary {method: {succeeded, failed, median_deg, p05_deg, p95_deg, mean_deg,
 terminations}} as summary.csv. Independent of `threads`.
+
+Raises polrig.RigError (a ValueError) naming the argument for trials, L_IS_max, L_S_max,
+nc_threshold or nc_min_points out of range, ValueError for a bad d_a.
 )doc";
 
 constexpr const char* kLightDoc = R"doc(
@@ -450,6 +519,9 @@ std::string doc(const char* text) {
     if (const auto at = s.find(mark); at != std::string::npos) s.replace(at, std::strlen(mark), what);
   return s;
 }
+
+// A copy of a result's nested lists and dicts, so that changing it leaves the result as it was.
+py::object deep_copy(const py::object& o) { return py::module_::import("copy").attr("deepcopy")(o); }
 
 }  // namespace
 
@@ -480,35 +552,38 @@ void bind_studies(py::module_& m) {
   py::class_<PyCsStudy>(m, "CsStudy",
                         "A central-symmetry study over a full turn (Rig.study_cs): deviations.csv "
                         "and summary.csv as NumPy arrays, in mV.")
-      .def_property_readonly("theta_R_deg", [](const PyCsStudy& c) {
-        return take(std::vector<double>(c.s.theta_R_deg));
+      .def_property_readonly("theta_R_deg", [](PyCsStudy& c) -> py::object {
+        if (c.theta_R_deg.is_none()) c.theta_R_deg = kept(take(std::move(c.s.theta_R_deg)), "theta_R_deg");
+        return c.theta_R_deg;
       }, "(steps,) table angles, deg: 360·k/steps")
       .def_property_readonly("deviations_mV", [](PyCsStudy& c) -> py::object {
-        if (c.deviations.is_none()) c.deviations = c.pairs_mV(c.s.dv_br_V, c.s.dv_mr_V);
+        if (c.deviations.is_none()) c.deviations = c.pairs_mV(c.s.dv_br_V, c.s.dv_mr_V, "deviations_mV");
         return c.deviations;
       }, "(steps, 3, 2) deviations in mV, [angle, pair, (br, mr)]: ΔV_br = V − V_ideal before CS, "
          "ΔV_mr after (deviations.csv's dv_br_mV, dv_mr_mV)")
       .def_property_readonly("deviations", [](py::object self) { return self.attr("deviations_mV"); },
                              "the same array as deviations_mV (mV)")
-      .def_property_readonly("deviations_se_mV", [](PyCsStudy& c) -> py::object {
+      .def_property_readonly("deviations_stderr_mV", [](PyCsStudy& c) -> py::object {
         if (!c.s.standard_errors) return py::none();
-        if (c.deviations_se.is_none()) c.deviations_se = c.pairs_mV(c.s.dv_br_se_V, c.s.dv_mr_se_V);
+        if (c.deviations_se.is_none())
+          c.deviations_se = c.pairs_mV(c.s.dv_br_se_V, c.s.dv_mr_se_V, "deviations_stderr_mV");
         return c.deviations_se;
-      }, "(steps, 3, 2) standard errors of deviations_mV, mV (dv_*_stderr_mV), or None when the "
-         "source has none (standard_errors False)")
+      }, "(steps, 3, 2) standard errors of deviations_mV, mV (deviations.csv's dv_br_stderr_mV, "
+         "dv_mr_stderr_mV), or None when the source has none (standard_errors False)")
       .def_property_readonly("summary", [](PyCsStudy& c) -> py::object {
-        if (c.summary.is_none()) c.summary = summary_dict(c.s.summary, c.s.standard_errors);
+        if (c.summary.is_none()) c.summary = summary_mapping(c.s.summary, c.s.standard_errors);
         return c.summary;
-      }, "dict of (3,) arrays over the pairs, mV (summary.csv): bsd_mV, asd_mV, mean_br_mV, "
-         "mean_mr_mV, eq6_mV (NaN without Eq. 6's closed form) and, with standard errors, "
-         "bsd_se_mV, asd_se_mV, mean_br_se_mV, mean_mr_se_mV (summary.csv's *_stderr_mV)")
+      }, "read-only mapping (types.MappingProxyType) of read-only (3,) arrays over the pairs, mV, named as summary.csv's columns: "
+         "bsd_mV, asd_mV, mean_br_mV, mean_mr_mV, eq6_mV (NaN without Eq. 6's closed form) and, "
+         "with standard errors, bsd_stderr_mV, asd_stderr_mV, mean_br_stderr_mV, "
+         "mean_mr_stderr_mV")
       .def_property_readonly("coaxial", [](PyCsStudy& c) -> py::object {
         if (!c.s.coaxial_reference) return py::none();
         if (c.coaxial.is_none()) {
-          const py::dict all = summary_dict(c.s.coaxial, false);
+          const py::object all = summary_mapping(c.s.coaxial, false);
           py::dict d;
           for (const char* k : {"bsd_mV", "asd_mV", "mean_br_mV"}) d[k] = all[k];
-          c.coaxial = d;
+          c.coaxial = read_only_mapping(d);
         }
         return c.coaxial;
       }, "when coaxial_reference: the coaxial rig's own deviations, a dict of (3,) arrays in mV "
@@ -521,7 +596,7 @@ void bind_studies(py::module_& m) {
                              "whether Eq. 6's closed form exists (else eq6_mV is NaN)")
       .def("__repr__", [](const PyCsStudy& c) {
         return fmt::format("<polrig.CsStudy: {} table angles; ASD {:.6g}, {:.6g}, {:.6g} mV>",
-                           c.s.theta_R_deg.size(), c.s.summary[0].asd_mV, c.s.summary[1].asd_mV,
+                           c.steps, c.s.summary[0].asd_mV, c.s.summary[1].asd_mV,
                            c.s.summary[2].asd_mV);
       });
 
@@ -532,11 +607,13 @@ void bind_studies(py::module_& m) {
       "(row-major) point p, i.e. field.reshape(-1, 3)[p].");
   sweep_class
       .def_readonly("keys", &PySweep::keys, "the swept keys, in axis order")
-      .def_readonly("axes", &PySweep::axes, "{key: (count,) values} in the key's unit")
+      .def_property_readonly("axes", [](const PySweep& s) { return read_only_mapping(s.axes); },
+                             "read-only mapping {key: (count,) read-only values} in the key's unit")
       .def_readonly("shape", &PySweep::shape, "the grid's shape: one count per key")
-      .def_readonly("fields", &PySweep::fields, "{field: (*shape, 3) array}: every per-point field below")
+      .def_property_readonly("fields", [](const PySweep& s) { return read_only_mapping(s.fields); },
+                             "read-only mapping {field: (*shape, 3) read-only array}: every per-point field below")
       .def_readonly("steps", &PySweep::steps, "table angles per turn of each CS study")
-      .def_readonly("standard_errors", &PySweep::standard_errors, "whether the *_se_mV fields exist")
+      .def_readonly("standard_errors", &PySweep::standard_errors, "whether the *_stderr_mV fields exist")
       .def_readonly("eq6", &PySweep::eq6, "whether Eq. 6's closed form exists (else eq6_mV is NaN)")
       .def("__len__", [](const PySweep& s) {
         py::ssize_t n = 1;
@@ -555,7 +632,7 @@ void bind_studies(py::module_& m) {
     if (name == "asd_bsd_pct") what = "(*shape, 3) ASD/BSD, %; NaN where BSD is rounding (< 1e-9 mV)";
     if (name == "eq6_dev_pct") what = "(*shape, 3) (eq6 − mean_mr)/mean_mr, %; NaN where mean_mr is rounding";
     if (f.standard_error) what = fmt::format("(*shape, 3) standard error of {}, mV; None without standard errors",
-                                             name.substr(0, name.size() - 6) + "_mV");
+                                             name.substr(0, name.size() - 10) + "_mV");
     sweep_class.def_property_readonly(f.name, [name](const PySweep& s) -> py::object {
       if (!s.fields.contains(name)) return py::none();
       return s.fields[py::str(name)];
@@ -578,10 +655,10 @@ void bind_studies(py::module_& m) {
         for (CalibrationMethod mm : kAllMethods) names.emplace_back(method_name(mm));
         return names;
       }, "the calibration types of accuracy_deg's columns: section, cs, cs-nc")
-      .def_readonly("failures", &PyTrials::failures,
+      .def_property_readonly("failures", [](const PyTrials& t) { return deep_copy(t.failures); },
                     "list of dicts (trial, method, termination, iterations, evaluations, reason) "
                     "for every fit that is not usable (failures.csv)")
-      .def_readonly("summary", &PyTrials::summary,
+      .def_property_readonly("summary", [](const PyTrials& t) { return deep_copy(t.summary); },
                     "{method: {succeeded, failed, median_deg, p05_deg, p95_deg, mean_deg, "
                     "terminations: {name: count}}} (summary.csv)")
       .def("__len__", [](const PyTrials& t) { return t.trial.size(); })
@@ -615,55 +692,52 @@ void bind_studies(py::module_& m) {
       py::gil_scoped_release release;
       out.s = cs_study(r, *turn, p);
     }
+    check_summary(out.s.summary, out.s.standard_errors, out.s.eq6, "summary ");
+    if (out.s.coaxial_reference)  // the three fields summary.csv writes (coaxial_bsd_mV, …)
+      for (const auto f : {&CsPairSummary::bsd_mV, &CsPairSummary::asd_mV, &CsPairSummary::mean_br_mV}) {
+        const std::array<double, 3> v{out.s.coaxial[0].*f, out.s.coaxial[1].*f, out.s.coaxial[2].*f};
+        check_finite(v.data(), 3, "coaxial", false);
+      }
+    out.steps = out.s.theta_R_deg.size();
     return out;
-  }, doc(kStudyCsDoc).c_str(), py::arg("steps") = 360, py::kw_only(),
+  }, doc(kStudyCsDoc).c_str(), py::arg("steps") = kDefaultCsSteps, py::kw_only(),
      py::arg("threads") = py::none(), py::arg("progress") = py::none());
 
-  rig.def("sweep", &run_sweep, doc(kSweepDoc).c_str(), py::arg("grid"), py::arg("steps") = 360,
+  rig.def("sweep", &run_sweep, doc(kSweepDoc).c_str(), py::arg("grid"), py::arg("steps") = kDefaultCsSteps,
           py::kw_only(), py::arg("threads") = py::none(), py::arg("progress") = py::none());
 
   rig.def("study_adc", [](const PyRig& self, const py::object& d, double step,
                           std::optional<int> threads) {
     const std::vector<double> ds = d_values(d);
-    finite_in(step, 1e-4, 10.0, "step", "deg");
+    finite_in(step, kMinAdcStep, kMaxAdcStep, "step", "deg");
     const Rig r = self.rig();
     const ThreadLimit limit(threads);
     std::vector<AdcLimit> limits;
     {
       py::gil_scoped_release release;
-      for (double v : ds) limits.push_back(adc_accuracy_limit(v, r.electronics, r.device.film_axis_deg, step));
+      limits = adc_accuracy_limits(ds, r.electronics, r.device.film_axis_deg, step);
     }
     py::dict out;
-    out["d"] = column_of(limits, [](const AdcLimit& l) { return l.d; });
-    out["vmax_mV"] = column_of(limits, [](const AdcLimit& l) { return l.vmax_mV; });
-    out["limit_deg"] = column_of(limits, [](const AdcLimit& l) { return l.limit_deg; });
+    out["d"] = kept(column_of(limits, [](const AdcLimit& l) { return l.d; }), "d");
+    out["vmax_mV"] = kept(column_of(limits, [](const AdcLimit& l) { return l.vmax_mV; }), "vmax_mV");
+    out["limit_deg"] = kept(column_of(limits, [](const AdcLimit& l) { return l.limit_deg; }), "limit_deg");
     return out;
-  }, doc(kStudyAdcDoc).c_str(), py::kw_only(), py::arg("d") = "0.05:0.95:19", py::arg("step") = 0.1,
+  }, doc(kStudyAdcDoc).c_str(), py::kw_only(), py::arg("d") = std::string(kDefaultAdcD),
+     py::arg("step") = kDefaultAdcStep,
      py::arg("threads") = py::none());
 
   rig.def("study_calibration", [](const PyRig& self, int trials, std::optional<double> L_IS_max,
                                   std::optional<double> L_S_max, std::optional<double> d_a,
                                   double nc_threshold, int nc_min_points, std::optional<int> threads,
                                   const py::object& progress) {
-    if (trials < 1 || trials > 10000000)
-      throw py::value_error(fmt::format("trials={}: expected a whole number in [1, 10000000]", trials));
-    if (L_IS_max) finite_in(*L_IS_max, 0.0, 100.0, "L_IS_max", "mm");
-    if (L_S_max) finite_in(*L_S_max, 0.0, 100.0, "L_S_max", "mm");
     if (d_a && !(*d_a > 0 && *d_a < 1))
       throw py::value_error(fmt::format("d_a={}: expected a degree of polarization in (0, 1)", *d_a));
-    finite_in(nc_threshold, 0.0, 1.0, "nc_threshold", "");
-    if (nc_min_points < 6 || nc_min_points > 100000)
-      throw py::value_error(fmt::format("nc_min_points={}: expected a whole number in [6, 100000]", nc_min_points));
+    const NoncontinuousRule rule{nc_threshold, nc_min_points};
+    if (const auto problem = noncontinuous_rule_problem(rule)) throw py::value_error(*problem);
     const Rig r = self.rig();
-    TrialSettings s;  // as `polrig study calibration`
-    s.trials = trials;
-    s.L_IS_max = L_IS_max.value_or(std::min(2.0 * r.eccentricity.L_IS, 100.0));
-    s.L_S_max = L_S_max.value_or(std::min(2.0 * r.eccentricity.L_S, 100.0));
-    s.calibration.d_a = d_a ? d_a : std::optional<double>(r.device.d);
-    s.calibration.d_a_source = d_a ? "d_a" : "the rig's device.d";
-    s.calibration.film_axis_deg = r.device.film_axis_deg;
-    s.calibration.volts_per_decade = r.electronics.volts_per_decade;
-    s.calibration.noncontinuous = {nc_threshold, nc_min_points};
+    CalibrationOptions options = calibration_options(r, d_a ? d_a : std::optional<double>(r.device.d), rule);
+    options.d_a_source = d_a ? "d_a" : "the rig's device.d";
+    const TrialSettings s = trial_settings_for(r, trials, L_IS_max, L_S_max, std::move(options));
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     std::vector<Trial> result;
@@ -672,7 +746,7 @@ void bind_studies(py::module_& m) {
       result = calibration_trials(r, s, p);
     }
     return to_python(result);
-  }, doc(kStudyCalibrationDoc).c_str(), py::kw_only(), py::arg("trials") = 100,
+  }, doc(kStudyCalibrationDoc).c_str(), py::kw_only(), py::arg("trials") = TrialSettings{}.trials,
      py::arg("L_IS_max") = py::none(), py::arg("L_S_max") = py::none(), py::arg("d_a") = py::none(),
      py::arg("nc_threshold") = NoncontinuousRule{}.min_relative_slope,
      py::arg("nc_min_points") = NoncontinuousRule{}.min_points, py::arg("threads") = py::none(),

@@ -3,8 +3,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include <fmt/format.h>
+
 #include "polrig/calib/angles.h"
 #include "polrig/device/sensor.h"
+#include "polrig/rig/error.h"
+#include "polrig/study/sweep.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -38,6 +42,61 @@ AdcLimit adc_accuracy_limit(double d, const Electronics& e,
     limit = std::max(limit, std::abs(curve.error_deg[k]));
   }
   return {d, vmax * 1e3, limit};
+}
+
+std::vector<AdcLimit> adc_accuracy_limits(std::span<const double> ds, const Electronics& e,
+                                          const std::array<double, 6>& film_axis_deg,
+                                          double step_deg) {
+  std::vector<AdcLimit> limits;
+  for (double d : ds) limits.push_back(adc_accuracy_limit(d, e, film_axis_deg, step_deg));
+  return limits;
+}
+
+namespace {
+bool is_degree_of_polarization(double d) { return d > 0.0 && d < 1.0; }
+}  // namespace
+
+std::vector<double> parse_d_list(std::string_view text) {
+  const auto fail = [&](const std::string& why) -> std::vector<double> {
+    throw RigError(fmt::format("--d {}: {}", text, why));
+  };
+  std::vector<double> ds;
+  if (text.find(':') != std::string_view::npos) {
+    if (std::count(text.begin(), text.end(), ':') != 2)
+      return fail("expected a,b,c or start:stop:count");
+    GridAxis axis;
+    try {
+      axis = GridAxis::parse("device.d=" + std::string(text));
+    } catch (const RigError& e) {
+      const std::string msg = e.what();
+      return fail(msg.substr(msg.find(": ") + 2));  // drop the --grid prefix
+    }
+    for (int i = 0; i < axis.count; ++i) ds.push_back(axis.value(i));
+    return ds;
+  }
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', pos), text.size());
+    double d = 0;
+    try {
+      d = parse_finite_number(text.substr(pos, comma - pos), "value");
+    } catch (const RigError& e) {
+      return fail(e.what());
+    }
+    if (!is_degree_of_polarization(d))
+      return fail(fmt::format("expected degrees of polarization in (0, 1), got {}", d));
+    ds.push_back(d);
+    pos = comma + 1;
+  }
+  return ds;
+}
+
+std::optional<std::string> d_values_problem(std::span<const double> ds) {
+  for (std::size_t i = 0; i < ds.size(); ++i)
+    if (!is_degree_of_polarization(ds[i]))
+      return fmt::format("element {} is {}; expected degrees of polarization in (0, 1)", i, ds[i]);
+  if (ds.empty()) return "expected at least one degree of polarization";
+  return std::nullopt;
 }
 
 }  // namespace polrig

@@ -9,9 +9,28 @@
 
 #include "polrig/calib/preprocess.h"
 #include "polrig/random.h"
+#include "polrig/rig/error.h"
 #include "polrig/sim/simulate.h"
 
 namespace polrig {
+
+TrialSettings trial_settings_for(const Rig& rig, int trials, std::optional<double> L_IS_max,
+                                 std::optional<double> L_S_max, CalibrationOptions calibration) {
+  if (trials < 1 || trials > kMaxTrials)
+    throw RigError(fmt::format("trials={}: expected a whole number in [1, {}]", trials, kMaxTrials));
+  const auto offset = [](std::optional<double> given, double rig_mm, const char* name) {
+    if (!given) return std::min(2.0 * rig_mm, kMaxTrialOffsetMm);  // twice the rig's, in range
+    if (!(*given >= 0.0 && *given <= kMaxTrialOffsetMm))
+      throw RigError(fmt::format("{}={}: expected a number in [0, {}] mm", name, *given, kMaxTrialOffsetMm));
+    return *given;
+  };
+  TrialSettings s;
+  s.trials = trials;
+  s.L_IS_max = offset(L_IS_max, rig.eccentricity.L_IS, "L_IS_max");
+  s.L_S_max = offset(L_S_max, rig.eccentricity.L_S, "L_S_max");
+  s.calibration = std::move(calibration);
+  return s;
+}
 
 namespace {
 

@@ -261,4 +261,23 @@ SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTu
   return result;
 }
 
+void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
+           const SweepSink& sink, const Progress& progress) {
+  base.light->prepare(progress);
+  progress.begin("sweep: grid points", static_cast<long long>(grid_points(axes)));
+  std::size_t reported = 0;
+  sweep(base, axes, turn, sink, [&](std::size_t done, std::size_t) {
+    progress.advance(static_cast<long long>(done - reported));
+    reported = done;
+  });
+  progress.finish();
+}
+
+std::vector<const RigKey*> axes_the_cs_study_ignores(const std::vector<GridAxis>& axes) {
+  std::vector<const RigKey*> keys;
+  for (const GridAxis& a : axes)
+    if (!(a.key->studies & RigKey::kCs)) keys.push_back(a.key);
+  return keys;
+}
+
 }  // namespace polrig

@@ -2,11 +2,28 @@
 // The accuracy limit that the ADC alone sets (spec §2, paper §2.4 and Fig. 6): an ideal sensor
 // (theory parameters, uniform light, no noise) whose voltages pass through Eq. 3.
 #include <array>
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "polrig/device/electronics.h"
 
 namespace polrig {
+
+// `polrig study adc`'s defaults: the degrees of polarization (`--d`) and the θ step (`--step`).
+inline constexpr std::string_view kDefaultAdcD = "0.05:0.95:19";
+inline constexpr double kDefaultAdcStep = 0.1;  // deg
+inline constexpr double kMinAdcStep = 1e-4, kMaxAdcStep = 10.0;  // deg
+
+// `--d`'s text: "a,b,c" (each a finite number) or "start:stop:count" (read as `--grid
+// device.d=start:stop:count`), every value in (0, 1). Throws RigError "--d TEXT: why".
+std::vector<double> parse_d_list(std::string_view text);
+// What is wrong with degrees of polarization given as values: "element 1 is 1; expected
+// degrees of polarization in (0, 1)", or "expected at least one degree of polarization";
+// nullopt when every one is in (0, 1).
+std::optional<std::string> d_values_problem(std::span<const double> ds);
 
 struct AdcLimit {
   double d;
@@ -15,13 +32,18 @@ struct AdcLimit {
 };
 
 AdcLimit adc_accuracy_limit(double d, const Electronics& e,
-                            const std::array<double, 6>& film_axis_deg, double step_deg = 0.1);
+                            const std::array<double, 6>& film_axis_deg, double step_deg = kDefaultAdcStep);
+
+// adc_accuracy_limit for each of `ds`, in order.
+std::vector<AdcLimit> adc_accuracy_limits(std::span<const double> ds, const Electronics& e,
+                                          const std::array<double, 6>& film_axis_deg,
+                                          double step_deg = kDefaultAdcStep);
 
 // The θ12 error curve behind one limit (paper Fig. 5): θ and θ12 − θ in degrees.
 struct AdcErrorCurve {
   std::vector<double> theta_deg, error_deg;
 };
 AdcErrorCurve adc_error_curve(double d, const Electronics& e,
-                              const std::array<double, 6>& film_axis_deg, double step_deg = 0.1);
+                              const std::array<double, 6>& film_axis_deg, double step_deg = kDefaultAdcStep);
 
 }  // namespace polrig

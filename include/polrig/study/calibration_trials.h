@@ -3,6 +3,7 @@
 // runs, each with its own noise and a random eccentricity, calibrated by all three types.
 #include <array>
 #include <iterator>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,18 @@ struct TrialSettings {
   double L_S_max = 0.04;
   CalibrationOptions calibration;  // the method field is ignored: every type runs
 };
+
+// The ranges of `polrig study calibration`'s --trials and --L-IS-max/--L-S-max (the keys' own
+// range of eccentricity.L_IS and L_S).
+inline constexpr int kMaxTrials = 10000000;
+inline constexpr double kMaxTrialOffsetMm = 100.0;
+
+// The settings of `polrig study calibration` and Rig.study_calibration: `trials` runs in [1,
+// kMaxTrials]; offsets drawn up to L_IS_max and L_S_max mm in [0, 100], by default twice the
+// rig's L_IS and L_S (at most 100); `calibration` as calib/rig_options.h's calibration_options.
+// Throws RigError naming the setting ("trials=0: …", "L_IS_max=…: …") for a value out of range.
+TrialSettings trial_settings_for(const Rig& rig, int trials, std::optional<double> L_IS_max,
+                                 std::optional<double> L_S_max, CalibrationOptions calibration);
 
 struct Trial {
   int index = 0;

@@ -64,5 +64,13 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
            const SweepSink& sink, const SweepProgress& progress = {});
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                   const SweepProgress& progress = {});
+// The sweep as `polrig sweep` and Rig.sweep run it: prepares the rig's light (a traced light
+// reports its own stages), then reports the stage "sweep: grid points" on `progress`.
+void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
+           const SweepSink& sink, const Progress& progress);
+
+// The swept keys the CS study does not read, in axis order: every point along such an axis
+// repeats the same result (the CLI notes it, Python warns).
+std::vector<const RigKey*> axes_the_cs_study_ignores(const std::vector<GridAxis>& axes);
 
 }  // namespace polrig

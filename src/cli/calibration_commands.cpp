@@ -72,15 +72,11 @@ struct DriftSettings {
 
 Site parse_site(const std::string& text) {
   const auto comma = text.find(',');
-  double lat = 0, lon = 0;
-  if (comma == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, comma), lat) ||
-      !CLI::detail::lexical_cast(text.substr(comma + 1), lon) || !(std::abs(lat) <= 90) ||
-      !(std::abs(lon) <= 180))
+  Site s;
+  if (comma == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, comma), s.lat_deg) ||
+      !CLI::detail::lexical_cast(text.substr(comma + 1), s.lon_deg) || site_problem(s))
     throw DataError(fmt::format("--site {}: expected LAT,LON in degrees (north and east positive, "
                                 "|LAT| ≤ 90, |LON| ≤ 180), e.g. 38.879167,121.543889", text));
-  Site s;
-  s.lat_deg = lat;
-  s.lon_deg = lon;
   return s;
 }
 

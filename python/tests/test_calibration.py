@@ -367,7 +367,7 @@ def test_no_non_finite_result_leaves(indoor, tmp_path):
     res = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
     # Eq. 15 is undefined where d_ratio·c reaches 1: the CLI's model_curve.csv refuses NaN.
     assert np.isfinite(res.model([0.0, 45.0], d_ratio=[1.0, 1.0])).all()
-    with pytest.raises(RuntimeError, match=r"a result is not finite: model element \d+ is nan"):
+    with pytest.raises(RuntimeError, match=r"a result is not finite: model\[\d+, \d+\] is nan"):
         res.model([0.0, 45.0], d_ratio=[10.0, 10.0])
     # The readers refuse NaN and inf as the CLI does, with the CLI's message.
     for bad in ("nan", "inf"):

@@ -33,42 +33,9 @@
 namespace polrig::python {
 namespace {
 
-// An array argument as the caller gave it (a list, an int array, ...): converted by as_array,
-// whose errors name the argument; help() shows it as numpy.typing.ArrayLike.
-struct ArrayLike {
-  py::object obj;
-};
-
-}  // namespace
-}  // namespace polrig::python
-
-namespace pybind11::detail {
-template <>
-struct type_caster<polrig::python::ArrayLike> {
-  PYBIND11_TYPE_CASTER(polrig::python::ArrayLike, const_name("numpy.typing.ArrayLike"));
-  bool load(handle src, bool) {
-    value.obj = reinterpret_borrow<object>(src);
-    return true;
-  }
-  static handle cast(const polrig::python::ArrayLike& a, return_value_policy, handle) {
-    return a.obj.inc_ref();
-  }
-};
-}  // namespace pybind11::detail
-
-namespace polrig::python {
-namespace {
-
-// The CLI's refusal of a non-finite result (io/csv.h CsvTable): every value of a result array is
-// finite (or NaN where `allow_nan`, a value documented as undefined), else RuntimeError naming
-// the result and the element. (The studies lane has the same check in convert.h.)
-py::array_t<double> check_finite(py::array_t<double> a, const char* name, bool allow_nan = false) {
-  const double* v = a.data();
-  for (py::ssize_t i = 0; i < a.size(); ++i)
-    if (!std::isfinite(v[i]) && !(allow_nan && std::isnan(v[i])))
-      throw std::runtime_error(fmt::format(
-          "a result is not finite: {} element {} is {}; the inputs are beyond what the model can "
-          "represent", name, i, v[i]));
+// A result array after convert.h's check_finite (the CLI's refusal of a non-finite value).
+py::array_t<double> finite_result(py::array_t<double> a, const char* name, bool allow_nan = false) {
+  check_finite(a, name, allow_nan);
   return a;
 }
 
@@ -191,12 +158,12 @@ AppliedAngles apply_rows(const CalibrationParams& p, double volts_per_decade, co
   AppliedAngles out;
   out.theta_R_deg = ref.empty() ? py::object(py::none()) : py::object(take(std::move(ref)));
   out.error_deg = err.empty() ? py::object(py::none())
-                              : py::object(check_finite(take(std::move(err)), "error_deg"));
-  out.theta12_deg = check_finite(take(std::move(t12)), "theta12_deg");
-  out.theta13_deg = check_finite(take(std::move(t13)), "theta13_deg");
-  out.theta23_deg = check_finite(take(std::move(t23)), "theta23_deg");
-  out.theta_sec_deg = check_finite(take(std::move(tsec)), "theta_sec_deg");
-  out.d = check_finite(take(std::move(d)), "d");
+                              : py::object(finite_result(take(std::move(err)), "error_deg"));
+  out.theta12_deg = finite_result(take(std::move(t12)), "theta12_deg");
+  out.theta13_deg = finite_result(take(std::move(t13)), "theta13_deg");
+  out.theta23_deg = finite_result(take(std::move(t23)), "theta23_deg");
+  out.theta_sec_deg = finite_result(take(std::move(tsec)), "theta_sec_deg");
+  out.d = finite_result(take(std::move(d)), "d");
   out.section = take(std::move(section));
   return out;
 }
@@ -338,14 +305,14 @@ template <class F>
 py::array_t<double> point_column(const std::vector<EvalPoint>& points, const char* name, F f) {
   std::vector<double> v(points.size());
   for (std::size_t n = 0; n < points.size(); ++n) v[n] = f(points[n]);
-  return check_finite(take(std::move(v)), name);
+  return finite_result(take(std::move(v)), name);
 }
 
 template <class F>
 py::array_t<double> error_column(const std::vector<AngleErrors>& errors, const char* name, F f) {
   std::vector<double> v(errors.size());
   for (std::size_t n = 0; n < errors.size(); ++n) v[n] = f(errors[n]);
-  return check_finite(take(std::move(v)), name);
+  return finite_result(take(std::move(v)), name);
 }
 
 const char* kApplyDoc = R"doc(
@@ -553,7 +520,7 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
       .def_property_readonly("V", [](const PyCalibration& c) {
             std::vector<std::array<double, 3>> rows;
             for (const EvalPoint& p : c.result.points) rows.push_back(p.V);
-            return check_finite(rows_array(rows), "V");
+            return finite_result(rows_array(rows), "V");
           }, "(M, 3) voltages at each point, V (a CS point's: the mean of its two stops).")
       .def_property_readonly("d_ratio", [](const PyCalibration& c) {
             return point_column(c.result.points, "d_ratio", [](const EvalPoint& p) { return p.d_ratio; });
@@ -568,7 +535,7 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
                                                               i, p.theta_ref_deg, p.d_ratio);
               rows.push_back(v);
             }
-            return check_finite(rows_array(rows), "V_model");
+            return finite_result(rows_array(rows), "V_model");
           }, "(M, 3) the fitted Eq. 15 at each point, V (points.csv's V*_model). Raises "
              "polrig.CalibrationError when the fit is not usable.")
       .def_property_readonly("fitted", [](const PyCalibration& c) {
@@ -597,7 +564,7 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
               for (int i = 0; i < 3; ++i)
                 v[3 * k + static_cast<std::size_t>(i)] =
                     eq15_voltage(c.result.fit.params, c.options.volts_per_decade, i, t[k], r[k]);
-            return check_finite(take(std::move(v), {static_cast<py::ssize_t>(t.size()), 3}), "model");
+            return finite_result(take(std::move(v), {static_cast<py::ssize_t>(t.size()), 3}), "model");
           }, py::arg("theta_deg"), py::arg("d_ratio") = py::none(),
           "The fitted Eq. 15 at polarization angles theta_deg ((N,) degrees): (N, 3) volts "
           "(model_curve.csv is model(np.arange(721) * 0.5)). d_ratio ((N,), default 1) scales d "
@@ -663,13 +630,13 @@ void bind_measured(py::module_& m) {
             if (!d.have_angles) return py::none();
             std::vector<double> v;
             for (const StopVoltages& s : d.data.stops) v.push_back(s.theta_R_deg);
-            return check_finite(take(std::move(v)), "theta_R_deg");
+            return finite_result(take(std::move(v)), "theta_R_deg");
           }, "(N,) table angle of each row, degrees; None when the file has no theta_R_deg column "
              "(read_voltages).")
       .def_property_readonly("V", [](const PyMeasured& d) {
             std::vector<std::array<double, 3>> rows;
             for (const StopVoltages& s : d.data.stops) rows.push_back(s.V);
-            return check_finite(rows_array(rows), "V");
+            return finite_result(rows_array(rows), "V");
           }, "(N, 3) pair voltages V1, V2, V3, volts.")
       .def_property_readonly("utc", [](const PyMeasured& d) -> py::object {
             if (d.data.utc.empty()) return py::none();
@@ -679,7 +646,7 @@ void bind_measured(py::module_& m) {
           }, "(N,) datetime64[ns] UTC of each row (the utc column), or None without it.")
       .def_property_readonly("t_s", [](const PyMeasured& d) -> py::object {
             if (d.data.t_s.empty()) return py::none();
-            return check_finite(take(std::vector<double>(d.data.t_s)), "t_s");
+            return finite_result(take(std::vector<double>(d.data.t_s)), "t_s");
           }, "(N,) seconds since the first stop (a time-dependent source's stops.csv), or None.")
       .def_property_readonly("rig", [](const PyMeasured& d) -> py::object {
             if (!d.rig) return py::none();

@@ -105,4 +105,25 @@ inline constexpr const char* kProgressDoc =
     "progress: None/False (quiet), True (a line on stderr, as the CLI), or a callable "
     "f(stage: str, fraction: float, eta_s: float).";
 
+// An array argument as the caller gave it (a list, an int array, ...), converted later by
+// as_array, whose errors name the argument; help() shows it as numpy.typing.ArrayLike instead of
+// pybind11's "handle".
+struct ArrayLike {
+  py::object obj;
+};
+
 }  // namespace polrig::python
+
+namespace pybind11::detail {
+template <>
+struct type_caster<polrig::python::ArrayLike> {
+  PYBIND11_TYPE_CASTER(polrig::python::ArrayLike, const_name("numpy.typing.ArrayLike"));
+  bool load(handle src, bool) {
+    value.obj = reinterpret_borrow<object>(src);
+    return true;
+  }
+  static handle cast(const polrig::python::ArrayLike& a, return_value_policy, handle) {
+    return a.obj.inc_ref();
+  }
+};
+}  // namespace pybind11::detail

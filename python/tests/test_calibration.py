@@ -1,6 +1,7 @@
 """polrig.calibrate, CalibrationParams.apply and the readers: the CLI's calibrate and apply outputs,
 bit for bit, on data from `polrig simulate`; errors with the CLI's messages."""
 import pickle
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -197,12 +198,25 @@ def test_fit_failure_is_data_not_an_exception():
         res.model([0.0])
 
 
-def test_replacement_analysis_function_matches_the_result(indoor):
-    data = polrig.read_measured(str(indoor))
+def test_replacement_analysis_function_is_the_cli(indoor, tmp_path):
+    out = cli_calibrate(indoor, tmp_path / "section", "--method", "section")
+    data = polrig.read_measured(indoor)
     res = polrig.calibrate(data.theta_R_deg, data.V, method="section", rig=data.rig)
     theory = polrig.CalibrationParams.theory(data.rig["device.film_axes_deg"])
-    got = polrig.replacement_analysis(res.params, theory, res.theta_ref_deg, res.V)
-    assert got == res.replacement() and len(got) == 16 and got[0][:2] == ("none", 0)
+    got = polrig.replacement_analysis(res.params, theory, res.theta_ref_deg, res.V,
+                                      volts_per_decade=data.rig["electronics.volts_per_decade"])
+    rep = read_csv(out / "replacement.csv")
+    assert [r[0] for r in got] == list(rep["replaced"]) and [r[1] for r in got] == list(range(16))
+    np.testing.assert_array_equal([r[2] for r in got], rep["accuracy_deg"])
+    # Independent ends: nothing replaced is the calibration's own θ_sec accuracy, from its errors;
+    # everything replaced is the theory parameters applied to the same points.
+    errsec = read_csv(out / "errors.csv")["errsec_deg"]
+    assert got[0][2] == (errsec.max() - errsec.min()) / 2
+    theta, _ = theory.apply(res.V)
+    err = (theta - res.theta_ref_deg + 90) % 180 - 90
+    assert got[15][0] == "α-k-kv-kd"
+    assert got[15][2] == pytest.approx((err.max() - err.min()) / 2, rel=1e-12, abs=1e-12)
+    assert got[15][2] > 10 * got[0][2]  # the theory values are far worse: the test can fail
 
 
 def test_bad_arguments_name_themselves(indoor, tmp_path):
@@ -235,8 +249,10 @@ def test_bad_arguments_name_themselves(indoor, tmp_path):
         polrig.calibrate(theta, V, method="nc", drift="angle", site=(38.9, 121.5))
     with pytest.raises(polrig.DataError, match=r"drift='angle' needs site=\(lat, lon\)"):
         polrig.calibrate(theta, V, method="nc", drift="angle", utc=["2018-11-16T08:09:40Z"] * 37)
-    with pytest.raises(ValueError, match=r"site=\(95, 121.5\): expected \(lat, lon\)"):
+    with pytest.raises(ValueError, match=r"site: latitude 95 is outside \[-90, 90\] \(degrees, north positive\)"):
         polrig.calibrate(theta, V, method="nc", drift="angle", site=(95, 121.5))
+    with pytest.raises(ValueError, match=r"site: longitude -181 is outside \[-180, 180\]"):
+        polrig.calibrate(theta, V, method="nc", drift="angle", site=(38, -181))
     with pytest.raises(ValueError, match="drift='sideways': expected none, angle, per-stop or linear"):
         polrig.calibrate(theta, V, method="nc", drift="sideways")
     with pytest.raises(TypeError, match="rig: expected a polrig.Rig or None, got <class 'str'>"):
@@ -293,10 +309,68 @@ def test_read_measured_errors_name_file_line_column(tmp_path):
         polrig.read_measured(str(f))
 
 
-def test_calibrate_is_deterministic(indoor):
-    # The fit is serial (no threads= argument, as the CLI's calibrate uses none): two calls agree
-    # bit for bit.
-    data = polrig.read_measured(str(indoor))
-    a = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
-    b = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
-    assert a.to_yaml() == b.to_yaml() and np.array_equal(a.V_model, b.V_model)
+def test_fit_limits_reach_the_fit(indoor):
+    data = polrig.read_measured(indoor)
+    full = polrig.calibrate(data.theta_R_deg, data.V, method="section", rig=data.rig)
+    one = polrig.calibrate(data.theta_R_deg, data.V, method="section", rig=data.rig, max_iterations=1)
+    assert full.fit.iterations > 1 and one.fit.iterations <= 1
+    assert one.fit.termination == "no_convergence" and not one.usable()
+
+
+def test_paths_may_be_pathlib(indoor, tmp_path):
+    cal = cli_calibrate(indoor, tmp_path / "cal", "--method", "cs-nc")
+    data = polrig.read_measured(Path(indoor))
+    assert len(data) == len(polrig.read_measured(str(indoor)))
+    res = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
+    res.save(tmp_path / "p.yaml")
+    assert (tmp_path / "p.yaml").read_text() == (cal / "params.yaml").read_text()
+    pf = polrig.read_params(tmp_path / "p.yaml")
+    assert pf.params == res.params and pf.origin == str(tmp_path / "p.yaml")
+    v = polrig.read_voltages(Path(indoor) / "stops.csv")
+    np.testing.assert_array_equal(v.V, data.V)
+    with pytest.raises(TypeError):
+        polrig.read_params(3)
+
+
+def test_array_arguments_convert_and_read_well(indoor):
+    data = polrig.read_measured(indoor)
+    params = polrig.CalibrationParams()
+    theta, d = params.apply(data.V[:5])
+    # A list and an int array convert as float64.
+    t2, d2 = params.apply(data.V[:5].tolist())
+    np.testing.assert_array_equal(t2, theta)
+    ints = np.array([[0, 0, 0], [1, 0, -1]])
+    np.testing.assert_array_equal(params.apply(ints)[0], params.apply(ints.astype(float))[0])
+    with pytest.raises(ValueError, match=r"V: expected a 2-D array of shape \(N, 3\), got shape \(2, 2\)"):
+        params.apply([[0.1, 0.1], [0.1, 0.1]])
+    with pytest.raises(TypeError, match=r"V: expected an array of numbers, got <class 'str'>"):
+        params.apply("volts")
+    with pytest.raises(ValueError, match=r"theta_R_deg: expected a 1-D array, got shape \(\)"):
+        polrig.calibrate(3.0, data.V)
+    # help() names the kinds of the arguments, not pybind11's 'handle'.
+    for f in (polrig.calibrate, polrig.CalibrationParams.apply, polrig.CalibrationParams.angles,
+              polrig.ParamsFile.angles, polrig.CalibrationResult.model, polrig.replacement_analysis,
+              polrig.CalibrationParams.theory, polrig.CalibrationParams.__init__, polrig.read_measured):
+        assert "handle" not in f.__doc__, f.__doc__.splitlines()[0]
+    assert "theta_R_deg: numpy.typing.ArrayLike, V: numpy.typing.ArrayLike" in polrig.calibrate.__doc__
+    assert "path: os.PathLike" in polrig.read_measured.__doc__
+
+
+def test_no_non_finite_result_leaves(indoor, tmp_path):
+    data = polrig.read_measured(indoor)
+    res = polrig.calibrate(data.theta_R_deg, data.V, rig=data.rig)
+    # Eq. 15 is undefined where d_ratio·c reaches 1: the CLI's model_curve.csv refuses NaN.
+    assert np.isfinite(res.model([0.0, 45.0], d_ratio=[1.0, 1.0])).all()
+    with pytest.raises(RuntimeError, match=r"a result is not finite: model element \d+ is nan"):
+        res.model([0.0, 45.0], d_ratio=[10.0, 10.0])
+    # The readers refuse NaN and inf as the CLI does, with the CLI's message.
+    for bad in ("nan", "inf"):
+        f = tmp_path / f"{bad}.csv"
+        f.write_text(f"theta_R_deg,V1,V2,V3\n0,0.1,0.1,0.1\n10,0.1,{bad},0.1\n")
+        cli = run_cli("calibrate", f, "--no-plots", "-o", tmp_path / f"out-{bad}", check=False)
+        assert cli.returncode != 0
+        with pytest.raises(polrig.DataError) as e:
+            polrig.read_measured(f)
+        assert str(e.value) in cli.stderr and "column 'V2'" in str(e.value)
+        with pytest.raises(polrig.DataError, match="column 'V2'"):
+            polrig.read_voltages(f)

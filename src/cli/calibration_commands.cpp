@@ -10,6 +10,7 @@
 #include "cli.h"
 #include "polrig/calib/angles.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/rig_options.h"
 #include "polrig/calib/stop_corrections.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
@@ -43,20 +44,16 @@ struct CalibrationSettings {
             "(0, 1)"));
     app.add_option("--nc-threshold", nc_threshold,
                    "noncontinuous rule: keep a voltage where |dV/dθ| ≥ this × its largest slope")
-        ->check(finite_range(0.0, 1.0))
+        ->check(finite_range(kNcThresholdMin, kNcThresholdMax))
         ->capture_default_str();
     app.add_option("--nc-min-points", nc_min_points,
                    "noncontinuous rule: keep at least this many points per voltage")
-        ->check(CLI::Range(6, 100000))
+        ->check(CLI::Range(kNcMinPointsMin, kNcMinPointsMax))
         ->capture_default_str();
   }
   CalibrationOptions options(const Rig& rig, std::optional<double> rig_d) const {
-    CalibrationOptions o;
-    o.d_a = d_a ? d_a : rig_d;
+    CalibrationOptions o = calibration_options(rig, d_a ? d_a : rig_d, {nc_threshold, nc_min_points});
     o.d_a_source = d_a ? "--d-a" : "the rig's device.d";
-    o.film_axis_deg = rig.device.film_axis_deg;
-    o.volts_per_decade = rig.electronics.volts_per_decade;
-    o.noncontinuous = {nc_threshold, nc_min_points};
     return o;
   }
 };
@@ -75,15 +72,11 @@ struct DriftSettings {
 
 Site parse_site(const std::string& text) {
   const auto comma = text.find(',');
-  double lat = 0, lon = 0;
-  if (comma == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, comma), lat) ||
-      !CLI::detail::lexical_cast(text.substr(comma + 1), lon) || !(std::abs(lat) <= 90) ||
-      !(std::abs(lon) <= 180))
+  Site s;
+  if (comma == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, comma), s.lat_deg) ||
+      !CLI::detail::lexical_cast(text.substr(comma + 1), s.lon_deg) || site_problem(s))
     throw DataError(fmt::format("--site {}: expected LAT,LON in degrees (north and east positive, "
                                 "|LAT| ≤ 90, |LON| ≤ 180), e.g. 38.879167,121.543889", text));
-  Site s;
-  s.lat_deg = lat;
-  s.lon_deg = lon;
   return s;
 }
 

@@ -97,12 +97,8 @@ Site parse_site(const std::string& text, const std::string& option) {
       !number(std::string_view(text).substr(comma + 1), site.lon_deg))
     throw DataError(fmt::format("{} '{}': expected LAT,LON in degrees (finite numbers), e.g. "
                                 "38.879167,121.543889", option, text));
-  if (std::abs(site.lat_deg) > 90)
-    throw DataError(fmt::format("{} '{}': latitude {} is outside [-90, 90] (degrees, north "
-                                "positive)", option, text, site.lat_deg));
-  if (std::abs(site.lon_deg) > 180)
-    throw DataError(fmt::format("{} '{}': longitude {} is outside [-180, 180] (degrees, east "
-                                "positive)", option, text, site.lon_deg));
+  if (const auto problem = site_problem(site))
+    throw DataError(fmt::format("{} '{}': {}", option, text, *problem));
   return site;
 }
 

@@ -13,6 +13,7 @@
 
 #include "cli.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/rig_options.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/adc_limit.h"
@@ -95,12 +96,9 @@ std::vector<StopVoltages> stops_of(const Simulation& sim) {
 }
 
 CalibrationOptions calibration_options_for(const Rig& rig, CalibrationMethod m) {
-  CalibrationOptions o;
+  CalibrationOptions o = calibration_options(rig, rig.device.d, NoncontinuousRule{});
   o.method = m;
-  o.d_a = rig.device.d;
   o.d_a_source = "the rig's device.d";
-  o.film_axis_deg = rig.device.film_axis_deg;
-  o.volts_per_decade = rig.electronics.volts_per_decade;
   return o;
 }
 

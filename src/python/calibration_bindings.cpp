@@ -2,7 +2,9 @@
 // data reader: the calls of `polrig calibrate` and `polrig apply` on NumPy arrays.
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -10,6 +12,7 @@
 #include <fmt/ranges.h>
 #include <pybind11/operators.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "bindings.h"
 #include "convert.h"
@@ -17,15 +20,56 @@
 #include "polrig/calib/model.h"
 #include "polrig/calib/pipeline.h"
 #include "polrig/calib/stop_corrections.h"
+#include "polrig/device/electronics.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/units.h"
 #include "rig_handle.h"
+#include "sky_args.h"
 
 namespace polrig::python {
 namespace {
+
+// An array argument as the caller gave it (a list, an int array, ...): converted by as_array,
+// whose errors name the argument; help() shows it as numpy.typing.ArrayLike.
+struct ArrayLike {
+  py::object obj;
+};
+
+}  // namespace
+}  // namespace polrig::python
+
+namespace pybind11::detail {
+template <>
+struct type_caster<polrig::python::ArrayLike> {
+  PYBIND11_TYPE_CASTER(polrig::python::ArrayLike, const_name("numpy.typing.ArrayLike"));
+  bool load(handle src, bool) {
+    value.obj = reinterpret_borrow<object>(src);
+    return true;
+  }
+  static handle cast(const polrig::python::ArrayLike& a, return_value_policy, handle) {
+    return a.obj.inc_ref();
+  }
+};
+}  // namespace pybind11::detail
+
+namespace polrig::python {
+namespace {
+
+// The CLI's refusal of a non-finite result (io/csv.h CsvTable): every value of a result array is
+// finite (or NaN where `allow_nan`, a value documented as undefined), else RuntimeError naming
+// the result and the element. (The studies lane has the same check in convert.h.)
+py::array_t<double> check_finite(py::array_t<double> a, const char* name, bool allow_nan = false) {
+  const double* v = a.data();
+  for (py::ssize_t i = 0; i < a.size(); ++i)
+    if (!std::isfinite(v[i]) && !(allow_nan && std::isnan(v[i])))
+      throw std::runtime_error(fmt::format(
+          "a result is not finite: {} element {} is {}; the inputs are beyond what the model can "
+          "represent", name, i, v[i]));
+  return a;
+}
 
 // A calibration and the options it ran with (params.yaml's volts per decade, the film axes of
 // the replacement analysis's theory values).
@@ -59,6 +103,8 @@ PyMeasured measured_of(MeasuredData&& data) {
   if (m.data.rig) m.rig = PyRig{load_rig(m.data.rig_origin)};
   return m;
 }
+
+py::object or_none(const std::optional<ArrayLike>& a) { return a ? a->obj : py::none(); }
 
 constexpr const char* kMethods = "section, cs, cs-nc or nc";
 
@@ -143,12 +189,13 @@ AppliedAngles apply_rows(const CalibrationParams& p, double volts_per_decade, co
   }
   AppliedAngles out;
   out.theta_R_deg = ref.empty() ? py::object(py::none()) : py::object(take(std::move(ref)));
-  out.error_deg = err.empty() ? py::object(py::none()) : py::object(take(std::move(err)));
-  out.theta12_deg = take(std::move(t12));
-  out.theta13_deg = take(std::move(t13));
-  out.theta23_deg = take(std::move(t23));
-  out.theta_sec_deg = take(std::move(tsec));
-  out.d = take(std::move(d));
+  out.error_deg = err.empty() ? py::object(py::none())
+                              : py::object(check_finite(take(std::move(err)), "error_deg"));
+  out.theta12_deg = check_finite(take(std::move(t12)), "theta12_deg");
+  out.theta13_deg = check_finite(take(std::move(t13)), "theta13_deg");
+  out.theta23_deg = check_finite(take(std::move(t23)), "theta23_deg");
+  out.theta_sec_deg = check_finite(take(std::move(tsec)), "theta_sec_deg");
+  out.d = check_finite(take(std::move(d)), "d");
   out.section = take(std::move(section));
   return out;
 }
@@ -163,17 +210,6 @@ std::string params_repr(const CalibrationParams& p) {
   return fmt::format("CalibrationParams(alpha_deg=[{}], k_mV=[{}], kv=[{}], kd=[{}])",
                      fmt::join(p.alpha_deg, ", "), fmt::join(p.k_mV, ", "), fmt::join(p.kv, ", "),
                      fmt::join(p.kd, ", "));
-}
-
-Site site_of(const py::handle& obj) {
-  const std::array<double, 2> s = fixed_array<2>(obj, "site");
-  if (!(std::abs(s[0]) <= 90) || !(std::abs(s[1]) <= 180))
-    throw py::value_error(fmt::format("site=({}, {}): expected (lat, lon) in degrees (north and "
-                                      "east positive, |lat| ≤ 90, |lon| ≤ 180)", s[0], s[1]));
-  Site site;
-  site.lat_deg = s[0];
-  site.lon_deg = s[1];
-  return site;
 }
 
 std::vector<EvalPoint> eval_points(const py::handle& theta_ref_deg, const py::handle& V,
@@ -285,8 +321,9 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
     std::optional<Site> s;
     std::string site_from;
     if (!site.is_none()) {
-      s = site_of(site);
+      s = site_of(site, "site");
       site_from = fmt::format("site {},{}", s->lat_deg, s->lon_deg);
+      if (s->height_m != 0) site_from += fmt::format(" (height {} m)", s->height_m);
     }
     try {
       o.corrections = sun_drift_corrections(request, s, site_from, rig);
@@ -305,17 +342,17 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
 }
 
 template <class F>
-py::array_t<double> point_column(const std::vector<EvalPoint>& points, F f) {
+py::array_t<double> point_column(const std::vector<EvalPoint>& points, const char* name, F f) {
   std::vector<double> v(points.size());
   for (std::size_t n = 0; n < points.size(); ++n) v[n] = f(points[n]);
-  return take(std::move(v));
+  return check_finite(take(std::move(v)), name);
 }
 
 template <class F>
-py::array_t<double> error_column(const std::vector<AngleErrors>& errors, F f) {
+py::array_t<double> error_column(const std::vector<AngleErrors>& errors, const char* name, F f) {
   std::vector<double> v(errors.size());
   for (std::size_t n = 0; n < errors.size(); ++n) v[n] = f(errors[n]);
-  return take(std::move(v));
+  return check_finite(take(std::move(v)), name);
 }
 
 const char* kApplyDoc = R"doc(
@@ -329,6 +366,21 @@ for voltages that give no angle (outside any ADC's range |V| ≤ 100 V, beyond 3
 ratio from the pair's offset, or no finite angle), as `polrig apply` refuses them.)doc";
 
 void bind_params(py::module_& m) {
+  py::class_<AppliedAngles>(m, "AppliedAngles",
+                            "The columns of `polrig apply`'s angles.csv, each (N,), one per row of V.")
+      .def_readonly("theta12_deg", &AppliedAngles::theta12_deg, "θ12 from pair voltages V1, V2, degrees in [0, 180).")
+      .def_readonly("theta13_deg", &AppliedAngles::theta13_deg, "θ13 from V1, V3, degrees in [0, 180).")
+      .def_readonly("theta23_deg", &AppliedAngles::theta23_deg, "θ23 from V2, V3, degrees in [0, 180).")
+      .def_readonly("theta_sec_deg", &AppliedAngles::theta_sec_deg,
+                    "θ_sec of the section algorithm (the pair without the section's bad voltage), degrees.")
+      .def_readonly("section", &AppliedAngles::section, "The section 0..5 θ12 falls in (int64).")
+      .def_readonly("d", &AppliedAngles::d, "Degree of polarization of θ_sec's pair (scaled by d_a).")
+      .def_readonly("theta_R_deg", &AppliedAngles::theta_R_deg, "The reference angles given, degrees, or None.")
+      .def_readonly("error_deg", &AppliedAngles::error_deg,
+                    "θ_sec − theta_R_deg wrapped to [−90°, 90°), degrees; None without theta_R_deg.")
+      .def("__len__", [](const AppliedAngles& a) { return a.d.size(); })
+      .def("__repr__", [](const AppliedAngles& a) { return fmt::format("<polrig.AppliedAngles: {} rows>", a.d.size()); });
+
   py::class_<CalibrationParams> p(m, "CalibrationParams", R"doc(
 Eq. 15's parameters of the six-photodiode sensor (Wang et al. 2019 §3.4–3.5, Table 2): what a
 simulated device carries as its truth and what a calibration estimates.
@@ -339,13 +391,13 @@ kv: (3,) log-amplifier gain deviation (1 = nominal).
 kd: (6,) polarizer non-ideality (1 + kd_m)·d; 0 = ideal film, ≤ 0 physically.
 The fields are float64 arrays (copies); assign a whole array to change one.
 CalibrationParams() are the theory values for the seed sensor's film axes.)doc");
-  p.def(py::init([](const py::object& alpha, const py::object& k, const py::object& kv,
-                    const py::object& kd) {
+  p.def(py::init([](const std::optional<ArrayLike>& alpha, const std::optional<ArrayLike>& k,
+                    const std::optional<ArrayLike>& kv, const std::optional<ArrayLike>& kd) {
           CalibrationParams c;
-          if (!alpha.is_none()) c.alpha_deg = fixed_array<6>(alpha, "alpha_deg");
-          if (!k.is_none()) c.k_mV = fixed_array<3>(k, "k_mV");
-          if (!kv.is_none()) c.kv = fixed_array<3>(kv, "kv");
-          if (!kd.is_none()) c.kd = fixed_array<6>(kd, "kd");
+          if (alpha) c.alpha_deg = fixed_array<6>(alpha->obj, "alpha_deg");
+          if (k) c.k_mV = fixed_array<3>(k->obj, "k_mV");
+          if (kv) c.kv = fixed_array<3>(kv->obj, "kv");
+          if (kd) c.kd = fixed_array<6>(kd->obj, "kd");
           return c;
         }),
         py::kw_only(), py::arg("alpha_deg") = py::none(), py::arg("k_mV") = py::none(),
@@ -365,8 +417,8 @@ CalibrationParams() are the theory values for the seed sensor's film axes.)doc")
       .def_property("kd", [](const CalibrationParams& c) { return to_array(c.kd); },
                     [](CalibrationParams& c, const py::handle& v) { c.kd = fixed_array<6>(v, "kd"); },
                     "(6,) polarizer non-idealities kd_1..kd_6 (dimensionless, 0 ideal).")
-      .def_static("theory", [](const py::handle& axes) {
-            return CalibrationParams::theory(fixed_array<6>(axes, "film_axes_deg"));
+      .def_static("theory", [](const ArrayLike& axes) {
+            return CalibrationParams::theory(fixed_array<6>(axes.obj, "film_axes_deg"));
           }, py::arg("film_axes_deg"),
           "Nominal values for films at the given axes ((6,), degrees in the sensor frame, as the "
           "rig key device.film_axes_deg): α_j = −2·f_j, α_h = 180° − 2·f_h wrapped to "
@@ -391,38 +443,23 @@ CalibrationParams() are the theory values for the seed sensor's film axes.)doc")
             c.kd = fixed_array<6>(t[3], "kd");
             return c;
           }))
-      .def("apply", [](const CalibrationParams& c, const py::handle& V, double v_dec,
-                       const std::string& inversion) { return apply_pair(c, v_dec, V, inversion); },
-           py::arg("V"), py::kw_only(), py::arg("volts_per_decade") = 0.5,
+      .def("apply", [](const CalibrationParams& c, const ArrayLike& V, double v_dec,
+                       const std::string& inversion) { return apply_pair(c, v_dec, V.obj, inversion); },
+           py::arg("V"), py::kw_only(), py::arg("volts_per_decade") = Electronics{}.volts_per_decade,
            py::arg("inversion") = "atan2",
            (std::string("The polarization angle and degree of every row of voltages, as `polrig "
                         "apply`: returns (theta_deg, d), each (N,): θ_sec in [0°, 180°) from the "
                         "section algorithm and the d of the pair it used (scaled by the d_a of "
                         "the decoupling).\n") + kApplyDoc).c_str())
-      .def("angles", [](const CalibrationParams& c, const py::handle& V, double v_dec,
-                        const std::string& inversion, const py::handle& theta_R_deg) {
-             return apply_rows(c, v_dec, V, theta_R_deg, inversion);
-           }, py::arg("V"), py::kw_only(), py::arg("volts_per_decade") = 0.5,
+      .def("angles", [](const CalibrationParams& c, const ArrayLike& V, double v_dec,
+                        const std::string& inversion, const std::optional<ArrayLike>& theta_R_deg) {
+             return apply_rows(c, v_dec, V.obj, or_none(theta_R_deg), inversion);
+           }, py::arg("V"), py::kw_only(), py::arg("volts_per_decade") = Electronics{}.volts_per_decade,
            py::arg("inversion") = "atan2", py::arg("theta_R_deg") = py::none(),
            (std::string("Every column of `polrig apply`'s angles.csv for each row of voltages: "
                         "an AppliedAngles (θ12, θ13, θ23, θ_sec, section, d; with theta_R_deg, "
                         "(N,) degrees, also error_deg = θ_sec − θ_R wrapped to [−90°, 90°)).\n") +
             kApplyDoc).c_str());
-
-  py::class_<AppliedAngles>(m, "AppliedAngles",
-                            "The columns of `polrig apply`'s angles.csv, each (N,), one per row of V.")
-      .def_readonly("theta12_deg", &AppliedAngles::theta12_deg, "θ12 from pair voltages V1, V2, degrees in [0, 180).")
-      .def_readonly("theta13_deg", &AppliedAngles::theta13_deg, "θ13 from V1, V3, degrees in [0, 180).")
-      .def_readonly("theta23_deg", &AppliedAngles::theta23_deg, "θ23 from V2, V3, degrees in [0, 180).")
-      .def_readonly("theta_sec_deg", &AppliedAngles::theta_sec_deg,
-                    "θ_sec of the section algorithm (the pair without the section's bad voltage), degrees.")
-      .def_readonly("section", &AppliedAngles::section, "The section 0..5 θ12 falls in (int64).")
-      .def_readonly("d", &AppliedAngles::d, "Degree of polarization of θ_sec's pair (scaled by d_a).")
-      .def_readonly("theta_R_deg", &AppliedAngles::theta_R_deg, "The reference angles given, degrees, or None.")
-      .def_readonly("error_deg", &AppliedAngles::error_deg,
-                    "θ_sec − theta_R_deg wrapped to [−90°, 90°), degrees; None without theta_R_deg.")
-      .def("__len__", [](const AppliedAngles& a) { return a.d.size(); })
-      .def("__repr__", [](const AppliedAngles& a) { return fmt::format("<polrig.AppliedAngles: {} rows>", a.d.size()); });
 
   py::class_<PyParamsFile>(m, "ParamsFile", "A params.yaml read back: the parameters, d_a and the amplifier scale.")
       .def_property_readonly("params", [](const PyParamsFile& f) { return f.loaded.params; },
@@ -432,14 +469,15 @@ CalibrationParams() are the theory values for the seed sensor's film axes.)doc")
       .def_property_readonly("volts_per_decade", [](const PyParamsFile& f) { return f.loaded.volts_per_decade; },
                              "The log amplifier's scale the parameters were fitted with, V per decade.")
       .def_property_readonly("origin", [](const PyParamsFile& f) { return f.origin; }, "The file read.")
-      .def("apply", [](const PyParamsFile& f, const py::handle& V, const std::string& inversion) {
-             return apply_pair(f.loaded.params, f.loaded.volts_per_decade, V, inversion);
+      .def("apply", [](const PyParamsFile& f, const ArrayLike& V, const std::string& inversion) {
+             return apply_pair(f.loaded.params, f.loaded.volts_per_decade, V.obj, inversion);
            }, py::arg("V"), py::kw_only(), py::arg("inversion") = "atan2",
            "CalibrationParams.apply with the file's volts_per_decade: (theta_deg, d), each (N,), "
            "for V of shape (N, 3) volts.")
-      .def("angles", [](const PyParamsFile& f, const py::handle& V, const std::string& inversion,
-                        const py::handle& theta_R_deg) {
-             return apply_rows(f.loaded.params, f.loaded.volts_per_decade, V, theta_R_deg, inversion);
+      .def("angles", [](const PyParamsFile& f, const ArrayLike& V, const std::string& inversion,
+                        const std::optional<ArrayLike>& theta_R_deg) {
+             return apply_rows(f.loaded.params, f.loaded.volts_per_decade, V.obj, or_none(theta_R_deg),
+                               inversion);
            }, py::arg("V"), py::kw_only(), py::arg("inversion") = "atan2",
            py::arg("theta_R_deg") = py::none(),
            "`polrig apply PARAMS VOLTAGES`: the AppliedAngles of every row of V ((N, 3) volts), with "
@@ -449,9 +487,12 @@ CalibrationParams() are the theory values for the seed sensor's film axes.)doc")
                            f.loaded.d_a, f.loaded.volts_per_decade);
       });
 
-  m.def("read_params", [](const std::string& path) { return PyParamsFile{read_params_yaml(path), path}; },
+  m.def("read_params", [](const std::filesystem::path& path) {
+          return PyParamsFile{read_params_yaml(path), path.string()};
+        },
         py::arg("path"),
-        "Reads a params.yaml written by `polrig calibrate` (or CalibrationResult.save): returns a "
+        "Reads a params.yaml written by `polrig calibrate` (or CalibrationResult.save); path: str or "
+        "os.PathLike. Returns a "
         "ParamsFile (params, d_a, volts_per_decade). Raises polrig.DataError naming the file, the "
         "line and the key.");
 }
@@ -513,15 +554,16 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
       .def_property_readonly("residual_rms_V", [](const PyCalibration& c) { return c.result.fit.residual_rms_V; },
                              "RMS of the fit's residuals, V.")
       .def_property_readonly("theta_ref_deg", [](const PyCalibration& c) {
-            return point_column(c.result.points, [](const EvalPoint& p) { return p.theta_ref_deg; });
+            return point_column(c.result.points, "theta_ref_deg",
+                                [](const EvalPoint& p) { return p.theta_ref_deg; });
           }, "(M,) reference angle of each point (raw stop, or CS point), degrees (points.csv).")
       .def_property_readonly("V", [](const PyCalibration& c) {
             std::vector<std::array<double, 3>> rows;
             for (const EvalPoint& p : c.result.points) rows.push_back(p.V);
-            return rows_array(rows);
+            return check_finite(rows_array(rows), "V");
           }, "(M, 3) voltages at each point, V (a CS point's: the mean of its two stops).")
       .def_property_readonly("d_ratio", [](const PyCalibration& c) {
-            return point_column(c.result.points, [](const EvalPoint& p) { return p.d_ratio; });
+            return point_column(c.result.points, "d_ratio", [](const EvalPoint& p) { return p.d_ratio; });
           }, "(M,) the light's d at each point over d at the first stop (1 without drift corrections).")
       .def_property_readonly("V_model", [](const PyCalibration& c) {
             usable_or_throw(c);
@@ -533,7 +575,7 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
                                                               i, p.theta_ref_deg, p.d_ratio);
               rows.push_back(v);
             }
-            return rows_array(rows);
+            return check_finite(rows_array(rows), "V_model");
           }, "(M, 3) the fitted Eq. 15 at each point, V (points.csv's V*_model). Raises "
              "polrig.CalibrationError when the fit is not usable.")
       .def_property_readonly("fitted", [](const PyCalibration& c) {
@@ -547,12 +589,13 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
             return a;
           }, "(M, 3) bool: voltage V_i of point m entered the fit (points.csv's V*_fitted); all "
              "False when the fit is not usable.")
-      .def("model", [](const PyCalibration& c, const py::handle& theta_deg, const py::handle& d_ratio) {
+      .def("model", [](const PyCalibration& c, const ArrayLike& theta_deg,
+                       const std::optional<ArrayLike>& d_ratio) {
             usable_or_throw(c);
-            const std::vector<double> t = finite_values(as_array(theta_deg, "theta_deg", 1), "theta_deg");
+            const std::vector<double> t = finite_values(as_array(theta_deg.obj, "theta_deg", 1), "theta_deg");
             std::vector<double> r(t.size(), 1.0);
-            if (!d_ratio.is_none()) {
-              r = finite_values(as_array(d_ratio, "d_ratio", 1), "d_ratio");
+            if (d_ratio) {
+              r = finite_values(as_array(d_ratio->obj, "d_ratio", 1), "d_ratio");
               if (r.size() != t.size())
                 throw py::value_error(fmt::format("d_ratio: {} values for {} angles", r.size(), t.size()));
             }
@@ -561,24 +604,26 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
               for (int i = 0; i < 3; ++i)
                 v[3 * k + static_cast<std::size_t>(i)] =
                     eq15_voltage(c.result.fit.params, c.options.volts_per_decade, i, t[k], r[k]);
-            return take(std::move(v), {static_cast<py::ssize_t>(t.size()), 3});
+            return check_finite(take(std::move(v), {static_cast<py::ssize_t>(t.size()), 3}), "model");
           }, py::arg("theta_deg"), py::arg("d_ratio") = py::none(),
-          "The fitted Eq. 15 at polarization angles theta_deg ((N,) degrees): (N, 3) volts, NaN "
-          "where Eq. 15 is undefined (model_curve.csv is model(np.arange(721) * 0.5)). d_ratio "
-          "((N,), default 1) scales d as the drift corrections do. Raises polrig.CalibrationError "
-          "when the fit is not usable.")
+          "The fitted Eq. 15 at polarization angles theta_deg ((N,) degrees): (N, 3) volts "
+          "(model_curve.csv is model(np.arange(721) * 0.5)). d_ratio ((N,), default 1) scales d "
+          "as the drift corrections do. Raises polrig.CalibrationError when the fit is not usable "
+          "and RuntimeError where Eq. 15 is undefined (1 + d_ratio·c_j·cos(2θ + α_j) ≤ 0 or "
+          "1 − d_ratio·c_h·cos(2θ + α_h) ≤ 0), as the CLI refuses to write a non-finite "
+          "model_curve.csv.")
       .def_property_readonly("errors", [](const PyCalibration& c) {
             const auto& e = c.result.errors;
             py::dict d;
-            d["theta_ref_deg"] = error_column(e, [](const AngleErrors& x) { return x.theta_ref_deg; });
+            d["theta_ref_deg"] = error_column(e, "errors['theta_ref_deg']", [](const AngleErrors& x) { return x.theta_ref_deg; });
             std::vector<std::int64_t> section(e.size());
             for (std::size_t n = 0; n < e.size(); ++n) section[n] = e[n].section;
             d["section"] = take(std::move(section));
-            d["err12_deg"] = error_column(e, [](const AngleErrors& x) { return x.e12_deg; });
-            d["err13_deg"] = error_column(e, [](const AngleErrors& x) { return x.e13_deg; });
-            d["err23_deg"] = error_column(e, [](const AngleErrors& x) { return x.e23_deg; });
-            d["errsec_deg"] = error_column(e, [](const AngleErrors& x) { return x.esec_deg; });
-            d["d"] = error_column(e, [](const AngleErrors& x) { return x.d; });
+            d["err12_deg"] = error_column(e, "errors['err12_deg']", [](const AngleErrors& x) { return x.e12_deg; });
+            d["err13_deg"] = error_column(e, "errors['err13_deg']", [](const AngleErrors& x) { return x.e13_deg; });
+            d["err23_deg"] = error_column(e, "errors['err23_deg']", [](const AngleErrors& x) { return x.e23_deg; });
+            d["errsec_deg"] = error_column(e, "errors['errsec_deg']", [](const AngleErrors& x) { return x.esec_deg; });
+            d["d"] = error_column(e, "errors['d']", [](const AngleErrors& x) { return x.d; });
             return d;
           }, "errors.csv as {column: (M,) array}: theta_ref_deg, section (int64), err12_deg, "
              "err13_deg, err23_deg, errsec_deg (θ − reference wrapped to [−90°, 90°), degrees) "
@@ -602,9 +647,11 @@ filled in (theory values, empty arrays, zeros); the points are.)doc")
           }, "params.yaml's text, as `polrig calibrate` writes it (read back by polrig.read_params "
              "and a rig's device.truth_from). Raises polrig.CalibrationError when the fit is not "
              "usable, as the CLI refuses to write it.")
-      .def("save", [](const PyCalibration& c, const std::string& path) {
+      .def("save", [](const PyCalibration& c, const std::filesystem::path& path) {
             write_text_file(path, params_to_yaml(usable_or_throw(c).result, c.options.volts_per_decade));
-          }, py::arg("path"), "Writes to_yaml() to a file (params.yaml).")
+          }, py::arg("path"), "Writes to_yaml() to a file (params.yaml); path: str or os.PathLike. Raises "
+             "polrig.CalibrationError when the fit is not usable, RuntimeError naming the path when "
+             "the file cannot be written.")
       .def("__repr__", [](const PyCalibration& c) {
         const CalibrationResult& r = c.result;
         if (!r.usable())
@@ -623,13 +670,13 @@ void bind_measured(py::module_& m) {
             if (!d.have_angles) return py::none();
             std::vector<double> v;
             for (const StopVoltages& s : d.data.stops) v.push_back(s.theta_R_deg);
-            return take(std::move(v));
+            return check_finite(take(std::move(v)), "theta_R_deg");
           }, "(N,) table angle of each row, degrees; None when the file has no theta_R_deg column "
              "(read_voltages).")
       .def_property_readonly("V", [](const PyMeasured& d) {
             std::vector<std::array<double, 3>> rows;
             for (const StopVoltages& s : d.data.stops) rows.push_back(s.V);
-            return rows_array(rows);
+            return check_finite(rows_array(rows), "V");
           }, "(N, 3) pair voltages V1, V2, V3, volts.")
       .def_property_readonly("utc", [](const PyMeasured& d) -> py::object {
             if (d.data.utc.empty()) return py::none();
@@ -639,7 +686,7 @@ void bind_measured(py::module_& m) {
           }, "(N,) datetime64[ns] UTC of each row (the utc column), or None without it.")
       .def_property_readonly("t_s", [](const PyMeasured& d) -> py::object {
             if (d.data.t_s.empty()) return py::none();
-            return take(std::vector<double>(d.data.t_s));
+            return check_finite(take(std::vector<double>(d.data.t_s)), "t_s");
           }, "(N,) seconds since the first stop (a time-dependent source's stops.csv), or None.")
       .def_property_readonly("rig", [](const PyMeasured& d) -> py::object {
             if (!d.rig) return py::none();
@@ -651,19 +698,21 @@ void bind_measured(py::module_& m) {
                            d.data.utc.empty() ? "" : ", utc", d.data.rig ? ", rig.yaml" : "");
       });
 
-  m.def("read_measured", [](const std::string& path) { return measured_of(read_measured(path)); },
+  m.def("read_measured", [](const std::filesystem::path& path) { return measured_of(read_measured(path)); },
         py::arg("path"),
-        "Reads voltages to calibrate, as `polrig calibrate INPUT` does: a folder written by "
+        "Reads voltages to calibrate, as `polrig calibrate INPUT` does (path: str or os.PathLike): a "
+        "folder written by "
         "`polrig simulate` (its stops.csv and rig.yaml) or a CSV with theta_R_deg,V1,V2,V3 "
         "(degrees, volts) and optionally utc (ISO 8601, Z). Returns a MeasuredData. Raises "
         "polrig.DataError naming the file, the line and the column (polrig.RigError for the "
         "dataset's rig.yaml).");
-  m.def("read_voltages", [](const std::string& path) {
+  m.def("read_voltages", [](const std::filesystem::path& path) {
           PyMeasured d = measured_of(read_voltages(path));
           d.have_angles = !d.data.stops.empty() && !std::isnan(d.data.stops.front().theta_R_deg);
           return d;
         }, py::arg("path"),
-        "Reads voltages to apply parameters to, as `polrig apply` does: a CSV with V1,V2,V3 "
+        "Reads voltages to apply parameters to, as `polrig apply` does (path: str or os.PathLike): a "
+        "CSV with V1,V2,V3 "
         "(volts) and optionally theta_R_deg (degrees). Returns a MeasuredData. Raises "
         "polrig.DataError naming the file, the line and the column.");
 }
@@ -676,11 +725,11 @@ void bind_calibration(py::module_& m) {
   bind_measured(m);
 
   m.def("calibrate",
-        [](const py::handle& theta_R_deg, const py::handle& V, const std::string& method,
+        [](const ArrayLike& theta_R_deg, const ArrayLike& V, const std::string& method,
            std::optional<double> d_a, const py::object& rig, double nc_threshold, int nc_min_points,
-           const py::object& film_axes_deg, std::optional<double> volts_per_decade,
-           const std::string& drift, const py::object& utc, const py::object& t_s,
-           const py::object& site, int max_iterations, int max_evaluations,
+           const std::optional<ArrayLike>& film_axes_deg, std::optional<double> volts_per_decade,
+           const std::string& drift, const py::object& utc, const std::optional<ArrayLike>& t_s,
+           const std::optional<ArrayLike>& site, int max_iterations, int max_evaluations,
            double function_tolerance, double parameter_tolerance, double gradient_tolerance,
            double min_singular_ratio) {
           FitOptions fit;
@@ -690,8 +739,9 @@ void bind_calibration(py::module_& m) {
           fit.parameter_tolerance = parameter_tolerance;
           fit.gradient_tolerance = gradient_tolerance;
           fit.min_singular_ratio = min_singular_ratio;
-          return run_calibrate(theta_R_deg, V, method, d_a, rig, nc_threshold, nc_min_points,
-                               film_axes_deg, volts_per_decade, drift, utc, t_s, site, fit);
+          return run_calibrate(theta_R_deg.obj, V.obj, method, d_a, rig, nc_threshold, nc_min_points,
+                               or_none(film_axes_deg), volts_per_decade, drift, utc, or_none(t_s),
+                               or_none(site), fit);
         },
         py::arg("theta_R_deg"), py::arg("V"), py::kw_only(), py::arg("method") = "cs-nc",
         py::arg("d_a") = py::none(), py::arg("rig") = py::none(),
@@ -728,7 +778,9 @@ drift: sun-drift correction of an outdoor run (methods 'nc' and 'section' only):
     and the observer, site= or a sky rig's site.
 utc: (N,) UTC of each stop: ISO 8601 strings with Z, aware datetimes or datetime64.
 t_s: (N,) seconds of each stop since the sky rig's sky.first_stop_utc (a sky simulate's t_s).
-site: (lat, lon) of the observer in degrees, north and east positive (--site).
+site: (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m) of the observer (--site): latitude in
+    [-90, 90] north positive, longitude in [-180, 180] east positive, height above the WGS-84
+    ellipsoid in m (default 0).
 max_iterations, max_evaluations, function_tolerance, parameter_tolerance, gradient_tolerance,
 min_singular_ratio: the Levenberg–Marquardt limits (calib/fit.h FitOptions; the CLI's defaults).
 
@@ -741,9 +793,9 @@ form the points (a stop without its CS partner). The GIL is released during the 
 
   m.def("replacement_analysis",
         [](const CalibrationParams& calibrated, const CalibrationParams& theory,
-           const py::handle& theta_ref_deg, const py::handle& V, const py::handle& d_ratio,
+           const ArrayLike& theta_ref_deg, const ArrayLike& V, const std::optional<ArrayLike>& d_ratio,
            double volts_per_decade) {
-          const std::vector<EvalPoint> points = eval_points(theta_ref_deg, V, d_ratio);
+          const std::vector<EvalPoint> points = eval_points(theta_ref_deg.obj, V.obj, or_none(d_ratio));
           const double v_dec = positive_finite(volts_per_decade, "volts_per_decade");
           std::vector<Replacement> rep;
           {
@@ -753,7 +805,8 @@ form the points (a stop without its CS partner). The GIL is released during the 
           return replacement_list(rep);
         },
         py::arg("calibrated"), py::arg("theory"), py::arg("theta_ref_deg"), py::arg("V"),
-        py::kw_only(), py::arg("d_ratio") = py::none(), py::arg("volts_per_decade") = 0.5,
+        py::kw_only(), py::arg("d_ratio") = py::none(),
+        py::arg("volts_per_decade") = Electronics{}.volts_per_decade,
         R"doc(The replacement analysis (Wang et al. 2019 §4.6, Fig. 21; replacement.csv).
 
 calibrated, theory: CalibrationParams (theory: CalibrationParams.theory(film_axes_deg)).

@@ -41,12 +41,7 @@ inline Site site_of(const py::handle& obj, const char* name) {
                                       "height_m), got {} values", name, a.size()));
   const std::vector<double> v = finite_values(a, name);
   const Site s{v[0], v[1], v.size() == 3 ? v[2] : 0.0};
-  if (std::abs(s.lat_deg) > 90)
-    throw py::value_error(fmt::format("{}: latitude {} is outside [-90, 90] (degrees, north "
-                                      "positive)", name, s.lat_deg));
-  if (std::abs(s.lon_deg) > 180)
-    throw py::value_error(fmt::format("{}: longitude {} is outside [-180, 180] (degrees, east "
-                                      "positive)", name, s.lon_deg));
+  if (const auto problem = site_problem(s)) throw py::value_error(fmt::format("{}: {}", name, *problem));
   return s;
 }
 

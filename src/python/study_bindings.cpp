@@ -18,6 +18,7 @@
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/rig_options.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/source/source.h"
@@ -651,19 +652,15 @@ void bind_studies(py::module_& m) {
     if (L_S_max) finite_in(*L_S_max, 0.0, 100.0, "L_S_max", "mm");
     if (d_a && !(*d_a > 0 && *d_a < 1))
       throw py::value_error(fmt::format("d_a={}: expected a degree of polarization in (0, 1)", *d_a));
-    finite_in(nc_threshold, 0.0, 1.0, "nc_threshold", "");
-    if (nc_min_points < 6 || nc_min_points > 100000)
-      throw py::value_error(fmt::format("nc_min_points={}: expected a whole number in [6, 100000]", nc_min_points));
+    const NoncontinuousRule rule{nc_threshold, nc_min_points};
+    if (const auto problem = noncontinuous_rule_problem(rule)) throw py::value_error(*problem);
     const Rig r = self.rig();
     TrialSettings s;  // as `polrig study calibration`
     s.trials = trials;
     s.L_IS_max = L_IS_max.value_or(std::min(2.0 * r.eccentricity.L_IS, 100.0));
     s.L_S_max = L_S_max.value_or(std::min(2.0 * r.eccentricity.L_S, 100.0));
-    s.calibration.d_a = d_a ? d_a : std::optional<double>(r.device.d);
+    s.calibration = calibration_options(r, d_a ? d_a : std::optional<double>(r.device.d), rule);
     s.calibration.d_a_source = d_a ? "d_a" : "the rig's device.d";
-    s.calibration.film_axis_deg = r.device.film_axis_deg;
-    s.calibration.volts_per_decade = r.electronics.volts_per_decade;
-    s.calibration.noncontinuous = {nc_threshold, nc_min_points};
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     std::vector<Trial> result;

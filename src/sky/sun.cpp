@@ -265,6 +265,14 @@ void check_sun_inputs(UtcTime t, const Site& site, const SunSettings& settings) 
   check_inputs(t, site, settings);
 }
 
+std::optional<std::string> site_problem(const Site& site) {
+  if (!(std::abs(site.lat_deg) <= 90))
+    return fmt::format("latitude {} is outside [-90, 90] (degrees, north positive)", site.lat_deg);
+  if (!(std::abs(site.lon_deg) <= 180))
+    return fmt::format("longitude {} is outside [-180, 180] (degrees, east positive)", site.lon_deg);
+  return std::nullopt;
+}
+
 Vec3 sun_direction_enu(const SunPosition& sun) {
   const double h = sun.elevation_deg * kDeg, A = sun.azimuth_deg * kDeg;
   return {std::cos(h) * std::sin(A), std::cos(h) * std::cos(A), std::sin(h)};

@@ -4,6 +4,8 @@
 #include <iostream>
 #include <optional>
 #include <stdexcept>
+#include <string_view>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -20,6 +22,19 @@
 namespace polrig::cli {
 
 namespace {
+
+// The option of `polrig study heading` that sets a HeadingStudySettings field.
+std::string study_heading_option(std::string_view field) {
+  static const std::pair<std::string_view, const char*> options[] = {
+      {"trials", "--trials"}, {"samples", "--samples"}, {"roll_sd_deg", "--roll-sd"},
+      {"pitch_sd_deg", "--pitch-sd"}, {"sync_max_s", "--sync-max"},
+      {"turn_rate_max_dps", "--turn-rate-max"}, {"ins_tilt_sd_deg", "--ins-tilt-sd"},
+      {"mount_tilt_sd_deg", "--mount-tilt-sd"}, {"mount_azimuth_sd_deg", "--mount-azimuth-sd"},
+      {"p_max_min", "--p-max-min"}, {"p_max_max", "--p-max-max"}};
+  for (const auto& [f, option] : options)
+    if (f == field) return option;
+  return std::string(field);
+}
 
 // Reads and checks every row before anything is computed or written.
 std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::optional<Site>& site) {
@@ -184,9 +199,13 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       HeadingStudySettings settings = *s;
-      if (settings.p_max_min > settings.p_max_max)
-        throw DataError(fmt::format("--p-max-min {} is above --p-max-max {}", settings.p_max_min,
-                                    settings.p_max_max));
+      try {
+        check_heading_study_settings(settings, [](std::string_view field) {
+          return study_heading_option(field);
+        });
+      } catch (const std::invalid_argument& e) {
+        throw DataError(e.what());
+      }
       const LoadedRig r = rig->load();
       // Site, time and the sun's settings: a sky rig's `sky:` block (site, first stop, UT1 − UTC,
       // refraction), else W19's dynamic run; an option given on the command line overrides either.

@@ -63,6 +63,20 @@ inline SiteArrays site_arrays(const py::handle& obj, const char* name) {
           a.shape(a.ndim() - 1) == 3 ? column(2) : np.attr("zeros_like")(column(0))};
 }
 
+// Sites as broadcast rows (latitude, longitude, height): each through the library's site_problem,
+// else ValueError "site[..., 2] (height_m): element 3: height 2e+05 m is outside ...".
+inline void check_site_rows(std::span<const double> lat, std::span<const double> lon,
+                            std::span<const double> height, const char* name) {
+  for (std::size_t i = 0; i < lat.size(); ++i) {
+    const Site s{lat[i], lon[i], height[i]};
+    if (const auto problem = site_problem(s)) {
+      const int k = !site_problem({s.lat_deg, 0, 0}) ? (!site_problem({0, s.lon_deg, 0}) ? 2 : 1) : 0;
+      const char* column[] = {"lat_deg", "lon_deg", "height_m"};
+      throw py::value_error(fmt::format("{}[..., {}] ({}): element {}: {}", name, k, column[k], i, *problem));
+    }
+  }
+}
+
 // The radiance model by the CLI's --radiance name.
 inline SkyRadiance radiance_of(const std::string& name) {
   if (name == "uniform") return SkyRadiance::Uniform;

@@ -54,11 +54,13 @@ std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::option
     throw DataError(fmt::format("{}:{}: no site: give --site LAT,LON or lat_deg and lon_deg "
                                 "columns", f.origin, f.header_line));
   if (f.rows.empty()) throw DataError(fmt::format("{}: no data rows after the header", f.origin));
-  const auto ranged = [&](std::size_t r, std::size_t c, double lo, double hi, const char* what) {
+  const auto ranged = [&](std::size_t r, std::size_t c, std::string_view field, const char* what) {
     const double v = f.number(r, c);
-    if (v < lo || v > hi)
+    const InputRange range = heading_query_range(field);
+    if (v < range.lo || v > range.hi)
       throw DataError(fmt::format("{}:{}: column '{}': {} is outside [{}, {}] ({})", f.origin,
-                                  f.line[r], f.header[c], f.rows[r][c], lo, hi, what));
+                                  f.line[r], f.header[c], f.rows[r][c], range.lo, range.hi,
+                                  what ? what : range.what));
     return v;
   };
   std::vector<HeadingQuery> rows;
@@ -70,14 +72,13 @@ std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::option
       throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
                                   f.rows[r][c_utc], e.what()));
     }
-    h.tilt.roll_deg = ranged(r, c_roll, -180, 180, "degrees, right side down positive");
-    h.tilt.pitch_deg = ranged(r, c_pitch, -90, 90, "degrees, nose up positive");
-    h.aop_deg = ranged(r, c_aop, -360, 360, "θ_b in degrees, anticlockwise from X_b seen from above");
-    if (c_prior && !f.rows[r][*c_prior].empty())
-      h.prior_deg = ranged(r, *c_prior, -360, 360, "degrees clockwise from north; empty for none");
+    h.tilt.roll_deg = ranged(r, c_roll, "roll_deg", nullptr);
+    h.tilt.pitch_deg = ranged(r, c_pitch, "pitch_deg", nullptr);
+    h.aop_deg = ranged(r, c_aop, "aop_deg", nullptr);
+    if (c_prior && !f.rows[r][*c_prior].empty()) h.prior_deg = ranged(r, *c_prior, "prior_deg", nullptr);
     if (c_lat) {
-      h.at.site.lat_deg = ranged(r, *c_lat, -90, 90, "degrees, north positive");
-      h.at.site.lon_deg = ranged(r, *c_lon, -180, 180, "degrees, east positive");
+      h.at.site.lat_deg = ranged(r, *c_lat, "lat_deg", nullptr);
+      h.at.site.lon_deg = ranged(r, *c_lon, "lon_deg", nullptr);
     } else {
       h.at.site = *site;
     }

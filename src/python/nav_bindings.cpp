@@ -207,12 +207,10 @@ void bind_nav(py::module_& m) {
         const Broadcast b = broadcast({{utc_index(utc), "utc"}, {lat, "lat_deg"}, {lon, "lon_deg"},
                                        {roll, "roll_deg"}, {pitch, "pitch_deg"}, {aop, "aop_deg"},
                                        {prior.is_none() ? no_prior : prior, "prior_deg", true}});
-        check_range(b.values[1], "lat_deg", -90, 90, "degrees, north positive");
-        check_range(b.values[2], "lon_deg", -180, 180, "degrees, east positive");
-        check_range(b.values[3], "roll_deg", -180, 180, "degrees, right side down positive");
-        check_range(b.values[4], "pitch_deg", -90, 90, "degrees, nose up positive");
-        check_range(b.values[5], "aop_deg", -360, 360, "θ_b in degrees, anticlockwise from X_b seen from above");
-        check_range(b.values[6], "prior_deg", -360, 360, "degrees clockwise from north; NaN for none");
+        const char* inputs[] = {"utc", "lat_deg", "lon_deg", "roll_deg", "pitch_deg", "aop_deg", "prior_deg"};
+        for (std::size_t k = 1; k <= 5; ++k) check_input(b.values[k], inputs[k], heading_query_range(inputs[k]));
+        check_input(b.values[6], "prior_deg", heading_query_range("prior_deg"),
+                    "degrees clockwise from north; NaN for none");
         std::vector<HeadingQuery> queries(b.size);
         for (std::size_t i = 0; i < b.size; ++i) {
           HeadingQuery& q = queries[i];

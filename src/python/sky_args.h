@@ -33,6 +33,12 @@ inline void check_range(std::span<const double> v, const char* name, double lo, 
                                         v[i], lo, hi, what));
 }
 
+// check_range with the library's range of a row input (sky_query_range, heading_query_range).
+inline void check_input(std::span<const double> v, const char* name, const InputRange& range,
+                        const char* what = nullptr) {
+  check_range(v, name, range.lo, range.hi, what ? what : range.what);
+}
+
 // (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m) with the CLI's --site checks.
 inline Site site_of(const py::handle& obj, const char* name) {
   const DoubleArray a = as_array(obj, name, 1);
@@ -79,9 +85,7 @@ inline void check_site_rows(std::span<const double> lat, std::span<const double>
 
 // The radiance model by the CLI's --radiance name.
 inline SkyRadiance radiance_of(const std::string& name) {
-  if (name == "uniform") return SkyRadiance::Uniform;
-  if (name == "rayleigh") return SkyRadiance::Rayleigh;
-  if (name == "cie-clear") return SkyRadiance::CieClear;
+  if (const auto r = parse_sky_radiance(name)) return *r;
   throw py::value_error(fmt::format("radiance '{}': expected one of uniform, rayleigh, cie-clear", name));
 }
 

@@ -50,9 +50,7 @@ struct PySky {
   explicit PySky(const Sky& s) : sky(s), sun(sun_position(s.first_stop, s.site, s.sun)) {}
 };
 
-std::string radiance_name(SkyRadiance r) {
-  return r == SkyRadiance::Uniform ? "uniform" : r == SkyRadiance::Rayleigh ? "rayleigh" : "cie-clear";
-}
+std::string radiance_name(SkyRadiance r) { return std::string(sky_radiance_name(r)); }
 
 // The sun's position and its ENU unit vector as a record of arrays of `shape`.
 Record sun_record(const std::vector<SunPosition>& suns, const std::vector<py::ssize_t>& shape) {
@@ -258,10 +256,9 @@ void bind_sky(py::module_& m) {
            "Raises ValueError naming the argument and value (the CLI's ranges; a site out of "
            "range included), and for a date outside ERFA's range.")
       .def_static("from_rig", [](const PyRig& r) {
-             if (!r.rig().light->has(Source::kTimeDependent))
-               throw RigError(fmt::format("{}: source.model {} has no sky (expected source.model sky)",
-                                          r.loaded.origin, r.rig().source.model));
-             return PySky(r.rig().source.sky.resolved_sky());
+             const std::optional<Sky> sky = rig_sky(r.rig());
+             if (!sky) throw RigError(no_sky_message(r.rig(), r.loaded.origin));
+             return PySky(*sky);
            }, "rig"_a,
            "The sky of a rig with source.model sky (its sky block: site, first stop, P_max or its "
            "table, radiance, refraction, UT1 − UTC), as `polrig sky RIG` uses it. Raises "
@@ -410,12 +407,10 @@ void bind_sky(py::module_& m) {
         check_option(ut1_minus_utc_s, "ut1_minus_utc_s", -1, 1, "s");
         sky.sun.ut1_minus_utc_s = ut1_minus_utc_s;
         const std::vector<UtcTime> times = utc_times(utc, "utc");
-        const Broadcast b = broadcast({{utc_index(utc), "utc"}, {lat, "lat_deg"}, {lon, "lon_deg"},
-                                       {az, "view_az_deg"}, {el, "view_el_deg"}});
-        check_range(b.values[1], "lat_deg", -90, 90, "degrees, north positive");
-        check_range(b.values[2], "lon_deg", -180, 180, "degrees, east positive");
-        check_range(b.values[3], "view_az_deg", -360, 360, "degrees, from north towards east");
-        check_range(b.values[4], "view_el_deg", -90, 90, "degrees above the horizon");
+        const char* names[] = {"utc", "lat_deg", "lon_deg", "view_az_deg", "view_el_deg"};
+        const Broadcast b = broadcast({{utc_index(utc), names[0]}, {lat, names[1]}, {lon, names[2]},
+                                       {az, names[3]}, {el, names[4]}});
+        for (std::size_t k = 1; k <= 4; ++k) check_input(b.values[k], names[k], sky_query_range(names[k]));
         std::vector<SkyQuery> queries(b.size);
         for (std::size_t i = 0; i < b.size; ++i)
           queries[i] = {{times[static_cast<std::size_t>(b.values[0][i])], {b.values[1][i], b.values[2][i], 0}},

@@ -243,8 +243,9 @@ HeadingErrorCdf heading_error_cdf(const std::vector<HeadingTrial>& trials) {
 }
 
 bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings) {
-  if (!rig.light->has(Source::kTimeDependent)) return false;
-  const Sky sky = rig.source.sky.resolved_sky();
+  const std::optional<Sky> found = rig_sky(rig);
+  if (!found) return false;
+  const Sky& sky = *found;
   settings.site = sky.site;
   settings.utc = sky.first_stop;
   settings.sun.ut1_minus_utc_s = sky.sun.ut1_minus_utc_s;

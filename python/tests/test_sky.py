@@ -310,3 +310,22 @@ def test_spectral_kd_errors():
         polrig.spectral_kd(str(films), str(resp), lamp_temperature_K=100)
     with pytest.raises(polrig.DataError, match="nope.csv"):
         polrig.spectral_kd(str(SPECTRA / "nope.csv"), str(resp))
+
+
+def test_spectral_kd_coverage_is_the_clis_message(tmp_path):
+    # a response wider than the films (320-800 nm) and than a sun file: the CLI's message, its
+    # option names replaced by the argument names
+    films = SPECTRA / "sheet-polarizer-synthetic.csv"
+    wide = tmp_path / "wide.csv"
+    wide.write_text("wavelength_nm,response\n300,1\n900,1\n")
+    cli = run_cli("spectral", "kd", "--films", films, "--response", wide, "--no-plots", "-o",
+                  tmp_path / "k", check=False)
+    assert cli.returncode != 0
+    with pytest.raises(polrig.DataError) as e:
+        polrig.spectral_kd(str(films), str(wide))
+    assert str(e.value) == f"films {films}: its wavelengths [320, 800] nm do not cover the response's [300, 900] nm"
+    assert f"--{e.value}" in cli.stderr
+    sun = tmp_path / "sun.csv"
+    sun.write_text("wavelength_nm,extraterrestrial\n330,1\n700,1\n")
+    with pytest.raises(polrig.DataError, match=r"sun .*sun.csv: its wavelengths \[330, 700\] nm do not cover"):
+        polrig.spectral_kd(str(films), str(SPECTRA / "blue-filter-photodiode-synthetic.csv"), sun=str(sun))

@@ -110,14 +110,6 @@ py::array_t<float> image(std::vector<float>&& layer, int size) {
   return take(std::move(layer), {size, size});
 }
 
-// A spectrum CSV with the CLI's coverage message when it does not span the response's band.
-void check_covers(const Spectrum& s, const Spectrum& response, const std::string& what) {
-  if (!s.covers(response.min_nm(), response.max_nm()))
-    throw DataError(fmt::format("{}: its wavelengths [{}, {}] nm do not cover the response's "
-                                "[{}, {}] nm", what, s.min_nm(), s.max_nm(), response.min_nm(),
-                                response.max_nm()));
-}
-
 constexpr const char* kSunFields =
     "azimuth_deg: A_s, geographic, from north towards east (clockwise seen from above), [0, 360).\n"
     "elevation_deg: h_s (refracted when refraction=True); zenith_deg: 90 - h_s.\n"
@@ -519,27 +511,23 @@ void bind_sky(py::module_& m) {
         }
         const FilmSpectra film = read_film_csv(films);
         const Spectrum resp = read_spectrum_csv(response, response_column);
-        check_covers(film.tau_M, resp, "films " + films);
-        check_covers(film.tau_m, resp, "films " + films);
-        const double lo = resp.min_nm(), hi = resp.max_nm();
-        const Spectrum lamp = blackbody(lamp_K, lo, hi);
-        const Spectrum sun = sun_path ? read_spectrum_csv(*sun_path, sun_column) : blackbody(sun_K, lo, hi);
-        if (sun_path) check_covers(sun, resp, "sun " + *sun_path);
-        const Spectrum sky = rayleigh_sky(sun);
+        const Spectrum sun = sun_path ? read_spectrum_csv(*sun_path, sun_column)
+                                      : blackbody(sun_K, resp.min_nm(), resp.max_nm());
+        SpectralKd result;
+        try {
+          result = spectral_kd(film, resp, lamp_K, sun, scale,
+                               {"films " + films, "sun " + sun_path.value_or(""), "tau_m_scale"});
+        } catch (const SpectrumError& e) {
+          throw DataError(e.what());
+        }
         std::vector<double> channel, s_col, dl, kl, ds, ks, shift;
-        for (int c = 0; c < kChannels; ++c) {
-          const double s = scale[static_cast<std::size_t>(c)];
-          ChannelKd k;
-          try {
-            k = channel_kd(film, lamp, sky, resp, s);
-          } catch (const SpectrumError& e) {
-            throw DataError(fmt::format("channel {} (tau_m_scale {}): {}", c + 1, s, e.what()));
-          }
-          channel.push_back(c + 1), s_col.push_back(s);
+        for (std::size_t c = 0; c < result.channels.size(); ++c) {
+          const ChannelKd& k = result.channels[c];
+          channel.push_back(static_cast<double>(c + 1)), s_col.push_back(scale[c]);
           dl.push_back(k.lamp.d_eff), kl.push_back(k.lamp.kd());
           ds.push_back(k.sky.d_eff), ks.push_back(k.sky.kd()), shift.push_back(k.kd_sky_minus_lamp());
         }
-        KdSpectra t = kd_spectra(film, resp, lamp, sky);
+        KdSpectra& t = result.spectra;
         Record spectra;
         spectra.add("wavelength_nm", take(std::move(t.wavelength_nm)));
         spectra.add("tau_M", take(std::move(t.tau_M)));

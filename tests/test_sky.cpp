@@ -96,6 +96,16 @@ TEST(Utc, RefusesAnythingElseNamingTheText) {
 // Spec §1.1 reference numbers (geometric sun: refraction off, the default)
 // ---------------------------------------------------------------------------------------------
 
+TEST(Site, ProblemNamesTheCoordinateAndItsRange) {
+  EXPECT_FALSE(site_problem(kDalian));
+  EXPECT_FALSE(site_problem(Site{-90, 180, 0}));
+  EXPECT_FALSE(site_problem(Site{90, -180, 0}));
+  EXPECT_EQ(site_problem(Site{95, 0, 0}), "latitude 95 is outside [-90, 90] (degrees, north positive)");
+  EXPECT_EQ(site_problem(Site{0, -180.5, 0}),
+            "longitude -180.5 is outside [-180, 180] (degrees, east positive)");
+  EXPECT_EQ(site_problem(Site{NAN, 0, 0}), "latitude nan is outside [-90, 90] (degrees, north positive)");
+}
+
 TEST(SunPosition, DalianOutdoor1) {
   const SunPosition a = at("2018-11-16T08:09:40Z", kDalian);
   const SunPosition b = at("2018-11-16T08:10:34Z", kDalian);

@@ -237,6 +237,12 @@ def test_bad_arguments_name_themselves(indoor, tmp_path):
         polrig.calibrate(theta, V, d_a=1.5)
     assert "expected a degree of polarization in (0, 1), got 1.5" in str(e.value)
     assert "expected a degree of polarization in (0, 1), got 1.5" in cli.stderr
+    # The noncontinuous rule's ranges: calib/rig_options.h, as the CLI's --nc-* options.
+    with pytest.raises(ValueError, match=r"nc_threshold=1.5: expected a finite number in \[0, 1\]"):
+        polrig.calibrate(theta, V, nc_threshold=1.5)
+    with pytest.raises(ValueError, match=r"nc_min_points=5: expected a whole number in \[6, 100000\]"):
+        polrig.calibrate(theta, V, nc_min_points=5)
+    assert run_cli("calibrate", indoor, "--nc-min-points", "5", "-o", tmp_path / "y", check=False).returncode != 0
     with pytest.raises(ValueError, match="V: 36 rows for 37 values of theta_R_deg"):
         polrig.calibrate(theta, V[1:])
     big = V.copy()

@@ -19,6 +19,7 @@
 #include "polrig/calib/angles.h"
 #include "polrig/calib/model.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/calib/rig_options.h"
 #include "polrig/calib/stop_corrections.h"
 #include "polrig/device/electronics.h"
 #include "polrig/io/csv.h"
@@ -259,10 +260,10 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
   if (*drift_mode != DriftMode::None && !raw_stops)
     throw py::value_error(fmt::format("drift='{}' needs method 'nc' or 'section' (the raw stops), "
                                       "not '{}': a CS point mixes two times", drift, method_name_text));
-  if (!(nc_threshold >= 0 && nc_threshold <= 1))
-    throw py::value_error(fmt::format("nc_threshold: expected a value in [0, 1], got {}", nc_threshold));
-  if (nc_min_points < 6 || nc_min_points > 100000)
-    throw py::value_error(fmt::format("nc_min_points: expected a whole number in [6, 100000], got {}", nc_min_points));
+  const NoncontinuousRule rule{nc_threshold, nc_min_points};
+  if (const auto problem = noncontinuous_rule_problem(rule)) throw py::value_error(*problem);
+  if (d_a && !(*d_a > 0 && *d_a < 1))
+    throw py::value_error(fmt::format("d_a: expected a degree of polarization in (0, 1), got {}", *d_a));
 
   // The stops.
   const std::vector<double> theta = finite_values(as_array(theta_R_deg, "theta_R_deg", 1), "theta_R_deg");
@@ -285,23 +286,15 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
     throw py::value_error(fmt::format("method='{}': the rig's light is the sky, which drifts with "
                                       "the sun during the run; use method='nc' with drift="
                                       "'per-stop' (or 'angle', 'linear', 'none')", method_name_text));
-  CalibrationOptions o;
+  // d_a: given, else the rig's stated d (only a rig the caller gave states one).
+  const std::optional<double> rig_d =
+      rig_obj.is_none() ? std::nullopt : std::optional<double>(rig.device.d);
+  CalibrationOptions o = calibration_options(rig, d_a ? d_a : rig_d, rule);
   o.method = *method;
-  if (d_a) {
-    const double v = *d_a;
-    if (!(v > 0 && v < 1))
-      throw py::value_error(fmt::format("d_a: expected a degree of polarization in (0, 1), got {}", v));
-    o.d_a = v;
-    o.d_a_source = "d_a";
-  } else if (!rig_obj.is_none()) {
-    o.d_a = rig.device.d;
-    o.d_a_source = "the rig's device.d";
-  }
-  o.film_axis_deg = film_axes_deg.is_none() ? rig.device.film_axis_deg
-                                            : fixed_array<6>(film_axes_deg, "film_axes_deg");
-  o.volts_per_decade = volts_per_decade ? positive_finite(*volts_per_decade, "volts_per_decade")
-                                       : rig.electronics.volts_per_decade;
-  o.noncontinuous = {nc_threshold, nc_min_points};
+  if (d_a) o.d_a_source = "d_a";
+  else if (rig_d) o.d_a_source = "the rig's device.d";
+  if (!film_axes_deg.is_none()) o.film_axis_deg = fixed_array<6>(film_axes_deg, "film_axes_deg");
+  if (volts_per_decade) o.volts_per_decade = positive_finite(*volts_per_decade, "volts_per_decade");
   o.fit = fit;
 
   // The sun-drift corrections, as --drift.

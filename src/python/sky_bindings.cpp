@@ -139,8 +139,8 @@ void bind_sky(py::module_& m) {
                         "gha_deg"_a = s.gha_deg, "lha_deg"_a = s.lha_deg);
       }, "The six angles as a dict (degrees), as sun.yaml writes them.")
       .def("__repr__", [](const SunPosition& s) {
-        return fmt::format("polrig.SunPosition(azimuth_deg={}, elevation_deg={}, zenith_deg={}, "
-                           "declination_deg={}, gha_deg={}, lha_deg={})", s.azimuth_deg,
+        return fmt::format("<polrig.SunPosition: azimuth_deg {}, elevation_deg {}, zenith_deg {}, "
+                           "declination_deg {}, gha_deg {}, lha_deg {}>", s.azimuth_deg,
                            s.elevation_deg, s.zenith_deg, s.declination_deg, s.gha_deg, s.lha_deg);
       });
 

@@ -226,3 +226,14 @@ def test_solve_heading_and_sky_view_body_refuse_a_non_unit_sun():
         polrig.sky_view_body([0.0, 0.6, 0.8], 10.0, radiance="rayleigh")
     # within 1e-9 of unit length is accepted
     assert polrig.solve_heading([0.6, 0.8, 1e-10], 30.0).status == "ok"
+
+
+def test_study_heading_reports_progress_to_a_callable():
+    # a stage reports after the progress interval (0.5 s) and at its end: (stage, fraction, eta_s)
+    reports = []
+    polrig.Rig().study_heading(trials=250000, threads=2, progress=lambda *r: reports.append(r))
+    assert len(reports) >= 2
+    assert all(stage == "study heading: trials" for stage, _, _ in reports)
+    fractions = [f for _, f, _ in reports]
+    assert fractions == sorted(fractions) and 0 < fractions[0] < 1 and fractions[-1] == 1
+    assert reports[-1][2] == 0

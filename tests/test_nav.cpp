@@ -162,6 +162,20 @@ TEST(Heading, NoSolutionWithTheSunAtTheZenith) {
   EXPECT_EQ(solve_heading(to_vec3(sun_enu(40, 88.5)), 30.0, {}).status, HeadingStatus::Ok);
 }
 
+// A sun vector that is not of unit length is refused, not solved into a wrong heading or NaN.
+TEST(Heading, NonUnitSunIsRefused) {
+  for (const Vec3& s : {Vec3{2, 0, 0}, Vec3{0, 0, 0}, Vec3{0.6, 0.8 + 1e-8, 0}}) {
+    EXPECT_THROW(solve_heading(s, 30.0, {}), std::invalid_argument);
+    EXPECT_THROW(sky_view_body(s, 10.0, {}), std::invalid_argument);
+  }
+  try {
+    solve_heading({2, 0, 0}, 30.0, {});
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sun_enu (2, 0, 0) has length 2"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(solve_heading({0.6, 0.8, 1e-10}, 30.0, {}));
+}
+
 // The same test fires with a low sun when the E-vector is nearly vertical: pitch 89.5°,
 // θ_b = 90° (e_b forward) gives u = Rx(89.5°)·Y = (0, cos 89.5°, sin 89.5°), so
 // √(a²+b²) = cos 89.5°·cos h_s < sin 1° for any sun.

@@ -104,6 +104,10 @@ TEST(Site, ProblemNamesTheCoordinateAndItsRange) {
   EXPECT_EQ(site_problem(Site{0, -180.5, 0}),
             "longitude -180.5 is outside [-180, 180] (degrees, east positive)");
   EXPECT_EQ(site_problem(Site{NAN, 0, 0}), "latitude nan is outside [-90, 90] (degrees, north positive)");
+  EXPECT_FALSE(site_problem(Site{0, 0, -1e5}));
+  EXPECT_EQ(site_problem(Site{0, 0, 2e5}),
+            "height 200000 m is outside [-1e5, 1e5] (m above the WGS-84 ellipsoid)");
+  EXPECT_TRUE(site_problem(Site{0, 0, NAN}));
 }
 
 TEST(SunPosition, DalianOutdoor1) {

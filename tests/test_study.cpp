@@ -14,6 +14,7 @@
 #include <span>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -722,6 +723,33 @@ TEST(SourceSeam, TheFactoryKnowsTheKindsTheKeyAccepts) {
 // ---------------------------------------------------------------------------------------------
 // study heading (study/heading_trials)
 // ---------------------------------------------------------------------------------------------
+
+// The settings' ranges, named by field (Python's keywords) or by the caller's names (the CLI's).
+TEST(HeadingTrials, SettingsOutOfRangeAreRefusedByName) {
+  polrig::HeadingStudySettings s;
+  EXPECT_NO_THROW(polrig::check_heading_study_settings(s));
+  s.p_max_min = 0.9;
+  try {
+    polrig::check_heading_study_settings(s, [](std::string_view f) { return "--" + std::string(f); });
+    ADD_FAILURE() << "p_max_min above p_max_max accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "--p_max_min 0.9 is above --p_max_max 0.7");
+  }
+  s = {};
+  s.roll_sd_deg = 31;
+  try {
+    polrig::check_heading_study_settings(s);
+    ADD_FAILURE() << "roll_sd_deg 31 accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "roll_sd_deg: expected a finite number in [0, 30] °, got 31");
+  }
+  s = {};
+  s.trials = 0;
+  EXPECT_THROW(polrig::heading_trials(polrig::Rig{}, s), std::invalid_argument);
+  s = {};
+  s.sync_max_s = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(polrig::check_heading_study_settings(s), std::invalid_argument);
+}
 
 // A level body, no turn, no INS error, a mount turned by m_z about the sensor's axis only: the
 // sensor frame turns by m_z anticlockwise, so θ_b falls by m_z and so does the heading

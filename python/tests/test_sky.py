@@ -139,23 +139,61 @@ def test_broadcasting_shapes():
         sky.light([1.0, 2.0], [1.0, 2.0, 3.0])
 
 
-def test_sun_position_independent_check():
-    # sky/sun.h: with refraction off, sin h = sin φ sin δ + cos φ cos δ cos LHA holds exactly.
+def near(got, text):
+    """A spec number given to its last digit: within half a unit of that digit plus 0.001° (spec
+    sky-and-compasses.md §1.1: the independent formulas agree to under 0.001°)."""
+    decimals = len(text.partition(".")[2])
+    return abs(got - float(text)) <= 0.5 * 10.0 ** -decimals + 0.001
+
+
+def test_sun_position_matches_the_spec_numbers():
+    # spec sky-and-compasses.md §1.1 "Checks" (Beijing time = UTC + 8 h), geometric sun.
+    beijing = (39.979, 116.339)
+    s = polrig.sun_position(["2019-09-18T08:14:00Z", "2019-09-18T08:34:00Z"], beijing)
+    assert near(s.elevation_deg[0], "22.94") and near(s.azimuth_deg[0], "252.1")
+    assert near(s.declination_deg[0], "1.93") and near(s.lha_deg[0], "61.27")
+    assert near(s.elevation_deg[1], "19.26")
+    changsha = (28.221, 112.992)
+    c = polrig.sun_position(["2015-12-16T05:37:00Z", "2015-12-16T06:37:00Z", "2015-12-16T08:40:00Z"], changsha)
+    assert near(c.azimuth_deg[0], "200.87") and near(c.azimuth_deg[1], "215.42")
+    assert near(c.zenith_deg[1], "60.75") and near(c.zenith_deg[2], "80.45")
+    dalian = (38 + 52 / 60 + 45 / 3600, 121 + 32 / 60 + 38 / 3600)
+    d = polrig.sun_position(["2018-11-16T08:09:40Z", "2018-11-16T08:10:34Z", "2018-11-16T08:11:28Z"], dalian)
+    assert abs(d.azimuth_deg[1] - d.azimuth_deg[0] - 0.1474) <= 0.00005 + 0.00001  # measured 0.147419
+    assert near(d.elevation_deg[0], "4.42") and near(d.elevation_deg[2], "4.11")
+    w19 = polrig.Sky(site=dalian, utc="2019-07-01T11:01:00Z").sun()
+    assert near(w19.elevation_deg, "2.9") and near(w19.azimuth_deg, "297.6")
+
+
+def test_sun_position_shapes_and_sites():
     times = np.datetime64("2018-11-16T00:00") + np.arange(0, 86400, 3600).astype("timedelta64[s]")
     s = polrig.sun_position(times, SITE)
-    phi = np.radians(SITE[0])
-    d, H = np.radians(s.declination_deg), np.radians(s.lha_deg)
-    assert np.allclose(np.sin(np.radians(s.elevation_deg)),
-                       np.sin(phi) * np.sin(d) + np.cos(phi) * np.cos(d) * np.cos(H), atol=1e-12)
     assert s.azimuth_deg.shape == (24,) and s.enu.shape == (24, 3)
     one = polrig.sun_position(UTC, SITE)
     assert one.azimuth_deg.shape == ()
     assert float(one.azimuth_deg) == polrig.Sky(site=SITE, utc=UTC).sun().azimuth_deg
     aware = datetime.datetime(2018, 11, 16, 8, 9, 40, tzinfo=datetime.timezone.utc)
     assert polrig.Sky(utc=aware).sun().azimuth_deg == polrig.Sky(utc=UTC).sun().azimuth_deg
-    # many sites at one time
-    sites = np.array([[0.0, 0.0], [45.0, 90.0], [-30.0, -60.0, 1000.0][:2]])
-    assert polrig.sun_position(UTC, sites).elevation_deg.shape == (3,)
+    # many sites at one time, with heights: each as the sky at that site (the height moves the
+    # topocentric sun, so a dropped height would show)
+    sites = np.array([[0.0, 0.0, 0.0], [45.0, 90.0, 3000.0], [-30.0, -60.0, 90000.0]])
+    many = polrig.sun_position(UTC, sites)
+    assert many.elevation_deg.shape == (3,)
+    for k in range(3):
+        assert many.elevation_deg[k] == polrig.Sky(site=tuple(sites[k]), utc=UTC).sun().elevation_deg
+    assert many.elevation_deg[2] != polrig.sun_position(UTC, sites[2, :2]).elevation_deg
+    # 2-D times (a list of lists and a str array), element for element the flat ones
+    grid = [["2018-11-16T08:00:00Z", "2018-11-16T09:00:00Z"], ["2018-11-16T10:00:00Z", "2018-11-16T11:00:00Z"]]
+    g = polrig.sun_position(grid, SITE)
+    assert g.azimuth_deg.shape == (2, 2)
+    assert np.array_equal(g.azimuth_deg.ravel(), polrig.sun_position(sum(grid, []), SITE).azimuth_deg)
+    assert np.array_equal(polrig.sun_position(np.array(grid), SITE).azimuth_deg, g.azimuth_deg)
+    with pytest.raises(ValueError, match=r"site\[\.\.\., 2\] \(height_m\): element 1: height 200000 m"):
+        polrig.sun_position(UTC, [[0.0, 0.0, 0.0], [1.0, 1.0, 2e5]])
+    with pytest.raises(ValueError, match=r"site\[\.\.\., 0\] \(lat_deg\): element 0: latitude 91"):
+        polrig.sun_position(UTC, [91.0, 0.0])
+    with pytest.raises(ValueError, match=r"site: height -200000 m is outside \[-1e5, 1e5\]"):
+        polrig.Sky(site=(38.9, 121.5, -2e5))
 
 
 def test_errors_name_the_argument():
@@ -173,7 +211,7 @@ def test_errors_name_the_argument():
         polrig.Sky().light([0, 0], [10, 91])
     with pytest.raises(ValueError, match=r"view_az_deg: element 0 is nan"):
         polrig.Sky().stokes([np.nan], [10])
-    with pytest.raises(ValueError, match=r"utc\[1\]: invalid UTC time .*2150"):
+    with pytest.raises(ValueError, match=r"utc \(element 1\): invalid UTC time .*2150"):
         polrig.sun_position(["2018-01-01T00:00:00Z", "2150-01-01T00:00:00Z"], SITE)
     with pytest.raises(ValueError, match="P_max"):
         polrig.Sky(p_max_table=[[10, 0.5], [5, 0.6]])
@@ -196,15 +234,49 @@ def test_p_max_table_is_used():
 def test_drift_corrections_follow_the_sun():
     t = np.datetime64("2018-11-16T08:09:40") + np.arange(0, 600, 60).astype("timedelta64[s]")
     d = polrig.drift_corrections(t, SITE, "per-stop", p_max=0.7)
-    sun = np.array([polrig.Sky(site=SITE, utc=x).sun().azimuth_deg for x in t])
-    assert np.allclose(d.dtheta_deg, -(sun - sun[0]), atol=1e-9)  # sky/drift.h: −ΔA_s
-    assert d.d_ratio[0] == 1 and d.d_ratio.shape == (10,)
-    assert polrig.drift_corrections(t, SITE, "none").dtheta_deg.shape == (0,)
-    assert polrig.drift_corrections(t, SITE, "angle").d_ratio.shape == (0,)
+    sun = polrig.sun_position(t, SITE)
+    # sky/drift.h: −ΔA_s, the sun of each stop computed exactly (as few rows of one site are)
+    single = np.array([polrig.Sky(site=SITE, utc=x).sun().azimuth_deg for x in t])
+    assert np.array_equal(d.dtheta_deg, -(single - single[0]))
+    # d(t_k)/d(t_0) from the zenith's DoP, spec §1.2 with γ = θ_s: P_max·sin²θ_s/(1 + cos²θ_s)
+    suns = [polrig.Sky(site=SITE, utc=x).sun() for x in t]
+    c = np.cos(np.deg2rad([x.zenith_deg for x in suns]))
+    dop = 0.7 * (1.0 - c * c) / (1.0 + c * c)
+    for k in range(10):
+        assert d.d_ratio[k] == dop[k] / dop[0], k
+    # the same DoP as the sky model's own at the zenith (another route: vectors, not θ_s)
+    zenith = np.array([polrig.Sky(site=SITE, utc=x, p_max=0.7).light(0.0, 90.0).dop for x in t])
+    assert np.allclose(dop, zenith, rtol=1e-12, atol=0)
+    assert d.d_ratio.shape == (10,) and sun.azimuth_deg.shape == (10,)
+    none = polrig.drift_corrections(t, SITE, "none")
+    assert np.array_equal(none.dtheta_deg, np.zeros(10)) and np.array_equal(none.d_ratio, np.ones(10))
+    angle = polrig.drift_corrections(t, SITE, "angle")
+    assert np.array_equal(angle.dtheta_deg, d.dtheta_deg) and np.array_equal(angle.d_ratio, np.ones(10))
     lin = polrig.drift_corrections(t, SITE, "linear")
     assert np.allclose(lin.dtheta_deg, np.linspace(lin.dtheta_deg[0], lin.dtheta_deg[-1], 10), atol=1e-12)
+    # spec §1.1: ΔA_s = 0.1474° over 16:09:40–16:10:34 Beijing time (measured 0.147419)
+    dalian = (38 + 52 / 60 + 45 / 3600, 121 + 32 / 60 + 38 / 3600)
+    w19 = polrig.drift_corrections(["2018-11-16T08:09:40Z", "2018-11-16T08:10:34Z"], dalian, "angle")
+    assert abs(-w19.dtheta_deg[1] - 0.1474) <= 0.00006
     with pytest.raises(ValueError, match="mode 'sideways'"):
         polrig.drift_corrections(t, SITE, "sideways")
+    with pytest.raises(ValueError, match=r"site: latitude 95"):
+        polrig.drift_corrections(t, (95.0, 0.0), "angle")
+    with pytest.raises(ValueError, match=r"utc \(element 1\)"):
+        polrig.drift_corrections(["2018-11-16T08:09:40Z", "later"], SITE, "angle")
+    with pytest.raises(ValueError, match=r"p_max: expected a finite number"):
+        polrig.drift_corrections(t, SITE, "per-stop", p_max=0)
+
+
+def test_light_and_stokes_take_threads():
+    sky = polrig.Sky()
+    az, el = np.meshgrid(np.arange(0, 360, 7.0), np.arange(0, 90, 3.0))
+    a, b = sky.light(az, el, threads=1), sky.light(az, el, threads=2)
+    for k in a.keys():
+        assert np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True), k
+    assert np.array_equal(sky.stokes(az, el, threads=1), sky.stokes(az, el, threads=2))
+    with pytest.raises(ValueError, match="threads=0"):
+        sky.light(0, 10, threads=0)
 
 
 SPECTRA = ROOT / "data" / "spectra"
@@ -238,3 +310,22 @@ def test_spectral_kd_errors():
         polrig.spectral_kd(str(films), str(resp), lamp_temperature_K=100)
     with pytest.raises(polrig.DataError, match="nope.csv"):
         polrig.spectral_kd(str(SPECTRA / "nope.csv"), str(resp))
+
+
+def test_spectral_kd_coverage_is_the_clis_message(tmp_path):
+    # a response wider than the films (320-800 nm) and than a sun file: the CLI's message, its
+    # option names replaced by the argument names
+    films = SPECTRA / "sheet-polarizer-synthetic.csv"
+    wide = tmp_path / "wide.csv"
+    wide.write_text("wavelength_nm,response\n300,1\n900,1\n")
+    cli = run_cli("spectral", "kd", "--films", films, "--response", wide, "--no-plots", "-o",
+                  tmp_path / "k", check=False)
+    assert cli.returncode != 0
+    with pytest.raises(polrig.DataError) as e:
+        polrig.spectral_kd(str(films), str(wide))
+    assert str(e.value) == f"films {films}: its wavelengths [320, 800] nm do not cover the response's [300, 900] nm"
+    assert f"--{e.value}" in cli.stderr
+    sun = tmp_path / "sun.csv"
+    sun.write_text("wavelength_nm,extraterrestrial\n330,1\n700,1\n")
+    with pytest.raises(polrig.DataError, match=r"sun .*sun.csv: its wavelengths \[330, 700\] nm do not cover"):
+        polrig.spectral_kd(str(films), str(SPECTRA / "blue-filter-photodiode-synthetic.csv"), sun=str(sun))

@@ -4,6 +4,8 @@
 #include <iostream>
 #include <optional>
 #include <stdexcept>
+#include <string_view>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -20,6 +22,19 @@
 namespace polrig::cli {
 
 namespace {
+
+// The option of `polrig study heading` that sets a HeadingStudySettings field.
+std::string study_heading_option(std::string_view field) {
+  static const std::pair<std::string_view, const char*> options[] = {
+      {"trials", "--trials"}, {"samples", "--samples"}, {"roll_sd_deg", "--roll-sd"},
+      {"pitch_sd_deg", "--pitch-sd"}, {"sync_max_s", "--sync-max"},
+      {"turn_rate_max_dps", "--turn-rate-max"}, {"ins_tilt_sd_deg", "--ins-tilt-sd"},
+      {"mount_tilt_sd_deg", "--mount-tilt-sd"}, {"mount_azimuth_sd_deg", "--mount-azimuth-sd"},
+      {"p_max_min", "--p-max-min"}, {"p_max_max", "--p-max-max"}};
+  for (const auto& [f, option] : options)
+    if (f == field) return option;
+  return std::string(field);
+}
 
 // Reads and checks every row before anything is computed or written.
 std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::optional<Site>& site) {
@@ -39,11 +54,13 @@ std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::option
     throw DataError(fmt::format("{}:{}: no site: give --site LAT,LON or lat_deg and lon_deg "
                                 "columns", f.origin, f.header_line));
   if (f.rows.empty()) throw DataError(fmt::format("{}: no data rows after the header", f.origin));
-  const auto ranged = [&](std::size_t r, std::size_t c, double lo, double hi, const char* what) {
+  const auto ranged = [&](std::size_t r, std::size_t c, std::string_view field, const char* what) {
     const double v = f.number(r, c);
-    if (v < lo || v > hi)
+    const InputRange range = heading_query_range(field);
+    if (v < range.lo || v > range.hi)
       throw DataError(fmt::format("{}:{}: column '{}': {} is outside [{}, {}] ({})", f.origin,
-                                  f.line[r], f.header[c], f.rows[r][c], lo, hi, what));
+                                  f.line[r], f.header[c], f.rows[r][c], range.lo, range.hi,
+                                  what ? what : range.what));
     return v;
   };
   std::vector<HeadingQuery> rows;
@@ -55,14 +72,13 @@ std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::option
       throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
                                   f.rows[r][c_utc], e.what()));
     }
-    h.tilt.roll_deg = ranged(r, c_roll, -180, 180, "degrees, right side down positive");
-    h.tilt.pitch_deg = ranged(r, c_pitch, -90, 90, "degrees, nose up positive");
-    h.aop_deg = ranged(r, c_aop, -360, 360, "θ_b in degrees, anticlockwise from X_b seen from above");
-    if (c_prior && !f.rows[r][*c_prior].empty())
-      h.prior_deg = ranged(r, *c_prior, -360, 360, "degrees clockwise from north; empty for none");
+    h.tilt.roll_deg = ranged(r, c_roll, "roll_deg", nullptr);
+    h.tilt.pitch_deg = ranged(r, c_pitch, "pitch_deg", nullptr);
+    h.aop_deg = ranged(r, c_aop, "aop_deg", nullptr);
+    if (c_prior && !f.rows[r][*c_prior].empty()) h.prior_deg = ranged(r, *c_prior, "prior_deg", nullptr);
     if (c_lat) {
-      h.at.site.lat_deg = ranged(r, *c_lat, -90, 90, "degrees, north positive");
-      h.at.site.lon_deg = ranged(r, *c_lon, -180, 180, "degrees, east positive");
+      h.at.site.lat_deg = ranged(r, *c_lat, "lat_deg", nullptr);
+      h.at.site.lon_deg = ranged(r, *c_lon, "lon_deg", nullptr);
     } else {
       h.at.site = *site;
     }
@@ -184,9 +200,13 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       HeadingStudySettings settings = *s;
-      if (settings.p_max_min > settings.p_max_max)
-        throw DataError(fmt::format("--p-max-min {} is above --p-max-max {}", settings.p_max_min,
-                                    settings.p_max_max));
+      try {
+        check_heading_study_settings(settings, [](std::string_view field) {
+          return study_heading_option(field);
+        });
+      } catch (const std::invalid_argument& e) {
+        throw DataError(e.what());
+      }
       const LoadedRig r = rig->load();
       // Site, time and the sun's settings: a sky rig's `sky:` block (site, first stop, UT1 − UTC,
       // refraction), else W19's dynamic run; an option given on the command line overrides either.

@@ -21,12 +21,6 @@
 namespace polrig::cli {
 namespace {
 
-SkyRadiance parse_radiance(const std::string& name) {
-  if (name == "uniform") return SkyRadiance::Uniform;
-  if (name == "rayleigh") return SkyRadiance::Rayleigh;
-  return SkyRadiance::CieClear;  // CLI::IsMember has refused anything else
-}
-
 struct SkyOptions {
   std::string site, utc, radiance = "uniform";
   double p_max = 0.7;
@@ -49,7 +43,7 @@ struct SkyOptions {
     if (!site.empty()) s.site = parse_site(site);
     if (!utc.empty()) s.first_stop = parse_utc_option(utc);
     if (given("--p-max")) s.model.P_max.constant = p_max;
-    if (given("--radiance")) s.model.radiance = parse_radiance(radiance);
+    if (given("--radiance")) s.model.radiance = *parse_sky_radiance(radiance);  // CLI::IsMember has refused anything else
     if (given("--refraction")) s.sun.refraction = sun.refraction;
     if (given("--ut1-minus-utc")) s.sun.ut1_minus_utc_s = sun.ut1_minus_utc_s;
     return s;
@@ -129,11 +123,9 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
       std::optional<LoadedRig> loaded;
       if (!rig->empty()) {
         loaded = load_rig(*rig);
-        if (!loaded->rig.light->has(Source::kTimeDependent))
-          throw RigError(fmt::format("{}: source.model {} has no sky (expected source.model sky)",
-                                     *rig, loaded->rig.source.model));
+        if (!rig_sky(loaded->rig)) throw RigError(no_sky_message(loaded->rig, *rig));
       }
-      const Sky sky = loaded ? opts->sky(loaded->rig.source.sky.resolved_sky(), sky_app)
+      const Sky sky = loaded ? opts->sky(*rig_sky(loaded->rig), sky_app)
                              : opts->sky();
       OutputDir dir = out->open();
       const SkyMap map = sky_map(sky, *size);

@@ -48,35 +48,24 @@ void run_spectral_kd(const SpectralKdOptions& o, const OutputOptions& out) {
 
   const FilmSpectra film = read_film_csv(o.films);
   const Spectrum response = read_spectrum_csv(o.response, o.response_column);
-  const double lo = response.min_nm(), hi = response.max_nm();
-  for (const Spectrum* s : {&film.tau_M, &film.tau_m})
-    if (!s->covers(lo, hi))
-      throw DataError(fmt::format("--films {}: its wavelengths [{}, {}] nm do not cover "
-                                           "the response's [{}, {}] nm", o.films, s->min_nm(),
-                                           s->max_nm(), lo, hi));
-  const Spectrum lamp = blackbody(o.lamp_K, lo, hi);
-  const Spectrum sun = o.sun.empty() ? blackbody(o.sun_K, lo, hi)
+  const Spectrum sun = o.sun.empty() ? blackbody(o.sun_K, response.min_nm(), response.max_nm())
                                      : read_spectrum_csv(o.sun, o.sun_column);
-  if (!sun.covers(lo, hi))
-    throw DataError(fmt::format("--sun {}: its wavelengths [{}, {}] nm do not cover the "
-                                         "response's [{}, {}] nm", o.sun, sun.min_nm(),
-                                         sun.max_nm(), lo, hi));
-  const Spectrum sky = rayleigh_sky(sun);
+  SpectralKd result;
+  try {
+    result = spectral_kd(film, response, o.lamp_K, sun, scale,
+                         {"--films " + o.films, "--sun " + o.sun, "--tau-m-scale"});
+  } catch (const SpectrumError& e) {
+    throw DataError(e.what());
+  }
 
   CsvTable kd({"channel", "tau_m_scale", "d_eff_lamp", "kd_lamp", "d_eff_sky", "kd_sky",
                "kd_sky_minus_lamp"});
-  for (int c = 0; c < kChannels; ++c) {
-    const double s = scale[static_cast<std::size_t>(c)];
-    ChannelKd k;
-    try {
-      k = channel_kd(film, lamp, sky, response, s);
-    } catch (const SpectrumError& e) {
-      throw DataError(fmt::format("channel {} (--tau-m-scale {}): {}", c + 1, s, e.what()));
-    }
-    kd.add_row({double(c + 1), s, k.lamp.d_eff, k.lamp.kd(), k.sky.d_eff, k.sky.kd(),
+  for (std::size_t c = 0; c < result.channels.size(); ++c) {
+    const ChannelKd& k = result.channels[c];
+    kd.add_row({double(c + 1), scale[c], k.lamp.d_eff, k.lamp.kd(), k.sky.d_eff, k.sky.kd(),
                 k.kd_sky_minus_lamp()});
   }
-  const CsvTable spectra = spectra_table(kd_spectra(film, response, lamp, sky));
+  const CsvTable spectra = spectra_table(result.spectra);
 
   OutputDir dir = out.open();
   write_text_file(dir.staging() / "kd.csv", kd.text());

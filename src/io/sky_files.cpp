@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -60,11 +61,12 @@ std::vector<SkyQuery> read_sky_table_input(const CsvFile& in) {
       throw DataError(fmt::format("{}:{}: column '{}' is one sky table writes: rename it",
                                   in.origin, in.header_line, added));
   if (in.rows.empty()) throw DataError(fmt::format("{}: no data rows after the header", in.origin));
-  auto ranged = [&](std::size_t row, std::size_t col, double lo, double hi) {
+  auto ranged = [&](std::size_t row, std::size_t col, std::string_view field) {
     const double v = in.number(row, col);
-    if (v < lo || v > hi)
+    const InputRange range = sky_query_range(field);
+    if (v < range.lo || v > range.hi)
       throw DataError(fmt::format("{}:{}: column '{}': {} is outside [{}, {}]", in.origin, in.line[row],
-                                  in.header[col], in.rows[row][col], lo, hi));
+                                  in.header[col], in.rows[row][col], range.lo, range.hi));
     return v;
   };
   std::vector<SkyQuery> queries(in.rows.size());
@@ -75,9 +77,9 @@ std::vector<SkyQuery> read_sky_table_input(const CsvFile& in) {
     } catch (const std::invalid_argument& e) {
       throw DataError(fmt::format("{}:{}: column 'utc': {}", in.origin, in.line[r], e.what()));
     }
-    q.at.site = {ranged(r, c_lat, -90, 90), ranged(r, c_lon, -180, 180), 0};
-    q.view_az_deg = ranged(r, c_az, -360, 360);
-    q.view_el_deg = ranged(r, c_el, -90, 90);
+    q.at.site = {ranged(r, c_lat, "lat_deg"), ranged(r, c_lon, "lon_deg"), 0};
+    q.view_az_deg = ranged(r, c_az, "view_az_deg");
+    q.view_el_deg = ranged(r, c_el, "view_el_deg");
   }
   return queries;
 }

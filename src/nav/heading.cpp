@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 #include "polrig/units.h"
 
@@ -55,8 +58,17 @@ Vec3 enu_to_body(const Vec3& v_n, double heading_deg, const Tilt& tilt) {
                -std::sin(g));
 }
 
+void check_sun_enu(const Vec3& s) {
+  const double n = vec3::norm(s);
+  if (!(std::abs(n - 1.0) <= 1e-9))
+    throw std::invalid_argument(fmt::format(
+        "sun_enu ({}, {}, {}) has length {}: expected the unit vector to the sun (|‖s‖ − 1| ≤ 1e-9)",
+        s[0], s[1], s[2], n));
+}
+
 HeadingSolution solve_heading(const Vec3& s, double aop_body_deg, const Tilt& tilt,
                               std::optional<double> prior_deg, const HeadingSettings& settings) {
+  check_sun_enu(s);
   HeadingSolution r;
   const double th = deg2rad(aop_body_deg);
   const double g = deg2rad(tilt.roll_deg), l = deg2rad(tilt.pitch_deg);

@@ -9,6 +9,7 @@ namespace polrig {
 
 BodySkyView sky_view_body(const Vec3& sun_enu, double heading_deg, const Tilt& tilt,
                           const SkyModel& model) {
+  check_sun_enu(sun_enu);
   const Vec3 v = body_to_enu({0.0, 0.0, 1.0}, heading_deg, tilt);
   const SkyLight light = sky_light(sun_enu, v, model);
   if (vec3::norm(light.e_vector) == 0.0)

@@ -141,9 +141,12 @@ std::vector<UtcTime> utc_times(const py::handle& obj, const char* name) {
     return out;
   }
   if (py::isinstance<py::str>(obj) || !py::isinstance<py::iterable>(obj)) return {one_utc(obj, name)};
+  // Any nesting (a 2-D list, an object or str array): its elements in C order, named by flat index.
+  const py::object flat = np.attr("ravel")(np.attr("asarray")(obj, py::arg("dtype") = "object"));
   std::vector<UtcTime> out;
   std::size_t i = 0;
-  for (const py::handle item : py::iter(obj)) out.push_back(one_utc(item, fmt::format("{}[{}]", name, i++)));
+  for (const py::handle item : py::iter(flat))
+    out.push_back(one_utc(item, fmt::format("{} (element {})", name, i++)));
   return out;
 }
 

@@ -5,6 +5,7 @@
 // roll right side down positive.
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -48,21 +49,6 @@ py::tuple status_names() {
   for (std::size_t i = 0; i < std::size(kStatuses); ++i)
     t[i] = py::str(std::string(heading_status_name(kStatuses[i])));
   return t;
-}
-
-// An optional per-row prior: NaN (or None) is "no prior", as an empty CSV cell.
-std::vector<double> priors_of(const py::object& prior, const py::object& shape_like) {
-  const py::module_ np = py::module_::import("numpy");
-  if (prior.is_none()) return {};
-  const DoubleArray a = DoubleArray::ensure(np.attr("array")(
-      np.attr("broadcast_to")(as_array(prior, "prior_deg", 0), shape_like), "dtype"_a = "float64",
-      "order"_a = "C"));
-  std::vector<double> v(a.data(), a.data() + a.size());
-  for (std::size_t i = 0; i < v.size(); ++i)
-    if (std::isinf(v[i]) || (!std::isnan(v[i]) && (v[i] < -360 || v[i] > 360)))
-      throw py::value_error(fmt::format("prior_deg: element {} is {}, outside [-360, 360] "
-                                        "(degrees clockwise from north; NaN for none)", i, v[i]));
-  return v;
 }
 
 HeadingSettings heading_settings(double min_horizontal, double tangent_tolerance) {
@@ -121,6 +107,8 @@ void bind_nav(py::module_& m) {
       .def_property_readonly("status", [](const HeadingSolution& s) {
              return std::string(heading_status_name(s.status));
            }, "'ok', 'clamped', 'sun-near-zenith-or-vertical-e' or 'inconsistent'.")
+      .def_property_readonly("status_code", [](const HeadingSolution& s) { return status_code(s.status); },
+                             "The status as its index into polrig.HEADING_STATUS (0 ok … 3 inconsistent).")
       .def_readonly("heading_deg", &HeadingSolution::heading_deg,
                     "The chosen root, degrees clockwise from north, [0, 360); NaN without a heading.")
       .def_readonly("heading_alt_deg", &HeadingSolution::heading_alt_deg, "The other root, degrees; NaN without a heading.")
@@ -132,8 +120,8 @@ void bind_nav(py::module_& m) {
       .def_readonly("from_prior", &HeadingSolution::from_prior,
                     "True when the root was chosen as the nearest the prior (else: sun in front).")
       .def("__repr__", [](const HeadingSolution& s) {
-        return fmt::format("polrig.HeadingSolution(status='{}', heading_deg={}, heading_alt_deg={}, "
-                           "a={}, b={}, c={}, sun_forward={}, from_prior={})",
+        return fmt::format("<polrig.HeadingSolution: status '{}', heading_deg {}, heading_alt_deg {}, "
+                           "a {}, b {}, c {}, sun_forward {}, from_prior {}>",
                            heading_status_name(s.status), s.heading_deg, s.heading_alt_deg, s.a,
                            s.b, s.c, s.sun_forward, s.from_prior ? "True" : "False");
       });
@@ -147,9 +135,10 @@ void bind_nav(py::module_& m) {
                       "prior_deg, else the one with the sun in front; NaN without a heading (the "
                       "CLI writes nan)."},
       {"heading_alt_deg", "the other root, degrees; NaN without a heading."},
-      {"status", "int8 codes indexing polrig.HEADING_STATUS: 0 ok, 1 clamped, "
-                 "2 sun-near-zenith-or-vertical-e, 3 inconsistent."},
-      {"status_name", "the status as the CLI writes it, an object array of str."},
+      {"status", "the status as the CLI writes it (heading.csv's status column): 'ok', 'clamped', "
+                 "'sun-near-zenith-or-vertical-e' or 'inconsistent', an object array of str."},
+      {"status_code", "the status as int8 codes indexing polrig.HEADING_STATUS: 0 ok, 1 clamped, "
+                      "2 sun-near-zenith-or-vertical-e, 3 inconsistent."},
       {"a", "Eq. 25's a."},
       {"b", "Eq. 25's b."},
       {"c", "Eq. 25's c."},
@@ -162,7 +151,7 @@ void bind_nav(py::module_& m) {
       {"dop", "degree of linear polarization P(γ)."}});
   bind_record<HeadingTrialsTag>(m, "HeadingTrials",
       "The trials of `polrig study heading` (trials.csv's columns), arrays of shape (trials,); "
-      "status as int8 codes into polrig.HEADING_STATUS and status_name as str.", {
+      "status as str (the CSV's) and status_code as int8 codes into polrig.HEADING_STATUS.", {
       {"trial", "trial index (int64)."}, {"seed", "the trial's seed (uint64)."},
       {"heading_deg", "true heading at the INS's time, degrees clockwise from north."},
       {"roll_deg", "true roll, degrees, right side down positive."},
@@ -175,7 +164,8 @@ void bind_nav(py::module_& m) {
       {"p_max", "the sky's P_max."}, {"dop", "d at the sensor's axis."},
       {"aop_true_deg", "θ_b from a perfect sensor on a perfect mount, degrees (anticlockwise from above)."},
       {"aop_meas_deg", "θ_b from the noisy voltages, degrees."},
-      {"status", "int8 codes into polrig.HEADING_STATUS."}, {"status_name", "the status as str."},
+      {"status", "the status as trials.csv writes it, an object array of str."},
+      {"status_code", "int8 codes into polrig.HEADING_STATUS."},
       {"heading_est_deg", "estimated heading, degrees; NaN without a solution."},
       {"error_deg", "estimate − truth, [−180, 180) degrees, all factors; NaN without a solution."},
       {"error_sync_deg", "the error from the sync alone."}, {"error_ins_tilt_deg", "from the INS tilt alone."},
@@ -213,23 +203,21 @@ void bind_nav(py::module_& m) {
         sun.ut1_minus_utc_s = ut1_minus_utc_s;
         const HeadingSettings settings = heading_settings(min_horizontal, tangent_tolerance);
         const std::vector<UtcTime> times = utc_times(utc, "utc");
+        const py::object no_prior = py::float_(std::numeric_limits<double>::quiet_NaN());
         const Broadcast b = broadcast({{utc_index(utc), "utc"}, {lat, "lat_deg"}, {lon, "lon_deg"},
-                                       {roll, "roll_deg"}, {pitch, "pitch_deg"}, {aop, "aop_deg"}});
-        check_range(b.values[1], "lat_deg", -90, 90, "degrees, north positive");
-        check_range(b.values[2], "lon_deg", -180, 180, "degrees, east positive");
-        check_range(b.values[3], "roll_deg", -180, 180, "degrees, right side down positive");
-        check_range(b.values[4], "pitch_deg", -90, 90, "degrees, nose up positive");
-        check_range(b.values[5], "aop_deg", -360, 360, "θ_b in degrees, anticlockwise from X_b seen from above");
-        py::tuple shape(b.shape.size());
-        for (std::size_t i = 0; i < b.shape.size(); ++i) shape[i] = b.shape[i];
-        const std::vector<double> priors = priors_of(prior, shape);
+                                       {roll, "roll_deg"}, {pitch, "pitch_deg"}, {aop, "aop_deg"},
+                                       {prior.is_none() ? no_prior : prior, "prior_deg", true}});
+        const char* inputs[] = {"utc", "lat_deg", "lon_deg", "roll_deg", "pitch_deg", "aop_deg", "prior_deg"};
+        for (std::size_t k = 1; k <= 5; ++k) check_input(b.values[k], inputs[k], heading_query_range(inputs[k]));
+        check_input(b.values[6], "prior_deg", heading_query_range("prior_deg"),
+                    "degrees clockwise from north; NaN for none");
         std::vector<HeadingQuery> queries(b.size);
         for (std::size_t i = 0; i < b.size; ++i) {
           HeadingQuery& q = queries[i];
           q.at = {times[static_cast<std::size_t>(b.values[0][i])], {b.values[1][i], b.values[2][i], 0}};
           q.tilt = {b.values[3][i], b.values[4][i]};
           q.aop_deg = b.values[5][i];
-          if (!priors.empty() && !std::isnan(priors[i])) q.prior_deg = priors[i];
+          if (!std::isnan(b.values[6][i])) q.prior_deg = b.values[6][i];
         }
         const Progress p = progress_from(progress);
         ThreadLimit limit(threads);
@@ -266,8 +254,8 @@ void bind_nav(py::module_& m) {
         r.add("sun_el_deg", take(std::move(el), b.shape));
         r.add("heading_deg", take(std::move(h), b.shape));
         r.add("heading_alt_deg", take(std::move(h2), b.shape));
-        r.add("status", codes);
-        r.add("status_name", np.attr("array")(names, "dtype"_a = "object")[codes]);
+        r.add("status", np.attr("array")(names, "dtype"_a = "object")[codes]);
+        r.add("status_code", codes);
         r.add("a", take(std::move(a), b.shape));
         r.add("b", take(std::move(bb), b.shape));
         r.add("c", take(std::move(c), b.shape));
@@ -291,8 +279,11 @@ void bind_nav(py::module_& m) {
        "tangent_tolerance: HeadingSettings (nav/heading.h; the CLI uses the defaults).\n" +
        kThreadsDoc + "\n" + kProgressDoc +
        "\nReturns polrig.Headings: sun_az_deg, sun_el_deg, heading_deg, heading_alt_deg (NaN "
-       "without a heading), status (int8 codes into polrig.HEADING_STATUS), status_name, a, b, c, "
-       "sun_forward, from_prior, each of shape S.").c_str());
+       "without a heading), status (str, the CSV's), status_code (int8 codes into "
+       "polrig.HEADING_STATUS), a, b, c, "
+       "sun_forward, from_prior, each of shape S. The sun of a row is exact when few rows share "
+       "its site and interpolated along a SunTrack (sky/sun_rows.h) when many do, so a row's sun "
+       "may differ by ~1e-8° depending on how many rows share the call.").c_str());
 
   m.def("solve_heading", [](const py::object& sun_enu, double aop_body_deg, double roll_deg,
                             double pitch_deg, std::optional<double> prior_deg, double min_horizontal,
@@ -311,14 +302,14 @@ void bind_nav(py::module_& m) {
       "tangent_tolerance"_a = HeadingSettings{}.tangent_tolerance,
       (std::string("Solves W19 Eq. 25 once (nav/heading.h's solve_heading): a·cos H + b·sin H = c.\n\n") +
        kFrames +
-       "\n\nsun_enu: the unit vector to the sun in ENU, shape (3,) (e.g. Sky.sun().enu); "
+       "\n\nsun_enu: the unit vector to the sun in ENU, shape (3,) (e.g. Sky.sun().enu), its length within 1e-9 of 1; "
        "aop_body_deg: θ_b, degrees; roll_deg, pitch_deg: the tilt, degrees; prior_deg: None or a "
        "heading (degrees clockwise from north) whose nearest root is chosen.\n"
-       "Returns polrig.HeadingSolution (a status, never an exception, when there is no heading).").c_str());
+       "Returns polrig.HeadingSolution (a status, never an exception, when there is no heading).\n"
+       "Raises ValueError for a sun_enu whose length is not 1 within 1e-9 or a non-finite argument.").c_str());
 
   m.def("sky_view_body", [](const py::object& sun_enu, const py::object& heading_deg,
-                            const py::object& roll_deg, const py::object& pitch_deg, double p_max,
-                            const std::string& radiance) {
+                            const py::object& roll_deg, const py::object& pitch_deg, double p_max) {
         const DoubleArray s = as_array(sun_enu, "sun_enu", 0, 3);
         const auto comp = [&](int k) { return s.attr("__getitem__")(py::make_tuple(py::ellipsis(), k)); };
         const Broadcast b = broadcast({{comp(0), "sun_enu[..., 0]"}, {comp(1), "sun_enu[..., 1]"},
@@ -327,7 +318,6 @@ void bind_nav(py::module_& m) {
         SkyModel model;
         check_option(p_max, "p_max", 1e-6, 1.0, "");
         model.P_max.constant = p_max;
-        model.radiance = radiance_of(radiance);
         std::vector<double> aop(b.size), dop(b.size);
         {
           py::gil_scoped_release release;
@@ -342,45 +332,31 @@ void bind_nav(py::module_& m) {
         r.add("dop", take(std::move(dop), b.shape));
         return RecordOf<BodySkyViewTag>(std::move(r));
       }, "sun_enu"_a, "heading_deg"_a, "roll_deg"_a = 0.0, "pitch_deg"_a = 0.0, py::kw_only(),
-      "p_max"_a = 0.7, "radiance"_a = "uniform",
+      "p_max"_a = 0.7,
       (std::string("The forward model (nav/heading.h's sky_view_body): the E-vector angle θ_b and "
                    "the degree of polarization a sensor looking along +Z_b sees of the "
                    "single-scattering sky, vectorised.\n\n") +
        kFrames +
-       "\n\nsun_enu: unit vectors to the sun in ENU, shape (..., 3); heading_deg (clockwise from "
+       "\n\nsun_enu: unit vectors to the sun in ENU, shape (..., 3), each of length 1 within 1e-9 (else ValueError); heading_deg (clockwise from "
        "north), roll_deg, pitch_deg: degrees; the leading shape of sun_enu and the others "
-       "broadcast to S. p_max in (0, 1]; radiance as polrig.Sky.\n"
+       "broadcast to S. p_max in (0, 1] (the radiance model does not enter: AoP and DoP do not depend on it).\n"
        "Returns polrig.BodySkyView: aop_body_deg in [0, 180) (NaN where the view lies along the "
        "sun's line) and dop, shape S. solve_heading inverts it.").c_str());
 
-  m.def("study_heading", [](const PyRig& rig, int trials, const py::object& site, const py::object& utc,
+  rig_class(m).def("study_heading", [](const PyRig& rig, int trials, const py::object& site, const py::object& utc,
                             std::optional<bool> refraction, std::optional<double> ut1_minus_utc_s,
                             double roll_sd, double pitch_sd, double sync_max, double turn_rate_max,
                             double ins_tilt_sd, double mount_tilt_sd, double mount_azimuth_sd,
                             double p_max_min, double p_max_max, int samples,
                             std::optional<int> threads, const py::object& progress) {
         HeadingStudySettings s;
-        if (trials < 1 || trials > 10000000)
-          throw py::value_error(fmt::format("trials={}: expected a whole number in [1, 10000000]", trials));
-        if (samples < 1 || samples > 100000)
-          throw py::value_error(fmt::format("samples={}: expected a whole number in [1, 100000]", samples));
         s.trials = trials;
         s.samples = samples;
-        check_option(roll_sd, "roll_sd_deg", 0, 30, "°");
-        check_option(pitch_sd, "pitch_sd_deg", 0, 30, "°");
-        check_option(sync_max, "sync_max_s", 0, 10, "s");
-        check_option(turn_rate_max, "turn_rate_max_dps", 0, 360, "°/s");
-        check_option(ins_tilt_sd, "ins_tilt_sd_deg", 0, 10, "°");
-        check_option(mount_tilt_sd, "mount_tilt_sd_deg", 0, 10, "°");
-        check_option(mount_azimuth_sd, "mount_azimuth_sd_deg", 0, 10, "°");
-        check_option(p_max_min, "p_max_min", 0.05, 1, "");
-        check_option(p_max_max, "p_max_max", 0.05, 1, "");
-        if (p_max_min > p_max_max)
-          throw py::value_error(fmt::format("p_max_min {} is above p_max_max {}", p_max_min, p_max_max));
         s.roll_sd_deg = roll_sd, s.pitch_sd_deg = pitch_sd, s.sync_max_s = sync_max;
         s.turn_rate_max_dps = turn_rate_max, s.ins_tilt_sd_deg = ins_tilt_sd;
         s.mount_tilt_sd_deg = mount_tilt_sd, s.mount_azimuth_sd_deg = mount_azimuth_sd;
         s.p_max_min = p_max_min, s.p_max_max = p_max_max;
+        check_heading_study_settings(s);
         // The run's site, time and sun: a sky rig's sky block, else W19's dynamic run; an
         // argument given overrides either (as the CLI's options).
         use_rig_sky(rig.rig(), s);
@@ -447,13 +423,13 @@ void bind_nav(py::module_& m) {
         r.add("trial", take(std::move(index)));
         r.add("seed", take(std::move(seed)));
         for (const auto& [name, get] : before) r.add(name, column(get));
-        r.add("status", codes);
-        r.add("status_name", np.attr("array")(status_names(), "dtype"_a = "object")[codes]);
+        r.add("status", np.attr("array")(status_names(), "dtype"_a = "object")[codes]);
+        r.add("status_code", codes);
         for (const auto& [name, get] : after) r.add(name, column(get));
         r.add("summary", py::cast(summary_record(summary)));
         r.add("cdf", py::cast(cdf_record(std::move(cdf))));
         return RecordOf<HeadingTrialsTag>(std::move(r));
-      }, "rig"_a, py::kw_only(), "trials"_a = 1000, "site"_a = py::none(), "utc"_a = py::none(),
+      }, py::kw_only(), "trials"_a = 1000, "site"_a = py::none(), "utc"_a = py::none(),
       "refraction"_a = py::none(), "ut1_minus_utc_s"_a = py::none(), "roll_sd_deg"_a = 5.0,
       "pitch_sd_deg"_a = 5.0, "sync_max_s"_a = 0.1, "turn_rate_max_dps"_a = 30.0,
       "ins_tilt_sd_deg"_a = 0.015, "mount_tilt_sd_deg"_a = 0.2, "mount_azimuth_sd_deg"_a = 0.05,
@@ -463,14 +439,14 @@ void bind_nav(py::module_& m) {
                    "a moving platform (study/heading_trials.h); bit for bit the rows of its "
                    "trials.csv, the same for any thread count.\n\n") +
        kFrames +
-       "\n\nrig: a polrig.Rig (its device, electronics and seed; a sky rig's sky block gives the "
-       "site, time, refraction and UT1 − UTC). trials in [1, 1e7]. site: (lat_deg, lon_deg[, "
+       "\n\nThe rig gives the device, electronics and seed; a sky rig's sky block gives the "
+       "site, time, refraction and UT1 − UTC. trials in [1, 1e7]. site: (lat_deg, lon_deg[, "
        "height_m]) or None (the rig's sky, else W19's Dalian site); utc: a time or None (the rig's "
        "first stop, else 2019-07-01T11:01:00Z); refraction, ut1_minus_utc_s ([-1, 1] s): None keeps "
        "the rig's. roll_sd_deg, pitch_sd_deg in [0, 30]°; sync_max_s in [0, 10] s; "
        "turn_rate_max_dps in [0, 360] °/s; ins_tilt_sd_deg, mount_tilt_sd_deg, "
        "mount_azimuth_sd_deg in [0, 10]°; p_max_min ≤ p_max_max in [0.05, 1]; samples in [1, "
-       "1e5] averaged per heading.\n" +
+       "1e5] averaged per heading. Raises ValueError naming a setting out of range.\n" +
        kThreadsDoc + "\n" + kProgressDoc +
        "\nReturns polrig.HeadingTrials: trials.csv's columns as arrays of shape (trials,) (errors "
        "NaN for a trial without a heading), .summary (summary.csv) and .cdf (cdf.csv).").c_str());

@@ -2,6 +2,8 @@
 // What the sky and navigation bindings share: broadcasting several array arguments (and an array
 // of UTC times) to one shape, and result records whose fields are NumPy arrays named as the CSV
 // columns.
+#include <cmath>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,11 +23,18 @@ struct Broadcast {
   std::vector<std::vector<double>> values;  // one per argument, in the order given
 };
 
-inline Broadcast broadcast(const std::vector<std::pair<py::object, const char*>>& args) {
+// An argument to broadcast: NaN allowed where it means "none" (a prior), never ±inf.
+struct BroadcastArg {
+  py::object obj;
+  const char* name;
+  bool nan_ok = false;
+};
+
+inline Broadcast broadcast(const std::vector<BroadcastArg>& args) {
   const py::module_ np = py::module_::import("numpy");
   std::vector<DoubleArray> arrays;
   std::string names;
-  for (const auto& [obj, name] : args) {
+  for (const auto& [obj, name, nan_ok] : args) {
     arrays.push_back(as_array(obj, name, 0));
     names += fmt::format("{}{}{}", names.empty() ? "" : ", ", name,
                          py::str(py::tuple(arrays.back().attr("shape"))).cast<std::string>());
@@ -46,7 +55,15 @@ inline Broadcast broadcast(const std::vector<std::pair<py::object, const char*>>
       for (py::ssize_t d = 0; d < a.ndim(); ++d) b.shape.push_back(a.shape(d));
       b.size = static_cast<std::size_t>(a.size());
     }
-    b.values.push_back(finite_values(a, args[i].second));
+    if (!args[i].nan_ok) {
+      b.values.push_back(finite_values(a, args[i].name));
+      continue;
+    }
+    std::vector<double> v(a.data(), a.data() + a.size());
+    for (std::size_t k = 0; k < v.size(); ++k)
+      if (std::isinf(v[k]))
+        throw py::value_error(fmt::format("{}: element {} is {} (NaN means none)", args[i].name, k, v[k]));
+    b.values.push_back(std::move(v));
   }
   return b;
 }
@@ -71,7 +88,11 @@ inline py::object utc_index(const py::handle& utc) {
 // A result: named fields (NumPy arrays or numbers), one Python class per kind of result.
 struct Record {
   std::vector<std::pair<std::string, py::object>> fields;
-  void add(std::string name, py::object value) { fields.emplace_back(std::move(name), std::move(value)); }
+  // Arrays are made read-only: the record is a result, its fields the CSV's columns.
+  void add(std::string name, py::object value) {
+    if (py::isinstance<py::array>(value)) value.attr("setflags")(py::arg("write") = false);
+    fields.emplace_back(std::move(name), std::move(value));
+  }
 };
 
 template <class Tag>
@@ -86,9 +107,13 @@ template <class Tag>
 py::class_<RecordOf<Tag>> bind_record(py::module_& m, const char* name, const char* doc,
                                       const std::vector<std::pair<const char*, const char*>>& fields) {
   py::class_<RecordOf<Tag>> c(m, name, doc);
-  for (std::size_t i = 0; i < fields.size(); ++i) {
-    c.def_property_readonly(fields[i].first, [i](const RecordOf<Tag>& r) { return r.fields.at(i).second; },
-                            fields[i].second);
+  for (const auto& [field, field_doc] : fields) {
+    const std::string key = field, type = name;
+    c.def_property_readonly(field, [key, type](const RecordOf<Tag>& r) -> py::object {
+      for (const auto& [k, v] : r.fields)
+        if (k == key) return v;
+      throw std::logic_error(fmt::format("polrig.{}: the record has no field '{}'", type, key));
+    }, field_doc);
   }
   c.def("keys", [](const RecordOf<Tag>& r) {
     std::vector<std::string> k;
@@ -102,15 +127,16 @@ py::class_<RecordOf<Tag>> bind_record(py::module_& m, const char* name, const ch
   }, "The fields as a dict {name: value} (the arrays themselves, not copies).");
   const std::string type = name;
   c.def("__repr__", [type](const RecordOf<Tag>& r) {
-    std::string s = "polrig." + type + "(";
+    std::string s = fmt::format("<polrig.{}:", type);
     for (std::size_t i = 0; i < r.fields.size(); ++i) {
       const py::object& v = r.fields[i].second;
       const std::string what = py::isinstance<py::array>(v)
-                                   ? "array" + py::str(v.attr("shape")).cast<std::string>()
-                                   : py::repr(v).cast<std::string>();
-      s += fmt::format("{}{}={}", i ? ", " : "", r.fields[i].first, what);
+                                   ? py::str(v.attr("shape")).cast<std::string>()
+                                   : fmt::format("<{}>", py::str(py::type::of(v).attr("__name__")).cast<std::string>());
+      s += fmt::format("{} {} {}", i ? "," : "", r.fields[i].first, what);
     }
-    return s + ")";
+    s += ">";
+    return s;
   });
   return c;
 }

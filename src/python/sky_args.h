@@ -33,6 +33,12 @@ inline void check_range(std::span<const double> v, const char* name, double lo, 
                                         v[i], lo, hi, what));
 }
 
+// check_range with the library's range of a row input (sky_query_range, heading_query_range).
+inline void check_input(std::span<const double> v, const char* name, const InputRange& range,
+                        const char* what = nullptr) {
+  check_range(v, name, range.lo, range.hi, what ? what : range.what);
+}
+
 // (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m) with the CLI's --site checks.
 inline Site site_of(const py::handle& obj, const char* name) {
   const DoubleArray a = as_array(obj, name, 1);
@@ -63,11 +69,23 @@ inline SiteArrays site_arrays(const py::handle& obj, const char* name) {
           a.shape(a.ndim() - 1) == 3 ? column(2) : np.attr("zeros_like")(column(0))};
 }
 
+// Sites as broadcast rows (latitude, longitude, height): each through the library's site_problem,
+// else ValueError "site[..., 2] (height_m): element 3: height 2e+05 m is outside ...".
+inline void check_site_rows(std::span<const double> lat, std::span<const double> lon,
+                            std::span<const double> height, const char* name) {
+  for (std::size_t i = 0; i < lat.size(); ++i) {
+    const Site s{lat[i], lon[i], height[i]};
+    if (const auto problem = site_problem(s)) {
+      const int k = !site_problem({s.lat_deg, 0, 0}) ? (!site_problem({0, s.lon_deg, 0}) ? 2 : 1) : 0;
+      const char* column[] = {"lat_deg", "lon_deg", "height_m"};
+      throw py::value_error(fmt::format("{}[..., {}] ({}): element {}: {}", name, k, column[k], i, *problem));
+    }
+  }
+}
+
 // The radiance model by the CLI's --radiance name.
 inline SkyRadiance radiance_of(const std::string& name) {
-  if (name == "uniform") return SkyRadiance::Uniform;
-  if (name == "rayleigh") return SkyRadiance::Rayleigh;
-  if (name == "cie-clear") return SkyRadiance::CieClear;
+  if (const auto r = parse_sky_radiance(name)) return *r;
   throw py::value_error(fmt::format("radiance '{}': expected one of uniform, rayleigh, cie-clear", name));
 }
 

@@ -50,9 +50,7 @@ struct PySky {
   explicit PySky(const Sky& s) : sky(s), sun(sun_position(s.first_stop, s.site, s.sun)) {}
 };
 
-std::string radiance_name(SkyRadiance r) {
-  return r == SkyRadiance::Uniform ? "uniform" : r == SkyRadiance::Rayleigh ? "rayleigh" : "cie-clear";
-}
+std::string radiance_name(SkyRadiance r) { return std::string(sky_radiance_name(r)); }
 
 // The sun's position and its ENU unit vector as a record of arrays of `shape`.
 Record sun_record(const std::vector<SunPosition>& suns, const std::vector<py::ssize_t>& shape) {
@@ -112,14 +110,6 @@ py::array_t<float> image(std::vector<float>&& layer, int size) {
   return take(std::move(layer), {size, size});
 }
 
-// A spectrum CSV with the CLI's coverage message when it does not span the response's band.
-void check_covers(const Spectrum& s, const Spectrum& response, const std::string& what) {
-  if (!s.covers(response.min_nm(), response.max_nm()))
-    throw DataError(fmt::format("{}: its wavelengths [{}, {}] nm do not cover the response's "
-                                "[{}, {}] nm", what, s.min_nm(), s.max_nm(), response.min_nm(),
-                                response.max_nm()));
-}
-
 constexpr const char* kSunFields =
     "azimuth_deg: A_s, geographic, from north towards east (clockwise seen from above), [0, 360).\n"
     "elevation_deg: h_s (refracted when refraction=True); zenith_deg: 90 - h_s.\n"
@@ -149,8 +139,8 @@ void bind_sky(py::module_& m) {
                         "gha_deg"_a = s.gha_deg, "lha_deg"_a = s.lha_deg);
       }, "The six angles as a dict (degrees), as sun.yaml writes them.")
       .def("__repr__", [](const SunPosition& s) {
-        return fmt::format("polrig.SunPosition(azimuth_deg={}, elevation_deg={}, zenith_deg={}, "
-                           "declination_deg={}, gha_deg={}, lha_deg={})", s.azimuth_deg,
+        return fmt::format("<polrig.SunPosition: azimuth_deg {}, elevation_deg {}, zenith_deg {}, "
+                           "declination_deg {}, gha_deg {}, lha_deg {}>", s.azimuth_deg,
                            s.elevation_deg, s.zenith_deg, s.declination_deg, s.gha_deg, s.lha_deg);
       });
 
@@ -255,13 +245,12 @@ void bind_sky(py::module_& m) {
            "ut1_minus_utc_s: UT1 − UTC in seconds, [-1, 1].\n"
            "p_max_table: None, or an (N, 2) array of (sun elevation in degrees, rising; P_max), "
            "interpolated linearly and held beyond its ends; replaces p_max.\n"
-           "Raises ValueError naming the argument and value (the CLI's ranges), polrig.DataError "
-           "for a bad site, ValueError for a date outside ERFA's range.")
+           "Raises ValueError naming the argument and value (the CLI's ranges; a site out of "
+           "range included), and for a date outside ERFA's range.")
       .def_static("from_rig", [](const PyRig& r) {
-             if (!r.rig().light->has(Source::kTimeDependent))
-               throw RigError(fmt::format("{}: source.model {} has no sky (expected source.model sky)",
-                                          r.loaded.origin, r.rig().source.model));
-             return PySky(r.rig().source.sky.resolved_sky());
+             const std::optional<Sky> sky = rig_sky(r.rig());
+             if (!sky) throw RigError(no_sky_message(r.rig(), r.loaded.origin));
+             return PySky(*sky);
            }, "rig"_a,
            "The sky of a rig with source.model sky (its sky block: site, first stop, P_max or its "
            "table, radiance, refraction, UT1 − UTC), as `polrig sky RIG` uses it. Raises "
@@ -290,11 +279,12 @@ void bind_sky(py::module_& m) {
            "The sun at the sky's time and site (ERFA's apparent topocentric place): a "
            "polrig.SunPosition (degrees; its .enu is the unit vector to the sun in ENU). The "
            "values of `polrig sky`'s sun.yaml.")
-      .def("light", [](const PySky& s, const py::object& az, const py::object& el) {
+      .def("light", [](const PySky& s, const py::object& az, const py::object& el, std::optional<int> threads) {
              const Broadcast b = view_directions(az, el);
+             ThreadLimit limit(threads);
              return RecordOf<SkyLightTag>(light_record(lights_of(s, b), b.shape));
-           }, "view_az_deg"_a, "view_el_deg"_a,
-           "The sky along viewing directions (where the light comes from), vectorised.\n\n"
+           }, "view_az_deg"_a, "view_el_deg"_a, py::kw_only(), "threads"_a = py::none(),
+           (std::string("The sky along viewing directions (where the light comes from), vectorised.\n\n"
            "view_az_deg: geographic azimuth of the view, degrees, from north towards east "
            "(clockwise seen from above), in [-360, 360]; view_el_deg: its elevation above the "
            "horizon, degrees, in [-90, 90]. Both array-like, broadcast together to a shape S.\n"
@@ -302,9 +292,10 @@ void bind_sky(py::module_& m) {
            "S + (3,) (ENU). aop_deg is χ in the view's local meridian frame: from e_θ (down the "
            "meridian, towards the horizon) towards e_φ = ẑ × v/|ẑ × v| (anticlockwise seen from "
            "above), [0, 180); at the zenith the frame is the limit along view_az_deg. The values "
-           "`polrig sky table` writes for the same time, site and view.")
-      .def("stokes", [](const PySky& s, const py::object& az, const py::object& el) {
+           "`polrig sky table` writes for the same time, site and view.\n") + kThreadsDoc).c_str())
+      .def("stokes", [](const PySky& s, const py::object& az, const py::object& el, std::optional<int> threads) {
              const Broadcast b = view_directions(az, el);
+             ThreadLimit limit(threads);
              const std::vector<SkyLight> lights = lights_of(s, b);
              std::vector<double> out(4 * lights.size());
              for (std::size_t i = 0; i < lights.size(); ++i) {
@@ -314,17 +305,15 @@ void bind_sky(py::module_& m) {
              std::vector<py::ssize_t> shape = b.shape;
              shape.push_back(4);
              return take(std::move(out), shape);
-           }, "view_az_deg"_a, "view_el_deg"_a,
-           "The Stokes vectors (S0, S1, S2, S3) of the sky along viewing directions, vectorised.\n\n"
+           }, "view_az_deg"_a, "view_el_deg"_a, py::kw_only(), "threads"_a = py::none(),
+           (std::string("The Stokes vectors (S0, S1, S2, S3) of the sky along viewing directions, vectorised.\n\n"
            "view_az_deg, view_el_deg: as in Sky.light (degrees; geographic azimuth from north "
            "towards east; elevation above the horizon), broadcast to a shape S.\n"
            "Returns a float64 array of shape S + (4,). The reference axis is e_θ of the view's "
            "local meridian frame (down the meridian, towards the horizon), angles from e_θ towards "
            "e_φ (anticlockwise seen from above): S0 = L, S1 = L·P·cos 2χ, S2 = L·P·sin 2χ, S3 = 0 "
-           "(sky/rayleigh.h's sky_stokes; L relative, 1 at the zenith).")
+           "(sky/rayleigh.h's sky_stokes; L relative, 1 at the zenith).\n") + kThreadsDoc).c_str())
       .def("map", [](const PySky& s, int size, std::optional<int> threads) {
-             if (size < 2 || size > 8192)
-               throw py::value_error(fmt::format("size={}: expected a whole number in [2, 8192] (pixels)", size));
              ThreadLimit limit(threads);
              SkyMap map;
              {
@@ -350,8 +339,8 @@ void bind_sky(py::module_& m) {
             "\nReturns polrig.SkyMap (S0, S1, S2 with reference axis e_θ; aop_deg; dop; inside; "
             "utc; sun).").c_str())
       .def("__repr__", [](const PySky& s) {
-        return fmt::format("polrig.Sky(site=({}, {}, {}), utc='{}', p_max={}, radiance='{}', "
-                           "refraction={}, ut1_minus_utc_s={})", s.sky.site.lat_deg,
+        return fmt::format("<polrig.Sky: site ({}, {}, {}), utc {}, p_max {}, radiance {}, "
+                           "refraction {}, ut1_minus_utc_s {}>", s.sky.site.lat_deg,
                            s.sky.site.lon_deg, s.sky.site.height_m, format_utc(s.sky.first_stop),
                            s.sky.model.P_max.constant, radiance_name(s.sky.model.radiance),
                            s.sky.sun.refraction ? "True" : "False", s.sky.sun.ut1_minus_utc_s);
@@ -369,8 +358,7 @@ void bind_sky(py::module_& m) {
         const Broadcast b = broadcast({{utc_index(utc), "utc"}, {sites.lat, "site[..., 0] (lat_deg)"},
                                        {sites.lon, "site[..., 1] (lon_deg)"},
                                        {sites.height, "site[..., 2] (height_m)"}});
-        check_range(b.values[1], "site[..., 0] (lat_deg)", -90, 90, "degrees, north positive");
-        check_range(b.values[2], "site[..., 1] (lon_deg)", -180, 180, "degrees, east positive");
+        check_site_rows(b.values[1], b.values[2], b.values[3], "site");
         std::vector<SunRow> rows(b.size);
         for (std::size_t i = 0; i < b.size; ++i)
           rows[i] = {times[static_cast<std::size_t>(b.values[0][i])],
@@ -411,12 +399,10 @@ void bind_sky(py::module_& m) {
         check_option(ut1_minus_utc_s, "ut1_minus_utc_s", -1, 1, "s");
         sky.sun.ut1_minus_utc_s = ut1_minus_utc_s;
         const std::vector<UtcTime> times = utc_times(utc, "utc");
-        const Broadcast b = broadcast({{utc_index(utc), "utc"}, {lat, "lat_deg"}, {lon, "lon_deg"},
-                                       {az, "view_az_deg"}, {el, "view_el_deg"}});
-        check_range(b.values[1], "lat_deg", -90, 90, "degrees, north positive");
-        check_range(b.values[2], "lon_deg", -180, 180, "degrees, east positive");
-        check_range(b.values[3], "view_az_deg", -360, 360, "degrees, from north towards east");
-        check_range(b.values[4], "view_el_deg", -90, 90, "degrees above the horizon");
+        const char* names[] = {"utc", "lat_deg", "lon_deg", "view_az_deg", "view_el_deg"};
+        const Broadcast b = broadcast({{utc_index(utc), names[0]}, {lat, names[1]}, {lon, names[2]},
+                                       {az, names[3]}, {el, names[4]}});
+        for (std::size_t k = 1; k <= 4; ++k) check_input(b.values[k], names[k], sky_query_range(names[k]));
         std::vector<SkyQuery> queries(b.size);
         for (std::size_t i = 0; i < b.size; ++i)
           queries[i] = {{times[static_cast<std::size_t>(b.values[0][i])], {b.values[1][i], b.values[2][i], 0}},
@@ -456,7 +442,9 @@ void bind_sky(py::module_& m) {
                    "p_max: P_max in (0, 1]; refraction; ut1_minus_utc_s in [-1, 1] s (as the "
                    "CLI's options; the radiance is uniform).\n") + kThreadsDoc + "\n" + kProgressDoc +
        "\nReturns polrig.SkyTable: sun_az_deg, sun_el_deg, dop, aop_deg (local meridian frame, "
-       "from e_θ towards e_φ), shape S.").c_str());
+       "from e_θ towards e_φ), shape S. A row's sun is exact when few rows share its site and "
+       "interpolated along a SunTrack when many do (sky/sun_rows.h), so it may differ by ~1e-8° "
+       "depending on how many rows share the call.").c_str());
 
   // ---- drift
   m.def("drift_corrections", [](const py::object& utc, const py::object& site, const std::string& mode,
@@ -481,6 +469,10 @@ void bind_sky(py::module_& m) {
           py::gil_scoped_release release;
           d = drift_corrections(times, where, settings, model.P_max, *parsed);
         }
+        // drift.h leaves what a mode does not correct empty; the arrays here are always (N,):
+        // no angle correction is 0°, no d correction a ratio of 1 (as the calibration applies them).
+        if (d.dtheta_deg.empty()) d.dtheta_deg.assign(times.size(), 0.0);
+        if (d.d_ratio.empty()) d.d_ratio.assign(times.size(), 1.0);
         Record r;
         r.add("dtheta_deg", take(std::move(d.dtheta_deg)));
         r.add("d_ratio", take(std::move(d.d_ratio)));
@@ -490,13 +482,14 @@ void bind_sky(py::module_& m) {
       "The sun-drift corrections of an outdoor turntable calibration at each stop's time "
       "(sky/drift.h's drift_corrections: a sensor looking at the zenith).\n\n"
       "utc: the stops' times, a 1-D sequence or datetime64 array (N,); the first stop is the "
-      "earliest. site: (lat_deg, lon_deg[, height_m]). mode: 'none' (both results empty), 'angle' "
+      "earliest. site: (lat_deg, lon_deg[, height_m]). mode: 'none' (no correction: zeros and ones), 'angle' "
       "(the azimuth drift), 'per-stop' (and d(t_k)/d(t_0) from the zenith's DoP), 'linear' (first "
       "and last stop, linear in time). p_max, p_max_table: the sky's P_max (as polrig.Sky); "
       "refraction, ut1_minus_utc_s: the sun's settings.\n"
       "Returns polrig.DriftCorrections: dtheta_deg (N,), degrees added to each stop's table angle "
       "in polrig's sensor frame (anticlockwise seen from above; the E-vector turns clockwise as "
-      "A_s rises, so dtheta = −ΔA_s); d_ratio (N,) for per-stop and linear, else empty. Raises "
+      "A_s rises, so dtheta = −ΔA_s; zeros for 'none'); d_ratio (N,) d(t_k)/d(t_0) for per-stop and "
+      "linear, ones for 'none' and 'angle'. Raises "
       "ValueError for a bad mode, a date ERFA refuses, or an unpolarized zenith at the first "
       "stop (per-stop/linear).");
 
@@ -518,27 +511,23 @@ void bind_sky(py::module_& m) {
         }
         const FilmSpectra film = read_film_csv(films);
         const Spectrum resp = read_spectrum_csv(response, response_column);
-        check_covers(film.tau_M, resp, "films " + films);
-        check_covers(film.tau_m, resp, "films " + films);
-        const double lo = resp.min_nm(), hi = resp.max_nm();
-        const Spectrum lamp = blackbody(lamp_K, lo, hi);
-        const Spectrum sun = sun_path ? read_spectrum_csv(*sun_path, sun_column) : blackbody(sun_K, lo, hi);
-        if (sun_path) check_covers(sun, resp, "sun " + *sun_path);
-        const Spectrum sky = rayleigh_sky(sun);
+        const Spectrum sun = sun_path ? read_spectrum_csv(*sun_path, sun_column)
+                                      : blackbody(sun_K, resp.min_nm(), resp.max_nm());
+        SpectralKd result;
+        try {
+          result = spectral_kd(film, resp, lamp_K, sun, scale,
+                               {"films " + films, "sun " + sun_path.value_or(""), "tau_m_scale"});
+        } catch (const SpectrumError& e) {
+          throw DataError(e.what());
+        }
         std::vector<double> channel, s_col, dl, kl, ds, ks, shift;
-        for (int c = 0; c < kChannels; ++c) {
-          const double s = scale[static_cast<std::size_t>(c)];
-          ChannelKd k;
-          try {
-            k = channel_kd(film, lamp, sky, resp, s);
-          } catch (const SpectrumError& e) {
-            throw DataError(fmt::format("channel {} (tau_m_scale {}): {}", c + 1, s, e.what()));
-          }
-          channel.push_back(c + 1), s_col.push_back(s);
+        for (std::size_t c = 0; c < result.channels.size(); ++c) {
+          const ChannelKd& k = result.channels[c];
+          channel.push_back(static_cast<double>(c + 1)), s_col.push_back(scale[c]);
           dl.push_back(k.lamp.d_eff), kl.push_back(k.lamp.kd());
           ds.push_back(k.sky.d_eff), ks.push_back(k.sky.kd()), shift.push_back(k.kd_sky_minus_lamp());
         }
-        KdSpectra t = kd_spectra(film, resp, lamp, sky);
+        KdSpectra& t = result.spectra;
         Record spectra;
         spectra.add("wavelength_nm", take(std::move(t.wavelength_nm)));
         spectra.add("tau_M", take(std::move(t.tau_M)));

@@ -8,6 +8,22 @@
 #include <fmt/format.h>
 
 namespace polrig {
+
+std::string_view sky_radiance_name(SkyRadiance r) {
+  switch (r) {
+    case SkyRadiance::Uniform: return "uniform";
+    case SkyRadiance::Rayleigh: return "rayleigh";
+    case SkyRadiance::CieClear: return "cie-clear";
+  }
+  return "?";
+}
+
+std::optional<SkyRadiance> parse_sky_radiance(std::string_view name) {
+  for (const SkyRadiance r : {SkyRadiance::Uniform, SkyRadiance::Rayleigh, SkyRadiance::CieClear})
+    if (sky_radiance_name(r) == name) return r;
+  return std::nullopt;
+}
+
 namespace {
 
 constexpr double kDeg = M_PI / 180;

@@ -270,6 +270,8 @@ std::optional<std::string> site_problem(const Site& site) {
     return fmt::format("latitude {} is outside [-90, 90] (degrees, north positive)", site.lat_deg);
   if (!(std::abs(site.lon_deg) <= 180))
     return fmt::format("longitude {} is outside [-180, 180] (degrees, east positive)", site.lon_deg);
+  if (!(std::abs(site.height_m) <= 1e5))
+    return fmt::format("height {} m is outside [-1e5, 1e5] (m above the WGS-84 ellipsoid)", site.height_m);
   return std::nullopt;
 }
 

@@ -1,5 +1,7 @@
 #include "polrig/sky/sun_rows.h"
 
+#include <stdexcept>
+#include <string>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,6 +12,14 @@
 #include <tbb/parallel_for.h>
 
 namespace polrig {
+
+InputRange sky_query_range(std::string_view field) {
+  if (field == "lat_deg") return {-90, 90, "degrees, north positive"};
+  if (field == "lon_deg") return {-180, 180, "degrees, east positive"};
+  if (field == "view_az_deg") return {-360, 360, "degrees, from north towards east"};
+  if (field == "view_el_deg") return {-90, 90, "degrees above the horizon"};
+  throw std::invalid_argument("sky_query_range: no input '" + std::string(field) + "'");
+}
 
 namespace {
 constexpr double kTrackNodeSpacing_s = 1800;  // SunTrack's default

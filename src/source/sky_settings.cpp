@@ -1,5 +1,6 @@
 #include "polrig/source/sky_settings.h"
 
+#include <optional>
 #include <stdexcept>
 
 namespace polrig {
@@ -7,10 +8,10 @@ namespace polrig {
 Sky SkySettings::resolved_sky() const {
   Sky s = sky;
   s.first_stop = parse_utc(first_stop_utc);
-  if (radiance == "uniform") s.model.radiance = SkyRadiance::Uniform;
-  else if (radiance == "rayleigh") s.model.radiance = SkyRadiance::Rayleigh;
-  else if (radiance == "cie-clear") s.model.radiance = SkyRadiance::CieClear;
-  else throw std::invalid_argument("sky.radiance: expected uniform, rayleigh or cie-clear, got '" + radiance + "'");
+  const std::optional<SkyRadiance> model = parse_sky_radiance(radiance);
+  if (!model)
+    throw std::invalid_argument("sky.radiance: expected uniform, rayleigh or cie-clear, got '" + radiance + "'");
+  s.model.radiance = *model;
   if (refraction != "off" && refraction != "on")
     throw std::invalid_argument("sky.refraction: expected off or on, got '" + refraction + "'");
   s.sun.refraction = refraction == "on";

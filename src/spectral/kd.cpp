@@ -2,6 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "polrig/spectral/sources.h"
 
 namespace polrig {
 
@@ -32,6 +37,33 @@ KdSpectra kd_spectra(const FilmSpectra& film, const Spectrum& response, const Sp
     t.sky_weight.push_back(sky(nm) * response(nm) / sky_max);
   }
   return t;
+}
+
+SpectralKd spectral_kd(const FilmSpectra& film, const Spectrum& response, double lamp_K,
+                       const Spectrum& sun, const std::vector<double>& tau_m_scale,
+                       const SpectralKdNames& names) {
+  const double lo = response.min_nm(), hi = response.max_nm();
+  const auto check_covers = [&](const Spectrum& s, const std::string& name) {
+    if (!s.covers(lo, hi))
+      throw SpectrumError(fmt::format("{}: its wavelengths [{}, {}] nm do not cover the response's "
+                                      "[{}, {}] nm", name, s.min_nm(), s.max_nm(), lo, hi));
+  };
+  check_covers(film.tau_M, names.films);
+  check_covers(film.tau_m, names.films);
+  const Spectrum lamp = blackbody(lamp_K, lo, hi);
+  check_covers(sun, names.sun);
+  const Spectrum sky = rayleigh_sky(sun);
+  SpectralKd out;
+  for (std::size_t c = 0; c < tau_m_scale.size(); ++c) {
+    try {
+      out.channels.push_back(channel_kd(film, lamp, sky, response, tau_m_scale[c]));
+    } catch (const SpectrumError& e) {
+      throw SpectrumError(fmt::format("channel {} ({} {}): {}", c + 1, names.tau_m_scale,
+                                      tau_m_scale[c], e.what()));
+    }
+  }
+  out.spectra = kd_spectra(film, response, lamp, sky);
+  return out;
 }
 
 }  // namespace polrig

@@ -5,6 +5,9 @@
 #include <utility>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
@@ -240,8 +243,9 @@ HeadingErrorCdf heading_error_cdf(const std::vector<HeadingTrial>& trials) {
 }
 
 bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings) {
-  if (!rig.light->has(Source::kTimeDependent)) return false;
-  const Sky sky = rig.source.sky.resolved_sky();
+  const std::optional<Sky> found = rig_sky(rig);
+  if (!found) return false;
+  const Sky& sky = *found;
   settings.site = sky.site;
   settings.utc = sky.first_stop;
   settings.sun.ut1_minus_utc_s = sky.sun.ut1_minus_utc_s;
@@ -249,8 +253,37 @@ bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings) {
   return true;
 }
 
+void check_heading_study_settings(const HeadingStudySettings& s,
+                                  const std::function<std::string(std::string_view)>& name) {
+  const auto whole = [&](int v, const char* field, int lo, int hi) {
+    if (v < lo || v > hi)
+      throw std::invalid_argument(fmt::format("{}: expected a whole number in [{}, {}], got {}",
+                                              name(field), lo, hi, v));
+  };
+  const auto range = [&](double v, const char* field, double lo, double hi, const char* unit) {
+    if (!(std::isfinite(v) && v >= lo && v <= hi))
+      throw std::invalid_argument(fmt::format("{}: expected a finite number in [{}, {}]{}{}, got {}",
+                                              name(field), lo, hi, *unit ? " " : "", unit, v));
+  };
+  whole(s.trials, "trials", 1, 10000000);
+  whole(s.samples, "samples", 1, 100000);
+  range(s.roll_sd_deg, "roll_sd_deg", 0, 30, "°");
+  range(s.pitch_sd_deg, "pitch_sd_deg", 0, 30, "°");
+  range(s.sync_max_s, "sync_max_s", 0, 10, "s");
+  range(s.turn_rate_max_dps, "turn_rate_max_dps", 0, 360, "°/s");
+  range(s.ins_tilt_sd_deg, "ins_tilt_sd_deg", 0, 10, "°");
+  range(s.mount_tilt_sd_deg, "mount_tilt_sd_deg", 0, 10, "°");
+  range(s.mount_azimuth_sd_deg, "mount_azimuth_sd_deg", 0, 10, "°");
+  range(s.p_max_min, "p_max_min", 0.05, 1, "");
+  range(s.p_max_max, "p_max_max", 0.05, 1, "");
+  if (s.p_max_min > s.p_max_max)
+    throw std::invalid_argument(fmt::format("{} {} is above {} {}", name("p_max_min"), s.p_max_min,
+                                            name("p_max_max"), s.p_max_max));
+}
+
 std::vector<HeadingTrial> heading_trials(const Rig& rig, const HeadingStudySettings& s,
                                          const Progress& progress) {
+  check_heading_study_settings(s);
   const Vec3 sun = sun_direction_enu(sun_position(s.utc, s.site, s.sun));
   std::vector<HeadingTrial> trials(static_cast<std::size_t>(std::max(0, s.trials)));
   progress.begin("study heading: trials", s.trials);

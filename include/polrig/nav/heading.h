@@ -71,6 +71,7 @@ struct HeadingSolution {
 // root: with a prior, the root nearest it (circular distance); without, the root that puts the
 // sun in front: the larger s_b·Y_b, the sun's component along the body's forward axis (one root
 // has it > 0 and the other < 0 except when the sun lies in the body's X–Z plane).
+// Throws std::invalid_argument naming sun_enu when |‖sun_enu‖ − 1| > 1e-9 (check_sun_enu).
 HeadingSolution solve_heading(const Vec3& sun_enu, double aop_body_deg, const Tilt& tilt,
                               std::optional<double> prior_deg = std::nullopt,
                               const HeadingSettings& settings = {});
@@ -86,8 +87,12 @@ struct BodySkyView {
   double aop_body_deg = 0;  // θ_b in [0°, 180°)
   double dop = 0;
 };
+// Throws as solve_heading for a sun_enu that is not a unit vector.
 BodySkyView sky_view_body(const Vec3& sun_enu, double heading_deg, const Tilt& tilt,
                           const SkyModel& model = {});
+// The precondition of solve_heading and sky_view_body: sun_enu a unit vector within 1e-9, else
+// std::invalid_argument naming it and its length.
+void check_sun_enu(const Vec3& sun_enu);
 // The same from an E-vector already in n (no sky model): θ_b of e_n seen by the body.
 double aop_body_deg(const Vec3& e_enu, double heading_deg, const Tilt& tilt);
 

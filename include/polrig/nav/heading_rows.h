@@ -2,6 +2,7 @@
 // The heading for many rows of (time, site, attitude, E-vector angle): `polrig heading`'s table.
 // Values only; reading and writing the files is the CLI's and io/'s.
 #include <optional>
+#include <string_view>
 #include <span>
 #include <vector>
 
@@ -17,6 +18,10 @@ struct HeadingQuery {
   double aop_deg = 0;               // θ_b, degrees, anticlockwise from X_b seen from above
   std::optional<double> prior_deg;  // clockwise from north; empty: the root with the sun in front
 };
+
+// The ranges of `polrig heading`'s inputs (its CSV columns, polrig.heading's arguments): roll_deg,
+// pitch_deg, aop_deg, prior_deg, lat_deg, lon_deg; std::invalid_argument for another name.
+InputRange heading_query_range(std::string_view field);
 
 struct HeadingSample {
   SunPosition sun;

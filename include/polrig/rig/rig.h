@@ -3,7 +3,9 @@
 // A default-constructed Rig is the seed paper's indoor rig (rigs/wang2019-indoor.yaml).
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "polrig/device/electronics.h"
 #include "polrig/device/sensor.h"
@@ -28,5 +30,11 @@ struct Rig {
   // What the light reads of the rig at a pose.
   SourceView source_view() const { return {device, eccentricity, source}; }
 };
+
+// The sky of a rig whose light is a sky (source.model sky: its sky block resolved), else nothing.
+std::optional<Sky> rig_sky(const Rig& rig);
+// Why a rig without a sky cannot give one: "ORIGIN: source.model cos4 has no sky (expected
+// source.model sky)" (`polrig sky RIG`, polrig.Sky.from_rig).
+std::string no_sky_message(const Rig& rig, std::string_view origin);
 
 }  // namespace polrig

@@ -3,6 +3,8 @@
 // of linear polarization, and the radiance models, for a viewing direction v and the sun s, both
 // unit vectors in ENU (x east, y north, z up).
 #include <utility>
+#include <optional>
+#include <string_view>
 #include <vector>
 
 #include "polrig/optics/polarizer.h"
@@ -19,6 +21,10 @@ namespace polrig {
 //              φ(Z) = 1 + a·exp(b/cos Z), f(γ) = 1 + c·(exp(dγ) − exp(dπ/2)) + e·cos²γ, Z the
 //              view's zenith angle (φ = 1 at and below the horizon), Z_s the sun's.
 enum class SkyRadiance { Uniform, Rayleigh, CieClear };
+// The names of the rig key sky.radiance, the CLI's --radiance and Python's radiance=:
+// "uniform", "rayleigh", "cie-clear".
+std::string_view sky_radiance_name(SkyRadiance r);
+std::optional<SkyRadiance> parse_sky_radiance(std::string_view name);
 
 // P_max: a constant, or a table P_max(h_s) over the sun's elevation (degrees), interpolated
 // linearly and held constant beyond its ends.

@@ -77,9 +77,9 @@ struct SunPosition {
 SunPosition sun_position(UtcTime t, const Site& site, const SunSettings& settings = {});
 // The checks alone: throws what sun_position would throw for these inputs, computes nothing.
 void check_sun_inputs(UtcTime t, const Site& site, const SunSettings& settings = {});
-// What is wrong with an observer's latitude and longitude as given by a user (--site, a Python
-// site=): "latitude 95 is outside [-90, 90] (degrees, north positive)", or nothing. Stricter than
-// check_sun_inputs, which accepts any longitude in [-360, 360].
+// What is wrong with an observer's latitude, longitude and height as given by a user (--site, a
+// Python site=): "latitude 95 is outside [-90, 90] (degrees, north positive)", or nothing. Stricter
+// than check_sun_inputs, which accepts any longitude in [-360, 360]; the height's range is its.
 std::optional<std::string> site_problem(const Site& site);
 
 // The fast path: exact apparent places at nodes `node_spacing_s` apart over [begin, end], and

@@ -3,6 +3,7 @@
 // `polrig heading`. Values only; reading and writing the files is io/'s.
 #include <cstddef>
 #include <span>
+#include <string_view>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -42,6 +43,15 @@ struct SkyQuery {
   SunRow at;
   double view_az_deg = 0, view_el_deg = 90;
 };
+// The range of one input of a row (a CSV column, a Python argument): [lo, hi] and what it is.
+struct InputRange {
+  double lo, hi;
+  const char* what;
+};
+// The ranges of `polrig sky table`'s inputs (its CSV columns, polrig.sky_table's arguments):
+// lat_deg, lon_deg, view_az_deg, view_el_deg; std::invalid_argument for another name.
+InputRange sky_query_range(std::string_view field);
+
 struct SkySample {
   SunPosition sun;
   SkyLight light;  // along the viewing direction; χ in its local meridian frame (at the zenith,

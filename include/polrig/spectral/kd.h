@@ -1,6 +1,7 @@
 #pragma once
 // `polrig spectral kd`'s values: each channel's effective degree and kd under the lamp and under
 // the sky, and the spectra a user looks at. Values only; reading the CSVs is io/spectrum_csv's.
+#include <string>
 #include <vector>
 
 #include "polrig/spectral/effective_degree.h"
@@ -26,5 +27,24 @@ struct KdSpectra {
 };
 KdSpectra kd_spectra(const FilmSpectra& film, const Spectrum& response, const Spectrum& lamp,
                      const Spectrum& sky);
+
+// `polrig spectral kd` on spectra already read: the lamp a blackbody at lamp_K over the response's
+// band, the sky the Rayleigh-scattered `sun` (sunlight × λ⁻⁴); one ChannelKd per entry of
+// tau_m_scale, and the spectra.
+struct SpectralKd {
+  std::vector<ChannelKd> channels;
+  KdSpectra spectra;
+};
+// How the caller's user named the inputs, for the messages: the CLI "--films PATH", "--sun PATH",
+// "--tau-m-scale"; Python "films PATH", "sun PATH", "tau_m_scale".
+struct SpectralKdNames {
+  std::string films, sun, tau_m_scale;
+};
+// Throws SpectrumError "NAME: its wavelengths [a, b] nm do not cover the response's [c, d] nm"
+// when the films or the sun do not span the response's band, and "channel c (SCALE s): ..." for
+// a channel effective_degree refuses.
+SpectralKd spectral_kd(const FilmSpectra& film, const Spectrum& response, double lamp_K,
+                       const Spectrum& sun, const std::vector<double>& tau_m_scale,
+                       const SpectralKdNames& names);
 
 }  // namespace polrig

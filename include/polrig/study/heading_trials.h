@@ -6,7 +6,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "polrig/nav/heading.h"
@@ -72,6 +74,16 @@ struct HeadingTrial {
 // any other rig. `polrig study heading` then applies the options given on its command line.
 bool use_rig_sky(const Rig& rig, HeadingStudySettings& settings);
 
+// The ranges of `polrig study heading`'s settings (trials in [1, 1e7], samples in [1, 1e5], the
+// SDs and limits as the CLI's options, p_max_min ≤ p_max_max in [0.05, 1]); throws
+// std::invalid_argument "roll_sd_deg: expected a finite number in [0, 30] °, got 31", the setting
+// named by `name` (its field name by default; the CLI passes its option's).
+void check_heading_study_settings(
+    const HeadingStudySettings& settings,
+    const std::function<std::string(std::string_view field)>& name = [](std::string_view f) {
+      return std::string(f);
+    });
+
 // summary.csv's rows: the heading error's statistics over the trials with a heading (NaN where
 // none has one), overall for the full error and each factor alone (factor "all", bin NaN), then
 // the full error in 8 equal bins of each factor's range (sync_heading_deg, tilt_deg = √(roll² +
@@ -94,6 +106,7 @@ HeadingErrorCdf heading_error_cdf(const std::vector<HeadingTrial>& trials);
 
 // Sun at settings.utc and site; trials in parallel (TBB), each a pure function of
 // (rig, settings, index): identical for any thread count.
+// Throws as check_heading_study_settings for settings out of range.
 std::vector<HeadingTrial> heading_trials(const Rig& rig, const HeadingStudySettings& settings,
                                          const Progress& progress = {});
 

@@ -27,6 +27,10 @@ std::optional<CalibrationMethod> parse_method(std::string_view name) {
   return std::nullopt;
 }
 
+bool uses_raw_stops(CalibrationMethod m) {
+  return m == CalibrationMethod::Section || m == CalibrationMethod::Noncontinuous;
+}
+
 namespace {
 
 std::vector<Observation> observations_of(const std::vector<EvalPoint>& points) {
@@ -106,8 +110,7 @@ CalibrationResult calibrate(const std::vector<StopVoltages>& stops, const Calibr
   if (!(std::isfinite(o.volts_per_decade) && o.volts_per_decade > 0))
     throw CalibrationError(fmt::format("volts_per_decade = {}: expected a finite gain > 0",
                                        o.volts_per_decade));
-  const bool raw_stops =
-      o.method == CalibrationMethod::Section || o.method == CalibrationMethod::Noncontinuous;
+  const bool raw_stops = uses_raw_stops(o.method);
   const StopCorrections& corr = o.corrections;
   if (!corr.empty() && !raw_stops)
     throw CalibrationError(fmt::format("per-stop drift corrections need a method on raw stops "

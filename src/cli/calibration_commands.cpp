@@ -120,7 +120,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   }
   if (drift.mode != "none")
     for (CalibrationMethod m : methods)
-      if (m != CalibrationMethod::Section && m != CalibrationMethod::Noncontinuous)
+      if (!uses_raw_stops(m))
         throw DataError(fmt::format("--drift {} needs --method nc or section (the raw stops), not "
                                     "{}: a CS point mixes two times", drift.mode, method_text));
   const MeasuredData data = read_measured(input);
@@ -133,7 +133,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   // A sky dataset's light turns with the sun during the run: a CS point would mix two times.
   if (rig.light->has(Source::kTimeDependent))
     for (CalibrationMethod m : methods)
-      if (m != CalibrationMethod::Section && m != CalibrationMethod::Noncontinuous)
+      if (!uses_raw_stops(m))
         throw DataError(fmt::format("--method {} on {}: its rig's light is the sky, which drifts "
                                     "with the sun during the run; use --method nc --drift per-stop "
                                     "(or angle, linear, none)", method_text, data.origin));

@@ -222,8 +222,7 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
   const std::optional<DriftMode> drift_mode = parse_drift_mode(drift);
   if (!drift_mode)
     throw py::value_error(fmt::format("drift='{}': expected none, angle, per-stop or linear", drift));
-  const bool raw_stops =
-      *method == CalibrationMethod::Section || *method == CalibrationMethod::Noncontinuous;
+  const bool raw_stops = uses_raw_stops(*method);
   if (*drift_mode != DriftMode::None && !raw_stops)
     throw py::value_error(fmt::format("drift='{}' needs method 'nc' or 'section' (the raw stops), "
                                       "not '{}': a CS point mixes two times", drift, method_name_text));

@@ -20,6 +20,10 @@ enum class CalibrationMethod {
 };
 std::string_view method_name(CalibrationMethod m);  // "section", "cs", "cs-nc", "nc"
 std::optional<CalibrationMethod> parse_method(std::string_view name);
+// Whether the method fits the raw stops (section, nc) rather than CS points. A CS point averages
+// two stops half a turn apart, taken at two times: only the raw-stop methods take per-stop drift
+// corrections or a light that changes during the run (the sky).
+bool uses_raw_stops(CalibrationMethod m);
 // The paper's three indoor calibration types (Fig. 14), as `--method all` and the studies run them.
 inline constexpr std::array<CalibrationMethod, 3> kAllMethods{
     CalibrationMethod::Section, CalibrationMethod::CentralSymmetry,

@@ -1,5 +1,6 @@
 # Type stubs for polrig._polrig (the compiled module); python/tests/test_stubs.py checks that every
 # public name of the module is declared here and that nothing here is missing from the module.
+import os
 from typing import Any, Callable, Mapping, Sequence, Union
 
 import numpy as np
@@ -39,7 +40,8 @@ class Rig:
     @property
     def overrides(self) -> list[str]: ...
     # ---- studies on a rig (study_bindings.cpp)
-    def simulate(self, *, samples: bool = False, threads: int | None = None, progress: Progress = None) -> Simulation: ...
+    def simulate(self, *, samples: bool = False, out: str | os.PathLike[str] | None = None, force: bool = False,
+                 plots: bool = False, threads: int | None = None, progress: Progress = None) -> Simulation: ...
     def study_cs(self, steps: int = 360, *, threads: int | None = None, progress: Progress = None) -> CsStudy: ...
     def sweep(self, grid: Mapping[str, ArrayLike | str], steps: int = 360, *, threads: int | None = None,
               progress: Progress = None) -> SweepResult: ...
@@ -176,7 +178,6 @@ class CalibrationTrials:
 
 
 # ---- calibration (calibration_bindings.cpp)
-import os
 
 class CalibrationParams:
     def __init__(self, *, alpha_deg: ArrayLike | None = None, k_mV: ArrayLike | None = None,

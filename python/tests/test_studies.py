@@ -406,3 +406,32 @@ def test_traced_sweep_and_simulate_equal_the_cli(tmp_path, traced_rig):
     run_cli("simulate", traced_rig, "-o", tmp_path / "s", "--no-plots", "--quiet")
     check_simulation_is_stops_csv(sim, tmp_path / "s")
     assert np.array_equal(sim.V_mean, rig.simulate(threads=1).V_mean)
+
+
+def test_simulate_writes_the_clis_dataset(tmp_path):
+    rig = polrig.Rig.load(INDOOR, set=SETS)
+    sim = rig.simulate(samples=True, out=tmp_path / "py")
+    run_cli("simulate", INDOOR, *[a for k, v in SETS.items() for a in ("--set", f"{k}={v}")],
+            "--samples", "--no-plots", "-o", tmp_path / "cli")
+    for name in ("stops.csv", "samples.csv", "rig.yaml"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    py_manifest = (tmp_path / "py" / "manifest.yaml").read_text().splitlines()
+    cli_manifest = (tmp_path / "cli" / "manifest.yaml").read_text().splitlines()
+    # the command differs, and the git revision may (the module and the CLI are built separately)
+    differ = [(a, b) for a, b in zip(py_manifest, cli_manifest)
+              if a != b and not a.startswith("git_revision:")]
+    assert len(py_manifest) == len(cli_manifest) and len(differ) == 1 and "command" in differ[0][0], differ
+    assert_equal(read_csv(tmp_path / "py" / "stops.csv")["V1"], sim.V_mean[:, 0])
+    # the dataset calibrates like the CLI's
+    run_cli("calibrate", tmp_path / "py", "--method", "cs-nc", "--no-plots", "-o", tmp_path / "cal")
+
+
+def test_simulate_never_replaces_a_folder_without_force(tmp_path):
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "mine.txt").write_text("keep")
+    with pytest.raises(RuntimeError, match="exists"):
+        polrig.Rig().simulate(out=tmp_path / "d")
+    assert [p.name for p in (tmp_path / "d").iterdir()] == ["mine.txt"]
+    polrig.Rig().simulate(out=tmp_path / "d", force=True)
+    assert (tmp_path / "d" / "stops.csv").is_file() and not (tmp_path / "d" / "mine.txt").exists()
+    assert [p.name for p in tmp_path.iterdir()] == ["d"]  # no staging folder left behind

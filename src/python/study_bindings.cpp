@@ -16,10 +16,15 @@
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/calib/pipeline.h"
+#include "polrig/io/manifest.h"
+#include "polrig/io/output_dir.h"
+#include "polrig/io/plot.h"
+#include "polrig/report/reports.h"
 #include "polrig/calib/rig_options.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
@@ -395,6 +400,12 @@ table pose → light at the six photodiodes → films and log amplifiers → noi
 
 Arguments:
   samples: also return every quantized sample (the CLI's --samples, samples.csv).
+  out: a folder (str or os.PathLike) to write the dataset into, as `polrig simulate -o OUT`
+       writes it (stops.csv, samples.csv with samples=True, rig.yaml, manifest.yaml; the same
+       bytes, the manifest's command aside); it appears whole or not at all. None: no files.
+  force: replace `out` if it exists (the CLI's --force); without it an existing folder is an
+         error and nothing is computed.
+  plots: also draw the PNG plots (needs gnuplot; the CLI draws them unless --no-plots).
   {threads}
   {progress}
 
@@ -667,18 +678,40 @@ void bind_studies(py::module_& m) {
                            t.failures.size());
       });
 
-  rig.def("simulate", [](const PyRig& self, bool samples, std::optional<int> threads,
+  rig.def("simulate", [](const PyRig& self, bool samples, std::optional<std::filesystem::path> out,
+                         bool force, bool plots, std::optional<int> threads,
                          const py::object& progress) {
-    const Rig r = self.rig();
+    const LoadedRig loaded = self.loaded;  // the GIL is released below: nothing of self is read then
+    const Rig& r = loaded.rig;
+    if (out && plots && !gnuplot_available())
+      throw std::runtime_error("plots=True needs gnuplot, which was not found; install it "
+                               "(scripts/setup-deps.sh) or pass plots=False");
+    // Opened before computing, as the CLI does: an existing folder fails at once.
+    std::optional<OutputDir> dir;
+    if (out) {
+      try {
+        dir.emplace(*out, force);
+      } catch (const std::runtime_error& e) {
+        throw std::runtime_error(fmt::format("out={}: {}", out->string(), e.what()));
+      }
+    }
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     Simulation sim;
     {
       py::gil_scoped_release release;
       sim = simulate(r, samples, p);
+      if (dir) {
+        const std::string command = fmt::format(
+            "python: polrig.Rig({}).simulate(samples={}, out='{}', plots={})", loaded.origin,
+            samples ? "True" : "False", out->string(), plots ? "True" : "False");
+        write_manifest(dir->staging(), {command, &loaded, report_simulation(dir->staging(), sim, plots)});
+        dir->commit();
+      }
     }
     return to_python(sim);
   }, doc(kSimulateDoc).c_str(), py::kw_only(), py::arg("samples") = false,
+     py::arg("out") = py::none(), py::arg("force") = false, py::arg("plots") = false,
      py::arg("threads") = py::none(), py::arg("progress") = py::none());
 
   rig.def("study_cs", [](const PyRig& self, int steps, std::optional<int> threads,

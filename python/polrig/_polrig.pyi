@@ -174,6 +174,10 @@ class CalibrationTrials:
     def summary(self) -> dict[str, dict[str, Any]]: ...
     def __len__(self) -> int: ...
 
+def trace(scene: str | os.PathLike[str], out: str | os.PathLike[str], *, photons: int | None = None,
+          force: bool = False, plots: bool = False, threads: int | None = None,
+          progress: Progress = None) -> list[str]: ...
+
 # ---- end of studies
 
 

@@ -435,3 +435,19 @@ def test_simulate_never_replaces_a_folder_without_force(tmp_path):
     polrig.Rig().simulate(out=tmp_path / "d", force=True)
     assert (tmp_path / "d" / "stops.csv").is_file() and not (tmp_path / "d" / "mine.txt").exists()
     assert [p.name for p in tmp_path.iterdir()] == ["d"]  # no staging folder left behind
+
+
+def test_trace_writes_what_polrig_trace_writes(tmp_path):
+    # 16000 photons (1000 per batch): about 10 s each way
+    scene = ROOT / "scenes" / "jf500.yaml"
+    names = polrig.trace(scene, tmp_path / "py", photons=16000)
+    run_cli("trace", scene, "--photons", 16000, "--no-plots", "-o", tmp_path / "cli")
+    written = sorted(p.name for p in (tmp_path / "py").iterdir())
+    assert written == sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert set(names) <= set(written) and "wall_radiance.csv" in names
+    for name in written:
+        if name != "manifest.yaml":
+            assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    with pytest.raises(polrig.RigError, match=r"photons=1500: expected at least 100 per batch \(1600 for 16 batches\)"):
+        polrig.trace(scene, tmp_path / "x", photons=1500)
+    assert not (tmp_path / "x").exists()

@@ -240,13 +240,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       SceneSpec s = load_scene(*scene);
-      if (*photons) {
-        if (**photons < 100LL * s.trace.batches)
-          throw RigError(fmt::format("--photons {}: expected at least 100 per batch ({} for {} batches)",
-                                     **photons, 100LL * s.trace.batches, s.trace.batches));
-        s.trace.photons = **photons;
-      }
-      s.trace.photons -= s.trace.photons % s.trace.batches;  // whole batches, as traced
+      if (const auto problem = set_trace_photons(s.trace, *photons))
+        throw RigError(fmt::format("--photons {}: {}", **photons, *problem));
       OutputDir dir = out->open();
       const auto t0 = std::chrono::steady_clock::now();
       Manifest m{command_line(), nullptr, trace_scene(dir.staging(), s, out->plots(), progress()), {*scene}};

@@ -25,6 +25,8 @@
 #include "polrig/io/output_dir.h"
 #include "polrig/io/plot.h"
 #include "polrig/report/reports.h"
+#include "polrig/report/trace_report.h"
+#include "polrig/io/scene_yaml.h"
 #include "polrig/calib/rig_options.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sim/simulate.h"
@@ -713,6 +715,55 @@ void bind_studies(py::module_& m) {
   }, doc(kSimulateDoc).c_str(), py::kw_only(), py::arg("samples") = false,
      py::arg("out") = py::none(), py::arg("force") = false, py::arg("plots") = false,
      py::arg("threads") = py::none(), py::arg("progress") = py::none());
+
+  m.def("trace", [](const std::filesystem::path& scene_file, const std::filesystem::path& out,
+                    std::optional<long long> photons, bool force, bool plots,
+                    std::optional<int> threads, const py::object& progress) {
+    SceneSpec scene = load_scene(scene_file);
+    if (const auto problem = set_trace_photons(scene.trace, photons))
+      throw RigError(fmt::format("photons={}: {}", *photons, *problem));
+    if (plots && !gnuplot_available())
+      throw std::runtime_error("plots=True needs gnuplot, which was not found; install it "
+                               "(scripts/setup-deps.sh) or pass plots=False");
+    std::optional<OutputDir> dir;
+    try {
+      dir.emplace(out, force);
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(fmt::format("out={}: {}", out.string(), e.what()));
+    }
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    std::vector<std::string> names;
+    {
+      py::gil_scoped_release release;
+      const std::string command = fmt::format("python: polrig.trace('{}', out='{}', photons={}, plots={})",
+                                              scene_file.string(), out.string(), scene.trace.photons,
+                                              plots ? "True" : "False");
+      Manifest manifest{command, nullptr, trace_scene(dir->staging(), scene, plots, p), {scene_file.string()}};
+      write_manifest(dir->staging(), manifest);
+      dir->commit();
+      for (const DatasetFile& f : manifest.files) names.push_back(f.name);
+    }
+    return names;
+  }, doc(R"doc(
+Traces a scene's integrating sphere (Embree photon tracing) and the light below its port, and
+writes what `polrig trace SCENE -o OUT` writes (docs/formats.md, "polrig trace"): the wall
+radiance and port-plane maps (EXR), their CSV tables, trace_summary.yaml, manifest.yaml and,
+with plots=True, the PNG previews (needs gnuplot). The folder appears whole or not at all.
+
+Arguments:
+  scene: the scene file (YAML, str or os.PathLike), e.g. "scenes/jf500.yaml".
+  out: the output folder; an existing one is an error unless force=True.
+  photons: photons for the sphere solve, in [1000, 1e11] and at least 100 per batch (None: the
+           scene's trace.photons); rounded down to whole batches, as traced.
+  {threads}
+  {progress}
+
+Returns the names of the files written (relative to `out`). Raises polrig.RigError naming the
+scene file, line and key, or the photon count.
+)doc").c_str(), py::arg("scene"), py::arg("out"), py::kw_only(), py::arg("photons") = py::none(),
+        py::arg("force") = false, py::arg("plots") = false, py::arg("threads") = py::none(),
+        py::arg("progress") = py::none());
 
   rig.def("study_cs", [](const PyRig& self, int steps, std::optional<int> threads,
                          const py::object& progress) {

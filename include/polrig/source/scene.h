@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <optional>
 #include <vector>
 
 #include "polrig/vec3.h"
@@ -79,6 +80,11 @@ struct TraceSettings {
   long long plane_samples = 4096;  // quasi-random samples per point for plane and sensor integrals
   std::uint64_t seed = 1;
 };
+
+// The sphere solve's photon count set by hand (`polrig trace --photons`, Python's
+// trace(photons=)): in [1000, 1e11] and at least 100 per batch; then (given or not) rounded down
+// to whole batches, as traced. Returns what is wrong with `photons`, or nothing (and sets it).
+std::optional<std::string> set_trace_photons(TraceSettings& trace, std::optional<long long> photons);
 
 struct SceneSpec {
   SphereSpec sphere;

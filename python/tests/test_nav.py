@@ -231,8 +231,8 @@ def test_solve_heading_and_sky_view_body_refuse_a_non_unit_sun():
 def test_study_heading_reports_progress_to_a_callable():
     # a stage reports after the progress interval (0.5 s) and at its end: (stage, fraction, eta_s)
     reports = []
-    # 600000 trials: about 1 s of trials on this 2-core machine, so the 0.5 s interval passes
-    polrig.Rig().study_heading(trials=600000, threads=2, progress=lambda *r: reports.append(r))
+    # 1e6 trials: about 2 s of trials on this 2-core machine, well over the 0.5 s interval
+    polrig.Rig().study_heading(trials=1000000, threads=2, progress=lambda *r: reports.append(r))
     assert len(reports) >= 2
     assert all(stage == "study heading: trials" for stage, _, _ in reports)
     fractions = [f for _, f, _ in reports]

@@ -120,7 +120,8 @@ def test_a_long_sweep_reports_progress_and_releases_the_gil():
     import threading
     import time
     seen, result = [], {}
-    grid = {"eccentricity.L_S": "0.001:1:400", "eccentricity.alpha_S": "0:359:360"}
+    # 288,000 points: about 2 s here, so that a machine twice as fast still takes over 0.6 s
+    grid = {"eccentricity.L_S": "0.001:1:800", "eccentricity.alpha_S": "0:359:360"}
     worker = threading.Thread(target=lambda: result.setdefault(
         "r", polrig.Rig().sweep(grid, progress=lambda stage, f, eta: seen.append((stage, f)))))
     t0 = last = time.perf_counter()
@@ -130,7 +131,7 @@ def test_a_long_sweep_reports_progress_and_releases_the_gil():
         now = time.perf_counter()
         longest_pause, last = max(longest_pause, now - last), now
     elapsed = time.perf_counter() - t0
-    assert result["r"].asd_mV.shape == (400, 360, 3)
+    assert result["r"].asd_mV.shape == (800, 360, 3)
     assert elapsed > 0.6, "the sweep was too quick to test this"
     # A held GIL would stop this loop for the whole sweep.
     assert longest_pause < 0.25 * elapsed, (longest_pause, elapsed)
@@ -336,8 +337,8 @@ def test_a_sweep_too_large_for_memory_is_refused_before_allocating():
 
 
 def test_progress_true_writes_the_clis_line_on_stderr(capfd):
-    """About 1 s on one thread: longer than the first report's 0.5 s."""
-    polrig.Rig().sweep({"eccentricity.L_IS": "0:1:80000"}, threads=1, progress=True)
+    """About 2.5 s on one thread: well over the first report's 0.5 s, on a faster machine too."""
+    polrig.Rig().sweep({"eccentricity.L_IS": "0:1:160000"}, threads=1, progress=True)
     err = capfd.readouterr().err
     assert "polrig: sweep: grid points" in err and "100 %" in err, err
 

@@ -15,6 +15,7 @@ if(POLRIG_PYTHON STREQUAL "AUTO")
   endif()
 else()
   set(_want ${POLRIG_PYTHON})
+  set(_why "POLRIG_PYTHON=${POLRIG_PYTHON}")
 endif()
 
 if(_want)

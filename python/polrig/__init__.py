@@ -5,6 +5,6 @@ A thin layer over the C++ library (docs/python.md): every function calls the sam
 the names (theta_R_deg, V_mean, L_IS in mm) and in every docstring.
 """
 from ._polrig import *  # noqa: F401,F403
-from ._polrig import __doc__ as _doc, __version__, git_revision  # noqa: F401
+from ._polrig import __version__, git_revision  # noqa: F401
 
 __all__ = [name for name in dir() if not name.startswith("_") and name not in ("git_revision",)]

@@ -181,11 +181,11 @@ void bind_sky(py::module_& m) {
       {"dop", "degree of linear polarization along the view."},
       {"aop_deg", "AoP χ, degrees, [0, 180), in the view's local meridian frame (from e_θ towards e_φ)."}});
   bind_record<DriftTag>(m, "DriftCorrections",
-      "Per-stop sun-drift corrections of an outdoor calibration (sky/drift.h); both empty for mode 'none'.", {
+      "Per-stop sun-drift corrections of an outdoor calibration (sky/drift.h); (N,) arrays for every mode: zeros and ones for 'none'.", {
       {"dtheta_deg", "added to each stop's table angle, degrees, polrig's sensor frame "
                      "(anticlockwise seen from above): −(A_s(t_k) − A_s(t_0)) wrapped to (−180, 180]."},
       {"d_ratio", "multiplies the fitted d: d(t_k)/d(t_0) ('per-stop'), linear in time ('linear'); "
-                  "empty for 'angle'."}});
+                  "1 for 'none' and 'angle'."}});
   bind_record<SpectralKdTag>(m, "SpectralKd",
       "`polrig spectral kd`: kd.csv's columns, one row per channel (shape (6,)), and `spectra` "
       "(spectra.csv's columns).", {

@@ -459,6 +459,32 @@ TEST(Sweep, StreamsBlocksInGridOrderWithBoundedMemory) {
   EXPECT_EQ(whole.points(), 75000u);
 }
 
+TEST(Sweep, ResumingAtABlockComputesOnlyTheRestAndTheSameValues) {
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:50")};
+  const CsTurn turn(8);
+  const SweepResult whole = sweep(Rig{}, axes, turn);
+  const std::size_t block = sweep_block_size(whole.points());
+  ASSERT_EQ(block, 4096u);  // 15,000 points: blocks of 4096, the last of 2712
+  std::size_t next = 2 * block;
+  sweep(Rig{}, axes, turn, [&](std::size_t first, std::span<const CsSummary> b) {
+    ASSERT_EQ(first, next);
+    for (std::size_t k = 0; k < b.size(); ++k)
+      for (int i = 0; i < 3; ++i) {
+        EXPECT_EQ(b[k][i].asd_mV, whole.summaries[first + k][i].asd_mV);
+        EXPECT_EQ(b[k][i].bsd_mV, whole.summaries[first + k][i].bsd_mV);
+      }
+    next += b.size();
+  }, SweepProgress{}, SweepOptions{.first_point = 2 * block});
+  EXPECT_EQ(next, whole.points());
+  // Nothing is left when the grid is done; a point inside a block is refused.
+  sweep(Rig{}, axes, turn, [&](std::size_t, std::span<const CsSummary>) { FAIL(); }, SweepProgress{},
+        SweepOptions{.first_point = whole.points()});
+  EXPECT_THROW(sweep(Rig{}, axes, turn, [](std::size_t, std::span<const CsSummary>) {}, SweepProgress{},
+                     SweepOptions{.first_point = 100}),
+               std::invalid_argument);
+}
+
 TEST(Sweep, AnInteriorPointThatBreaksARuleIsNamedBeforeItIsComputed) {
   // Thirteen varying axes: too many corners to check up front, so the rule is found while
   // sweeping, at the first bad point in grid order.

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cmath>
 #include <cstdlib>
+#include <stdexcept>
 #include <string>
 
 #include <fmt/format.h>
@@ -215,15 +216,22 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
   }
 }
 
+std::size_t sweep_block_size(std::size_t total_points) {
+  return std::clamp<std::size_t>(total_points / 100, 4096, 32768);
+}
+
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
-           const SweepSink& sink, const SweepProgress& progress) {
+           const SweepSink& sink, const SweepProgress& progress, const SweepOptions& options) {
   check_grid(base, axes);
   const std::size_t total = grid_points(axes);
   // Blocks in turn, each in parallel: bounded memory, and progress between them.
-  const std::size_t block = std::clamp<std::size_t>(total / 100, 4096, 32768);
+  const std::size_t block = sweep_block_size(total);
+  if (options.first_point > total || (options.first_point % block != 0 && options.first_point != total))
+    throw std::invalid_argument(fmt::format("sweep: resuming at point {}, not a block boundary "
+                                            "(blocks of {} of {} points)", options.first_point, block, total));
   std::vector<CsSummary> summaries(std::min(block, total));
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
-  for (std::size_t begin = 0; begin < total; begin += block) {
+  for (std::size_t begin = options.first_point; begin < total; begin += block) {
     const std::size_t end = std::min(total, begin + block);
     std::atomic<std::size_t> first_bad{total};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
@@ -262,14 +270,14 @@ SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTu
 }
 
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
-           const SweepSink& sink, const Progress& progress) {
+           const SweepSink& sink, const Progress& progress, const SweepOptions& options) {
   base.light->prepare(progress);
-  progress.begin("sweep: grid points", static_cast<long long>(grid_points(axes)));
-  std::size_t reported = 0;
+  progress.begin("sweep: grid points", static_cast<long long>(grid_points(axes) - std::min(grid_points(axes), options.first_point)));
+  std::size_t reported = options.first_point;
   sweep(base, axes, turn, sink, [&](std::size_t done, std::size_t) {
     progress.advance(static_cast<long long>(done - reported));
     reported = done;
-  });
+  }, options);
   progress.finish();
 }
 

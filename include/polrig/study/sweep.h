@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "polrig/ranks.h"
 #include "polrig/rig/keys.h"
 #include "polrig/study/cs.h"
 
@@ -52,6 +53,20 @@ using SweepProgress = std::function<void(std::size_t done, std::size_t total)>;
 // Receives the summaries of grid points first, first + 1, …, in grid order, a block at a time.
 using SweepSink = std::function<void(std::size_t first, std::span<const CsSummary> block)>;
 
+// The sweep's blocks: points [b·size, (b+1)·size) form block b, the last one shorter. A pure
+// function of the grid's size (never of threads or ranks): blocks are the unit of computation,
+// of output, and of resuming an interrupted sweep.
+std::size_t sweep_block_size(std::size_t total_points);
+
+struct SweepOptions {
+  // Resuming: the points before first_point are done and not computed again. A block boundary
+  // (a multiple of sweep_block_size), or the grid's size.
+  std::size_t first_point = 0;
+  // The processes that share the blocks; `sink` and `progress` are called on rank 0 only, with
+  // every block in grid order. Null: this process alone.
+  const Ranks* ranks = nullptr;
+};
+
 // The checks that need no computation: the grid's size, what a traced rig cannot sweep, and the
 // rig's cross-key rules (check_rig) at every corner of the grid. Throws RigError.
 void check_grid(const Rig& base, const std::vector<GridAxis>& axes);
@@ -61,13 +76,13 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes);
 // against check_rig before it is computed, and the first bad point (in grid order) throws
 // RigError naming it. Results do not depend on the thread count.
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
-           const SweepSink& sink, const SweepProgress& progress = {});
+           const SweepSink& sink, const SweepProgress& progress = {}, const SweepOptions& options = {});
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                   const SweepProgress& progress = {});
 // The sweep as `polrig sweep` and Rig.sweep run it: prepares the rig's light (a traced light
 // reports its own stages), then reports the stage "sweep: grid points" on `progress`.
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
-           const SweepSink& sink, const Progress& progress);
+           const SweepSink& sink, const Progress& progress, const SweepOptions& options = {});
 
 // The swept keys the CS study does not read, in axis order: every point along such an axis
 // repeats the same result (the CLI notes it, Python warns).

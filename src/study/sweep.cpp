@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -216,6 +217,36 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
   }
 }
 
+namespace {
+// The CS summaries of grid points [begin, end) into out[0 … end − begin), in parallel. Throws
+// RigError naming the first point (in grid order) that breaks a rule of check_rig; nothing else
+// is then meaningful in `out`.
+void compute_block(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
+                   std::size_t begin, std::size_t end, CsSummary* out,
+                   tbb::enumerable_thread_specific<std::vector<double>>& scratch) {
+  const std::size_t none = std::numeric_limits<std::size_t>::max();
+  std::atomic<std::size_t> first_bad{none};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::vector<double>& s = scratch.local();
+                      for (std::size_t p = r.begin(); p != r.end(); ++p) {
+                        const Rig rig = rig_at(base, axes, grid_indices(axes, p));
+                        if (check_rig(rig)) {
+                          std::size_t seen = first_bad.load();
+                          while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {
+                          }
+                          continue;
+                        }
+                        out[p - begin] = cs_summary(rig, turn, s);
+                      }
+                    });
+  if (first_bad != none) {
+    const std::vector<int> idx = grid_indices(axes, first_bad);
+    throw point_error(axes, idx, *check_rig(rig_at(base, axes, idx)));
+  }
+}
+}  // namespace
+
 std::size_t sweep_block_size(std::size_t total_points) {
   return std::clamp<std::size_t>(total_points / 100, 4096, 32768);
 }
@@ -233,25 +264,7 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
   for (std::size_t begin = options.first_point; begin < total; begin += block) {
     const std::size_t end = std::min(total, begin + block);
-    std::atomic<std::size_t> first_bad{total};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        std::vector<double>& s = scratch.local();
-                        for (std::size_t p = r.begin(); p != r.end(); ++p) {
-                          const Rig rig = rig_at(base, axes, grid_indices(axes, p));
-                          if (check_rig(rig)) {
-                            std::size_t seen = first_bad.load();
-                            while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {
-                            }
-                            continue;
-                          }
-                          summaries[p - begin] = cs_summary(rig, turn, s);
-                        }
-                      });
-    if (first_bad < total) {
-      const std::vector<int> idx = grid_indices(axes, first_bad);
-      throw point_error(axes, idx, *check_rig(rig_at(base, axes, idx)));
-    }
+    compute_block(base, axes, turn, begin, end, summaries.data(), scratch);
     sink(begin, std::span<const CsSummary>(summaries.data(), end - begin));
     if (progress) progress(end, total);
   }

@@ -10,9 +10,11 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libembree-dev libopenexr-dev
   liberfa-dev                 # the sun's apparent position (IAU SOFA-derived ERFA, as astropy)
+  libhdf5-dev hdf5-tools       # sweep.h5 (serial HDF5 + its high-level dimension scales; h5dump to inspect it)
   gnuplot-nox fonts-dejavu-core
   python3-dev pybind11-dev    # the Python module (docs/python.md)
   python3-numpy python3-pytest python3-matplotlib  # its arrays, its tests, its examples' plots
+  python3-h5py                # the tests read sweep.h5 with an independent HDF5 reader
 )
 
 missing=()

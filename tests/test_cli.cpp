@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -19,6 +20,8 @@
 #include <vector>
 
 #include "polrig/io/rig_yaml.h"
+#include "polrig/io/sweep_h5.h"
+#include "polrig/io/sweep_state.h"
 #include "polrig/rig/rig.h"
 #include "support.h"
 
@@ -42,6 +45,20 @@ class Cli : public PolrigTest {
 };
 
 std::string dir_arg(const fs::path& p) { return shell_quote(p); }
+
+// Two sweep.h5 files hold the same values, bit for bit, in every column (their manifests
+// may differ: another command line).
+void expect_same_sweep_columns(const fs::path& a, const fs::path& b, std::size_t points) {
+  const polrig::SweepH5Reader ra(a), rb(b);
+  std::vector<double> va(points), vb(points);
+  for (int i = 1; i <= 3; ++i)
+    for (const char* c : {"bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV", "eq6_mV", "eq6_dev_pct"}) {
+      const std::string name = "pair" + std::to_string(i) + "_" + c;
+      ra.read(name, 0, va);
+      rb.read(name, 0, vb);
+      EXPECT_EQ(std::memcmp(va.data(), vb.data(), points * sizeof(double)), 0) << name << " differs";
+    }
+}
 
 }  // namespace
 
@@ -287,8 +304,8 @@ TEST_F(Cli, SweepWritesTheGridAndIsIndependentOfThreadCount) {
   const std::string grids =
       " --grid eccentricity.L_S=0.001:1:5 --grid eccentricity.L_IS=0.001:1:4";
   const fs::path a = tmp / "sw1", b = tmp / "sw2";
-  ok("sweep " + shell_quote(kRig) + grids + " -o " + dir_arg(a) + " --no-plots --threads 1");
-  ok("sweep " + shell_quote(kRig) + grids + " -o " + dir_arg(b) + " --no-plots --threads 2");
+  ok("sweep " + shell_quote(kRig) + grids + " -o " + dir_arg(a) + " --no-plots --csv --threads 1");
+  ok("sweep " + shell_quote(kRig) + grids + " -o " + dir_arg(b) + " --no-plots --csv --threads 2");
   const Csv csv = read_csv(a / "sweep.csv");
   ASSERT_GE(csv.header.size(), 3u);
   EXPECT_EQ(csv.header[0], "eccentricity.L_S");
@@ -306,6 +323,17 @@ TEST_F(Cli, SweepWritesTheGridAndIsIndependentOfThreadCount) {
   for (const auto& row : csv.rows) EXPECT_EQ(row.size(), csv.header.size());
   EXPECT_EQ(read_file(a / "sweep.csv"), read_file(b / "sweep.csv"))
       << "sweep.csv differs between 1 and 2 threads";
+  expect_same_sweep_columns(a / "sweep.h5", b / "sweep.h5", 20);
+}
+
+TEST_F(Cli, SweepWithoutCsvWritesOnlyTheHdf5File) {
+  const fs::path out = tmp / "h5only";
+  ok("sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0.001:1:5 -o " + dir_arg(out) + " --no-plots");
+  EXPECT_TRUE(fs::exists(out / "sweep.h5"));
+  EXPECT_FALSE(fs::exists(out / "sweep.csv"));
+  const YAML::Node m = YAML::LoadFile((out / "manifest.yaml").string());
+  EXPECT_TRUE(m["files"]["sweep.h5"]);
+  EXPECT_FALSE(m["files"]["sweep.csv"]);
 }
 
 // A sweep long enough for several progress reports (200,000 grid points on one thread, seconds).
@@ -332,7 +360,7 @@ TEST_F(Cli, ProgressLineOnATerminalUnlessQuiet) {
   const std::string quiet = on_terminal("sweep " + shell_quote(kRig) + kLongSweep + " --quiet -o " + dir_arg(tmp / "b"), tmp / "b.log");
   EXPECT_EQ(quiet.find("polrig: sweep"), std::string::npos) << quiet;
   EXPECT_HAS(quiet, "wrote " + (tmp / "b").string());
-  EXPECT_EQ(read_file(tmp / "a" / "sweep.csv"), read_file(tmp / "b" / "sweep.csv"));
+  expect_same_sweep_columns(tmp / "a" / "sweep.h5", tmp / "b" / "sweep.h5", 200000);
 }
 
 TEST_F(Cli, StudyAdcWritesAccuracyLimits) {
@@ -614,12 +642,12 @@ bool wait_for_staging(const fs::path& parent) {
 }  // namespace
 
 TEST_F(Cli, AnInterruptedRunLeavesNothing) {
-  // Ctrl-C (SIGINT), a kill (SIGTERM) or a hang-up during a long sweep: the staging folder and
+  // Ctrl-C (SIGINT), a kill (SIGTERM) or a hang-up during a long study: the staging folder and
   // the parent folders polrig created are removed, and the process ends by the signal.
   for (int sig : {SIGINT, SIGTERM, SIGHUP}) {
     SCOPED_TRACE(sig);
     const fs::path parent = tmp / "made" / "for";
-    const pid_t pid = spawn_polrig({"sweep", kRig, "--grid", "eccentricity.L_S=0:1:1000000", "-o",
+    const pid_t pid = spawn_polrig({"study", "calibration", kRig, "--trials", "10000000", "-o",
                                     (parent / "out").string(), "--no-plots"}, false);
     ASSERT_GT(pid, 0);
     ASSERT_TRUE(wait_for_staging(parent));
@@ -636,7 +664,7 @@ TEST_F(Cli, AHangUpIgnoredByNohupStaysIgnored) {
   // Under nohup SIGHUP is ignored when polrig starts; it must stay so (the run goes on), and a
   // later SIGTERM still cleans up.
   const fs::path parent = tmp / "nohup";
-  const pid_t pid = spawn_polrig({"sweep", kRig, "--grid", "eccentricity.L_S=0:1:1000000", "-o",
+  const pid_t pid = spawn_polrig({"study", "calibration", kRig, "--trials", "10000000", "-o",
                                   (parent / "out").string(), "--no-plots"}, true);
   ASSERT_GT(pid, 0);
   ASSERT_TRUE(wait_for_staging(parent));
@@ -648,6 +676,112 @@ TEST_F(Cli, AHangUpIgnoredByNohupStaysIgnored) {
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
   EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM);
   EXPECT_FALSE(fs::exists(parent)) << "the staging folder or its parents were left behind";
+}
+
+// ---- resuming an interrupted sweep
+
+namespace {
+// 200,000 points on one thread: long enough to interrupt after a checkpoint.
+std::vector<std::string> resumable_sweep(const fs::path& out) {
+  return {"sweep", kRig, "--grid", "eccentricity.L_S=0.001:1:400", "--grid", "eccentricity.L_IS=0.001:1:500",
+          "--csv", "--threads", "1", "-o", out.string()};
+}
+std::string joined(const std::vector<std::string>& args) {
+  std::string s;
+  for (const std::string& a : args) {
+    if (!s.empty()) s += ' ';
+    s += shell_quote(a);
+  }
+  return s;
+}
+fs::path staging_of(const fs::path& out) { return out.parent_path() / ("." + out.filename().string() + ".resumable"); }
+
+// Waits until the staging folder's progress record shows a completed block, then sends `sig`
+// and waits for the process. Returns the points the record held, or 0 if the run ended first.
+std::size_t interrupt_after_a_checkpoint(pid_t pid, const fs::path& out, int sig) {
+  std::size_t done = 0;
+  for (int i = 0; i < 20000 && done == 0; ++i) {
+    try {
+      if (const auto s = polrig::read_sweep_state(staging_of(out))) done = s->points_done;
+    } catch (const std::exception&) {  // read while it was renamed
+    }
+    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ::kill(pid, sig);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "the sweep ended before the signal";
+  return done;
+}
+
+std::set<std::string> names_in(const fs::path& dir) {
+  std::set<std::string> names;
+  for (const auto& e : fs::directory_iterator(dir)) names.insert(e.path().filename().string());
+  return names;
+}
+}  // namespace
+
+TEST_F(Cli, SlowAnInterruptedSweepResumesToTheSameBytes) {
+  // The reference: an uninterrupted run, written to the same -o (the manifest records it).
+  const fs::path out = tmp / "runs" / "sweep", ref = tmp / "reference";
+  ok(joined(resumable_sweep(out)));
+  fs::rename(out, ref);
+  for (int sig : {SIGKILL, SIGINT}) {
+    SCOPED_TRACE(sig);
+    const pid_t pid = spawn_polrig(resumable_sweep(out), false);
+    ASSERT_GT(pid, 0);
+    const std::size_t done = interrupt_after_a_checkpoint(pid, out, sig);
+    ASSERT_GT(done, 0u);
+    ASSERT_LT(done, 200000u);
+    EXPECT_FALSE(fs::exists(out));
+    ASSERT_TRUE(fs::exists(staging_of(out) / "sweep.h5")) << "the interrupted run's staging folder was removed";
+
+    // Not resumed by accident: the same command refuses, naming the staging folder.
+    const Result again = polrig(joined(resumable_sweep(out)));
+    EXPECT_NE(again.status, 0);
+    EXPECT_HAS(again.err, staging_of(out).string());
+    EXPECT_HAS(again.err, "--resume continues it; --force starts over");
+
+    std::vector<std::string> resume = resumable_sweep(out);
+    resume.push_back("--resume");
+    ok(joined(resume));
+    EXPECT_FALSE(fs::exists(staging_of(out)));
+    ASSERT_EQ(names_in(out), names_in(ref));
+    for (const std::string& name : names_in(ref))
+      EXPECT_TRUE(read_file(out / name) == read_file(ref / name)) << name << " differs from the uninterrupted run's";
+    fs::remove_all(out);
+  }
+}
+
+TEST_F(Cli, SlowResumingRefusesOtherInputsAndForceStartsOver) {
+  const fs::path out = tmp / "sweep";
+  const pid_t pid = spawn_polrig(resumable_sweep(out), false);
+  ASSERT_GT(pid, 0);
+  ASSERT_GT(interrupt_after_a_checkpoint(pid, out, SIGKILL), 0u);
+  std::vector<std::string> other = resumable_sweep(out);
+  other.insert(other.end(), {"--steps", "36", "--set", "eccentricity.L_S=0.2", "--resume"});
+  const Result r = polrig(joined(other));
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "--resume: the interrupted run in " + staging_of(out).string() + " was started with another");
+  EXPECT_HAS(r.err, "steps (--steps)");
+  EXPECT_HAS(r.err, "overrides (--set)");
+  EXPECT_EQ(r.err.find("grid (--grid)"), std::string::npos) << r.err;
+  EXPECT_TRUE(fs::exists(staging_of(out) / polrig::kSweepStateFile)) << "a refused resume must keep the progress";
+  // --force without --resume starts over (and finishes).
+  std::vector<std::string> force = resumable_sweep(out);
+  force.insert(force.end(), {"--steps", "8", "--force"});
+  ok(joined(force));
+  EXPECT_FALSE(fs::exists(staging_of(out)));
+  EXPECT_FALSE(fs::exists(out / polrig::kSweepStateFile));
+}
+
+TEST_F(Cli, ResumeWithNothingToResumeIsAnError) {
+  const fs::path out = tmp / "nothing";
+  const Result r = polrig("sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0:1:3 --no-plots --resume -o " + dir_arg(out));
+  EXPECT_NE(r.status, 0);
+  EXPECT_HAS(r.err, "--resume: there is no interrupted run of " + out.string() + " to continue");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(staging_of(out)));
 }
 
 TEST_F(Cli, ExistingOutputFolderNeedsForce) {

@@ -146,7 +146,7 @@ def test_sweep_equals_the_cli_sweep_csv(tmp_path):
     grid = {"eccentricity.L_IS": "0.001:1:4", "eccentricity.alpha_S": "0:350:3"}
     res = rig.sweep(grid, steps=36, threads=2)
     run_cli("sweep", INDOOR, *cli_sets(SETS), "--steps", 36, *[a for k, v in grid.items() for a in ("--grid", f"{k}={v}")],
-            "-o", tmp_path / "sw", "--no-plots", "--quiet")
+            "-o", tmp_path / "sw", "--no-plots", "--quiet", "--csv")
     csv = read_csv(tmp_path / "sw" / "sweep.csv")
     assert res.shape == (4, 3) and len(res) == 12 and res.keys == list(grid)
     L, a = np.meshgrid(res.axes["eccentricity.L_IS"], res.axes["eccentricity.alpha_S"], indexing="ij")

@@ -20,6 +20,8 @@
 #include "polrig/report/calibration_reports.h"
 #include "polrig/study/cs.h"
 #include "polrig/report/reports.h"
+#include "polrig/report/sweep_report.h"
+#include "polrig/io/plot.h"
 #include "polrig/study/sweep.h"
 #include "polrig/report/trace_report.h"
 #include "polrig/io/scene_yaml.h"
@@ -145,6 +147,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         ->type_name("KEY=START:STOP:COUNT")
         ->allow_extra_args(false);
     app->add_option("--steps", *steps, "table angles per turn (even)")->check(EvenSteps())->capture_default_str();
+    auto csv = std::make_shared<bool>(false);
+    auto resume = std::make_shared<bool>(false);
+    app->add_flag("--csv", *csv, "also write sweep.csv (one row per grid point; large)");
+    app->add_flag("--resume", *resume, "continue an interrupted sweep into the same folder (same arguments)");
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
@@ -154,13 +160,13 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
                                  "row along that axis will be the same\n", key->path);
       check_grid(r.rig, axes);
-      OutputDir dir = out->open(axes.size() <= 2);
-      SweepReport report(dir.staging(), axes, r.rig.light->has(Source::kClosedFormEq6));
-      sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t first, std::span<const CsSummary> block) {
-        report.write(first, block);
-      }, progress());
-      write_manifest(dir.staging(), {command_line(), &r, report.finish(out->plots())});
-      finish(dir);
+      if (axes.size() <= 2 && out->plots() && !gnuplot_available())
+        throw std::runtime_error("gnuplot is needed for the PNG plots and was not found; install it "
+                                 "(scripts/setup-deps.sh) or pass --no-plots");
+      const fs::path written = sweep_to_folder(r, axes, *steps, {out->out, out->force, *csv, out->plots(), *resume, command_line()},
+                                               progress());
+      end_progress_line();
+      std::cout << "wrote " << written.string() << "\n";
     }});
   }
 

@@ -1,5 +1,7 @@
 #include "polrig/io/csv.h"
 
+#include <unistd.h>
+
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -52,6 +54,21 @@ std::string CsvTable::take_body() {
 TextFileWriter::TextFileWriter(const std::filesystem::path& path) : path_(path) {
   file_ = std::fopen(path.c_str(), "wb");
   if (!file_) fail("cannot create the file", errno);
+}
+
+TextFileWriter::TextFileWriter(const std::filesystem::path& path, std::uint64_t keep_bytes) : path_(path) {
+  if (::truncate(path.c_str(), static_cast<off_t>(keep_bytes)) != 0) fail("cannot cut the file to its last checkpoint", errno);
+  file_ = std::fopen(path.c_str(), "ab");
+  if (!file_) fail("cannot open the file", errno);
+}
+
+std::uint64_t TextFileWriter::sync() {
+  if (!file_) throw std::logic_error(fmt::format("{}: synced after close", path_.string()));
+  errno = 0;
+  if (std::fflush(file_) != 0 || ::fsync(::fileno(file_)) != 0) fail("cannot write the file", errno ? errno : EIO);
+  const long at = std::ftell(file_);
+  if (at < 0) fail("cannot tell the file's length", errno);
+  return static_cast<std::uint64_t>(at);
 }
 
 TextFileWriter::~TextFileWriter() {

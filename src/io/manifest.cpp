@@ -48,7 +48,45 @@ void emit_rig_text(YAML::Emitter& out, const std::string& text) {
         << YAML::EncodeBase64(reinterpret_cast<const unsigned char*>(text.data()), text.size());
   }
 }
+// UTF-8 without NUL: what an HDF5 UTF-8 string holds exactly.
+bool is_utf8_text(const std::string& t) {
+  return t.find('\0') == std::string::npos && reads_back_exactly(t, YAML::DoubleQuoted);
+}
 }  // namespace
+
+std::string manifest_working_directory(const Manifest& m) {
+  if (m.working_directory) return *m.working_directory;
+  std::error_code ec;
+  const std::filesystem::path cwd = std::filesystem::current_path(ec);
+  return ec ? "(unavailable: " + ec.message() + ")" : cwd.string();
+}
+
+std::vector<std::pair<std::string, std::string>> manifest_fields(const Manifest& m) {
+  std::vector<std::pair<std::string, std::string>> f{
+      {"manifest_schema", "1"}, {"program", "polrig"}, {"version", POLRIG_VERSION},
+      {"git_revision", POLRIG_GIT_REVISION}, {"command", m.command},
+      {"working_directory", manifest_working_directory(m)}};
+  const auto lines = [](const std::vector<std::string>& items) {
+    std::string t;
+    for (const std::string& i : items) t += i + "\n";
+    return t;
+  };
+  if (!m.inputs.empty()) f.emplace_back("inputs", lines(m.inputs));
+  if (m.rig) {
+    f.emplace_back("seed", fmt::format("{}", m.rig->rig.seed));
+    f.emplace_back("rig_file", m.rig->origin);
+    std::vector<std::string> overrides;
+    for (const RigOverride& o : m.rig->overrides) overrides.push_back(o.path + "=" + o.value);
+    f.emplace_back("overrides", lines(overrides));
+    if (is_utf8_text(m.rig->text))
+      f.emplace_back("rig_text", m.rig->text);
+    else
+      f.emplace_back("rig_text_base64", YAML::EncodeBase64(reinterpret_cast<const unsigned char*>(m.rig->text.data()),
+                                                           m.rig->text.size()));
+    f.emplace_back("rig_resolved", rig_to_yaml(m.rig->rig));
+  }
+  return f;
+}
 
 void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
   YAML::Emitter out;
@@ -58,10 +96,7 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
   out << YAML::Key << "version" << YAML::Value << POLRIG_VERSION;
   out << YAML::Key << "git_revision" << YAML::Value << POLRIG_GIT_REVISION;
   out << YAML::Key << "command" << YAML::Value << m.command;
-  std::error_code ec;
-  const std::filesystem::path cwd = std::filesystem::current_path(ec);
-  out << YAML::Key << "working_directory" << YAML::Value
-      << (ec ? "(unavailable: " + ec.message() + ")" : cwd.string());
+  out << YAML::Key << "working_directory" << YAML::Value << manifest_working_directory(m);
   if (!m.inputs.empty()) {
     out << YAML::Key << "inputs" << YAML::Value << YAML::BeginSeq;
     for (const std::string& in : m.inputs) out << in;

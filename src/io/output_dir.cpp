@@ -1,6 +1,7 @@
 #include "polrig/io/output_dir.h"
 
 #include <fcntl.h>
+#include <sys/file.h>
 #include <limits.h>
 #include <pthread.h>
 #include <signal.h>
@@ -99,6 +100,82 @@ void probe_atomic_renames(const fs::path& folder, bool exchange) {
 }  // namespace
 
 OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
+  prepare(destination, fmt::format(".partial-{}", ::getpid()).c_str());
+  const std::lock_guard lock(open_dirs_mutex());
+  try {
+    create_parents();
+    std::error_code ec;
+    fs::remove_all(staging_, ec);  // left by a killed run that had our process id
+    if (!fs::create_directory(staging_, ec))
+      throw error(staging_, fmt::format("cannot create the staging folder: {}",
+                                        ec ? ec.message() : std::string("it exists")));
+    probe_atomic_renames(staging_, replace_);
+    open_dirs().insert(this);
+  } catch (...) {
+    remove_staging_and_parents();
+    throw;
+  }
+}
+
+OutputDir::OutputDir(fs::path destination, bool replace, const Resumable& resumable) : replace_(replace) {
+  prepare(destination, ".resumable");
+  const std::lock_guard lock(open_dirs_mutex());
+  try {
+    create_parents();
+    open_resumable(resumable);
+    probe_atomic_renames(staging_, replace_);
+    open_dirs().insert(this);
+  } catch (...) {
+    if (!keep_) remove_staging_and_parents();
+    if (lock_fd_ >= 0) ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw;
+  }
+}
+
+void OutputDir::open_resumable(const Resumable& r) {
+  std::error_code ec;
+  const fs::file_type there = type_of(staging_);
+  if (there != fs::file_type::not_found && there != fs::file_type::directory)
+    throw error(staging_, fmt::format("the staging folder's name is taken by {}; remove it",
+                                      what_is_there(staging_, there)));
+  if (there == fs::file_type::not_found) {
+    if (r.resume)
+      throw error(staging_, fmt::format("--resume: there is no interrupted run of {} to continue",
+                                        destination_.string()));
+    if (!fs::create_directory(staging_, ec) && ec)
+      throw error(staging_, fmt::format("cannot create the staging folder: {}", ec.message()));
+  }
+  lock_fd_ = ::open(staging_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (lock_fd_ < 0)
+    throw error(staging_, fmt::format("cannot open the staging folder: {}", std::strerror(errno)));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    keep_ = true;  // another process's
+    throw error(staging_, errno == EWOULDBLOCK
+                              ? "another polrig is writing this output folder now (its staging "
+                                "folder is locked); wait for it or choose another folder"
+                              : fmt::format("cannot lock the staging folder: {}", std::strerror(errno)));
+  }
+  const bool interrupted = fs::exists(staging_ / r.record, ec);
+  if (interrupted && r.resume) {
+    resuming_ = keep_ = true;
+    return;
+  }
+  if (interrupted && !r.restart) {
+    keep_ = true;
+    throw error(destination_, fmt::format("an interrupted run left its staging folder {}: --resume "
+                                          "continues it; --force starts over", staging_.string()));
+  }
+  if (r.resume)
+    throw error(staging_, fmt::format("--resume: the staging folder holds no progress record (the "
+                                      "run was stopped before its first checkpoint); run again "
+                                      "without --resume"));
+  // Started over: empty the folder we hold locked.
+  for (const auto& e : fs::directory_iterator(staging_, ec)) fs::remove_all(e.path(), ec);
+  if (ec) throw error(staging_, fmt::format("cannot empty the staging folder: {}", ec.message()));
+}
+
+void OutputDir::prepare(const fs::path& destination, const char* staging_suffix) {
   if (destination.empty()) throw std::runtime_error("the output folder's name is empty");
   std::error_code ec;
   destination_ = fs::absolute(destination, ec).lexically_normal();
@@ -118,47 +195,36 @@ OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
 
   // The nearest existing ancestor must be a folder; the ones below it are created.
   fs::path existing = destination_.parent_path();
-  std::vector<fs::path> missing;
   for (; !existing.empty() && type_of(existing) == fs::file_type::not_found; existing = existing.parent_path())
-    missing.insert(missing.begin(), existing);
+    missing_parents_.insert(missing_parents_.begin(), existing);
   if (!fs::is_directory(existing, ec))
     throw error(existing, fmt::format("cannot create the output folder inside it: it is {}",
                                       what_is_there(existing, type_of(existing))));
 
-  const std::string staging_name =
-      fmt::format(".{}.partial-{}", destination_.filename().string(), ::getpid());
+  const std::string staging_name = fmt::format(".{}{}", destination_.filename().string(), staging_suffix);
   const long name_max = name_max_at(existing);
   const std::size_t overhead = staging_name.size() - destination_.filename().string().size();
   if (static_cast<long>(staging_name.size()) > name_max)
     throw error(destination_, fmt::format("the folder name is {} bytes long; at most {} fit here "
                                           "(the file system allows {} and the staging folder "
-                                          "'.NAME.partial-{}' adds {})",
+                                          "'.NAME{}' adds {})",
                                           destination_.filename().string().size(),
                                           name_max - static_cast<long>(overhead), name_max,
-                                          ::getpid(), overhead));
-  for (const fs::path& p : missing)
+                                          staging_suffix, overhead));
+  for (const fs::path& p : missing_parents_)
     if (p.filename().string().size() > static_cast<std::size_t>(name_max))
       throw error(p, fmt::format("the folder name is {} bytes long; the file system allows {}",
                                  p.filename().string().size(), name_max));
-
   staging_ = destination_.parent_path() / staging_name;
-  const std::lock_guard lock(open_dirs_mutex());
-  try {
-    for (const fs::path& p : missing) {
-      if (fs::create_directory(p, ec))
-        created_parents_.push_back(p);  // not one that another process made meanwhile
-      else if (ec)
-        throw error(p, fmt::format("cannot create the folder: {}", ec.message()));
-    }
-    fs::remove_all(staging_, ec);  // left by a killed run that had our process id
-    if (!fs::create_directory(staging_, ec))
-      throw error(staging_, fmt::format("cannot create the staging folder: {}",
-                                        ec ? ec.message() : std::string("it exists")));
-    probe_atomic_renames(staging_, replace_);
-    open_dirs().insert(this);
-  } catch (...) {
-    remove_staging_and_parents();
-    throw;
+}
+
+void OutputDir::create_parents() {
+  std::error_code ec;
+  for (const fs::path& p : missing_parents_) {
+    if (fs::create_directory(p, ec))
+      created_parents_.push_back(p);  // not one that another process made meanwhile
+    else if (ec)
+      throw error(p, fmt::format("cannot create the folder: {}", ec.message()));
   }
 }
 
@@ -193,6 +259,7 @@ void OutputDir::commit() {
 }
 
 void OutputDir::remove_staging_and_parents() noexcept {
+  if (keep_ && !committed_) return;  // a resumable run's progress
   std::error_code ec;
   // A few tries: on a signal, another thread may still be writing into the staging folder.
   for (int attempt = 0; attempt < 10 && !staging_.empty() && fs::exists(staging_, ec); ++attempt)
@@ -206,6 +273,7 @@ OutputDir::~OutputDir() {
   const std::lock_guard lock(open_dirs_mutex());
   open_dirs().erase(this);
   if (!committed_) remove_staging_and_parents();
+  if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 void clean_up_outputs_on_signals() {

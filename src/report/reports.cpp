@@ -15,11 +15,6 @@ namespace polrig {
 namespace {
 const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
 
-std::string axis_label(const GridAxis& a) {
-  return a.key->unit.empty() ? std::string(a.key->path)
-                             : fmt::format("{} ({})", a.key->path, a.key->unit);
-}
-
 std::string line_style(int pair, const char* extra = "") {
   return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
 }
@@ -110,112 +105,6 @@ std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const
   render_plots(dir, "plots.gp", {pair1, all});
   files.push_back({"cs_pair1.png", 1, "pair 1 before/after rotation and CS average (Fig. 8a)"});
   files.push_back({"cs_deviations.png", 1, "all pairs before and after CS (Fig. 9)"});
-  return files;
-}
-
-namespace {
-constexpr int kSweepColumnsPerPair = 7;
-
-std::vector<std::string> sweep_header(const std::vector<GridAxis>& axes) {
-  std::vector<std::string> header;
-  for (const GridAxis& a : axes) header.emplace_back(a.key->path);
-  for (int i = 1; i <= 3; ++i)
-    for (const char* c : {"bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV",
-                          "eq6_mV", "eq6_dev_pct"})
-      header.push_back(fmt::format("pair{}_{}", i, c));
-  return header;
-}
-}  // namespace
-
-SweepReport::SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes, bool eq6)
-    : dir_(dir), axes_(std::move(axes)), table_(sweep_header(axes_)), file_(dir / "sweep.csv") {
-  for (int i = 1; i <= 3; ++i) {  // ratios over a zero denominator; Eq. 6 where it has no closed form
-    table_.allow_undefined(fmt::format("pair{}_asd_bsd_pct", i));
-    table_.allow_undefined(fmt::format("pair{}_eq6_dev_pct", i));
-    if (!eq6) table_.allow_undefined(fmt::format("pair{}_eq6_mV", i));
-  }
-  file_.write(table_.header_line());
-}
-
-void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
-  if (first != rows_)
-    throw std::logic_error(fmt::format("sweep.csv: block at point {} after {} rows", first, rows_));
-  std::vector<double> row;
-  for (std::size_t k = 0; k < block.size(); ++k) {
-    row.clear();
-    const std::vector<int> idx = grid_indices(axes_, first + k);
-    for (std::size_t a = 0; a < axes_.size(); ++a) row.push_back(axes_[a].value(idx[a]));
-    for (int i = 0; i < 3; ++i) {
-      const CsPairSummary& s = block[k][static_cast<std::size_t>(i)];
-      row.insert(row.end(), {s.bsd_mV, s.asd_mV, asd_bsd_pct(s), s.mean_br_mV, s.mean_mr_mV,
-                             s.eq6_mV, eq6_dev_pct(s)});
-      ratio_defined_[static_cast<std::size_t>(i)] |= s.bsd_mV > kCsRounding_mV;
-    }
-    table_.add_row(row);
-  }
-  file_.write(table_.take_body());
-  rows_ += block.size();
-}
-
-std::vector<DatasetFile> SweepReport::finish(bool plots) {
-  file_.close();
-  std::vector<DatasetFile> files{
-      {"sweep.csv", 1, "one row per grid point: the grid values and the CS summary of each pair"}};
-  if (!plots || axes_.empty() || axes_.size() > 2) return files;
-
-  const std::size_t first_pair_column = axes_.size() + 1;  // 1-based for gnuplot
-  const auto col = [&](int pair, int offset) {
-    return first_pair_column + static_cast<std::size_t>(pair * kSweepColumnsPerPair + offset);
-  };
-  std::vector<Plot> figures;
-  if (axes_.size() == 1) {
-    const std::string x = axis_label(axes_[0]);
-    Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)", x, "ASD (mV)",
-             "ASD/BSD (%)"};
-    Plot mean{"sweep_expectation.png",
-              "Expectation of ΔV_mr (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)",
-              x, "expectation (mV)", "Eq. 6 - expectation (µV)"};
-    for (int i = 0; i < 3; ++i) {
-      asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 1)),
-                            fmt::format("ASD pair {}", i + 1), line_style(i)});
-      // gnuplot refuses a series with no defined point: the ratio is NaN where BSD is zero.
-      if (ratio_defined_[static_cast<std::size_t>(i)])
-        asd.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 2)),
-                              fmt::format("ASD/BSD pair {}", i + 1), line_style(i, "dt 2"), true});
-      mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 4)),
-                             fmt::format("expectation pair {}", i + 1), line_style(i)});
-      mean.series.push_back({"sweep.csv", fmt::format("1:{}", col(i, 5)),
-                             fmt::format("Eq. 6 pair {}", i + 1),
-                             fmt::format("points pt 6 ps 0.8 lc rgb '{}'", kPairColour[i])});
-      mean.series.push_back({"sweep.csv", fmt::format("1:((${}-${})*1e3)", col(i, 5), col(i, 4)),
-                             fmt::format("Eq. 6 - expectation, pair {}", i + 1),
-                             line_style(i, "dt 2"), true});
-    }
-    figures = {asd, mean};
-  } else {
-    // Two keys: pair 1 against the second key, one curve per value of the first (at most 6).
-    const GridAxis& outer = axes_[0];
-    const std::string x = axis_label(axes_[1]);
-    Plot asd{"sweep_asd.png", fmt::format("Pair 1 ASD after CS, one curve per {}", outer.key->path),
-             x, "ASD (mV)"};
-    Plot mean{"sweep_expectation.png",
-              fmt::format("Pair 1 expectation of ΔV_mr, one curve per {}", outer.key->path), x,
-              "expectation (mV)"};
-    const int curves = std::min(outer.count, 6);
-    for (int c = 0; c < curves; ++c) {
-      const int idx = curves == 1 ? 0 : c * (outer.count - 1) / (curves - 1);
-      const std::string v = fmt::format("{}", outer.value(idx));
-      asd.series.push_back({"sweep.csv", fmt::format("2:($1=={}?${}:NaN)", v, col(0, 1)),
-                            fmt::format("{} = {}", outer.key->path, v), "lines lw 2"});
-      mean.series.push_back({"sweep.csv", fmt::format("2:($1=={}?${}:NaN)", v, col(0, 4)),
-                             fmt::format("{} = {}", outer.key->path, v), "lines lw 2"});
-    }
-    figures = {asd, mean};
-  }
-  render_plots(dir_, "plots.gp", figures);
-  files.push_back({"sweep_asd.png", 1, "ASD and ASD/BSD against the swept key (Figs. 11a, 12a)"});
-  files.push_back({"sweep_expectation.png", 1,
-                   "expectation after CS and Eq. 6 against the swept key (Figs. 10, 11b, 12b)"});
   return files;
 }
 

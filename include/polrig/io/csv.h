@@ -1,6 +1,7 @@
 #pragma once
 // CSV output. Numbers are written in their shortest exact form ({fmt}'s "{}"), so a CSV reads
 // back to the same doubles and is byte-identical for identical results.
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -37,10 +38,14 @@ class CsvTable {
 class TextFileWriter {
  public:
   explicit TextFileWriter(const std::filesystem::path& path);
+  // Continues an existing file after its first `keep_bytes` bytes (the rest is cut off).
+  TextFileWriter(const std::filesystem::path& path, std::uint64_t keep_bytes);
   ~TextFileWriter();  // closes without checking: call close() to know the file is whole
   TextFileWriter(const TextFileWriter&) = delete;
   TextFileWriter& operator=(const TextFileWriter&) = delete;
   void write(std::string_view text);
+  // Makes what was written durable (fflush, fsync); returns the file's length.
+  std::uint64_t sync();
   void close();
 
  private:

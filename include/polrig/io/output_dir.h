@@ -9,10 +9,22 @@
 // two folders atomically (RENAME_EXCHANGE), so the destination exists at every instant, then
 // removes the old one. A file system without these renames is refused when the folder is
 // opened, before any computation.
+//
+// A resumable folder (a long sweep) stages in '.NAME.resumable' instead, a fixed name, locked
+// (flock) while a process writes it. Once keep_on_failure() is called (the first progress
+// record is on disk), the staging folder survives errors, signals, kill -9 and power loss, so
+// that a later run can continue it.
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace polrig {
+
+struct Resumable {
+  std::string record;   // the file in the staging folder that marks an interrupted, resumable run
+  bool resume = false;  // continue an interrupted run (its staging folder must hold `record`)
+  bool restart = false; // discard an interrupted run's staging folder (--force)
+};
 
 class OutputDir {
  public:
@@ -20,6 +32,15 @@ class OutputDir {
   // empty, exists (even as a dangling symbolic link) and `replace` is false, has a name too long
   // for its staging folder, or cannot be created.
   OutputDir(std::filesystem::path destination, bool replace);
+  // A resumable folder. Also throws if another process holds the staging folder; if it holds an
+  // interrupted run's record and neither `resume` nor `restart` is given (the message says
+  // "--resume continues it; --force starts over"); if `resume` is given and there is no record.
+  // A staging folder without a record (killed before its first) is started over.
+  OutputDir(std::filesystem::path destination, bool replace, const Resumable& resumable);
+  // True when the staging folder holds an interrupted run to continue.
+  bool resuming() const { return resuming_; }
+  // From now on the staging folder is kept when the folder is not committed.
+  void keep_on_failure() { keep_ = true; }
   ~OutputDir();
   OutputDir(const OutputDir&) = delete;
   OutputDir& operator=(const OutputDir&) = delete;
@@ -35,13 +56,18 @@ class OutputDir {
 
  private:
 
+  void prepare(const std::filesystem::path& destination, const char* staging_suffix);
+  void open_resumable(const Resumable& resumable);
+  void create_parents();
+
   std::filesystem::path destination_, staging_;
-  std::vector<std::filesystem::path> created_parents_;
-  bool replace_ = false, committed_ = false;
+  std::vector<std::filesystem::path> missing_parents_, created_parents_;
+  bool replace_ = false, committed_ = false, resuming_ = false, keep_ = false;
+  int lock_fd_ = -1;  // the resumable staging folder, locked
 };
 
 // On SIGINT, SIGTERM or SIGHUP: removes the staging folder and created parents of every
-// OutputDir not yet committed, then ends the process by the same signal. Call at the start of
+// OutputDir not yet committed (but those kept by keep_on_failure()), then ends the process by the same signal. Call at the start of
 // main, before any other thread exists (it blocks these signals and waits for them in a thread
 // of its own, so the cleanup runs as ordinary code, not in a signal handler).
 void clean_up_outputs_on_signals();

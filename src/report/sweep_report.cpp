@@ -1,0 +1,395 @@
+#include "polrig/report/sweep_report.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "polrig/io/csv.h"
+#include "polrig/io/output_dir.h"
+#include "polrig/io/plot.h"
+#include "polrig/io/sweep_state.h"
+#include "polrig/version.h"
+
+namespace polrig {
+namespace fs = std::filesystem;
+
+namespace {
+const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
+
+struct PairColumn {
+  const char* name;
+  const char* unit;
+  const char* description;
+  double (*get)(const CsPairSummary&);
+};
+// sweep.csv's columns after the axes, for each pair, in order (docs/formats.md §6.3).
+constexpr PairColumn kPairColumns[] = {
+    {"bsd_mV", "mV", "BSD: population standard deviation of ΔV_br over the turn",
+     [](const CsPairSummary& s) { return s.bsd_mV; }},
+    {"asd_mV", "mV", "ASD: population standard deviation of ΔV_mr (after CS) over the turn",
+     [](const CsPairSummary& s) { return s.asd_mV; }},
+    {"asd_bsd_pct", "%", "100·ASD/BSD; NaN where BSD is below 1e-9 mV (undefined)", &asd_bsd_pct},
+    {"mean_br_mV", "mV", "mean of ΔV_br over the turn", [](const CsPairSummary& s) { return s.mean_br_mV; }},
+    {"mean_mr_mV", "mV", "mean of ΔV_mr over the turn (the expectation after CS)",
+     [](const CsPairSummary& s) { return s.mean_mr_mV; }},
+    {"eq6_mV", "mV", "Eq. 6's CS constant; NaN where the source has no closed form (a traced source)",
+     [](const CsPairSummary& s) { return s.eq6_mV; }},
+    {"eq6_dev_pct", "%", "100·(eq6 − mean_mr)/mean_mr; NaN where |mean_mr| is below 1e-9 mV or Eq. 6 is NaN",
+     &eq6_dev_pct},
+};
+constexpr std::size_t kColumnsPerPair = std::size(kPairColumns);
+constexpr std::size_t kColumns = 3 * kColumnsPerPair;
+
+std::string column_name(std::size_t c) {
+  return fmt::format("pair{}_{}", c / kColumnsPerPair + 1, kPairColumns[c % kColumnsPerPair].name);
+}
+
+std::vector<std::string> csv_header(const std::vector<GridAxis>& axes) {
+  std::vector<std::string> header;
+  for (const GridAxis& a : axes) header.emplace_back(a.key->path);
+  for (std::size_t c = 0; c < kColumns; ++c) header.push_back(column_name(c));
+  return header;
+}
+
+std::string axis_label(const GridAxis& a) {
+  return a.key->unit.empty() ? std::string(a.key->path) : fmt::format("{} ({})", a.key->path, a.key->unit);
+}
+
+std::string line_style(int pair, const char* extra = "") {
+  return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
+}
+
+// 64-bit FNV-1a: a short, stable fingerprint of a long input (a rig's text, an axis's values).
+std::string fingerprint(std::string_view bytes) {
+  std::uint64_t h = 14695981039346656037ull;
+  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+  return fmt::format("{:016x}", h);
+}
+}  // namespace
+
+SweepH5Layout sweep_h5_layout(const std::vector<GridAxis>& axes, bool eq6,
+                              std::vector<std::pair<std::string, std::string>> attributes) {
+  SweepH5Layout l;
+  for (const GridAxis& a : axes) {
+    SweepH5Axis x{std::string(a.key->path), std::string(a.key->unit), std::string(a.key->doc), {}};
+    x.values.resize(static_cast<std::size_t>(a.count));
+    for (int i = 0; i < a.count; ++i) x.values[static_cast<std::size_t>(i)] = a.value(i);
+    l.axes.push_back(std::move(x));
+  }
+  for (std::size_t c = 0; c < kColumns; ++c) {
+    const PairColumn& p = kPairColumns[c % kColumnsPerPair];
+    const std::string_view name = p.name;
+    const bool nan = name == "asd_bsd_pct" || name == "eq6_dev_pct" || (name == "eq6_mV" && !eq6);
+    l.columns.push_back({column_name(c), p.unit, fmt::format("pair {}: {}", c / kColumnsPerPair + 1, p.description), nan});
+  }
+  l.attributes = std::move(attributes);
+  return l;
+}
+
+SweepReport::SweepReport(const fs::path& dir, std::vector<GridAxis> axes, bool eq6, bool csv,
+                         const std::vector<std::pair<std::string, std::string>>& attributes,
+                         std::optional<Resume> resume)
+    : dir_(dir), axes_(std::move(axes)), layout_(sweep_h5_layout(axes_, eq6, attributes)) {
+  const fs::path h5 = dir / "sweep.h5", csv_path = dir / "sweep.csv";
+  h5_.emplace(resume ? SweepH5Writer::reopen(h5, layout_) : SweepH5Writer::create(h5, layout_));
+  if (csv) {
+    table_.emplace(csv_header(axes_));
+    for (const SweepH5Column& c : layout_.columns)
+      if (c.may_be_nan) table_->allow_undefined(c.name);
+    csv_ = resume ? std::make_unique<TextFileWriter>(csv_path, resume->csv_bytes)
+                  : std::make_unique<TextFileWriter>(csv_path);
+    if (!resume) csv_->write(table_->header_line());
+  }
+  if (resume) points_ = resume->points_done;
+}
+
+void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
+  if (first != points_)
+    throw std::logic_error(fmt::format("sweep.h5: block at point {} after {} points", first, points_));
+  const std::size_t n = block.size();
+  columns_.resize(kColumns * n);
+  for (std::size_t k = 0; k < n; ++k)
+    for (std::size_t c = 0; c < kColumns; ++c) {
+      const double v = kPairColumns[c % kColumnsPerPair].get(block[k][c / kColumnsPerPair]);
+      // No NaN or infinity leaves unless it is documented to mean "undefined" (as CsvTable).
+      if (!std::isfinite(v) && !(std::isnan(v) && layout_.columns[c].may_be_nan)) {
+        const std::vector<int> idx = grid_indices(axes_, first + k);
+        std::string at;
+        for (std::size_t a = 0; a < axes_.size(); ++a)
+          at += fmt::format("{}{}={}", a ? ", " : "", axes_[a].key->path, axes_[a].value(idx[a]));
+        throw std::runtime_error(fmt::format("sweep: {} is {} at grid point {} ({})", column_name(c), v,
+                                             first + k, at));
+      }
+      columns_[c * n + k] = v;
+    }
+  h5_->write(first, n, columns_);
+  if (csv_) {
+    std::vector<double> row;
+    for (std::size_t k = 0; k < n; ++k) {
+      row.clear();
+      const std::vector<int> idx = grid_indices(axes_, first + k);
+      for (std::size_t a = 0; a < axes_.size(); ++a) row.push_back(axes_[a].value(idx[a]));
+      for (std::size_t c = 0; c < kColumns; ++c) row.push_back(columns_[c * n + k]);
+      table_->add_row(row);
+    }
+    csv_->write(table_->take_body());
+  }
+  points_ += n;
+}
+
+SweepReport::Resume SweepReport::sync() {
+  h5_->sync();
+  return {points_, csv_ ? csv_->sync() : 0};
+}
+
+namespace {
+
+// Mean values over a grid of bins: the points of grid index i along an axis of n values go to
+// bin i·B/n, B = min(n, max_bins), so that a grid smaller than the bins is drawn exactly.
+struct Bins {
+  std::size_t count;
+  std::size_t of(std::size_t index, std::size_t n) const { return index * count / n; }
+};
+Bins bins_for(const GridAxis& a, std::size_t max_bins) {
+  return {std::min<std::size_t>(static_cast<std::size_t>(a.count), max_bins)};
+}
+// The bin's position on the axis: the value itself when every bin holds one, else the middle
+// of the bin on a regular grid between the axis's ends (what `with image` needs).
+double bin_centre(const GridAxis& a, const Bins& b, std::size_t bin) {
+  if (b.count == static_cast<std::size_t>(a.count)) return a.value(static_cast<int>(bin));
+  const double lo = a.value(0), hi = a.value(a.count - 1);
+  return lo + (static_cast<double>(bin) + 0.5) * (hi - lo) / static_cast<double>(b.count);
+}
+
+// Sums the named columns of sweep.h5 into bins, reading it a slice at a time. NaN (undefined)
+// values are left out of a bin's mean; a bin with none defined is NaN.
+std::vector<std::vector<double>> binned_means(const fs::path& h5, const std::vector<std::string>& names,
+                                              std::size_t points, std::size_t bins,
+                                              const std::function<std::size_t(std::size_t)>& bin_of) {
+  const SweepH5Reader reader(h5);
+  std::vector<std::vector<double>> sum(names.size(), std::vector<double>(bins, 0.0));
+  std::vector<std::vector<std::uint32_t>> count(names.size(), std::vector<std::uint32_t>(bins, 0));
+  constexpr std::size_t kSlice = 1 << 16;
+  std::vector<double> values(std::min(points, kSlice));
+  for (std::size_t first = 0; first < points; first += kSlice) {
+    const std::size_t n = std::min(kSlice, points - first);
+    for (std::size_t q = 0; q < names.size(); ++q) {
+      reader.read(names[q], first, std::span<double>(values.data(), n));
+      for (std::size_t k = 0; k < n; ++k)
+        if (!std::isnan(values[k])) {
+          const std::size_t b = bin_of(first + k);
+          sum[q][b] += values[k];
+          ++count[q][b];
+        }
+    }
+  }
+  for (std::size_t q = 0; q < names.size(); ++q)
+    for (std::size_t b = 0; b < bins; ++b)
+      sum[q][b] = count[q][b] ? sum[q][b] / count[q][b] : std::numeric_limits<double>::quiet_NaN();
+  return sum;
+}
+
+constexpr std::size_t kMaxCurveBins = 2000;  // a line plot's points along one axis
+constexpr std::size_t kMaxImageBins = 256;   // an image's pixels along each axis
+
+std::vector<DatasetFile> plot_one_axis(const fs::path& dir, const GridAxis& axis) {
+  const Bins bins = bins_for(axis, kMaxCurveBins);
+  const std::size_t n = static_cast<std::size_t>(axis.count);
+  std::vector<std::string> names, header{std::string(axis.key->path)};
+  for (int i = 1; i <= 3; ++i)
+    for (const char* c : {"asd_mV", "asd_bsd_pct", "mean_mr_mV", "eq6_mV"}) {
+      names.push_back(fmt::format("pair{}_{}", i, c));
+      header.push_back(names.back());
+    }
+  const auto means = binned_means(dir / "sweep.h5", names, n, bins.count,
+                                  [&](std::size_t p) { return bins.of(p, n); });
+  CsvTable table(header);
+  for (std::size_t q = 0; q < names.size(); ++q) table.allow_undefined(names[q]);
+  std::array<bool, 3> ratio_defined{}, eq6_defined{};
+  for (std::size_t b = 0; b < bins.count; ++b) {
+    // The bin's x: the mean of its axis values (exact when it holds one).
+    const std::size_t lo = (b * n + bins.count - 1) / bins.count, hi = ((b + 1) * n + bins.count - 1) / bins.count;
+    double x = 0;
+    for (std::size_t i = lo; i < hi; ++i) x += axis.value(static_cast<int>(i));
+    std::vector<double> row{x / static_cast<double>(hi - lo)};
+    for (std::size_t q = 0; q < names.size(); ++q) row.push_back(means[q][b]);
+    for (std::size_t i = 0; i < 3; ++i) {
+      ratio_defined[i] |= !std::isnan(means[4 * i + 1][b]);
+      eq6_defined[i] |= !std::isnan(means[4 * i + 3][b]);
+    }
+    table.add_row(row);
+  }
+  write_text_file(dir / "sweep_plot.csv", table.text());
+
+  const std::string x = axis_label(axis);
+  Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)", x, "ASD (mV)", "ASD/BSD (%)"};
+  Plot mean{"sweep_expectation.png",
+            "Expectation of ΔV_mr (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)", x,
+            "expectation (mV)", "Eq. 6 - expectation (µV)"};
+  for (int i = 0; i < 3; ++i) {
+    const auto col = [&](int offset) { return 2 + 4 * i + offset; };  // 1-based
+    asd.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(0)), fmt::format("ASD pair {}", i + 1), line_style(i)});
+    // gnuplot refuses a series with no defined point: the ratio is NaN where BSD is zero.
+    if (ratio_defined[static_cast<std::size_t>(i)])
+      asd.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(1)), fmt::format("ASD/BSD pair {}", i + 1),
+                            line_style(i, "dt 2"), true});
+    mean.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(2)),
+                           fmt::format("expectation pair {}", i + 1), line_style(i)});
+    if (eq6_defined[static_cast<std::size_t>(i)]) {
+      mean.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(3)), fmt::format("Eq. 6 pair {}", i + 1),
+                             fmt::format("points pt 6 ps 0.8 lc rgb '{}'", kPairColour[i])});
+      mean.series.push_back({"sweep_plot.csv", fmt::format("1:((${}-${})*1e3)", col(3), col(2)),
+                             fmt::format("Eq. 6 - expectation, pair {}", i + 1), line_style(i, "dt 2"), true});
+    }
+  }
+  render_plots(dir, "plots.gp", {asd, mean});
+  return {{"sweep_plot.csv", 1,
+           fmt::format("the plotted curves: per pair ASD, ASD/BSD, expectation and Eq. 6, the mean over each of "
+                       "{} bins of the swept key", bins.count)}};
+}
+
+std::vector<DatasetFile> plot_two_axes(const fs::path& dir, const GridAxis& outer, const GridAxis& inner) {
+  const Bins by = bins_for(outer, kMaxImageBins), bx = bins_for(inner, kMaxImageBins);
+  const std::size_t ny = static_cast<std::size_t>(outer.count), nx = static_cast<std::size_t>(inner.count);
+  const std::vector<std::string> names{"pair1_asd_mV", "pair1_mean_mr_mV"};
+  const auto means = binned_means(dir / "sweep.h5", names, nx * ny, by.count * bx.count, [&](std::size_t p) {
+    return by.of(p / nx, ny) * bx.count + bx.of(p % nx, nx);
+  });
+  // Scan lines of constant outer value, a blank line after each (gnuplot's grid format).
+  CsvTable table({std::string(inner.key->path), std::string(outer.key->path), names[0], names[1]});
+  table.allow_undefined(names[0]).allow_undefined(names[1]);
+  std::string text = table.header_line();
+  for (std::size_t j = 0; j < by.count; ++j) {
+    for (std::size_t i = 0; i < bx.count; ++i)
+      table.add_row({bin_centre(inner, bx, i), bin_centre(outer, by, j), means[0][j * bx.count + i],
+                     means[1][j * bx.count + i]});
+    text += table.take_body() + "\n";
+  }
+  write_text_file(dir / "sweep_map.csv", text);
+
+  const auto image = [&](const char* png, const std::string& title, const char* cblabel, int column) {
+    std::string s = fmt::format(
+        "reset session\nset terminal pngcairo size 960,720 enhanced font 'DejaVu Sans,11'\n"
+        "set output '{}'\nset datafile separator ','\n"
+        "set title \"{}\" noenhanced\nset xlabel \"{}\" noenhanced\nset ylabel \"{}\" noenhanced\n"
+        "set cblabel \"{}\"\nset palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\nset autoscale fix\nset tics out\n"
+        "plot 'sweep_map.csv' skip 1 using 1:2:{} with image pixels notitle\nunset output\n",
+        png, title, axis_label(inner), axis_label(outer), cblabel, column);
+    return s;
+  };
+  const std::string mean_of = by.count * bx.count < nx * ny ? " (mean of each bin)" : "";
+  const std::string script =
+      image("sweep_asd.png", "Pair 1 ASD after CS" + mean_of, "ASD (mV)", 3) + "\n" +
+      image("sweep_expectation.png", "Pair 1 expectation of ΔV_mr after CS" + mean_of, "expectation (mV)", 4);
+  run_gnuplot(dir, "plots.gp", script, {"sweep_asd.png", "sweep_expectation.png"});
+  return {{"sweep_map.csv", 1,
+           fmt::format("the plotted images: pair 1 ASD and expectation, the mean over each of {}×{} bins of the "
+                       "grid (blank line after each row)", by.count, bx.count)}};
+}
+
+}  // namespace
+
+std::vector<DatasetFile> SweepReport::finish(bool plots) {
+  h5_->close();
+  h5_.reset();
+  if (csv_) csv_->close();
+  std::vector<DatasetFile> files{
+      {"sweep.h5", 1, "HDF5: one dataset per summary column shaped as the grid, the axes as dimension scales, "
+                      "the manifest as attributes"}};
+  if (csv_) files.push_back({"sweep.csv", 1, "one row per grid point: the grid values and the CS summary of each pair"});
+  if (!plots || axes_.empty() || axes_.size() > 2) return files;
+  std::vector<DatasetFile> data =
+      axes_.size() == 1 ? plot_one_axis(dir_, axes_[0]) : plot_two_axes(dir_, axes_[0], axes_[1]);
+  files.insert(files.end(), data.begin(), data.end());
+  files.push_back({"sweep_asd.png", 1, axes_.size() == 1 ? "ASD and ASD/BSD against the swept key (Figs. 11a, 12a)"
+                                                         : "pair 1 ASD over the grid, an image (Figs. 11a, 12a)"});
+  files.push_back({"sweep_expectation.png", 1,
+                   axes_.size() == 1 ? "expectation after CS and Eq. 6 against the swept key (Figs. 10, 11b, 12b)"
+                                     : "pair 1 expectation after CS over the grid, an image (Figs. 10, 11b, 12b)"});
+  return files;
+}
+
+namespace {
+// Everything that determines a sweep folder's bytes, but the command and working directory
+// (kept from the first run): a resumed run must match each.
+std::vector<std::pair<std::string, std::string>> sweep_inputs(const LoadedRig& r, const std::vector<GridAxis>& axes,
+                                                              int steps, const SweepFolder& f) {
+  std::string overrides, grid;
+  for (const RigOverride& o : r.overrides) overrides += o.path + "=" + o.value + "\n";
+  for (const GridAxis& a : axes) {
+    std::string values;
+    for (int i = 0; i < a.count; ++i) {
+      const double v = a.value(i);
+      values.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+    grid += fmt::format("{} ({} values, fingerprint {})\n", a.key->path, a.count, fingerprint(values));
+  }
+  return {{"program", fmt::format("polrig {} ({})", POLRIG_VERSION, POLRIG_GIT_REVISION)},
+          {"rig file", r.origin},
+          {"rig file's text", fingerprint(r.text)},
+          {"overrides (--set)", overrides},
+          {"effective rig", fingerprint(rig_to_yaml(r.rig))},
+          {"grid (--grid)", grid},
+          {"steps (--steps)", fmt::format("{}", steps)},
+          {"csv (--csv)", f.csv ? "yes" : "no"},
+          {"plots (--no-plots)", f.plots ? "yes" : "no"}};
+}
+}  // namespace
+
+fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, int steps, const SweepFolder& f,
+                         const Progress& progress) {
+  check_grid(r.rig, axes);
+  OutputDir dir(f.out, f.force, Resumable{kSweepStateFile, f.resume, f.force && !f.resume});
+  const fs::path staging = dir.staging();
+  SweepState state{0, 0, f.command, manifest_working_directory({f.command, &r, {}}), sweep_inputs(r, axes, steps, f)};
+  std::optional<SweepReport::Resume> resume;
+  if (dir.resuming()) {
+    const std::optional<SweepState> saved = read_sweep_state(staging);
+    const std::vector<std::string> differ = differing_inputs(*saved, state.inputs);
+    if (!differ.empty())
+      throw std::runtime_error(fmt::format("--resume: the interrupted run in {} was started with another {}; "
+                                           "run the same command to continue it, or pass --force without "
+                                           "--resume to start over", staging.string(), fmt::join(differ, ", ")));
+    state.points_done = saved->points_done;
+    state.csv_bytes = saved->csv_bytes;
+    state.command = saved->command;
+    state.working_directory = saved->working_directory;
+    resume = SweepReport::Resume{state.points_done, state.csv_bytes};
+  }
+  Manifest manifest{state.command, &r, {}, {}, state.working_directory};
+  SweepReport report(staging, axes, r.rig.light->has(Source::kClosedFormEq6), f.csv, manifest_fields(manifest), resume);
+
+  // A checkpoint costs a few fsyncs: after the first block (so that an early interruption
+  // already resumes), then at most once a second.
+  using Clock = std::chrono::steady_clock;
+  auto last = Clock::now();
+  bool checkpointed = false;
+  SweepOptions options;
+  options.first_point = state.points_done;
+  sweep(r.rig, axes, CsTurn(steps), [&](std::size_t first, std::span<const CsSummary> block) {
+    report.write(first, block);
+    if (checkpointed && Clock::now() - last < std::chrono::seconds(1)) return;
+    const SweepReport::Resume at = report.sync();
+    state.points_done = at.points_done;
+    state.csv_bytes = at.csv_bytes;
+    write_sweep_state(staging, state);
+    dir.keep_on_failure();
+    checkpointed = true;
+    last = Clock::now();
+  }, progress, options);
+  manifest.files = report.finish(f.plots);
+  write_manifest(staging, manifest);
+  std::error_code ec;
+  fs::remove(staging / kSweepStateFile, ec);
+  if (ec) throw std::runtime_error(fmt::format("{}: cannot remove: {}", (staging / kSweepStateFile).string(), ec.message()));
+  dir.commit();
+  return dir.destination();
+}
+
+}  // namespace polrig

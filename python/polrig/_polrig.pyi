@@ -1,7 +1,8 @@
 # Type stubs for polrig._polrig (the compiled module); python/tests/test_stubs.py checks that every
 # public name of the module is declared here and that nothing here is missing from the module.
 import os
-from typing import Any, Callable, Mapping, Sequence, Union
+import pathlib
+from typing import Any, Callable, Mapping, Sequence, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -43,8 +44,14 @@ class Rig:
     def simulate(self, *, samples: bool = False, out: str | os.PathLike[str] | None = None, force: bool = False,
                  plots: bool = False, threads: int | None = None, progress: Progress = None) -> Simulation: ...
     def study_cs(self, steps: int = 360, *, threads: int | None = None, progress: Progress = None) -> CsStudy: ...
+    @overload
     def sweep(self, grid: Mapping[str, ArrayLike | str], steps: int = 360, *, threads: int | None = None,
-              progress: Progress = None) -> SweepResult: ...
+              progress: Progress = None, out: None = None, csv: bool = False, resume: bool = False,
+              force: bool = False, plots: bool = False) -> SweepResult: ...
+    @overload
+    def sweep(self, grid: Mapping[str, ArrayLike | str], steps: int = 360, *, threads: int | None = None,
+              progress: Progress = None, out: str | os.PathLike[str], csv: bool = False, resume: bool = False,
+              force: bool = False, plots: bool = False) -> pathlib.Path: ...
     def study_adc(self, *, d: ArrayLike | str = "0.05:0.95:19", step: float = 0.1,
                   threads: int | None = None) -> dict[str, Array]: ...
     def study_calibration(self, *, trials: int = 100, L_IS_max: float | None = None, L_S_max: float | None = None,

@@ -35,6 +35,7 @@
 #include "polrig/study/calibration_trials.h"
 #include "polrig/study/cs.h"
 #include "polrig/study/sweep.h"
+#include "polrig/report/sweep_report.h"
 #include "rig_handle.h"
 
 namespace polrig::python {
@@ -259,27 +260,66 @@ void check_sweep_memory(std::size_t points, std::size_t fields) {
         "`polrig sweep`, which streams sweep.csv", points, bytes / kGiB, fields, limit / kGiB));
 }
 
-PySweep run_sweep(const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
-                  const py::object& progress) {
+// The grid's axes, in the dict's order; warns for keys the CS study ignores, as the CLI notes.
+std::vector<GridAxis> grid_axes(const py::object& grid, std::vector<std::string>& keys) {
   if (!py::hasattr(grid, "items"))
     throw py::type_error("grid: expected a dict {key: values or 'start:stop:count'}");
-  PySweep r;
   std::vector<GridAxis> axes;
   for (const py::handle item : py::iter(grid.attr("items")())) {
     const auto kv = item.cast<py::tuple>();
     if (!py::isinstance<py::str>(kv[0]))
       throw py::type_error(fmt::format("grid: keys are rig key names (str), got {}",
                                        py::repr(kv[0]).cast<std::string>()));
-    r.keys.push_back(kv[0].cast<std::string>());
-    axes.push_back(axis_of(r.keys.back(), kv[1]));
+    keys.push_back(kv[0].cast<std::string>());
+    axes.push_back(axis_of(keys.back(), kv[1]));
   }
   if (axes.empty()) throw py::value_error("grid: expected at least one key");
-  const Rig rig = self.rig();
-  const std::shared_ptr<const CsTurn> turn = turn_of(steps);
   const py::module_ warnings = py::module_::import("warnings");
   for (const RigKey* key : axes_the_cs_study_ignores(axes))  // the CLI's note
     warnings.attr("warn")(fmt::format("the CS study does not depend on '{}'; every point along "
                                       "that axis will be the same", key->path));
+  return axes;
+}
+
+// Rig.sweep(out=...): the CLI's folder, through the same library function; returns its path.
+py::object sweep_into_folder(const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
+                             const py::object& progress, const std::filesystem::path& out, bool csv, bool resume,
+                             bool force, bool plots) {
+  std::vector<std::string> keys;
+  const std::vector<GridAxis> axes = grid_axes(grid, keys);
+  const LoadedRig loaded = self.loaded;  // the GIL is released below: nothing of self is read then
+  turn_of(steps);  // the steps' check, with Rig.study_cs's message
+  check_grid(loaded.rig, axes);
+  if (plots && axes.size() <= 2 && !gnuplot_available())
+    throw std::runtime_error("plots=True needs gnuplot, which was not found; install it "
+                             "(scripts/setup-deps.sh) or pass plots=False");
+  std::string grid_text;
+  for (const GridAxis& a : axes) grid_text += fmt::format("{}'{}'", grid_text.empty() ? "" : ", ", a.text());
+  const std::string command = fmt::format(
+      "python: polrig.Rig({}).sweep(grid=[{}], steps={}, out='{}', csv={}, plots={})", loaded.origin, grid_text,
+      steps, out.string(), csv ? "True" : "False", plots ? "True" : "False");
+  const ThreadLimit limit(threads);
+  const Progress p = progress_from(progress);
+  std::filesystem::path written;
+  {
+    py::gil_scoped_release release;
+    try {
+      written = sweep_to_folder(loaded, axes, steps, {out, force, csv, plots, resume, command}, p);
+    } catch (const RigError&) {
+      throw;
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(fmt::format("out={}: {}", out.string(), e.what()));
+    }
+  }
+  return py::module_::import("pathlib").attr("Path")(written.string());
+}
+
+PySweep run_sweep(const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
+                  const py::object& progress) {
+  PySweep r;
+  const std::vector<GridAxis> axes = grid_axes(grid, r.keys);
+  const Rig rig = self.rig();
+  const std::shared_ptr<const CsTurn> turn = turn_of(steps);
   check_grid(rig, axes);
   r.steps = steps;
   r.standard_errors = rig.light->has(Source::kStandardErrors);
@@ -457,8 +497,22 @@ Arguments:
   steps: table angles per turn of each CS study, even, in [2, 3600000].
   {threads}
   {progress}
+  out: a folder (str or os.PathLike) to write the sweep into, as `polrig sweep -o OUT` writes it
+       (sweep.h5, sweep.csv with csv=True, the plots with plots=True, manifest.yaml, rig.yaml;
+       the same bytes, the manifest's command and working directory aside), streamed as it is
+       computed: memory does not grow with the grid. It appears whole or not at all. None: no
+       files, the arrays are returned.
+  csv: also write sweep.csv (the CLI's --csv).
+  resume: continue an interrupted sweep into `out` (the CLI's --resume): the same grid, steps,
+       rig and options; the result is the same bytes as an uninterrupted run.
+  force: replace `out` if it exists, and without resume, discard an interrupted run's staging
+       folder (the CLI's --force).
+  plots: also draw the PNG plots (needs gnuplot; the CLI draws them unless --no-plots).
 
-Returns a polrig.SweepResult: keys (axis order), axes {key: (count,) values}, shape (the grid's
+With out=, returns the folder's path (a pathlib.Path) and keeps no arrays in memory, so that a
+grid of any size fits: read the results from OUT/sweep.h5 (h5py.File(path / "sweep.h5"): one
+dataset per sweep.csv column, shaped as the grid, the axes as dimension scales). Without it,
+returns a polrig.SweepResult: keys (axis order), axes {key: (count,) values}, shape (the grid's
 shape), and per-point arrays of shape (*shape, 3) over the pairs, written straight from the
 library into NumPy (no Python object per point): bsd_mV, asd_mV, asd_bsd_pct, mean_br_mV,
 mean_mr_mV, eq6_mV, eq6_dev_pct (sweep.csv's pairN_* columns; NaN only where sweep.csv allows
@@ -787,8 +841,19 @@ scene file, line and key, or the photon count.
   }, doc(kStudyCsDoc).c_str(), py::arg("steps") = kDefaultCsSteps, py::kw_only(),
      py::arg("threads") = py::none(), py::arg("progress") = py::none());
 
-  rig.def("sweep", &run_sweep, doc(kSweepDoc).c_str(), py::arg("grid"), py::arg("steps") = kDefaultCsSteps,
-          py::kw_only(), py::arg("threads") = py::none(), py::arg("progress") = py::none());
+  rig.def("sweep", [](const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
+                      const py::object& progress, std::optional<std::filesystem::path> out, bool csv, bool resume,
+                      bool force, bool plots) -> py::object {
+    if (!out) {
+      if (csv || resume || force || plots)
+        throw py::value_error("csv=, resume=, force= and plots= are options of out=: pass out=FOLDER");
+      return py::cast(run_sweep(self, grid, steps, threads, progress));
+    }
+    return sweep_into_folder(self, grid, steps, threads, progress, *out, csv, resume, force, plots);
+  }, doc(kSweepDoc).c_str(), py::arg("grid"), py::arg("steps") = kDefaultCsSteps,
+     py::kw_only(), py::arg("threads") = py::none(), py::arg("progress") = py::none(),
+     py::arg("out") = py::none(), py::arg("csv") = false, py::arg("resume") = false, py::arg("force") = false,
+     py::arg("plots") = false);
 
   rig.def("study_adc", [](const PyRig& self, const py::object& d, double step,
                           std::optional<int> threads) {

@@ -1,0 +1,114 @@
+"""sweep.h5, read by h5py (an HDF5 reader independent of polrig's writer), against sweep.csv; and
+Rig.sweep(out=...) writing the CLI's folder through the same library code."""
+import shutil
+
+import h5py
+import numpy as np
+import pytest
+import yaml
+
+import polrig
+from conftest import ROOT, read_csv, run_cli
+
+INDOOR = ROOT / "rigs" / "wang2019-indoor.yaml"
+# L_IS = 0 with a centred sensor: BSD is zero there and ASD/BSD undefined (NaN in both files).
+GRID = {"eccentricity.L_IS": "0:1:4", "eccentricity.alpha_S": "0:350:3"}
+SETS = ["--set", "eccentricity.L_S=0"]
+COLUMNS = [f"pair{i}_{c}" for i in (1, 2, 3) for c in
+           ("bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV", "eq6_mV", "eq6_dev_pct")]
+
+
+def cli_sweep(out, *extra):
+    grid = [a for k, v in GRID.items() for a in ("--grid", f"{k}={v}")]
+    return run_cli("sweep", INDOOR, *SETS, *grid, "--steps", 36, "-o", out, "--quiet", *extra)
+
+
+def test_sweep_h5_holds_sweep_csv_exactly_with_its_axes_as_dimension_scales(tmp_path):
+    out = tmp_path / "sw"
+    cli_sweep(out, "--csv", "--no-plots")
+    csv = read_csv(out / "sweep.csv")
+    manifest = yaml.safe_load((out / "manifest.yaml").read_text())
+    with h5py.File(out / "sweep.h5", "r") as f:
+        keys = list(GRID)
+        assert set(f.keys()) == set(COLUMNS) | set(keys)
+        for k in keys:
+            assert f[k].dtype == np.float64 and f[k].ndim == 1
+            assert f[k].attrs["CLASS"] == b"DIMENSION_SCALE"
+        assert [f[k].shape[0] for k in keys] == [4, 3]
+        L, a = np.meshgrid(f[keys[0]][...], f[keys[1]][...], indexing="ij")
+        assert np.array_equal(L.ravel(), csv[keys[0]]) and np.array_equal(a.ravel(), csv[keys[1]])
+        assert f[keys[0]].attrs["units"] == "mm" and f[keys[1]].attrs["units"] == "deg"
+        nan_seen = False
+        for name in COLUMNS:
+            d = f[name]
+            assert d.shape == (4, 3) and d.dtype == np.float64, name
+            values = d[...].ravel()
+            # Bit for bit, NaN where the CSV says nan.
+            assert np.array_equal(values, csv[name], equal_nan=True), name
+            assert np.array_equal(np.isnan(values), np.isnan(csv[name])), name
+            nan_seen |= bool(np.isnan(values).any())
+            assert d.attrs["units"] in ("mV", "%") and d.attrs["description"].startswith("pair ")
+            for dim, k in enumerate(keys):
+                assert d.dims[dim].label == "" and len(d.dims[dim]) == 1
+                assert d.dims[dim][0].name == "/" + k, (name, dim)
+        assert nan_seen, "the grid was meant to hold an undefined ratio"
+        attrs = dict(f.attrs)
+        assert attrs["program"] == "polrig" and attrs["manifest_schema"] == "1"
+        for key in ("version", "git_revision", "command", "working_directory", "rig_file"):
+            assert attrs[key] == str(manifest[key]), key
+        assert attrs["seed"] == str(manifest["seed"])
+        assert attrs["overrides"] == "".join(o + "\n" for o in manifest["overrides"])
+        assert attrs["rig_text"] == INDOOR.read_text() == manifest["rig_text"]
+        assert attrs["rig_resolved"] == (out / "rig.yaml").read_text() == manifest["rig_resolved"]
+    # The manifest lists the HDF5 file beside the CSV.
+    assert {"sweep.h5", "sweep.csv"} <= set(manifest["files"])
+
+
+def test_two_runs_give_the_same_bytes(tmp_path):
+    cli_sweep(tmp_path / "a", "--no-plots")
+    shutil.move(tmp_path / "a", tmp_path / "first")
+    cli_sweep(tmp_path / "a", "--no-plots")
+    assert (tmp_path / "a" / "sweep.h5").read_bytes() == (tmp_path / "first" / "sweep.h5").read_bytes()
+
+
+def test_rig_sweep_out_writes_the_cli_folder(tmp_path, monkeypatch):
+    plots = shutil.which("gnuplot") is not None
+    monkeypatch.chdir(ROOT)  # the manifests record the working directory; the CLI runs from ROOT
+    cli_sweep(tmp_path / "cli", "--csv", *([] if plots else ["--no-plots"]))
+    rig = polrig.Rig.load(INDOOR, set={"eccentricity.L_S": 0})
+    path = rig.sweep(GRID, steps=36, out=tmp_path / "py", csv=True, plots=plots, threads=1)
+    assert path == tmp_path / "py"
+    names = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert names == sorted(p.name for p in path.iterdir())
+    for name in names:
+        if name not in ("manifest.yaml", "sweep.h5"):  # both record the command
+            assert (path / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    m_cli = yaml.safe_load((tmp_path / "cli" / "manifest.yaml").read_text())
+    m_py = yaml.safe_load((path / "manifest.yaml").read_text())
+    assert m_py["command"].startswith("python: polrig.Rig(")
+    assert {k: v for k, v in m_py.items() if k != "command"} == {k: v for k, v in m_cli.items() if k != "command"}
+    with h5py.File(tmp_path / "cli" / "sweep.h5", "r") as c, h5py.File(path / "sweep.h5", "r") as p:
+        assert sorted(c.keys()) == sorted(p.keys())
+        for name in c:
+            assert c[name][...].tobytes() == p[name][...].tobytes(), name
+            assert c[name].attrs["units"] == p[name].attrs["units"]
+        assert {k: v for k, v in c.attrs.items() if k != "command"} == \
+               {k: v for k, v in p.attrs.items() if k != "command"}
+        assert p.attrs["command"] == m_py["command"]
+    # The arrays without out= are the file's values.
+    res = rig.sweep(GRID, steps=36)
+    with h5py.File(path / "sweep.h5", "r") as p:
+        for i in range(3):
+            assert np.array_equal(res.asd_mV[..., i], p[f"pair{i + 1}_asd_mV"][...])
+
+
+def test_rig_sweep_out_refuses_what_the_cli_refuses(tmp_path):
+    rig = polrig.Rig()
+    with pytest.raises(RuntimeError, match="--resume: there is no interrupted run of .* to continue"):
+        rig.sweep({"eccentricity.L_S": "0:1:3"}, steps=8, out=tmp_path / "x", resume=True)
+    assert not (tmp_path / "x").exists() and not (tmp_path / ".x.resumable").exists()
+    rig.sweep({"eccentricity.L_S": "0:1:3"}, steps=8, out=tmp_path / "x")
+    with pytest.raises(RuntimeError, match="the output folder exists"):
+        rig.sweep({"eccentricity.L_S": "0:1:3"}, steps=8, out=tmp_path / "x")
+    with pytest.raises(ValueError, match="options of out="):
+        rig.sweep({"eccentricity.L_S": "0:1:3"}, csv=True)

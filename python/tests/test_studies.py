@@ -394,7 +394,7 @@ def test_traced_sweep_and_simulate_equal_the_cli(tmp_path, traced_rig):
     rig = polrig.Rig.load(traced_rig)
     res = rig.sweep({"eccentricity.L_IS": "0:0.2:3"}, steps=8, threads=1)
     run_cli("sweep", traced_rig, "--grid", "eccentricity.L_IS=0:0.2:3", "--steps", 8, "-o", tmp_path / "sw",
-            "--no-plots", "--quiet")
+            "--no-plots", "--quiet", "--csv")
     csv = read_csv(tmp_path / "sw" / "sweep.csv")
     assert res.standard_errors and res.asd_stderr_mV.shape == (3, 3)
     for field in ("bsd_mV", "asd_mV", "asd_bsd_pct", "mean_br_mV", "mean_mr_mV", "eq6_mV", "eq6_dev_pct"):

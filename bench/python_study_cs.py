@@ -69,7 +69,7 @@ def sweep_python(grid, steps):
 def sweep_cli(grid, steps):
     """`polrig sweep --no-plots` on the default rig: wall time, max RSS (GNU time's %M: the
     process's own, not the Python parent's that ru_maxrss of a child would carry over) and the
-    size of sweep.csv."""
+    size of sweep.h5 (its default output)."""
     with tempfile.TemporaryDirectory() as tmp:
         args = ["/usr/bin/time", "-f", "%M", "-o", f"{tmp}/rss", str(BUILD / "polrig"), "sweep",
                 str(ROOT / "rigs" / "wang2019-indoor.yaml"), "--steps", str(steps), "-o", f"{tmp}/sweep",
@@ -79,7 +79,7 @@ def sweep_cli(grid, steps):
         t0 = time.perf_counter()
         subprocess.run(args, check=True, stdout=subprocess.DEVNULL)
         t = time.perf_counter() - t0
-        size_mb = (pathlib.Path(tmp) / "sweep" / "sweep.csv").stat().st_size / 1e6
+        size_mb = (pathlib.Path(tmp) / "sweep" / "sweep.h5").stat().st_size / 1e6
         rss_mb = int(pathlib.Path(f"{tmp}/rss").read_text().split()[-1]) / 1024
     return t, rss_mb, size_mb
 
@@ -134,7 +134,7 @@ def main():
     print(f"  Python rig.sweep     {tp:8.2f} s  {points / tp:9.0f} points/s   max RSS {rss_p:6.1f} MB "
           f"(result arrays {arrays_mb:.1f} MB)")
     print(f"  polrig sweep         {tc:8.2f} s  {points / tc:9.0f} points/s   max RSS {rss_c:6.1f} MB "
-          f"(sweep.csv {csv_mb:.1f} MB)")
+          f"(sweep.h5 {csv_mb:.1f} MB)")
 
 
 if __name__ == "__main__":

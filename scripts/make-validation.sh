@@ -13,13 +13,13 @@ $p study adc --d 0.05:0.95:91 -o "$out/adc"
 $p study cs $rig --set eccentricity.L_S=0 -o "$out/fig8a"
 $p study cs $rig --set eccentricity.L_IS=0 -o "$out/fig8b"
 $p study cs $rig -o "$out/fig9"
-$p sweep $rig --set eccentricity.L_IS=0 --grid eccentricity.alpha_S=0:359:360 -o "$out/fig10"
+$p sweep $rig --set eccentricity.L_IS=0 --grid eccentricity.alpha_S=0:359:360 --csv -o "$out/fig10"
 $p sweep $rig --set eccentricity.alpha_S=240 --set eccentricity.L_IS=1 \
-  --grid eccentricity.L_S=0.001:1:100 -o "$out/fig11"
+  --grid eccentricity.L_S=0.001:1:100 --csv -o "$out/fig11"
 $p sweep $rig --set eccentricity.alpha_S=240 --set eccentricity.L_S=1 \
-  --grid eccentricity.L_IS=0.001:1:100 -o "$out/fig12"
+  --grid eccentricity.L_IS=0.001:1:100 --csv -o "$out/fig12"
 $p sweep $rig --set eccentricity.alpha_S=240 \
-  --grid eccentricity.L_IS=0.001:1:100 --grid eccentricity.L_S=0.001:1:100 -o "$out/grid"
+  --grid eccentricity.L_IS=0.001:1:100 --grid eccentricity.L_S=0.001:1:100 --csv -o "$out/grid"
 $p simulate rigs/wang2019-indoor.yaml -o "$out/simulate"
 $p calibrate "$out/simulate" --method all -o "$out/calibrate"
 $p study calibration rigs/wang2019-indoor.yaml --trials 1000 -o "$out/trials"

@@ -278,8 +278,8 @@ std::vector<DatasetFile> plot_two_axes(const fs::path& dir, const GridAxis& oute
         "reset session\nset terminal pngcairo size 960,720 enhanced font 'DejaVu Sans,11'\n"
         "set output '{}'\nset datafile separator ','\n"
         "set title \"{}\" noenhanced\nset xlabel \"{}\" noenhanced\nset ylabel \"{}\" noenhanced\n"
-        "set cblabel \"{}\"\nset palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\nset autoscale fix\nset tics out\n"
-        "plot 'sweep_map.csv' skip 1 using 1:2:{} with image pixels notitle\nunset output\n",
+        "set cblabel \"{}\"\nset format cb '%g'\nset rmargin at screen 0.82\nset palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\nset autoscale fix\nset tics out\n"
+        "plot 'sweep_map.csv' skip 1 using 1:2:{} with image notitle\nunset output\n",
         png, title, axis_label(inner), axis_label(outer), cblabel, column);
     return s;
   };

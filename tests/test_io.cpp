@@ -2,9 +2,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <atomic>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -13,6 +15,7 @@
 #include "polrig/io/exr.h"
 #include "polrig/io/manifest.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/io/sweep_h5.h"
 #include "support.h"
 
 namespace polrig {
@@ -86,6 +89,126 @@ TEST(OutputDir, LeavesNothingWhenAbandoned) {
   }
   EXPECT_FALSE(fs::exists(dest));
   EXPECT_FALSE(fs::exists(base / "a"));  // parents it created are removed again
+  fs::remove_all(base);
+}
+
+TEST(OutputDir, AResumableFolderIsLockedKeptAndContinued) {
+  const fs::path base = fresh_dir("resumable");
+  const fs::path dest = base / "out", staging = base / ".out.resumable";
+  const Resumable fresh{"record", false, false}, resume{"record", true, false}, restart{"record", false, true};
+  {
+    OutputDir out(dest, false, fresh);
+    EXPECT_EQ(out.staging(), staging);
+    EXPECT_FALSE(out.resuming());
+    // Another writer of the same folder is refused, and does not remove this one's staging.
+    try {
+      OutputDir other(dest, false, fresh);
+      ADD_FAILURE() << "a locked staging folder was opened twice";
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find("another polrig is writing this output folder now"), std::string::npos) << e.what();
+    }
+    write_text_file(out.staging() / "record", "1\n");
+    out.keep_on_failure();
+  }  // not committed: kept
+  ASSERT_TRUE(fs::exists(staging / "record"));
+  try {
+    OutputDir again(dest, false, fresh);
+    ADD_FAILURE() << "an interrupted run was started over without --force";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("--resume continues it; --force starts over"), std::string::npos) << e.what();
+  }
+  ASSERT_TRUE(fs::exists(staging / "record"));
+  {
+    OutputDir out(dest, false, resume);
+    EXPECT_TRUE(out.resuming());
+    EXPECT_EQ(read_file(out.staging() / "record"), "1\n");
+    fs::remove(out.staging() / "record");
+    out.commit();
+  }
+  EXPECT_TRUE(fs::exists(dest));
+  EXPECT_FALSE(fs::exists(staging));
+  // Without a record (killed before its first), a staging folder is started over; --force
+  // empties one with a record; an error before keep_on_failure() removes it.
+  fs::create_directory(staging);
+  write_text_file(staging / "junk", "x");
+  try {
+    OutputDir out(base / "out", false, fresh);
+    ADD_FAILURE() << "the destination exists";
+  } catch (const std::runtime_error&) {
+  }
+  {
+    OutputDir out(dest, true, restart);
+    EXPECT_FALSE(fs::exists(staging / "junk"));
+  }
+  EXPECT_FALSE(fs::exists(staging));
+  fs::remove_all(dest);
+  fs::create_directory(staging);
+  write_text_file(staging / "junk", "x");
+  {
+    OutputDir out(dest, false, fresh);
+    EXPECT_FALSE(out.resuming());
+    EXPECT_FALSE(fs::exists(staging / "junk"));
+  }
+  EXPECT_FALSE(fs::exists(staging));
+  fs::remove_all(base);
+}
+
+TEST(SweepH5, TheBytesDependOnlyOnTheValuesNotOnTheBlocks) {
+  // A 3-D grid written in blocks that cut rows and planes anywhere, against one write: the same
+  // file, byte for byte, and every value where row-major order puts it.
+  const fs::path base = fresh_dir("sweep-h5");
+  fs::create_directories(base);
+  SweepH5Layout layout;
+  const std::size_t shape[3] = {3, 4, 5};
+  for (std::size_t a = 0; a < 3; ++a)
+    layout.axes.push_back({"axis" + std::to_string(a), "mm", "an axis", shape[a], [a](std::size_t i) { return 10.0 * a + i; }});
+  layout.columns = {{"x", "mV", "the point's index", false}, {"y", "%", "minus it, NaN at 7", true}};
+  layout.attributes = {{"command", "polrig sweep …"}, {"rig_text", "a: 1\n"}};
+  const std::size_t n = layout.points();
+  ASSERT_EQ(n, 60u);
+  const auto values = [](std::size_t first, std::size_t count) {
+    std::vector<double> v(2 * count);
+    for (std::size_t k = 0; k < count; ++k) {
+      v[k] = static_cast<double>(first + k);
+      v[count + k] = first + k == 7 ? std::nan("") : -static_cast<double>(first + k);
+    }
+    return v;
+  };
+  const std::vector<std::vector<std::size_t>> partitions = {{60}, {7, 13, 1, 19, 20}, {1, 1, 3, 4, 5, 6, 40}};
+  std::vector<std::string> files;
+  for (std::size_t p = 0; p < partitions.size(); ++p) {
+    const fs::path path = base / ("p" + std::to_string(p) + ".h5");
+    std::optional<SweepH5Writer> w;
+    w.emplace(SweepH5Writer::create(path, layout));
+    std::size_t first = 0;
+    for (std::size_t count : partitions[p]) {
+      if (p == 2 && first == 5) {  // resuming: the file closed and reopened between blocks
+        w->close();
+        w.reset();
+        w.emplace(SweepH5Writer::reopen(path, layout));
+      }
+      w->write(first, count, values(first, count));
+      first += count;
+    }
+    w->close();
+    files.push_back(read_file(path));
+  }
+  EXPECT_TRUE(files[0] == files[1]) << "the file depends on the block sizes";
+  EXPECT_TRUE(files[0] == files[2]) << "the file depends on closing and reopening";
+  const SweepH5Reader r(base / "p1.h5");
+  std::vector<double> x(n), y(n);
+  r.read("x", 0, x);
+  r.read("y", 0, y);
+  for (std::size_t i = 0; i < n; ++i) {
+    EXPECT_EQ(x[i], static_cast<double>(i));
+    if (i == 7) EXPECT_TRUE(std::isnan(y[i]));
+    else EXPECT_EQ(y[i], -static_cast<double>(i));
+  }
+  std::vector<double> part(11);
+  r.read("x", 23, part);
+  EXPECT_EQ(part.front(), 23.0);
+  EXPECT_EQ(part.back(), 33.0);
+  EXPECT_THROW(SweepH5Writer::create(base / "p0.h5", layout), std::runtime_error);  // never replaced
   fs::remove_all(base);
 }
 

@@ -112,3 +112,21 @@ def test_rig_sweep_out_refuses_what_the_cli_refuses(tmp_path):
         rig.sweep({"eccentricity.L_S": "0:1:3"}, steps=8, out=tmp_path / "x")
     with pytest.raises(ValueError, match="options of out="):
         rig.sweep({"eccentricity.L_S": "0:1:3"}, csv=True)
+
+
+def test_a_three_axis_sweep_in_blocks_that_cut_rows_lands_in_row_major_order(tmp_path):
+    # 7429 points: the first block (4096 points) ends inside a plane and inside a row.
+    grid = {"eccentricity.L_IS": "0:1:17", "eccentricity.alpha_S": "0:360:19", "eccentricity.L_S": "0.1:2:23"}
+    out = tmp_path / "sw3"
+    run_cli("sweep", INDOOR, *[a for k, v in grid.items() for a in ("--grid", f"{k}={v}")], "--steps", 8,
+            "-o", out, "--quiet", "--csv")
+    csv = read_csv(out / "sweep.csv")
+    assert not (out / "sweep_map.csv").exists()  # no plots for three axes
+    with h5py.File(out / "sweep.h5", "r") as f:
+        axes = [f[k][...] for k in grid]
+        mesh = np.meshgrid(*axes, indexing="ij")
+        for k, m in zip(grid, mesh):
+            assert np.array_equal(m.ravel(), csv[k]), k
+        for name in COLUMNS:
+            assert f[name].shape == (17, 19, 23)
+            assert np.array_equal(f[name][...].ravel(), csv[name], equal_nan=True), name

@@ -163,7 +163,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       if (axes.size() <= 2 && out->plots() && !gnuplot_available())
         throw std::runtime_error("gnuplot is needed for the PNG plots and was not found; install it "
                                  "(scripts/setup-deps.sh) or pass --no-plots");
-      const fs::path written = sweep_to_folder(r, axes, *steps, {out->out, out->force, *csv, out->plots(), *resume, command_line()},
+      const fs::path written = sweep_to_folder(r, axes, *steps, {out->out, out->force, *csv, out->plots(), *resume, command_line(), "-o/--out " + out->out},
                                                progress());
       end_progress_line();
       std::cout << "wrote " << written.string() << "\n";

@@ -141,8 +141,8 @@ void OutputDir::open_resumable(const Resumable& r) {
                                       what_is_there(staging_, there)));
   if (there == fs::file_type::not_found) {
     if (r.resume)
-      throw error(staging_, fmt::format("--resume: there is no interrupted run of {} to continue",
-                                        destination_.string()));
+      throw std::runtime_error(fmt::format("--resume: there is no interrupted run of {} to continue (no {})",
+                                           destination_.string(), staging_.filename().string()));
     if (!fs::create_directory(staging_, ec) && ec)
       throw error(staging_, fmt::format("cannot create the staging folder: {}", ec.message()));
   }

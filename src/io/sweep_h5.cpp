@@ -102,7 +102,7 @@ Id dataset_creation(const fs::path& path) {
 
 std::vector<hsize_t> shape_of(const SweepH5Layout& layout) {
   std::vector<hsize_t> shape;
-  for (const SweepH5Axis& a : layout.axes) shape.push_back(a.values.size());
+  for (const SweepH5Axis& a : layout.axes) shape.push_back(a.size);
   return shape;
 }
 
@@ -152,7 +152,7 @@ std::size_t product(const std::vector<hsize_t>& shape) {
 
 std::size_t SweepH5Layout::points() const {
   std::size_t p = 1;
-  for (const SweepH5Axis& a : axes) p *= a.values.size();
+  for (const SweepH5Axis& a : axes) p *= a.size;
   return p;
 }
 
@@ -185,13 +185,23 @@ SweepH5Writer SweepH5Writer::create(const fs::path& path, const SweepH5Layout& l
   std::vector<hid_t> scales;
   std::deque<Id> scale_ids;
   for (const SweepH5Axis& a : layout.axes) {
-    const hsize_t size = a.values.size();
+    const hsize_t size = a.size;
     Id space(check(H5Screate_simple(1, &size, nullptr), path, "make a dataspace"), H5Sclose);
     const std::string what = fmt::format("write the axis '{}'", a.name);
     scale_ids.emplace_back(check(H5Dcreate2(w.file_, a.name.c_str(), type, space, H5P_DEFAULT, dcpl,
                                             H5P_DEFAULT), path, what), H5Dclose);
     const hid_t d = scale_ids.back();
-    check(H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, a.values.data()), path, what.c_str());
+    // A slice at a time: an axis may have 1e8 values.
+    constexpr std::size_t kSlice = 1 << 16;
+    std::vector<double> values(std::min<std::size_t>(a.size, kSlice));
+    for (std::size_t first = 0; first < a.size; first += kSlice) {
+      const std::size_t n = std::min(kSlice, a.size - first);
+      for (std::size_t i = 0; i < n; ++i) values[i] = a.value(first + i);
+      select_points(space, {size}, first, n, path);
+      const hsize_t count = n;
+      Id memory(check(H5Screate_simple(1, &count, nullptr), path, "make a dataspace"), H5Sclose);
+      check(H5Dwrite(d, H5T_NATIVE_DOUBLE, memory, space, H5P_DEFAULT, values.data()), path, what.c_str());
+    }
     write_unit_and_description(d, a.unit, a.description, path);
     check(H5DSset_scale(d, a.name.c_str()), path, what.c_str());
     scales.push_back(d);

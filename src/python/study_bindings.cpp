@@ -303,13 +303,7 @@ py::object sweep_into_folder(const PyRig& self, const py::object& grid, int step
   std::filesystem::path written;
   {
     py::gil_scoped_release release;
-    try {
-      written = sweep_to_folder(loaded, axes, steps, {out, force, csv, plots, resume, command}, p);
-    } catch (const RigError&) {
-      throw;
-    } catch (const std::runtime_error& e) {
-      throw std::runtime_error(fmt::format("out={}: {}", out.string(), e.what()));
-    }
+    written = sweep_to_folder(loaded, axes, steps, {out, force, csv, plots, resume, command, "out=" + out.string()}, p);
   }
   return py::module_::import("pathlib").attr("Path")(written.string());
 }

@@ -66,10 +66,17 @@ std::string line_style(int pair, const char* extra = "") {
 }
 
 // 64-bit FNV-1a: a short, stable fingerprint of a long input (a rig's text, an axis's values).
-std::string fingerprint(std::string_view bytes) {
+struct Fingerprint {
   std::uint64_t h = 14695981039346656037ull;
-  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-  return fmt::format("{:016x}", h);
+  void add(std::string_view bytes) {
+    for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+  }
+  std::string text() const { return fmt::format("{:016x}", h); }
+};
+std::string fingerprint(std::string_view bytes) {
+  Fingerprint f;
+  f.add(bytes);
+  return f.text();
 }
 }  // namespace
 
@@ -77,10 +84,8 @@ SweepH5Layout sweep_h5_layout(const std::vector<GridAxis>& axes, bool eq6,
                               std::vector<std::pair<std::string, std::string>> attributes) {
   SweepH5Layout l;
   for (const GridAxis& a : axes) {
-    SweepH5Axis x{std::string(a.key->path), std::string(a.key->unit), std::string(a.key->doc), {}};
-    x.values.resize(static_cast<std::size_t>(a.count));
-    for (int i = 0; i < a.count; ++i) x.values[static_cast<std::size_t>(i)] = a.value(i);
-    l.axes.push_back(std::move(x));
+    l.axes.push_back({std::string(a.key->path), std::string(a.key->unit), std::string(a.key->doc),
+                      static_cast<std::size_t>(a.count), [a](std::size_t i) { return a.value(static_cast<int>(i)); }});
   }
   for (std::size_t c = 0; c < kColumns; ++c) {
     const PairColumn& p = kPairColumns[c % kColumnsPerPair];
@@ -323,12 +328,12 @@ std::vector<std::pair<std::string, std::string>> sweep_inputs(const LoadedRig& r
   std::string overrides, grid;
   for (const RigOverride& o : r.overrides) overrides += o.path + "=" + o.value + "\n";
   for (const GridAxis& a : axes) {
-    std::string values;
+    Fingerprint values;
     for (int i = 0; i < a.count; ++i) {
       const double v = a.value(i);
-      values.append(reinterpret_cast<const char*>(&v), sizeof v);
+      values.add(std::string_view(reinterpret_cast<const char*>(&v), sizeof v));
     }
-    grid += fmt::format("{} ({} values, fingerprint {})\n", a.key->path, a.count, fingerprint(values));
+    grid += fmt::format("{} ({} values, fingerprint {})\n", a.key->path, a.count, values.text());
   }
   return {{"program", fmt::format("polrig {} ({})", POLRIG_VERSION, POLRIG_GIT_REVISION)},
           {"rig file", r.origin},
@@ -345,7 +350,14 @@ std::vector<std::pair<std::string, std::string>> sweep_inputs(const LoadedRig& r
 fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, int steps, const SweepFolder& f,
                          const Progress& progress) {
   check_grid(r.rig, axes);
-  OutputDir dir(f.out, f.force, Resumable{kSweepStateFile, f.resume, f.force && !f.resume});
+  std::optional<OutputDir> opened;
+  try {
+    opened.emplace(f.out, f.force, Resumable{kSweepStateFile, f.resume, f.force && !f.resume});
+  } catch (const std::runtime_error& e) {
+    if (f.argument.empty()) throw;
+    throw std::runtime_error(fmt::format("{}: {}", f.argument, e.what()));
+  }
+  OutputDir& dir = *opened;
   const fs::path staging = dir.staging();
   SweepState state{0, 0, f.command, manifest_working_directory({f.command, &r, {}}), sweep_inputs(r, axes, steps, f)};
   std::optional<SweepReport::Resume> resume;

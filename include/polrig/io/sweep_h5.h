@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
 #include <utility>
@@ -19,7 +20,8 @@ namespace polrig {
 
 struct SweepH5Axis {
   std::string name, unit, description;
-  std::vector<double> values;  // the grid's values along this axis, in order
+  std::size_t size = 0;
+  std::function<double(std::size_t)> value;  // the grid's values along this axis, computed on demand
 };
 
 struct SweepH5Column {

@@ -59,6 +59,7 @@ struct SweepFolder {
   bool plots = true;
   bool resume = false;  // continue the interrupted run of the same sweep into `out`
   std::string command;  // the manifest's (a resumed run keeps its first's)
+  std::string argument; // how the user named `out` ("-o/--out OUT", "out=OUT"): folder errors start with it
 };
 
 // The whole `polrig sweep`: opens the folder (resumable staging), runs the sweep into

@@ -4,6 +4,8 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -347,61 +349,95 @@ std::vector<std::pair<std::string, std::string>> sweep_inputs(const LoadedRig& r
 }
 }  // namespace
 
-fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, int steps, const SweepFolder& f,
-                         const Progress& progress) {
-  check_grid(r.rig, axes);
-  std::optional<OutputDir> opened;
+namespace {
+// The folder a sweep writes into, opened (or resumed) by rank 0.
+struct OpenSweep {
+  std::optional<OutputDir> dir;
+  SweepState state;
+  Manifest manifest;
+  std::optional<SweepReport> report;
+};
+
+void open_sweep(OpenSweep& o, const LoadedRig& r, const std::vector<GridAxis>& axes, int steps, const SweepFolder& f) {
   try {
-    opened.emplace(f.out, f.force, Resumable{kSweepStateFile, f.resume, f.force && !f.resume});
+    o.dir.emplace(f.out, f.force, Resumable{kSweepStateFile, f.resume, f.force && !f.resume});
   } catch (const std::runtime_error& e) {
     if (f.argument.empty()) throw;
     throw std::runtime_error(fmt::format("{}: {}", f.argument, e.what()));
   }
-  OutputDir& dir = *opened;
-  const fs::path staging = dir.staging();
-  SweepState state{0, 0, f.command, manifest_working_directory({f.command, &r, {}}), sweep_inputs(r, axes, steps, f)};
+  const fs::path staging = o.dir->staging();
+  o.state = {0, 0, f.command, manifest_working_directory({f.command, &r, {}}), sweep_inputs(r, axes, steps, f)};
   std::optional<SweepReport::Resume> resume;
-  if (dir.resuming()) {
+  if (o.dir->resuming()) {
     const std::optional<SweepState> saved = read_sweep_state(staging);
-    const std::vector<std::string> differ = differing_inputs(*saved, state.inputs);
+    const std::vector<std::string> differ = differing_inputs(*saved, o.state.inputs);
     if (!differ.empty())
       throw std::runtime_error(fmt::format("--resume: the interrupted run in {} was started with another {}; "
                                            "run the same command to continue it, or pass --force without "
                                            "--resume to start over", staging.string(), fmt::join(differ, ", ")));
-    state.points_done = saved->points_done;
-    state.csv_bytes = saved->csv_bytes;
-    state.command = saved->command;
-    state.working_directory = saved->working_directory;
-    resume = SweepReport::Resume{state.points_done, state.csv_bytes};
+    o.state.points_done = saved->points_done;
+    o.state.csv_bytes = saved->csv_bytes;
+    o.state.command = saved->command;
+    o.state.working_directory = saved->working_directory;
+    resume = SweepReport::Resume{o.state.points_done, o.state.csv_bytes};
   }
-  Manifest manifest{state.command, &r, {}, {}, state.working_directory};
-  SweepReport report(staging, axes, r.rig.light->has(Source::kClosedFormEq6), f.csv, manifest_fields(manifest), resume);
+  o.manifest = Manifest{o.state.command, &r, {}, {}, o.state.working_directory};
+  o.report.emplace(staging, axes, r.rig.light->has(Source::kClosedFormEq6), f.csv, manifest_fields(o.manifest), resume);
+}
+}  // namespace
+
+fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, int steps, const SweepFolder& f,
+                         const Progress& progress) {
+  check_grid(r.rig, axes);
+  const Ranks& ranks = f.ranks ? *f.ranks : this_process_only();
+  // Rank 0 opens the folder; every rank learns whether it could, and where to start.
+  OpenSweep o;
+  std::exception_ptr error;
+  std::optional<std::string> failure;
+  if (ranks.is_root()) {
+    try {
+      open_sweep(o, r, axes, steps, f);
+    } catch (const std::exception& e) {
+      error = std::current_exception();
+      failure = e.what();
+    }
+  }
+  if (const std::optional<std::string> first = ranks.first_failure(failure)) {
+    if (error) std::rethrow_exception(error);
+    throw std::runtime_error(*first);
+  }
+  std::vector<std::byte> start(sizeof(std::size_t));
+  std::memcpy(start.data(), &o.state.points_done, sizeof(std::size_t));
+  ranks.broadcast(start);
+  SweepOptions options;
+  std::memcpy(&options.first_point, start.data(), sizeof(std::size_t));
+  options.ranks = &ranks;
 
   // A checkpoint costs a few fsyncs: after the first block (so that an early interruption
-  // already resumes), then at most once a second.
+  // already resumes), then at most once a second. The sink runs on rank 0 only.
   using Clock = std::chrono::steady_clock;
   auto last = Clock::now();
   bool checkpointed = false;
-  SweepOptions options;
-  options.first_point = state.points_done;
   sweep(r.rig, axes, CsTurn(steps), [&](std::size_t first, std::span<const CsSummary> block) {
-    report.write(first, block);
+    o.report->write(first, block);
     if (checkpointed && Clock::now() - last < std::chrono::seconds(1)) return;
-    const SweepReport::Resume at = report.sync();
-    state.points_done = at.points_done;
-    state.csv_bytes = at.csv_bytes;
-    write_sweep_state(staging, state);
-    dir.keep_on_failure();
+    const SweepReport::Resume at = o.report->sync();
+    o.state.points_done = at.points_done;
+    o.state.csv_bytes = at.csv_bytes;
+    write_sweep_state(o.dir->staging(), o.state);
+    o.dir->keep_on_failure();
     checkpointed = true;
     last = Clock::now();
   }, progress, options);
-  manifest.files = report.finish(f.plots);
-  write_manifest(staging, manifest);
+  if (!ranks.is_root()) return {};
+  const fs::path staging = o.dir->staging();
+  o.manifest.files = o.report->finish(f.plots);
+  write_manifest(staging, o.manifest);
   std::error_code ec;
   fs::remove(staging / kSweepStateFile, ec);
   if (ec) throw std::runtime_error(fmt::format("{}: cannot remove: {}", (staging / kSweepStateFile).string(), ec.message()));
-  dir.commit();
-  return dir.destination();
+  o.dir->commit();
+  return o.dir->destination();
 }
 
 }  // namespace polrig

@@ -14,6 +14,7 @@
 #include "polrig/io/manifest.h"
 #include "polrig/io/sweep_h5.h"
 #include "polrig/progress.h"
+#include "polrig/ranks.h"
 #include "polrig/study/sweep.h"
 
 namespace polrig {
@@ -60,12 +61,16 @@ struct SweepFolder {
   bool resume = false;  // continue the interrupted run of the same sweep into `out`
   std::string command;  // the manifest's (a resumed run keeps its first's)
   std::string argument; // how the user named `out` ("-o/--out OUT", "out=OUT"): folder errors start with it
+  // The processes sharing the sweep (MPI; null: this one alone). Rank 0 opens, writes and
+  // commits the folder; the others compute their blocks and return an empty path.
+  const Ranks* ranks = nullptr;
 };
 
 // The whole `polrig sweep`: opens the folder (resumable staging), runs the sweep into
 // SweepReport with a durable checkpoint after the first block and then at most every second,
 // writes the manifest and moves the folder into place. A resumed run refuses other inputs
 // (rig, grid, steps, files asked for, program version), naming them. Returns the destination.
+// Collective when `folder.ranks` has several: an error opening the folder stops every rank.
 std::filesystem::path sweep_to_folder(const LoadedRig& rig, const std::vector<GridAxis>& axes,
                                       int steps, const SweepFolder& folder, const Progress& progress);
 

@@ -228,6 +228,11 @@ void OutputDir::create_parents() {
   }
 }
 
+void OutputDir::keep_on_failure() {
+  const std::lock_guard lock(open_dirs_mutex());  // the signal thread reads it under this lock
+  keep_ = true;
+}
+
 void OutputDir::commit() {
   const std::lock_guard lock(open_dirs_mutex());
   // Three tries cover another process creating or removing the destination in between.

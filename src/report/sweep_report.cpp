@@ -424,8 +424,8 @@ fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, 
     const SweepReport::Resume at = o.report->sync();
     o.state.points_done = at.points_done;
     o.state.csv_bytes = at.csv_bytes;
+    o.dir->keep_on_failure();  // first: a signal between the record and this would remove it
     write_sweep_state(o.dir->staging(), o.state);
-    o.dir->keep_on_failure();
     checkpointed = true;
     last = Clock::now();
   }, progress, options);

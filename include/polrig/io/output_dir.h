@@ -39,8 +39,9 @@ class OutputDir {
   OutputDir(std::filesystem::path destination, bool replace, const Resumable& resumable);
   // True when the staging folder holds an interrupted run to continue.
   bool resuming() const { return resuming_; }
-  // From now on the staging folder is kept when the folder is not committed.
-  void keep_on_failure() { keep_ = true; }
+  // From now on the staging folder is kept when the folder is not committed (also by a signal
+  // arriving meanwhile: call it before writing the first progress record).
+  void keep_on_failure();
   ~OutputDir();
   OutputDir(const OutputDir&) = delete;
   OutputDir& operator=(const OutputDir&) = delete;

@@ -130,3 +130,43 @@ def test_a_three_axis_sweep_in_blocks_that_cut_rows_lands_in_row_major_order(tmp
         for name in COLUMNS:
             assert f[name].shape == (17, 19, 23)
             assert np.array_equal(f[name][...].ravel(), csv[name], equal_nan=True), name
+
+
+def test_rig_sweep_resumes_a_killed_cli_sweep_to_the_cli_folder(tmp_path, monkeypatch):
+    """kill -9 of `polrig sweep` after its first checkpoint, then Rig.sweep(out=, resume=True): the
+    folder is the uninterrupted CLI run's, byte for byte (its manifest keeps the CLI's command)."""
+    import os
+    import signal
+    import subprocess
+    import time
+    from conftest import polrig_exe
+    monkeypatch.chdir(ROOT)
+    grid = {"eccentricity.L_S": "0.001:1:400", "eccentricity.L_IS": "0.001:1:500"}  # 200,000 points
+    out = tmp_path / "sw"
+    args = [str(polrig_exe()), "sweep", str(INDOOR), *[a for k, v in grid.items() for a in ("--grid", f"{k}={v}")],
+            "--csv", "--no-plots", "--threads", "1", "--quiet", "-o", str(out)]
+    subprocess.run(args, check=True, capture_output=True, cwd=ROOT)
+    shutil.move(out, tmp_path / "reference")
+    p = subprocess.Popen(args, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    record = tmp_path / ".sw.resumable" / "resume-state.yaml"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:
+        try:
+            if yaml.safe_load(record.read_text())["points_done"] > 0:
+                break
+        except (OSError, TypeError, KeyError, yaml.YAMLError):
+            pass
+        time.sleep(0.001)
+    os.kill(p.pid, signal.SIGKILL)
+    p.wait()
+    assert p.returncode == -signal.SIGKILL, "the sweep ended before it was killed"
+    assert not out.exists() and record.exists()
+    with pytest.raises(RuntimeError, match="--resume continues it; --force starts over"):
+        polrig.Rig.load(INDOOR).sweep(grid, out=out, csv=True, threads=1)
+    with pytest.raises(RuntimeError, match=r"was started with another csv \(--csv\)"):
+        polrig.Rig.load(INDOOR).sweep(grid, out=out, resume=True, threads=1)
+    polrig.Rig.load(INDOOR).sweep(grid, out=out, csv=True, resume=True, threads=2)
+    ref = tmp_path / "reference"
+    assert sorted(x.name for x in out.iterdir()) == sorted(x.name for x in ref.iterdir())
+    for x in ref.iterdir():
+        assert (out / x.name).read_bytes() == x.read_bytes(), x.name

@@ -68,6 +68,11 @@ Id file_access(const fs::path& path) {
   Id fapl(check(H5Pcreate(H5P_FILE_ACCESS), path, "create a property list"), H5Pclose);
   check(H5Pset_libver_bounds(fapl, H5F_LIBVER_V18, H5F_LIBVER_V18), path, "set the format version");
   check(H5Pset_fclose_degree(fapl, H5F_CLOSE_STRONG), path, "set the close degree");
+#if H5_VERSION_GE(1, 10, 7)
+  // HDF5 locks its files, which some file systems cannot do: the staging folder's own lock
+  // already keeps a second writer out, so go on there without HDF5's.
+  check(H5Pset_file_locking(fapl, true, true), path, "set file locking");
+#endif
   return Id(H5Pcopy(fapl), H5Pclose);
 }
 

@@ -170,3 +170,37 @@ def test_rig_sweep_resumes_a_killed_cli_sweep_to_the_cli_folder(tmp_path, monkey
     assert sorted(x.name for x in out.iterdir()) == sorted(x.name for x in ref.iterdir())
     for x in ref.iterdir():
         assert (out / x.name).read_bytes() == x.read_bytes(), x.name
+
+
+def read_map(path):
+    """sweep_map.csv: a header, then rows of numbers with a blank line after each scan line."""
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    rows = [[float(c) for c in l.split(",")] for l in lines[1:] if l]
+    return header, np.array(rows)
+
+
+@pytest.mark.skipif(shutil.which("gnuplot") is None, reason="needs gnuplot")
+def test_the_image_plots_data_is_the_grid_or_its_bin_means(tmp_path):
+    # 300 × 7: the first axis is cut into 256 bins (point i into bin ⌊i·256/300⌋), the second is exact.
+    out = tmp_path / "img"
+    run_cli("sweep", INDOOR, "--grid", "eccentricity.L_IS=0.001:1:300", "--grid", "eccentricity.alpha_S=0:360:7",
+            "--steps", 8, "-o", out, "--quiet")
+    header, m = read_map(out / "sweep_map.csv")
+    assert header == ["eccentricity.alpha_S", "eccentricity.L_IS", "pair1_asd_mV", "pair1_mean_mr_mV"]
+    assert m.shape == (256 * 7, 4)
+    assert (out / "sweep_map.csv").read_text().count("\n\n") == 256  # a blank line after each scan line
+    with h5py.File(out / "sweep.h5", "r") as f:
+        L, alpha = f["eccentricity.L_IS"][...], f["eccentricity.alpha_S"][...]
+        for col, name in ((2, "pair1_asd_mV"), (3, "pair1_mean_mr_mV")):
+            values = f[name][...]
+            # The same additions in the same (grid) order as the writer: np.add.at is unbuffered.
+            sums, counts = np.zeros((256, 7)), np.zeros((256, 7))
+            bins = np.arange(300) * 256 // 300
+            for i in range(300):
+                np.add.at(sums, (bins[i], np.arange(7)), values[i])
+                counts[bins[i]] += 1
+            assert np.array_equal(m[:, col], (sums / counts).ravel()), name
+    centres = L[0] + (np.arange(256) + 0.5) * (L[-1] - L[0]) / 256
+    assert np.array_equal(m[:, 1], np.repeat(centres, 7))
+    assert np.array_equal(m[:, 0], np.tile(alpha, 256))  # exact: one pixel per value

@@ -145,6 +145,12 @@ void OutputDir::open_resumable(const Resumable& r) {
                                            destination_.string(), staging_.filename().string()));
     if (!fs::create_directory(staging_, ec) && ec)
       throw error(staging_, fmt::format("cannot create the staging folder: {}", ec.message()));
+    // Durable before its first progress record, which only syncs the folder itself.
+    const int parent = ::open(staging_.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (parent >= 0) {
+      ::fsync(parent);
+      ::close(parent);
+    }
   }
   lock_fd_ = ::open(staging_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (lock_fd_ < 0)

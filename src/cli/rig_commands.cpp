@@ -147,21 +147,34 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     app->add_option("--steps", *steps, "table angles per turn (even)")->check(EvenSteps())->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
+      // Every rank loads and checks the same input (the same verdict everywhere); rank 0 alone
+      // prints, opens and writes the output, and receives every block (docs/scale.md).
+      const Ranks& world = ranks();
       const LoadedRig r = rig->load();
       std::vector<GridAxis> axes;
       for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
-      for (const RigKey* key : axes_the_cs_study_ignores(axes))
-        std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
-                                 "row along that axis will be the same\n", key->path);
+      if (world.is_root())
+        for (const RigKey* key : axes_the_cs_study_ignores(axes))
+          std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
+                                   "row along that axis will be the same\n", key->path);
       check_grid(r.rig, axes);
-      OutputDir dir = out->open(axes.size() <= 2);
-      SweepReport report(dir.staging(), axes, r.rig.light->has(Source::kClosedFormEq6));
+      std::optional<OutputDir> dir;
+      std::optional<SweepReport> report;
+      on_rank_0([&] {
+        dir.emplace(made_by{[&] { return out->open(axes.size() <= 2); }});
+        report.emplace(dir->staging(), axes, r.rig.light->has(Source::kClosedFormEq6));
+      });
+      SweepOptions options;
+      options.first_point = from_rank_0(options.first_point);  // rank 0 decides where a resumed sweep starts
+      options.ranks = &world;
       sweep(r.rig, axes, CsTurn(*steps), [&](std::size_t first, std::span<const CsSummary> block) {
-        report.write(first, block);
-      }, progress());
-      write_manifest(dir.staging(), {command_line(), &r, report.finish(out->plots())});
-      finish(dir);
-    }});
+        report->write(first, block);
+      }, progress(), options);
+      on_rank_0([&] {
+        write_manifest(dir->staging(), {command_line(), &r, report->finish(out->plots())});
+        finish(*dir);
+      });
+    }, true});
   }
 
   // ---- run: the main job

@@ -13,6 +13,7 @@ packages=(
   gnuplot-nox fonts-dejavu-core
   python3-dev pybind11-dev    # the Python module (docs/python.md)
   python3-numpy python3-pytest python3-matplotlib  # its arrays, its tests, its examples' plots
+  libopenmpi-dev openmpi-bin  # -DPOLRIG_MPI=ON: sweeps across processes and machines (docs/scale.md)
 )
 
 missing=()

@@ -1,7 +1,8 @@
 #pragma once
 // A study's failure on one rank, carried to every rank by Ranks::first_failure (text) and thrown
 // there as the same kind of error one process alone would throw (RigError: exit 2,
-// CalibrationError: exit 3, anything else a std::runtime_error), with the same message.
+// CalibrationError: exit 3, a std::logic_error (a programming error) as one, anything else a
+// std::runtime_error), with the same message.
 #include <exception>
 #include <stdexcept>
 #include <string>
@@ -12,7 +13,10 @@
 namespace polrig {
 
 inline std::string rank_failure_text(const std::exception& e) {
-  const char kind = dynamic_cast<const RigError*>(&e) ? 'R' : dynamic_cast<const CalibrationError*>(&e) ? 'C' : 'E';
+  const char kind = dynamic_cast<const RigError*>(&e)           ? 'R'
+                    : dynamic_cast<const CalibrationError*>(&e) ? 'C'
+                    : dynamic_cast<const std::logic_error*>(&e) ? 'L'
+                                                                : 'E';
   return kind + std::string(e.what());
 }
 
@@ -20,6 +24,7 @@ inline std::string rank_failure_text(const std::exception& e) {
   const std::string message = text.empty() ? text : text.substr(1);
   if (!text.empty() && text[0] == 'R') throw RigError(message);
   if (!text.empty() && text[0] == 'C') throw CalibrationError(message);
+  if (!text.empty() && text[0] == 'L') throw std::logic_error(message);
   throw std::runtime_error(message);
 }
 

@@ -285,6 +285,7 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
       try {
         compute_block(base, axes, turn, mine_begin, mine_end, summaries.data(), scratch);
       } catch (const std::exception& e) {
+        if (size == 1) throw;  // alone: the error as it is
         failure = rank_failure_text(e);
       }
     }

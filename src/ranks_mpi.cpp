@@ -2,9 +2,11 @@
 #include <mpi.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "polrig/ranks.h"
 
@@ -15,24 +17,48 @@ namespace {
 // MPI counts are ints: messages go in pieces of at most 1 GiB, so a rank may hold any size.
 constexpr std::size_t kPiece = std::size_t{1} << 30;
 
+// Waits for a request, sleeping between tests (50 µs, doubling up to 2 ms) instead of MPI's
+// busy polling: a rank that waits for the others (rank 1 while rank 0 writes a block, rank 0
+// while a slower rank computes) then leaves its core to the ranks and threads that work, which
+// matters whenever ranks × --threads fill the cores. The added latency is at most 2 ms per
+// collective, against blocks that take far longer.
+void wait_politely(MPI_Request& request) {
+  auto pause = std::chrono::microseconds(50);
+  for (int done = 0;;) {
+    MPI_Test(&request, &done, MPI_STATUS_IGNORE);
+    if (done) return;
+    std::this_thread::sleep_for(pause);
+    pause = std::min(2 * pause, std::chrono::microseconds(2000));
+  }
+}
+
 void send_bytes(const std::byte* data, std::size_t n, int to) {
-  for (std::size_t at = 0; at < n; at += kPiece)
-    MPI_Send(data + at, static_cast<int>(std::min(kPiece, n - at)), MPI_BYTE, to, 0, MPI_COMM_WORLD);
+  for (std::size_t at = 0; at < n; at += kPiece) {
+    MPI_Request r;
+    MPI_Isend(data + at, static_cast<int>(std::min(kPiece, n - at)), MPI_BYTE, to, 0, MPI_COMM_WORLD, &r);
+    wait_politely(r);
+  }
 }
 
 void receive_bytes(std::byte* data, std::size_t n, int from) {
-  for (std::size_t at = 0; at < n; at += kPiece)
-    MPI_Recv(data + at, static_cast<int>(std::min(kPiece, n - at)), MPI_BYTE, from, 0, MPI_COMM_WORLD,
-             MPI_STATUS_IGNORE);
+  for (std::size_t at = 0; at < n; at += kPiece) {
+    MPI_Request r;
+    MPI_Irecv(data + at, static_cast<int>(std::min(kPiece, n - at)), MPI_BYTE, from, 0, MPI_COMM_WORLD, &r);
+    wait_politely(r);
+  }
 }
 
 void broadcast_from(std::vector<std::byte>& bytes, int root) {
   std::uint64_t n = bytes.size();
-  MPI_Bcast(&n, 1, MPI_UINT64_T, root, MPI_COMM_WORLD);
+  MPI_Request r;
+  MPI_Ibcast(&n, 1, MPI_UINT64_T, root, MPI_COMM_WORLD, &r);
+  wait_politely(r);
   bytes.resize(n);
-  for (std::size_t at = 0; at < n; at += kPiece)
-    MPI_Bcast(bytes.data() + at, static_cast<int>(std::min<std::size_t>(kPiece, n - at)), MPI_BYTE, root,
-              MPI_COMM_WORLD);
+  for (std::size_t at = 0; at < n; at += kPiece) {
+    MPI_Ibcast(bytes.data() + at, static_cast<int>(std::min<std::size_t>(kPiece, n - at)), MPI_BYTE, root,
+               MPI_COMM_WORLD, &r);
+    wait_politely(r);
+  }
 }
 
 class MpiJob final : public Ranks {
@@ -51,7 +77,9 @@ class MpiJob final : public Ranks {
   std::vector<std::byte> gather(std::span<const std::byte> mine) const override {
     std::uint64_t n = mine.size();
     std::vector<std::uint64_t> sizes(rank_ == 0 ? static_cast<std::size_t>(size_) : 0);
-    MPI_Gather(&n, 1, MPI_UINT64_T, sizes.data(), 1, MPI_UINT64_T, 0, MPI_COMM_WORLD);
+    MPI_Request r;
+    MPI_Igather(&n, 1, MPI_UINT64_T, sizes.data(), 1, MPI_UINT64_T, 0, MPI_COMM_WORLD, &r);
+    wait_politely(r);
     if (rank_ != 0) {
       send_bytes(mine.data(), mine.size(), 0);
       return {};
@@ -73,7 +101,9 @@ class MpiJob final : public Ranks {
   std::optional<std::string> first_failure(const std::optional<std::string>& mine) const override {
     const int candidate = mine ? rank_ : size_;
     int first = size_;
-    MPI_Allreduce(&candidate, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
+    MPI_Request r;
+    MPI_Iallreduce(&candidate, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD, &r);
+    wait_politely(r);
     if (first == size_) return std::nullopt;
     std::vector<std::byte> message;
     if (rank_ == first) {

@@ -330,7 +330,20 @@ SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTu
 
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
            const SweepSink& sink, const Progress& progress, const SweepOptions& options) {
-  base.light->prepare(progress);
+  // Every rank prepares the light itself (a traced rig's sphere solve: a pure function of the
+  // scene, so every rank holds the same solution); one that fails stops them all.
+  const Ranks& ranks = options.ranks ? *options.ranks : this_process_only();
+  if (ranks.size() == 1) {
+    base.light->prepare(progress);
+  } else {
+    std::optional<std::string> failure;
+    try {
+      base.light->prepare(progress);
+    } catch (const std::exception& e) {
+      failure = rank_failure_text(e);
+    }
+    if (const auto first = ranks.first_failure(failure)) throw_rank_failure(*first);
+  }
   progress.begin("sweep: grid points", static_cast<long long>(grid_points(axes) - std::min(grid_points(axes), options.first_point)));
   std::size_t reported = options.first_point;
   sweep(base, axes, turn, sink, [&](std::size_t done, std::size_t) {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <numbers>
@@ -19,6 +20,7 @@
 #include "polrig/sim/simulate.h"
 #include "polrig/study/cs.h"
 #include "polrig/study/calibration_trials.h"
+#include "thread_ranks.h"
 #include "polrig/device/sensor.h"
 #include "polrig/units.h"
 #include "support.h"
@@ -711,6 +713,64 @@ TEST(SlowCalibrationTrials, MedianAccuracyOrdersTheThreeTypes) {
   EXPECT_LE(summary[2].median_deg, summary[1].median_deg);
   EXPECT_LE(summary[1].median_deg, summary[0].median_deg);
   EXPECT_LT(summary[1].median_deg, 0.1 * summary[0].median_deg);  // CS is the big step
+}
+
+void expect_same_trial(const Trial& a, const Trial& b) {
+  EXPECT_EQ(a.index, b.index);
+  EXPECT_EQ(a.seed, b.seed);
+  EXPECT_EQ(std::memcmp(&a.eccentricity, &b.eccentricity, sizeof(Eccentricity)), 0) << a.index;
+  EXPECT_EQ(std::memcmp(&a.accuracy_deg, &b.accuracy_deg, sizeof(a.accuracy_deg)), 0) << a.index;
+  for (std::size_t m = 0; m < 3; ++m) {
+    EXPECT_EQ(a.fit[m].termination, b.fit[m].termination);
+    EXPECT_EQ(a.fit[m].message, b.fit[m].message);
+    EXPECT_EQ(a.fit[m].solver_status, b.fit[m].solver_status);
+    EXPECT_EQ(std::memcmp(&a.fit[m].initial_cost, &b.fit[m].initial_cost, sizeof(double)), 0);
+    EXPECT_EQ(std::memcmp(&a.fit[m].final_cost, &b.fit[m].final_cost, sizeof(double)), 0);
+    EXPECT_EQ(a.fit[m].iterations, b.fit[m].iterations);
+    EXPECT_EQ(a.fit[m].evaluations, b.fit[m].evaluations);
+    EXPECT_EQ(a.fit[m].observations, b.fit[m].observations);
+  }
+}
+
+TEST(CalibrationTrials, SharedBetweenRanksRank0GetsEveryTrialInIndexOrderAsOneProcessComputesIt) {
+  TrialSettings s;
+  s.trials = 7;  // shards of 2, 2, 3 trials on 3 ranks; one rank of 5 gets one
+  const std::vector<Trial> alone = calibration_trials(Rig{}, s);
+  for (int size : {2, 3, 5}) {
+    std::vector<Trial> on_root;
+    const auto errors = test::with_thread_ranks(size, [&](const Ranks& ranks) {
+      std::vector<Trial> t = calibration_trials(Rig{}, s, {}, &ranks);
+      if (ranks.is_root()) on_root = std::move(t);
+      else EXPECT_TRUE(t.empty());
+    });
+    for (const std::string& e : errors) EXPECT_EQ(e, "");
+    ASSERT_EQ(on_root.size(), alone.size()) << size << " ranks";
+    for (std::size_t k = 0; k < alone.size(); ++k) expect_same_trial(on_root[k], alone[k]);
+  }
+}
+
+TEST(CalibrationTrials, ATrialTravelsAsBytesExactly) {
+  Trial t;
+  t.index = 41;
+  t.seed = 0xfedcba9876543210u;
+  t.eccentricity = {0.1, 20, 0.03, -40};
+  t.accuracy_deg = {1e-3, std::numeric_limits<double>::quiet_NaN(), -0.0};
+  t.fit[1].termination = FitTermination::RankDeficient;
+  t.fit[1].message = "kd_3 is not determined";
+  t.fit[2].solver_status = "RelativeReductionTooSmall";
+  t.fit[2].iterations = 12;
+  t.fit[2].evaluations = 34;
+  t.fit[2].observations = 56;
+  t.fit[2].final_cost = 7.5e-9;
+  std::vector<std::byte> bytes;
+  append_trial_bytes(t, bytes);
+  append_trial_bytes(Trial{}, bytes);
+  std::size_t at = 0;
+  expect_same_trial(read_trial_bytes(bytes, at), t);
+  expect_same_trial(read_trial_bytes(bytes, at), Trial{});
+  EXPECT_EQ(at, bytes.size());
+  at = 0;
+  EXPECT_THROW(read_trial_bytes(std::span(bytes).first(bytes.size() / 2 - 1), at), std::runtime_error);
 }
 
 TEST(CalibrationTrials, AreIndependentOfTheThreadCount) {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -29,6 +30,7 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/study/sweep.h"
 #include "polrig/units.h"
+#include "thread_ranks.h"
 
 namespace polrig {
 namespace {
@@ -501,6 +503,105 @@ TEST(Sweep, AnInteriorPointThatBreaksARuleIsNamedBeforeItIsComputed) {
               std::string::npos) << e.what();
   }
   EXPECT_FALSE(sunk) << "a block with a bad point was handed on";
+}
+
+// Sweeps shared between ranks (SweepOptions::ranks), with ranks on threads (tests/thread_ranks.h):
+// what the MPI build does across processes, tested in every build.
+namespace {
+bool same_bits(const CsSummary& a, const CsSummary& b) { return std::memcmp(&a, &b, sizeof(CsSummary)) == 0; }
+}  // namespace
+
+TEST(SweepOnRanks, Rank0ReceivesEveryBlockInGridOrderBitIdenticalToOneProcess) {
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:50")};
+  const CsTurn turn(8);
+  const SweepResult whole = sweep(Rig{}, axes, turn);
+  const std::size_t block = sweep_block_size(whole.points());
+  ASSERT_EQ(block, 4096u);  // 15,000 points: 3 blocks of 4096 (shards of 1365 and 1366 on 3 ranks), one of 2712
+  for (int size : {1, 2, 3, 5}) {
+    for (std::size_t first_point : {std::size_t{0}, block}) {
+      std::vector<CsSummary> got;
+      std::vector<std::size_t> firsts, progress_done;
+      const auto errors = test::with_thread_ranks(size, [&](const Ranks& ranks) {
+        sweep(Rig{}, axes, turn,
+              [&](std::size_t first, std::span<const CsSummary> b) {
+                EXPECT_EQ(ranks.rank(), 0) << "the sink is called on rank 0 only";
+                firsts.push_back(first);
+                got.insert(got.end(), b.begin(), b.end());
+              },
+              [&](std::size_t done, std::size_t) {
+                EXPECT_EQ(ranks.rank(), 0) << "progress is reported on rank 0 only";
+                progress_done.push_back(done);
+              },
+              SweepOptions{.first_point = first_point, .ranks = &ranks});
+      });
+      for (const std::string& e : errors) EXPECT_EQ(e, "") << size << " ranks";
+      ASSERT_EQ(got.size(), whole.points() - first_point) << size << " ranks";
+      for (std::size_t p = 0; p < got.size(); ++p)
+        ASSERT_TRUE(same_bits(got[p], whole.summaries[first_point + p])) << size << " ranks, point " << p;
+      std::vector<std::size_t> expected_firsts;
+      for (std::size_t b = first_point; b < whole.points(); b += block) expected_firsts.push_back(b);
+      EXPECT_EQ(firsts, expected_firsts) << "one sink call per block, in grid order";
+      ASSERT_EQ(progress_done.size(), expected_firsts.size());
+      EXPECT_EQ(progress_done.back(), whole.points());
+    }
+  }
+}
+
+TEST(SweepOnRanks, MoreRanksThanPointsLeaveSomeRanksIdleAndTheResultTheSame) {
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:5")};
+  const SweepResult whole = sweep(Rig{}, axes, CsTurn(8));
+  std::vector<CsSummary> got;
+  const auto errors = test::with_thread_ranks(7, [&](const Ranks& ranks) {
+    sweep(Rig{}, axes, CsTurn(8), [&](std::size_t, std::span<const CsSummary> b) {
+      got.insert(got.end(), b.begin(), b.end());
+    }, SweepProgress{}, SweepOptions{.ranks = &ranks});
+  });
+  for (const std::string& e : errors) EXPECT_EQ(e, "");
+  ASSERT_EQ(got.size(), 5u);
+  for (std::size_t p = 0; p < 5; ++p) EXPECT_TRUE(same_bits(got[p], whole.summaries[p])) << p;
+}
+
+TEST(SweepOnRanks, ABadPointOnRank1sShardStopsEveryRankWithOneProcesssMessage) {
+  // Thirteen varying axes (no corners checked up front): the first bad point is 2048 (the
+  // second axis at its second value), in block 0's second half, which rank 1 of 2 computes.
+  std::vector<GridAxis> axes{GridAxis::parse("eccentricity.alpha_S=0:1:2"), GridAxis::parse("schedule.start_deg=0:400:2")};
+  for (int k = 0; k < 11; ++k) axes.push_back(GridAxis::parse("eccentricity.alpha_S=0:1:2"));
+  ASSERT_EQ(sweep_block_size(grid_points(axes)), 4096u);
+  std::string alone;
+  try {
+    sweep(Rig{}, axes, CsTurn(4), [](std::size_t, std::span<const CsSummary>) {});
+  } catch (const RigError& e) {
+    alone = e.what();
+  }
+  ASSERT_NE(alone.find("eccentricity.alpha_S=0, schedule.start_deg=400, eccentricity.alpha_S=0"), std::string::npos) << alone;
+  bool sunk = false;
+  const auto errors = test::with_thread_ranks(2, [&](const Ranks& ranks) {
+    try {
+      sweep(Rig{}, axes, CsTurn(4), [&](std::size_t, std::span<const CsSummary>) { sunk = true; },
+            SweepProgress{}, SweepOptions{.ranks = &ranks});
+    } catch (const RigError&) {
+      throw;  // the kind of error one process throws (exit 2 in the CLI)
+    } catch (const std::exception& e) {
+      throw std::runtime_error(std::string("not a RigError: ") + e.what());
+    }
+  });
+  EXPECT_EQ(errors, (std::vector<std::string>{alone, alone}));
+  EXPECT_FALSE(sunk) << "rank 0 handed on a block of the round that failed";
+}
+
+TEST(SweepOnRanks, ASinkFailureOnRank0StopsEveryRankAtTheNextCollective) {
+  // Thrown for the second block: said when the third is computed.
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:50")};
+  for (int size : {2, 3}) {
+    const auto errors = test::with_thread_ranks(size, [&](const Ranks& ranks) {
+      sweep(Rig{}, axes, CsTurn(8), [&](std::size_t first, std::span<const CsSummary>) {
+        if (first > 0) throw std::runtime_error("disk full");
+      }, SweepProgress{}, SweepOptions{.ranks = &ranks});
+    });
+    EXPECT_EQ(errors, std::vector<std::string>(static_cast<std::size_t>(size), "disk full")) << size;
+  }
 }
 
 TEST(Sweep, IsBitIdenticalForAnyThreadCount) {

@@ -4,6 +4,7 @@
 // index alone, each result is a pure function of its index, and rank 0 writes everything in
 // index order, so a run's results do not depend on size().
 #include <cstddef>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -30,5 +31,26 @@ class Ranks {
 
 // The run of this process alone: rank 0 of 1, every collective a copy.
 const Ranks& this_process_only();
+
+// How the environment says this process was started: by an MPI launcher (OpenMPI's mpirun sets
+// OMPI_COMM_WORLD_SIZE, PMIx launchers such as `srun --mpi=pmix` set PMIX_RANK, MPICH's and
+// `srun --mpi=pmi2` set PMI_RANK/PMI_SIZE), as which rank of how many processes (0: unknown).
+struct Launch {
+  bool by_mpi_launcher = false;
+  int rank = 0;
+  int processes = 1;
+};
+Launch launch_from_environment();
+
+// True when polrig was built with -DPOLRIG_MPI=ON.
+bool built_with_mpi();
+
+// The MPI job this process was started in: MPI is initialised here (MPI_Init_thread, FUNNELED:
+// only the calling thread uses MPI, TBB's workers never do) and finalized when the returned
+// Ranks is destroyed. Null when no MPI launcher started this process (a plain `polrig …` pays
+// no MPI start-up), and in a build without MPI started as one process. Throws
+// std::runtime_error when a build without MPI was started as one of several processes (each
+// would run the whole command alone).
+std::unique_ptr<Ranks> join_mpi_job(int& argc, char**& argv);
 
 }  // namespace polrig

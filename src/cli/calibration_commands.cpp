@@ -303,10 +303,16 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
       const LoadedRig r = rig->load();
       const TrialSettings s = trial_settings_for(r.rig, *trials, *L_IS_max, *L_S_max,
                                                  settings->options(r.rig, r.rig.device.d));
-      OutputDir dir = out->open();
-      const std::vector<Trial> result = calibration_trials(r.rig, s, progress());
-      write_manifest(dir.staging(), {command_line(), &r, report_calibration_trials(dir.staging(), result, out->plots())});
-      finish(dir);
+      // Every rank checks the same input; rank 0 alone opens and writes the output, and
+      // receives every trial in index order (docs/scale.md).
+      std::optional<OutputDir> dir;
+      on_rank_0([&] { dir.emplace(made_by{[&] { return out->open(); }}); });
+      const std::vector<Trial> result = calibration_trials(r.rig, s, progress(), &ranks());
+      on_rank_0([&] {
+        write_manifest(dir->staging(), {command_line(), &r, report_calibration_trials(dir->staging(), result, out->plots())});
+        finish(*dir);
+      });
+      if (!ranks().is_root()) return;
       for (const TrialSummary& t : summarize_trials(result)) {
         std::string ends;
         for (std::size_t k = 0; k < t.terminations.size(); ++k)
@@ -317,7 +323,7 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
                                  method_name(t.method), t.median_deg, t.p05_deg, t.p95_deg,
                                  t.failed, ends);
       }
-    }});
+    }, true});
   }
   return commands;
 }

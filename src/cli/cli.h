@@ -2,7 +2,12 @@
 // Shared pieces of the polrig commands. Every command follows one pattern: parse and check all
 // input, open the output (a staging folder, so nothing appears on failure), compute, write,
 // commit.
+#include <cstring>
+#include <exception>
 #include <filesystem>
+#include <functional>
+#include <stdexcept>
+#include <type_traits>
 #include <string>
 #include <vector>
 
@@ -12,6 +17,7 @@
 #include "polrig/io/output_dir.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/progress.h"
+#include "polrig/ranks.h"
 #include "polrig/sky/sun.h"
 
 namespace polrig::cli {
@@ -19,6 +25,52 @@ namespace polrig::cli {
 // The command line as typed, shell-quoted, for manifests.
 const std::string& command_line();
 void set_command_line(int argc, char** argv);
+
+// The processes of this run: the MPI job's ranks when mpirun or srun started polrig (built with
+// -DPOLRIG_MPI=ON; docs/scale.md), else this process alone. Every rank parses and checks the
+// same input with the same code, so all reach the same verdict; rank 0 alone prints (progress,
+// notes, errors, results) and alone opens and writes the output folder.
+const Ranks& ranks();
+void set_ranks(const Ranks& ranks);
+
+// What main prints for an error and the exit code it returns: 2 for bad input (RigError,
+// DataError), 3 for a calibration that cannot be done, 1 otherwise.
+struct Failure {
+  int exit_code = 1;
+  std::string message;  // after "polrig: error: "
+};
+Failure failure_of(std::exception_ptr error);
+// A failure every rank has learnt at a collective point: each throws it, rank 0 prints it.
+class RanksFailure : public std::runtime_error {
+ public:
+  explicit RanksFailure(Failure f) : std::runtime_error(f.message), exit_code(f.exit_code) {}
+  int exit_code;
+};
+// Collective: runs `step` on rank 0 alone (opening, writing or committing the output), then
+// every rank learns whether it failed and, if so, throws RanksFailure with rank 0's message and
+// exit code (on rank 0 as well, after `step`'s own clean-up).
+void on_rank_0(const std::function<void()>& step);
+// Collective: rank 0's value on every rank (e.g. where a resumed sweep starts).
+template <class T>
+T from_rank_0(const T& value) {
+  static_assert(std::is_trivially_copyable_v<T>);
+  std::vector<std::byte> bytes(sizeof(T));
+  std::memcpy(bytes.data(), &value, sizeof(T));
+  ranks().broadcast(bytes);
+  T v;
+  std::memcpy(&v, bytes.data(), sizeof(T));
+  return v;
+}
+
+// `optional.emplace(made_by([&] { return out.open(); }))`: an object that cannot move (OutputDir)
+// made in place from a function that returns it.
+template <class F>
+struct made_by {
+  F make;
+  operator std::invoke_result_t<F&>() { return make(); }
+};
+template <class F>
+made_by(F) -> made_by<F>;
 
 // Options shared by every command that writes a folder.
 struct OutputOptions {
@@ -58,7 +110,7 @@ void add_sun_options(CLI::App& app, SunSettings& sun);
 // --quiet on `app` and every command below it: no progress line.
 void add_quiet_option(CLI::App& app);
 // Where the library reports progress: a line on stderr, rewritten in place, when stderr is a
-// terminal and --quiet was not given; otherwise nowhere.
+// terminal, --quiet was not given and this is rank 0; otherwise nowhere.
 Progress progress();
 // Ends an unfinished progress line, so that the next message starts on its own line.
 void end_progress_line();
@@ -68,6 +120,9 @@ void finish(OutputDir& out);
 struct Command {
   CLI::App* app;
   std::function<void()> run;
+  // The command shares its work between the ranks of an MPI job; the others refuse to run as
+  // more than one rank.
+  bool distributes = false;
 };
 std::vector<Command> add_rig_commands(CLI::App& root, int& threads);
 std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, int& threads);

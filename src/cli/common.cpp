@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <stdexcept>
 #include <string_view>
 
@@ -12,12 +13,15 @@
 #include "cli.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/plot.h"
+#include "polrig/calib/fit.h"
+#include "polrig/rig/error.h"
 
 namespace polrig::cli {
 namespace {
 std::string g_command_line;
 bool g_quiet = false;
 bool g_line_open = false;  // a progress line without its newline yet
+const Ranks* g_ranks = nullptr;
 
 std::string shell_word(const std::string& w) {
   if (!w.empty() && w.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ"
@@ -30,6 +34,42 @@ std::string shell_word(const std::string& w) {
 }  // namespace
 
 const std::string& command_line() { return g_command_line; }
+
+const Ranks& ranks() { return g_ranks ? *g_ranks : this_process_only(); }
+void set_ranks(const Ranks& r) { g_ranks = &r; }
+
+Failure failure_of(std::exception_ptr error) {
+  try {
+    std::rethrow_exception(error);
+  } catch (const RanksFailure& e) {
+    return {e.exit_code, e.what()};
+  } catch (const RigError& e) {
+    return {2, e.what()};
+  } catch (const DataError& e) {
+    return {2, e.what()};
+  } catch (const CalibrationError& e) {
+    return {3, std::string("cannot calibrate: ") + e.what()};
+  } catch (const std::exception& e) {
+    return {1, e.what()};
+  }
+}
+
+void on_rank_0(const std::function<void()>& step) {
+  std::optional<std::string> mine;
+  Failure failure;
+  if (ranks().is_root()) {
+    try {
+      step();
+    } catch (...) {
+      failure = failure_of(std::current_exception());
+      mine = std::to_string(failure.exit_code) + "\n" + failure.message;
+    }
+  }
+  const std::optional<std::string> first = ranks().first_failure(mine);
+  if (!first) return;
+  const auto newline = first->find('\n');
+  throw RanksFailure({std::stoi(first->substr(0, newline)), first->substr(newline + 1)});
+}
 
 void set_command_line(int argc, char** argv) {
   g_command_line = "polrig";
@@ -130,7 +170,7 @@ void add_quiet_option(CLI::App& app) {
 }
 
 Progress progress() {
-  if (g_quiet || !::isatty(2)) return {};
+  if (g_quiet || !::isatty(2) || !ranks().is_root()) return {};
   return Progress([](const ProgressReport& r) {
     const bool done = r.fraction >= 1;
     std::fprintf(stderr, "\rpolrig: %s\033[K%s", format_progress(r).c_str(), done ? "\n" : "");

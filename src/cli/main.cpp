@@ -1,6 +1,7 @@
 // polrig: the command-line front end.
 #include <iostream>
 #include <memory>
+#include <string>
 
 #include <fmt/format.h>
 #include <tbb/global_control.h>
@@ -9,12 +10,34 @@
 #include "polrig/calib/fit.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/ranks.h"
+#include "polrig/rig/error.h"
 #include "polrig/version.h"
 
 using namespace polrig;
 
+namespace {
+// "study cs", "sweep": the command as typed after polrig.
+std::string command_name(const CLI::App* app) {
+  std::string name = app->get_name();
+  for (const CLI::App* p = app->get_parent(); p && p->get_parent(); p = p->get_parent())
+    name = p->get_name() + " " + name;
+  return name;
+}
+}  // namespace
+
 int main(int argc, char** argv) {
-  clean_up_outputs_on_signals();  // first: before any other thread exists
+  clean_up_outputs_on_signals();  // first: before any other thread exists (MPI starts some)
+  // MPI starts only under a launcher (mpirun, srun), and ends when `job` goes, after everything.
+  std::unique_ptr<Ranks> job;
+  try {
+    job = join_mpi_job(argc, argv);
+  } catch (const std::exception& e) {
+    if (launch_from_environment().rank == 0) std::cerr << "polrig: error: " << e.what() << "\n";
+    return 2;
+  }
+  cli::set_ranks(job ? *job : this_process_only());
+  const bool root = cli::ranks().is_root();
   cli::set_command_line(argc, argv);
   CLI::App app{"polrig: simulator and calibration toolkit for polarization-sensor calibration rigs"};
   app.set_version_flag("--version", fmt::format("polrig {} ({})", POLRIG_VERSION, POLRIG_GIT_REVISION));
@@ -33,6 +56,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
+    if (!root) return e.get_exit_code();  // every rank parsed the same line; rank 0 says it
     return app.exit(e);
   }
 
@@ -43,25 +67,22 @@ int main(int argc, char** argv) {
   try {
     for (cli::Command& c : commands)
       if (c.app->parsed()) {
+        if (cli::ranks().size() > 1 && !c.distributes)
+          throw RigError(fmt::format(
+              "polrig {} runs as one process, but was started as {} MPI ranks: it does not share "
+              "its work between ranks (only polrig sweep and polrig study calibration do; "
+              "docs/scale.md). Run it without mpirun/srun, or with -np 1",
+              command_name(c.app), cli::ranks().size()));
         c.run();
         break;
       }
-  } catch (const RigError& e) {
-    cli::end_progress_line();
-    std::cerr << "polrig: error: " << e.what() << "\n";
-    return 2;
-  } catch (const DataError& e) {
-    cli::end_progress_line();
-    std::cerr << "polrig: error: " << e.what() << "\n";
-    return 2;
-  } catch (const CalibrationError& e) {
-    cli::end_progress_line();
-    std::cerr << "polrig: error: cannot calibrate: " << e.what() << "\n";
-    return 3;
-  } catch (const std::exception& e) {
-    cli::end_progress_line();
-    std::cerr << "polrig: error: " << e.what() << "\n";
-    return 1;
+  } catch (...) {
+    const cli::Failure f = cli::failure_of(std::current_exception());
+    if (root) {
+      cli::end_progress_line();
+      std::cerr << "polrig: error: " << f.message << "\n";
+    }
+    return f.exit_code;
   }
   return 0;
 }

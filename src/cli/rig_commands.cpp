@@ -153,21 +153,29 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     app->add_flag("--resume", *resume, "continue an interrupted sweep into the same folder (same arguments)");
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
+      // Every rank loads and checks the same input (the same verdict everywhere); rank 0 alone
+      // prints, opens and writes the output, and receives every block (docs/scale.md).
+      const Ranks& world = ranks();
       const LoadedRig r = rig->load();
       std::vector<GridAxis> axes;
       for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
-      for (const RigKey* key : axes_the_cs_study_ignores(axes))
-        std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
-                                 "row along that axis will be the same\n", key->path);
+      if (world.is_root())
+        for (const RigKey* key : axes_the_cs_study_ignores(axes))
+          std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
+                                   "row along that axis will be the same\n", key->path);
       check_grid(r.rig, axes);
-      if (axes.size() <= 2 && out->plots() && !gnuplot_available())
-        throw std::runtime_error("gnuplot is needed for the PNG plots and was not found; install it "
-                                 "(scripts/setup-deps.sh) or pass --no-plots");
-      const fs::path written = sweep_to_folder(r, axes, *steps, {out->out, out->force, *csv, out->plots(), *resume, command_line(), "-o/--out " + out->out},
-                                               progress());
+      on_rank_0([&] {
+        if (axes.size() <= 2 && out->plots() && !gnuplot_available())
+          throw std::runtime_error("gnuplot is needed for the PNG plots and was not found; install it "
+                                   "(scripts/setup-deps.sh) or pass --no-plots");
+      });
+      SweepFolder folder{out->out, out->force, *csv, out->plots(), *resume, command_line(), "-o/--out " + out->out};
+      folder.ranks = &world;
+      const fs::path written = sweep_to_folder(r, axes, *steps, folder, progress());
+      if (!world.is_root()) return;
       end_progress_line();
       std::cout << "wrote " << written.string() << "\n";
-    }});
+    }, true});
   }
 
   // ---- run: the main job

@@ -16,6 +16,7 @@
 #include "polrig/io/output_dir.h"
 #include "polrig/io/plot.h"
 #include "polrig/io/sweep_state.h"
+#include "polrig/study/rank_failure.h"
 #include "polrig/version.h"
 
 namespace polrig {
@@ -401,12 +402,12 @@ fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, 
       open_sweep(o, r, axes, steps, f);
     } catch (const std::exception& e) {
       error = std::current_exception();
-      failure = e.what();
+      failure = rank_failure_text(e);
     }
   }
   if (const std::optional<std::string> first = ranks.first_failure(failure)) {
     if (error) std::rethrow_exception(error);
-    throw std::runtime_error(*first);
+    throw_rank_failure(*first);  // the same kind of error, so every rank exits with rank 0's code
   }
   std::vector<std::byte> start(sizeof(std::size_t));
   std::memcpy(start.data(), &o.state.points_done, sizeof(std::size_t));
@@ -431,15 +432,25 @@ fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, 
     checkpointed = true;
     last = Clock::now();
   }, progress, options);
-  if (!ranks.is_root()) return {};
-  const fs::path staging = o.dir->staging();
-  o.manifest.files = o.report->finish(f.plots);
-  write_manifest(staging, o.manifest);
-  std::error_code ec;
-  fs::remove(staging / kSweepStateFile, ec);
-  if (ec) throw std::runtime_error(fmt::format("{}: cannot remove: {}", (staging / kSweepStateFile).string(), ec.message()));
-  o.dir->commit();
-  return o.dir->destination();
+  // Rank 0 finishes the folder; every rank learns whether it could, so all exit alike.
+  if (ranks.is_root()) {
+    try {
+      const fs::path staging = o.dir->staging();
+      o.manifest.files = o.report->finish(f.plots);
+      write_manifest(staging, o.manifest);
+      std::error_code ec;
+      fs::remove(staging / kSweepStateFile, ec);
+      if (ec) throw std::runtime_error(fmt::format("{}: cannot remove: {}", (staging / kSweepStateFile).string(), ec.message()));
+      o.dir->commit();
+    } catch (const std::exception& e) {
+      error = std::current_exception();
+      failure = rank_failure_text(e);
+    }
+  }
+  if (ranks.size() > 1)
+    if (const std::optional<std::string> first = ranks.first_failure(failure); first && !error) throw_rank_failure(*first);
+  if (error) std::rethrow_exception(error);
+  return ranks.is_root() ? o.dir->destination() : fs::path{};
 }
 
 }  // namespace polrig

@@ -6,6 +6,9 @@
 #include <cstdint>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
+#include <optional>
+#include <type_traits>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -15,6 +18,7 @@
 #include <tbb/parallel_for.h>
 
 #include "polrig/rig/error.h"
+#include "polrig/study/rank_failure.h"
 
 namespace polrig {
 
@@ -251,6 +255,7 @@ std::size_t sweep_block_size(std::size_t total_points) {
   return std::clamp<std::size_t>(total_points / 100, 4096, 32768);
 }
 
+
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
            const SweepSink& sink, const SweepProgress& progress, const SweepOptions& options) {
   check_grid(base, axes);
@@ -260,14 +265,55 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
   if (options.first_point > total || (options.first_point % block != 0 && options.first_point != total))
     throw std::invalid_argument(fmt::format("sweep: resuming at point {}, not a block boundary "
                                             "(blocks of {} of {} points)", options.first_point, block, total));
-  std::vector<CsSummary> summaries(std::min(block, total));
+  const Ranks& ranks = options.ranks ? *options.ranks : this_process_only();
+  const auto size = static_cast<std::size_t>(ranks.size());
+  const auto rank = static_cast<std::size_t>(ranks.rank());
+  // Every block is shared: rank k computes the k-th of `size` consecutive shards of its points,
+  // and rank 0 gathers the shards in rank order, which is grid order. Blocks stay the unit of
+  // output and resuming; shards, not whole blocks, go to the ranks, so that a grid of one block
+  // (a traced rig's few hundred points, each two traced turns) is shared too. Every rank runs
+  // every block's collectives (also with an empty shard), so none waits forever.
+  std::vector<CsSummary> summaries(std::min(block, total) / size + 1);
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
+  std::optional<std::string> sink_failure;  // rank 0's, said at the next collective point
   for (std::size_t begin = options.first_point; begin < total; begin += block) {
     const std::size_t end = std::min(total, begin + block);
-    compute_block(base, axes, turn, begin, end, summaries.data(), scratch);
-    sink(begin, std::span<const CsSummary>(summaries.data(), end - begin));
-    if (progress) progress(end, total);
+    const std::size_t mine_begin = begin + (end - begin) * rank / size;
+    const std::size_t mine_end = begin + (end - begin) * (rank + 1) / size;
+    std::optional<std::string> failure = sink_failure;
+    if (!failure && mine_begin < mine_end) {
+      try {
+        compute_block(base, axes, turn, mine_begin, mine_end, summaries.data(), scratch);
+      } catch (const std::exception& e) {
+        if (size == 1) throw;  // alone: the error as it is
+        failure = rank_failure_text(e);
+      }
+    }
+    // Every shard is computed before anything of the block is written: a rank that failed (the
+    // lowest, whose bad point comes first in grid order, as one process finds it) stops all.
+    if (const auto first = ranks.first_failure(failure)) throw_rank_failure(*first);
+    if (size == 1) {
+      sink(begin, std::span<const CsSummary>(summaries.data(), end - begin));
+      if (progress) progress(end, total);
+      continue;
+    }
+    static_assert(std::is_trivially_copyable_v<CsSummary>, "CsSummary travels between ranks as bytes");
+    const std::vector<std::byte> gathered =
+        ranks.gather(std::as_bytes(std::span<const CsSummary>(summaries.data(), mine_end - mine_begin)));
+    if (rank != 0) continue;
+    try {
+      if (gathered.size() != (end - begin) * sizeof(CsSummary))
+        throw std::logic_error(fmt::format("sweep: gathered {} bytes for {} points", gathered.size(), end - begin));
+      std::vector<CsSummary> block_summaries(end - begin);
+      std::memcpy(block_summaries.data(), gathered.data(), gathered.size());
+      sink(begin, block_summaries);
+      if (progress) progress(end, total);
+    } catch (const std::exception& e) {
+      sink_failure = rank_failure_text(e);
+    }
   }
+  if (size > 1)
+    if (const auto first = ranks.first_failure(sink_failure)) throw_rank_failure(*first);
 }
 
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
@@ -284,7 +330,20 @@ SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTu
 
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
            const SweepSink& sink, const Progress& progress, const SweepOptions& options) {
-  base.light->prepare(progress);
+  // Every rank prepares the light itself (a traced rig's sphere solve: a pure function of the
+  // scene, so every rank holds the same solution); one that fails stops them all.
+  const Ranks& ranks = options.ranks ? *options.ranks : this_process_only();
+  if (ranks.size() == 1) {
+    base.light->prepare(progress);
+  } else {
+    std::optional<std::string> failure;
+    try {
+      base.light->prepare(progress);
+    } catch (const std::exception& e) {
+      failure = rank_failure_text(e);
+    }
+    if (const auto first = ranks.first_failure(failure)) throw_rank_failure(*first);
+  }
   progress.begin("sweep: grid points", static_cast<long long>(grid_points(axes) - std::min(grid_points(axes), options.first_point)));
   std::size_t reported = options.first_point;
   sweep(base, axes, turn, sink, [&](std::size_t done, std::size_t) {

@@ -4,11 +4,13 @@
 #include <array>
 #include <iterator>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "polrig/calib/pipeline.h"
 #include "polrig/progress.h"
+#include "polrig/ranks.h"
 #include "polrig/rig/rig.h"
 
 namespace polrig {
@@ -42,9 +44,17 @@ struct Trial {
 };
 
 // Every trial is a pure function of (rig, settings, index): the result is the same for any
-// thread count. Trials run in parallel (TBB).
+// thread count and any rank count. Trials run in parallel (TBB). With `ranks`, rank k computes
+// the k-th of size() consecutive shards of the indices and rank 0 receives every trial in index
+// order (the other ranks an empty vector); a trial that throws on any rank throws on every rank
+// (the lowest rank's error). `progress` is reported with this rank's shard.
 std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& settings,
-                                      const Progress& progress = {});
+                                      const Progress& progress = {}, const Ranks* ranks = nullptr);
+
+// A trial as bytes and back, exactly (ranks send trials to rank 0 so).
+void append_trial_bytes(const Trial& trial, std::vector<std::byte>& out);
+// Reads the trial at `at` and moves `at` past it; std::runtime_error on truncated bytes.
+Trial read_trial_bytes(std::span<const std::byte> bytes, std::size_t& at);
 
 struct TrialSummary {
   CalibrationMethod method;

@@ -62,8 +62,11 @@ struct SweepOptions {
   // Resuming: the points before first_point are done and not computed again. A block boundary
   // (a multiple of sweep_block_size), or the grid's size.
   std::size_t first_point = 0;
-  // The processes that share the blocks; `sink` and `progress` are called on rank 0 only, with
-  // every block in grid order. Null: this process alone.
+  // The processes that share the work (docs/scale.md): every block is cut into one contiguous
+  // shard per rank, and rank 0 gathers the shards; `sink` and `progress` are called on rank 0
+  // only, with every block in grid order. Every rank must call sweep() with the same arguments
+  // (and first_point). An error on any rank is thrown on every rank: that of the lowest failing
+  // rank, which holds the first bad point in grid order. Null: this process alone.
   const Ranks* ranks = nullptr;
 };
 

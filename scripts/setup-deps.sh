@@ -10,6 +10,8 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libembree-dev libopenexr-dev
   liberfa-dev                 # the sun's apparent position (IAU SOFA-derived ERFA, as astropy)
+  libhwy-dev                  # Highway: the CS study's vectorised logarithms (src/vector_log.cpp)
+  libsleef-dev libxsimd-dev   # the other candidates in the vectorised-log benchmark (bench/ only)
   gnuplot-nox fonts-dejavu-core
   python3-dev pybind11-dev    # the Python module (docs/python.md)
   python3-numpy python3-pytest python3-matplotlib  # its arrays, its tests, its examples' plots

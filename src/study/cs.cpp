@@ -7,34 +7,51 @@
 #include "polrig/device/sensor.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/statistics.h"
+#include "polrig/vector_log.h"
 
 namespace polrig {
 
 namespace {
 
-// ΔV_br of the three pairs over the turn (Eq. 5) from the irradiances E[m·n + k], into br[i·n + k].
+// ΔV_br of the three pairs over the turn (Eq. 5) from the irradiances E[m·n + k], into br[i·n + k]:
+// the ratios E_j/E_h first, then their logarithms all at once (vectorised: the sweep's hot loop).
 void deviations_before(const Rig& rig, const CsTurn& turn, const double* E, double* br) {
   const int n = turn.steps();
   for (int i = 0; i < 3; ++i) {
     const double* Ej = E + pair_j(i) * n;
     const double* Eh = E + pair_h(i) * n;
-    for (int k = 0; k < n; ++k)
-      br[i * n + k] = eccentricity_bias(rig.device.truth, rig.electronics, i, Ej[k], Eh[k]);
+    for (int k = 0; k < n; ++k) br[i * n + k] = Ej[k] / Eh[k];
   }
+  log_array(br, br, static_cast<std::size_t>(3 * n));
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < n; ++k)
+      br[i * n + k] = eccentricity_bias_of_log(rig.device.truth, rig.electronics, i, br[i * n + k]);
 }
 
-// ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2.
+// ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2 (in two halves: no index wraps inside a loop).
 void central_symmetry_average(const double* br, double* mr, int n) {
   const int half = n / 2;
-  for (int k = 0; k < n; ++k) mr[k] = 0.5 * (br[k] + br[(k + half) % n]);
+  for (int k = 0; k < half; ++k) mr[k] = 0.5 * (br[k] + br[k + half]);
+  for (int k = half; k < n; ++k) mr[k] = 0.5 * (br[k] + br[k - half]);
 }
 
+// The means and population SDs of the six curves (ΔV_br and ΔV_mr of each pair), each summed in
+// the same order as mean_and_population_sd (so with the same rounding), but the six sums side by
+// side: they are independent, so the processor overlaps them instead of waiting for each add.
 CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
+  constexpr int kCurves = 6;
+  const double* curve[kCurves] = {br, br + n, br + 2 * n, mr, mr + n, mr + 2 * n};
+  double sum[kCurves] = {}, mean[kCurves], ss[kCurves] = {};
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < kCurves; ++c) sum[c] += curve[c][k];
+  for (int c = 0; c < kCurves; ++c) mean[c] = sum[c] / static_cast<double>(n);
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < kCurves; ++c) ss[c] += (curve[c][k] - mean[c]) * (curve[c][k] - mean[c]);
   CsSummary s;
   for (int i = 0; i < 3; ++i) {
-    const auto [mean_br, bsd] = mean_and_population_sd({br + i * n, static_cast<std::size_t>(n)});
-    const auto [mean_mr, asd] = mean_and_population_sd({mr + i * n, static_cast<std::size_t>(n)});
-    s[i] = {bsd * 1e3, asd * 1e3, mean_br * 1e3, mean_mr * 1e3, eq6_constant_V(rig, i) * 1e3};
+    const double bsd = std::sqrt(ss[i] / static_cast<double>(n));
+    const double asd = std::sqrt(ss[3 + i] / static_cast<double>(n));
+    s[i] = {bsd * 1e3, asd * 1e3, mean[i] * 1e3, mean[3 + i] * 1e3, eq6_constant_V(rig, i) * 1e3};
   }
   return s;
 }

@@ -16,6 +16,7 @@
 #include "polrig/vector_log.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -38,17 +39,28 @@ namespace polrig {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-void LogArray(const double* x, double* y, std::size_t n) {
+// y[i] = ln x[i]; whether every x[i] was positive and finite (what Highway's Log is meant for).
+bool LogArray(const double* x, double* y, std::size_t n) {
   const hn::ScalableTag<double> d;
   const std::size_t lanes = hn::Lanes(d);
+  const auto zero = hn::Zero(d);
+  const auto largest = hn::Set(d, std::numeric_limits<double>::max());
+  auto positive_finite = hn::Eq(zero, zero);
   std::size_t i = 0;
-  for (; i + lanes <= n; i += lanes) hn::StoreU(hn::Log(d, hn::LoadU(d, x + i)), d, y + i);
+  for (; i + lanes <= n; i += lanes) {
+    const auto v = hn::LoadU(d, x + i);
+    positive_finite = hn::And(positive_finite, hn::And(hn::Gt(v, zero), hn::Le(v, largest)));
+    hn::StoreU(hn::Log(d, v), d, y + i);
+  }
   if (i < n) {  // the tail, padded with ones into a whole vector
     HWY_ALIGN double tail[hn::MaxLanes(d)];
     for (std::size_t k = 0; k < lanes; ++k) tail[k] = i + k < n ? x[i + k] : 1.0;
-    hn::Store(hn::Log(d, hn::Load(d, tail)), d, tail);
+    const auto v = hn::Load(d, tail);
+    positive_finite = hn::And(positive_finite, hn::And(hn::Gt(v, zero), hn::Le(v, largest)));
+    hn::Store(hn::Log(d, v), d, tail);
     for (std::size_t k = 0; i + k < n; ++k) y[i + k] = tail[k];
   }
+  return hn::AllTrue(d, positive_finite);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -59,32 +71,21 @@ HWY_AFTER_NAMESPACE();
 namespace polrig {
 
 namespace {
-using LogPath = void (*)(const double*, double*, std::size_t);
+using LogPath = bool (*)(const double*, double*, std::size_t);
 
-bool positive_finite(double v) { return v > 0.0 && v <= std::numeric_limits<double>::max(); }
-
-// `path`, except that x ≤ 0, inf and NaN give std::log's exact special values: Highway's Log is
-// meant for positive finite x.
+// `path`, except that x ≤ 0, inf and NaN give std::log's exact special values.
 void run_checked(LogPath path, const double* x, double* y, std::size_t n) {
-  // In blocks, so that a block's special inputs are kept when x and y are the same array.
-  constexpr std::size_t kBlock = 256;
+  // In blocks; in place, each block through a buffer, so that its inputs are still there when
+  // one of them needs std::log.
+  constexpr std::size_t kBlock = 2048;
+  double buffer[kBlock];
   for (std::size_t b = 0; b < n; b += kBlock) {
     const std::size_t m = std::min(kBlock, n - b);
-    bool all_positive_finite = true;
-    for (std::size_t i = 0; i < m; ++i) all_positive_finite &= positive_finite(x[b + i]);
-    if (all_positive_finite) {
-      path(x + b, y + b, m);
-      continue;
-    }
-    bool odd[kBlock];
-    double special[kBlock];
-    for (std::size_t i = 0; i < m; ++i) {
-      odd[i] = !positive_finite(x[b + i]);
-      special[i] = odd[i] ? std::log(x[b + i]) : 0.0;
-    }
-    path(x + b, y + b, m);
-    for (std::size_t i = 0; i < m; ++i)
-      if (odd[i]) y[b + i] = special[i];
+    double* out = x == y ? buffer : y + b;
+    if (!path(x + b, out, m))
+      for (std::size_t i = 0; i < m; ++i)
+        if (!(x[b + i] > 0.0 && x[b + i] <= std::numeric_limits<double>::max())) out[i] = std::log(x[b + i]);
+    if (out == buffer) std::copy(buffer, buffer + m, y + b);
   }
 }
 
@@ -96,7 +97,21 @@ void checked(const double* x, double* y, std::size_t n) {
 
 HWY_EXPORT(LogArray);
 
+namespace {
+std::atomic<bool> baseline_only{false};
+}  // namespace
+
+bool avx2_paths() {
+  static const bool cpu_has_avx2 = __builtin_cpu_supports("avx2");
+  return cpu_has_avx2 && !baseline_only.load(std::memory_order_relaxed);
+}
+
+void set_baseline_paths_only(bool on) { baseline_only.store(on); }
+
 void log_array(const double* x, double* y, std::size_t n) {
+#if HWY_TARGETS & HWY_SCALAR
+  if (baseline_only.load(std::memory_order_relaxed)) return run_checked(&N_SCALAR::LogArray, x, y, n);
+#endif
   run_checked(&HWY_DYNAMIC_DISPATCH(LogArray), x, y, n);
 }
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <random>
@@ -28,6 +29,7 @@
 #include "polrig/study/heading_trials.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/study/sweep.h"
+#include "polrig/vector_log.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -520,6 +522,32 @@ TEST(Sweep, IsBitIdenticalForAnyThreadCount) {
       EXPECT_EQ(one.summaries[p][i].asd_mV, two.summaries[p][i].asd_mV);
       EXPECT_EQ(one.summaries[p][i].mean_mr_mV, two.summaries[p][i].mean_mr_mV);
     }
+}
+
+// The AVX2 code paths of the CS study (vector_log.h) do the IEEE operations of the baseline
+// x86-64 ones in the same order: every summary and curve has the same bits, so a sweep gives the
+// same file on any x86-64 machine (MPI ranks may run on different CPUs).
+TEST(Cs, BaselineAndAvx2PathsGiveTheSameBits) {
+  if (!avx2_paths()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline paths exist";
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_IS=0:2:9"),
+                                   GridAxis::parse("eccentricity.L_S=0:1.5:7"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:37")};
+  const Rig rig;
+  const SweepResult best = sweep(rig, axes, CsTurn(360));
+  const CsStudy best_study = cs_study(rig, CsTurn(720));
+  set_baseline_paths_only(true);
+  const SweepResult baseline = sweep(rig, axes, CsTurn(360));
+  const CsStudy baseline_study = cs_study(rig, CsTurn(720));
+  set_baseline_paths_only(false);
+  ASSERT_EQ(best.points(), baseline.points());
+  std::size_t differing = 0;
+  for (std::size_t p = 0; p < best.points(); ++p)
+    differing += std::memcmp(&best.summaries[p], &baseline.summaries[p], sizeof(CsSummary)) != 0;
+  EXPECT_EQ(differing, 0u) << "of " << best.points() << " grid points";
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(best_study.dv_br_V[i], baseline_study.dv_br_V[i]);
+    EXPECT_EQ(best_study.dv_mr_V[i], baseline_study.dv_mr_V[i]);
+  }
 }
 
 // ---- Progress reports ---------------------------------------------------------------------

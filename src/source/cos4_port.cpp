@@ -1,6 +1,9 @@
 #include "polrig/source/cos4_port.h"
 
+#include <array>
 #include <cmath>
+
+#include "polrig/vector_log.h"
 
 namespace polrig {
 
@@ -19,23 +22,42 @@ std::array<double, 6> Cos4PortSource::ideal_irradiance(const SourceView& rig, co
   return {E0, E0, E0, E0, E0, E0};
 }
 
-void Cos4PortSource::irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
-                                          const Progress&) const {
-  const int n = turn.steps();
-  const double* c = turn.cos_theta();
-  const double* s = turn.sin_theta();
-  const Point2 port = port_centre(rig.eccentricity);
-  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
-  const Cos4Source& source = rig.settings.cos4;
+namespace {
+// cos⁴φ of channel m over the turn: compiled twice, below, for baseline x86-64 and for AVX2, with
+// the same operations in the same order (no FMA: this file is built with -ffp-contract=off and
+// AVX2 alone brings none), so both give the same bits (test Cs.BaselineAndAvx2PathsGiveTheSameBits).
+[[gnu::always_inline]] inline void falloffs_over_turn(const Cos4Source& source, const double* c, const double* s,
+                                                      const std::array<Point2, 6>& p0, const Point2& port,
+                                                      double* E, int n) {
+  const double px = port.x(), py = port.y();
   for (int m = 0; m < 6; ++m) {
-    const double qx = p0[m].x(), qy = p0[m].y();
-    double* Em = E.data() + m * n;
+    const double qx = p0[static_cast<std::size_t>(m)].x(), qy = p0[static_cast<std::size_t>(m)].y();
+    double* Em = E + m * n;
     for (int k = 0; k < n; ++k) {
-      const double x = c[k] * qx - s[k] * qy - port.x();  // P_m(θ_R) − O_IS
-      const double y = s[k] * qx + c[k] * qy - port.y();
+      const double x = c[k] * qx - s[k] * qy - px;  // P_m(θ_R) − O_IS
+      const double y = s[k] * qx + c[k] * qy - py;
       Em[k] = source.falloff(x * x + y * y);
     }
   }
+}
+
+__attribute__((target("avx2"))) void falloffs_over_turn_avx2(const Cos4Source& source, const double* c,
+                                                             const double* s, const std::array<Point2, 6>& p0,
+                                                             const Point2& port, double* E, int n) {
+  falloffs_over_turn(source, c, s, p0, port, E, n);
+}
+void falloffs_over_turn_baseline(const Cos4Source& source, const double* c, const double* s,
+                                 const std::array<Point2, 6>& p0, const Point2& port, double* E, int n) {
+  falloffs_over_turn(source, c, s, p0, port, E, n);
+}
+}  // namespace
+
+void Cos4PortSource::irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
+                                          const Progress&) const {
+  const Point2 port = port_centre(rig.eccentricity);
+  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
+  (avx2_paths() ? falloffs_over_turn_avx2 : falloffs_over_turn_baseline)(
+      rig.settings.cos4, turn.cos_theta(), turn.sin_theta(), p0, port, E.data(), turn.steps());
 }
 
 double Cos4PortSource::eq6_log_ratio(const SourceView& rig, int pair) const {

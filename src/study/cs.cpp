@@ -13,47 +13,77 @@ namespace polrig {
 
 namespace {
 
-// ΔV_br of the three pairs over the turn (Eq. 5) from the irradiances E[m·n + k], into br[i·n + k]:
-// the ratios E_j/E_h first, then their logarithms all at once (vectorised: the sweep's hot loop).
-void deviations_before(const Rig& rig, const CsTurn& turn, const double* E, double* br) {
-  const int n = turn.steps();
+// The means and population SDs of the six curves ΔV_br and ΔV_mr of each pair (br 1–3, mr 1–3).
+struct CurveMoments {
+  double mean[6];
+  double sd[6];
+};
+
+// One pass's arithmetic from the irradiances E[m·n + k]: ΔV_br of the three pairs (Eq. 5) into
+// br[i·n + k], the ratios E_j/E_h first and then their logarithms all at once (vectorised: the
+// sweep's hot loop); ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2 into mr (in two halves, so no
+// index wraps inside a loop; mr holds the ratios until then); and the moments of the six curves,
+// each summed in the same order as mean_and_population_sd but the six side by side (independent
+// sums, so the processor overlaps them instead of waiting for each add).
+// Compiled twice, below: for baseline x86-64 and for AVX2, with the same operations in the same
+// order (no FMA, no reordered sums); AVX2 only takes more values at a time, so both give the same
+// bits (test Cs.BaselineAndAvx2PathsGiveTheSameBits).
+[[gnu::always_inline]] inline void curves_and_moments(const Rig& rig, const double* E, double* br, double* mr,
+                                                      int n, CurveMoments& m) {
+  double* ratios = mr;
   for (int i = 0; i < 3; ++i) {
     const double* Ej = E + pair_j(i) * n;
     const double* Eh = E + pair_h(i) * n;
-    for (int k = 0; k < n; ++k) br[i * n + k] = Ej[k] / Eh[k];
+    for (int k = 0; k < n; ++k) ratios[i * n + k] = Ej[k] / Eh[k];
   }
-  log_array(br, br, static_cast<std::size_t>(3 * n));
+  log_array(ratios, br, static_cast<std::size_t>(3 * n));
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < n; ++k)
       br[i * n + k] = eccentricity_bias_of_log(rig.device.truth, rig.electronics, i, br[i * n + k]);
-}
-
-// ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2 (in two halves: no index wraps inside a loop).
-void central_symmetry_average(const double* br, double* mr, int n) {
   const int half = n / 2;
-  for (int k = 0; k < half; ++k) mr[k] = 0.5 * (br[k] + br[k + half]);
-  for (int k = half; k < n; ++k) mr[k] = 0.5 * (br[k] + br[k - half]);
-}
-
-// The means and population SDs of the six curves (ΔV_br and ΔV_mr of each pair), each summed in
-// the same order as mean_and_population_sd (so with the same rounding), but the six sums side by
-// side: they are independent, so the processor overlaps them instead of waiting for each add.
-CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
+  for (int i = 0; i < 3; ++i) {
+    const double* b = br + i * n;
+    double* a = mr + i * n;
+    for (int k = 0; k < half; ++k) a[k] = 0.5 * (b[k] + b[k + half]);
+    for (int k = half; k < n; ++k) a[k] = 0.5 * (b[k] + b[k - half]);
+  }
   constexpr int kCurves = 6;
   const double* curve[kCurves] = {br, br + n, br + 2 * n, mr, mr + n, mr + 2 * n};
-  double sum[kCurves] = {}, mean[kCurves], ss[kCurves] = {};
+  double sum[kCurves] = {}, ss[kCurves] = {};
   for (int k = 0; k < n; ++k)
     for (int c = 0; c < kCurves; ++c) sum[c] += curve[c][k];
-  for (int c = 0; c < kCurves; ++c) mean[c] = sum[c] / static_cast<double>(n);
+  for (int c = 0; c < kCurves; ++c) m.mean[c] = sum[c] / static_cast<double>(n);
   for (int k = 0; k < n; ++k)
-    for (int c = 0; c < kCurves; ++c) ss[c] += (curve[c][k] - mean[c]) * (curve[c][k] - mean[c]);
+    for (int c = 0; c < kCurves; ++c) ss[c] += (curve[c][k] - m.mean[c]) * (curve[c][k] - m.mean[c]);
+  for (int c = 0; c < kCurves; ++c) m.sd[c] = std::sqrt(ss[c] / static_cast<double>(n));
+}
+
+__attribute__((target("avx2"))) void curves_and_moments_avx2(const Rig& rig, const double* E, double* br,
+                                                             double* mr, int n, CurveMoments& m) {
+  curves_and_moments(rig, E, br, mr, n, m);
+}
+void curves_and_moments_baseline(const Rig& rig, const double* E, double* br, double* mr, int n,
+                                 CurveMoments& m) {
+  curves_and_moments(rig, E, br, mr, n, m);
+}
+
+CsSummary summary_of(const Rig& rig, const CurveMoments& m) {
   CsSummary s;
-  for (int i = 0; i < 3; ++i) {
-    const double bsd = std::sqrt(ss[i] / static_cast<double>(n));
-    const double asd = std::sqrt(ss[3 + i] / static_cast<double>(n));
-    s[i] = {bsd * 1e3, asd * 1e3, mean[i] * 1e3, mean[3 + i] * 1e3, eq6_constant_V(rig, i) * 1e3};
-  }
+  for (int i = 0; i < 3; ++i)
+    s[i] = {m.sd[i] * 1e3, m.sd[3 + i] * 1e3, m.mean[i] * 1e3, m.mean[3 + i] * 1e3, eq6_constant_V(rig, i) * 1e3};
   return s;
+}
+
+// The summary of curves computed elsewhere (the mean curves over shifts), as mean_and_population_sd gives it.
+CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
+  CurveMoments m;
+  for (int c = 0; c < 6; ++c) {
+    const double* curve = c < 3 ? br + c * n : mr + (c - 3) * n;
+    const auto [mean, sd] = mean_and_population_sd({curve, static_cast<std::size_t>(n)});
+    m.mean[c] = mean;
+    m.sd[c] = sd;
+  }
+  return summary_of(rig, m);
 }
 
 }  // namespace
@@ -72,9 +102,9 @@ CsSummary one_pass(const Rig& rig, const CsTurn& turn, const double* E, std::vec
     rig.light->irradiance_over_turn(rig.source_view(), turn, {mr + 3 * n, static_cast<std::size_t>(6 * n)});
     E = mr + 3 * n;
   }
-  deviations_before(rig, turn, E, br);
-  for (int i = 0; i < 3; ++i) central_symmetry_average(br + i * n, mr + i * n, n);
-  return summarise(rig, br, mr, n);
+  CurveMoments m;
+  (avx2_paths() ? curves_and_moments_avx2 : curves_and_moments_baseline)(rig, E, br, mr, n, m);
+  return summary_of(rig, m);
 }
 
 // The standard errors of the per-shift figures, into `out`.

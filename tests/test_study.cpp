@@ -427,6 +427,27 @@ TEST(Sweep, AnAxisOfListedValuesEqualsTheParsedAxisWithTheSameValues) {
   EXPECT_NE(message("eccentricity.L_S", {}).find("expected 1 to 1e8 values, got 0"), std::string::npos);
 }
 
+// The sweep steps one rig through the grid, setting only the keys whose index changed: every
+// point equals the study of a rig given all of that point's values in axis order (a key swept
+// twice: the later axis wins), field for field.
+TEST(Sweep, EachPointIsTheStudyOfTheRigWithThatPointsValues) {
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_IS=0:1:3"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:300:4"),
+                                   GridAxis::parse("eccentricity.L_S=0.01:0.5:7"),
+                                   GridAxis::parse("eccentricity.L_IS=0.5:2:5")};
+  const CsTurn turn(360);
+  const SweepResult result = sweep(Rig{}, axes, turn);
+  ASSERT_EQ(result.points(), 3u * 4 * 7 * 5);
+  std::vector<double> scratch;
+  for (std::size_t p = 0; p < result.points(); ++p) {
+    Rig r;
+    const std::vector<int> idx = grid_indices(axes, p);
+    for (std::size_t a = 0; a < axes.size(); ++a) axes[a].key->real(r) = axes[a].value(idx[a]);
+    const CsSummary expected = cs_summary(r, turn, scratch);
+    EXPECT_EQ(std::memcmp(&expected, &result.summaries[p], sizeof(CsSummary)), 0) << "point " << p;
+  }
+}
+
 TEST(Sweep, StreamsBlocksInGridOrderWithBoundedMemory) {
   const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
                                    GridAxis::parse("eccentricity.alpha_S=0:359:250")};

@@ -60,13 +60,23 @@ void Cos4PortSource::irradiance_over_turn(const SourceView& rig, const CsTurn& t
       rig.settings.cos4, turn.cos_theta(), turn.sin_theta(), p0, port, E.data(), turn.steps());
 }
 
-double Cos4PortSource::eq6_log_ratio(const SourceView& rig, int pair) const {
-  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
+namespace {
+double eq6_log_ratio_at(const SourceView& rig, const std::array<Point2, 6>& p0, int pair) {
   const double L_o2 = rig.settings.cos4.L_o * rig.settings.cos4.L_o;
   const double L_IS2 = rig.eccentricity.L_IS * rig.eccentricity.L_IS;
   const double L_Rj2 = p0[pair_j(pair)].squaredNorm();
   const double L_Rh2 = p0[pair_h(pair)].squaredNorm();
   return std::log10((L_o2 + L_Rh2 + L_IS2) / (L_o2 + L_Rj2 + L_IS2));
+}
+}  // namespace
+
+double Cos4PortSource::eq6_log_ratio(const SourceView& rig, int pair) const {
+  return eq6_log_ratio_at(rig, photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0), pair);
+}
+
+std::array<double, 3> Cos4PortSource::eq6_log_ratios(const SourceView& rig) const {
+  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
+  return {eq6_log_ratio_at(rig, p0, 0), eq6_log_ratio_at(rig, p0, 1), eq6_log_ratio_at(rig, p0, 2)};
 }
 
 }  // namespace polrig

@@ -37,4 +37,8 @@ double Source::eq6_log_ratio(const SourceView&, int) const {
   throw std::logic_error("Eq. 6's closed form belongs to the cos⁴ source only");
 }
 
+std::array<double, 3> Source::eq6_log_ratios(const SourceView& rig) const {
+  return {eq6_log_ratio(rig, 0), eq6_log_ratio(rig, 1), eq6_log_ratio(rig, 2)};
+}
+
 }  // namespace polrig

@@ -1,5 +1,6 @@
 #include "polrig/study/cs.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -67,10 +68,22 @@ void curves_and_moments_baseline(const Rig& rig, const double* E, double* br, do
   curves_and_moments(rig, E, br, mr, n, m);
 }
 
+// eq6_constant_V of the three pairs, the same values, from one call to the light.
+std::array<double, 3> eq6_constants_V(const Rig& rig) {
+  std::array<double, 3> v;
+  v.fill(std::numeric_limits<double>::quiet_NaN());
+  if (!rig.light->has(Source::kClosedFormEq6)) return v;
+  const std::array<double, 3> log_ratio = rig.light->eq6_log_ratios(rig.source_view());
+  for (int i = 0; i < 3; ++i)
+    v[i] = 2.0 * rig.device.truth.kv[i] * rig.electronics.volts_per_decade * log_ratio[i];
+  return v;
+}
+
 CsSummary summary_of(const Rig& rig, const CurveMoments& m) {
+  const std::array<double, 3> eq6 = eq6_constants_V(rig);
   CsSummary s;
   for (int i = 0; i < 3; ++i)
-    s[i] = {m.sd[i] * 1e3, m.sd[3 + i] * 1e3, m.mean[i] * 1e3, m.mean[3 + i] * 1e3, eq6_constant_V(rig, i) * 1e3};
+    s[i] = {m.sd[i] * 1e3, m.sd[3 + i] * 1e3, m.mean[i] * 1e3, m.mean[3 + i] * 1e3, eq6[i] * 1e3};
   return s;
 }
 

@@ -18,6 +18,8 @@ class Cos4PortSource final : public Source {
                             const Progress& progress = {}) const override;
   // log10[(L_o² + L_Rh² + L_IS²)/(L_o² + L_Rj² + L_IS²)], L_Rm = |O_R P_m| (fixed during the turn).
   double eq6_log_ratio(const SourceView& rig, int pair) const override;
+  // The three from one computation of the photodiode positions (sin and cos of the ring's angles).
+  std::array<double, 3> eq6_log_ratios(const SourceView& rig) const override;
 };
 
 }  // namespace polrig

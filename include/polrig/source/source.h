@@ -118,6 +118,8 @@ class Source {
   // Eq. 6's light term where kClosedFormEq6: ΔV_mr,i ≈ 2·kv_i·v_dec·eq6_log_ratio(i). Throws
   // std::logic_error for a source without the flag.
   virtual double eq6_log_ratio(const SourceView& rig, int pair) const;
+  // eq6_log_ratio of the three pairs, the same values (every sweep point needs all three).
+  virtual std::array<double, 3> eq6_log_ratios(const SourceView& rig) const;
 };
 
 // Reads the scene file a traced source names (io/scene_yaml's load_scene, resolved against the

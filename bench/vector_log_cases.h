@@ -16,7 +16,8 @@ inline std::vector<double> study_like_ratios() {
 
 // Defined in bench_vector_log_hwy.cpp (Highway's dynamic dispatch: the best target of this CPU).
 void highway_log(const double* x, double* y, std::size_t n);
-// Defined in bench_vector_log_avx2.cpp (compiled with -mavx2 -mno-fma); false without AVX2.
+// Defined in bench_vector_log_avx2.cpp (compiled with -mavx2 -mno-fma): call only when the CPU
+// has AVX2.
 bool eigen_avx2_log(const double* x, double* y, std::size_t n);
 bool xsimd_avx2_log(const double* x, double* y, std::size_t n);
 

@@ -571,6 +571,67 @@ TEST(Cs, BaselineAndAvx2PathsGiveTheSameBits) {
   }
 }
 
+// cos⁴'s closed form of Eq. 5's logarithm, ln(E_j/E_h) = 2·ln(D_h/D_j) (docs/physics.md),
+// against the irradiance-based computation every other source uses (Source's own
+// log_ratio_over_turn on the same rig: falloffs, their ratio, log_array). Both start from the same
+// D_m = L_o² + L_m². The irradiances' ratio carries at most 7 roundings of relative size u = 2⁻⁵³
+// (two quotients and two squares per falloff pair, then the ratio): ≤ 7u absolute in its log;
+// the closed form's quotient one, doubled: ≤ 2u. Each log_array adds ≤ 2 ulp of its result
+// (vector_log.h), the closed form's doubled with it. So |difference| ≤ 9u + 4·ulp(|value|): a
+// few ulp of the log values, and a few u where they are near 0 (ratios near 1). Random
+// eccentricities, port distances and table-turn sizes, on every code path.
+TEST(Cs, Cos4LogRatiosMatchTheIrradiancesWithinRounding) {
+  std::mt19937_64 rng(20261123);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto ulp = [](double x) {
+    x = std::abs(x);
+    return std::nextafter(x, std::numeric_limits<double>::infinity()) - x;
+  };
+  const double u = std::ldexp(1.0, -53);
+  double worst = 0;  // the largest |difference| in units of the bound
+  for (const bool baseline_only : {false, true}) {
+    set_baseline_paths_only(baseline_only);
+    for (int trial = 0; trial < 400; ++trial) {
+      Rig rig;
+      rig.eccentricity = {5.0 * std::pow(unit(rng), 3), 360.0 * unit(rng), 5.0 * std::pow(unit(rng), 3),
+                          360.0 * unit(rng)};
+      rig.source.cos4.L_o = 5.0 + 100.0 * unit(rng);
+      const CsTurn turn(2 * (1 + trial % 200));
+      const std::size_t values = static_cast<std::size_t>(3 * turn.steps());
+      std::vector<double> closed(values), from_irradiance(values);
+      rig.light->log_ratio_over_turn(rig.source_view(), turn, closed);
+      rig.light->Source::log_ratio_over_turn(rig.source_view(), turn, from_irradiance);
+      for (std::size_t v = 0; v < values; ++v) {
+        const double bound = 9 * u + 4 * ulp(std::max(std::abs(closed[v]), std::abs(from_irradiance[v])));
+        const double diff = std::abs(closed[v] - from_irradiance[v]);
+        ASSERT_LE(diff, bound) << "trial " << trial << " value " << v << ": " << closed[v] << " vs "
+                               << from_irradiance[v];
+        worst = std::max(worst, diff / bound);
+      }
+    }
+  }
+  set_baseline_paths_only(false);
+  RecordProperty("worst_fraction_of_bound", std::to_string(worst));
+}
+
+// The closed form's AVX2 and baseline paths give the same bits, value by value.
+TEST(Cs, Cos4LogRatiosBaselineAndAvx2GiveTheSameBits) {
+  if (!avx2_paths()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline paths exist";
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    Rig rig;
+    rig.eccentricity = {3.0 * unit(rng), 360.0 * unit(rng), 3.0 * unit(rng), 360.0 * unit(rng)};
+    const CsTurn turn(2 * (1 + trial * 7));
+    std::vector<double> best(static_cast<std::size_t>(3 * turn.steps())), baseline(best.size());
+    rig.light->log_ratio_over_turn(rig.source_view(), turn, best);
+    set_baseline_paths_only(true);
+    rig.light->log_ratio_over_turn(rig.source_view(), turn, baseline);
+    set_baseline_paths_only(false);
+    ASSERT_EQ(std::memcmp(best.data(), baseline.data(), best.size() * sizeof(double)), 0) << "trial " << trial;
+  }
+}
+
 // ---- Progress reports ---------------------------------------------------------------------
 
 TEST(Progress, FormatsStageFractionAndEta) {

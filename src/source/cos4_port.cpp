@@ -61,6 +61,58 @@ void Cos4PortSource::irradiance_over_turn(const SourceView& rig, const CsTurn& t
 }
 
 namespace {
+// Eq. 5's logarithm from the cos⁴ law in closed form. E_m ∝ (L_o²/D_m)², D_m = L_o² + L_m² and
+// L_m = |P_m(θ_R) − O_IS| (source/cos4.h), so E_j/E_h = (D_h/D_j)² and
+//   ln(E_j/E_h) = 2·ln(D_h/D_j)                                       (docs/physics.md, Eq. 5)
+// one division per value where the irradiances took three (two falloffs and their ratio), and a
+// value at least as exact: D_m are the falloffs' own denominators, computed with the same
+// operations, and one rounding (the quotient) replaces seven; ×2 is exact.
+// Here the quotients D_h/D_j of the three pairs into out[i·n + k]; compiled twice, below, for
+// baseline x86-64 and AVX2 with the same operations in the same order (no FMA): the same bits
+// (tests Cos4.LogRatiosBaselineAndAvx2GiveTheSameBits, Cs.BaselineAndAvx2PathsGiveTheSameBits).
+[[gnu::always_inline]] inline void distance_ratios_over_turn(double L_o2, const double* c, const double* s,
+                                                             const std::array<Point2, 6>& p0, const Point2& port,
+                                                             double* out, int n) {
+  const double px = port.x(), py = port.y();
+  for (int i = 0; i < 3; ++i) {
+    const Point2& pj = p0[static_cast<std::size_t>(pair_j(i))];
+    const Point2& ph = p0[static_cast<std::size_t>(pair_h(i))];
+    const double jx = pj.x(), jy = pj.y(), hx = ph.x(), hy = ph.y();
+    double* r = out + i * n;
+    for (int k = 0; k < n; ++k) {
+      const double xj = c[k] * jx - s[k] * jy - px;  // P_j(θ_R) − O_IS
+      const double yj = s[k] * jx + c[k] * jy - py;
+      const double xh = c[k] * hx - s[k] * hy - px;
+      const double yh = s[k] * hx + c[k] * hy - py;
+      r[k] = (L_o2 + (xh * xh + yh * yh)) / (L_o2 + (xj * xj + yj * yj));
+    }
+  }
+}
+
+__attribute__((target("avx2"))) void distance_ratios_over_turn_avx2(double L_o2, const double* c, const double* s,
+                                                                    const std::array<Point2, 6>& p0,
+                                                                    const Point2& port, double* out, int n) {
+  distance_ratios_over_turn(L_o2, c, s, p0, port, out, n);
+}
+void distance_ratios_over_turn_baseline(double L_o2, const double* c, const double* s,
+                                        const std::array<Point2, 6>& p0, const Point2& port, double* out, int n) {
+  distance_ratios_over_turn(L_o2, c, s, p0, port, out, n);
+}
+}  // namespace
+
+void Cos4PortSource::log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> out) const {
+  const int n = turn.steps();
+  const Point2 port = port_centre(rig.eccentricity);
+  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
+  const double L_o2 = rig.settings.cos4.L_o * rig.settings.cos4.L_o;
+  (avx2_paths() ? distance_ratios_over_turn_avx2 : distance_ratios_over_turn_baseline)(
+      L_o2, turn.cos_theta(), turn.sin_theta(), p0, port, out.data(), n);
+  const std::size_t values = static_cast<std::size_t>(3 * n);
+  log_array(out.data(), out.data(), values);
+  for (std::size_t v = 0; v < values; ++v) out[v] *= 2.0;
+}
+
+namespace {
 double eq6_log_ratio_at(const SourceView& rig, const std::array<Point2, 6>& p0, int pair) {
   const double L_o2 = rig.settings.cos4.L_o * rig.settings.cos4.L_o;
   const double L_IS2 = rig.eccentricity.L_IS * rig.eccentricity.L_IS;

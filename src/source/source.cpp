@@ -2,6 +2,8 @@
 
 #include <vector>
 
+#include "polrig/vector_log.h"
+
 namespace polrig {
 
 void Source::prepare(const Progress&) const {}
@@ -31,6 +33,23 @@ void Source::irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std
     for (int j = 0; j < 6 * S; ++j) E[static_cast<std::size_t>(j * n + k)] = e[static_cast<std::size_t>(j)];
     progress.advance(6);
   }
+}
+
+void pair_log_ratios(const double* E, int n, double* out) {
+  for (int i = 0; i < 3; ++i) {
+    const double* Ej = E + pair_j(i) * n;
+    const double* Eh = E + pair_h(i) * n;
+    double* r = out + i * n;
+    for (int k = 0; k < n; ++k) r[k] = Ej[k] / Eh[k];
+  }
+  log_array(out, out, static_cast<std::size_t>(3 * n));
+}
+
+void Source::log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> out) const {
+  const int n = turn.steps();
+  std::vector<double> E(static_cast<std::size_t>(6 * shifts() * n));
+  irradiance_over_turn(rig, turn, E);
+  pair_log_ratios(E.data(), n, out.data());
 }
 
 double Source::eq6_log_ratio(const SourceView&, int) const {

@@ -20,24 +20,16 @@ struct CurveMoments {
   double sd[6];
 };
 
-// One pass's arithmetic from the irradiances E[m·n + k]: ΔV_br of the three pairs (Eq. 5) into
-// br[i·n + k], the ratios E_j/E_h first and then their logarithms all at once (vectorised: the
-// sweep's hot loop); ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2 into mr (in two halves, so no
-// index wraps inside a loop; mr holds the ratios until then); and the moments of the six curves,
-// each summed in the same order as mean_and_population_sd but the six side by side (independent
-// sums, so the processor overlaps them instead of waiting for each add).
+// One pass's arithmetic from ln(E_j/E_h) of the three pairs in br[i·n + k]: ΔV_br (Eq. 5) in
+// place; ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2 into mr (in two halves, so no index wraps
+// inside a loop); and the moments of the six curves, each summed in the same order as
+// mean_and_population_sd but the six side by side (independent sums, so the processor overlaps
+// them instead of waiting for each add).
 // Compiled twice, below: for baseline x86-64 and for AVX2, with the same operations in the same
 // order (no FMA, no reordered sums); AVX2 only takes more values at a time, so both give the same
 // bits (test Cs.BaselineAndAvx2PathsGiveTheSameBits).
-[[gnu::always_inline]] inline void curves_and_moments(const Rig& rig, const double* E, double* br, double* mr,
-                                                      int n, CurveMoments& m) {
-  double* ratios = mr;
-  for (int i = 0; i < 3; ++i) {
-    const double* Ej = E + pair_j(i) * n;
-    const double* Eh = E + pair_h(i) * n;
-    for (int k = 0; k < n; ++k) ratios[i * n + k] = Ej[k] / Eh[k];
-  }
-  log_array(ratios, br, static_cast<std::size_t>(3 * n));
+[[gnu::always_inline]] inline void curves_and_moments(const Rig& rig, double* br, double* mr, int n,
+                                                      CurveMoments& m) {
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < n; ++k)
       br[i * n + k] = eccentricity_bias_of_log(rig.device.truth, rig.electronics, i, br[i * n + k]);
@@ -59,13 +51,12 @@ struct CurveMoments {
   for (int c = 0; c < kCurves; ++c) m.sd[c] = std::sqrt(ss[c] / static_cast<double>(n));
 }
 
-__attribute__((target("avx2"))) void curves_and_moments_avx2(const Rig& rig, const double* E, double* br,
-                                                             double* mr, int n, CurveMoments& m) {
-  curves_and_moments(rig, E, br, mr, n, m);
+__attribute__((target("avx2"))) void curves_and_moments_avx2(const Rig& rig, double* br, double* mr, int n,
+                                                             CurveMoments& m) {
+  curves_and_moments(rig, br, mr, n, m);
 }
-void curves_and_moments_baseline(const Rig& rig, const double* E, double* br, double* mr, int n,
-                                 CurveMoments& m) {
-  curves_and_moments(rig, E, br, mr, n, m);
+void curves_and_moments_baseline(const Rig& rig, double* br, double* mr, int n, CurveMoments& m) {
+  curves_and_moments(rig, br, mr, n, m);
 }
 
 // eq6_constant_V of the three pairs, the same values, from one call to the light.
@@ -103,20 +94,20 @@ CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
 
 namespace {
 
-// One estimate of the turn from irradiances E[m·n + k] (when null, the source's own over the
-// turn: a source with a uniform reference and one shift): ΔV_br and ΔV_mr into scratch, and
-// their summary.
+// One estimate of the turn from irradiances E[m·n + k] (when null, the source's own
+// ln(E_j/E_h) over the turn: a source with a uniform reference and one shift): ΔV_br and ΔV_mr
+// into scratch, and their summary.
 CsSummary one_pass(const Rig& rig, const CsTurn& turn, const double* E, std::vector<double>& scratch) {
   const int n = turn.steps();
-  scratch.resize(static_cast<std::size_t>(12 * n));
+  scratch.resize(static_cast<std::size_t>(6 * n));
   double* br = scratch.data();
   double* mr = br + 3 * n;
-  if (!E) {
-    rig.light->irradiance_over_turn(rig.source_view(), turn, {mr + 3 * n, static_cast<std::size_t>(6 * n)});
-    E = mr + 3 * n;
-  }
+  if (E)
+    pair_log_ratios(E, n, br);
+  else
+    rig.light->log_ratio_over_turn(rig.source_view(), turn, {br, static_cast<std::size_t>(3 * n)});
   CurveMoments m;
-  (avx2_paths() ? curves_and_moments_avx2 : curves_and_moments_baseline)(rig, E, br, mr, n, m);
+  (avx2_paths() ? curves_and_moments_avx2 : curves_and_moments_baseline)(rig, br, mr, n, m);
   return summary_of(rig, m);
 }
 

@@ -42,11 +42,11 @@ BENCHMARK(BM_Reference_Log10_1080);
 // The roofline of BM_CsSummary: the 1080 natural logarithms one CS study takes, as it takes them
 // (polrig::log_array: Highway, dispatched, without FMA), of study-like ratios, alone. Both count
 // one item per study, so BM_CsSummary's items/s over this one is the fraction of the study's time
-// that its logarithms would take if nothing else cost anything. The rest of a study is the cos⁴
-// falloffs (6 × 360 divisions), the ratios (1080 more), Eq. 5's scaling, the CS average and the
-// six means and SDs: measured in this run on this machine (docs/validation.md), the study takes
-// about 3 × the bare logarithms.
-//   build/bench/polrig_bench --benchmark_filter='Reference_VectorLog|CsSummary'
+// that its logarithms would take if nothing else cost anything. The rest of a study is cos⁴'s
+// distance ratios D_h/D_j (1080 divisions, Source::log_ratio_over_turn), Eq. 5's scaling, the CS
+// average and the six means and SDs: measured in one run on this shared machine
+// (docs/validation.md), the study takes about 2.3 × the bare logarithms (4.2 µs against 1.8 µs).
+//   build/bench/polrig_bench --benchmark_filter='VectorLog_1080|CsSummary|Sweep_20k'
 void BM_Reference_VectorLog_1080(benchmark::State& state) {
   std::vector<double> x(1080), y(x.size());
   for (std::size_t k = 0; k < x.size(); ++k) x[k] = 0.95 + 1e-4 * static_cast<double>(k);

@@ -20,11 +20,13 @@
 #include "polrig/sim/simulate.h"
 #include "polrig/study/cs.h"
 #include "polrig/study/sweep.h"
+#include "polrig/vector_log.h"
 
 namespace {
 using namespace polrig;
 
-// Reference: 3 pairs × 360 angles of log10, the transcendental floor of one CS study.
+// Reference: 3 pairs × 360 angles of log10, the transcendental floor of one CS study, scalar
+// (glibc), as the study computed them before it took its logarithms in vectors.
 void BM_Reference_Log10_1080(benchmark::State& state) {
   std::vector<double> x(1080);
   for (std::size_t k = 0; k < x.size(); ++k) x[k] = 1.0 + 1e-3 * static_cast<double>(k);
@@ -36,6 +38,26 @@ void BM_Reference_Log10_1080(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_Reference_Log10_1080);
+
+// The roofline of BM_CsSummary: the 1080 natural logarithms one CS study takes, as it takes them
+// (polrig::log_array: Highway, dispatched, without FMA), of study-like ratios, alone. Both count
+// one item per study, so BM_CsSummary's items/s over this one is the fraction of the study's time
+// that its logarithms would take if nothing else cost anything. The rest of a study is cos⁴'s
+// distance ratios D_h/D_j (1080 divisions, Source::log_ratio_over_turn), Eq. 5's scaling, the CS
+// average and the six means and SDs: measured in one run on this shared machine
+// (docs/validation.md), the study takes about 2.3 × the bare logarithms (4.2 µs against 1.8 µs).
+//   build/bench/polrig_bench --benchmark_filter='VectorLog_1080|CsSummary|Sweep_20k'
+void BM_Reference_VectorLog_1080(benchmark::State& state) {
+  std::vector<double> x(1080), y(x.size());
+  for (std::size_t k = 0; k < x.size(); ++k) x[k] = 0.95 + 1e-4 * static_cast<double>(k);
+  for (auto _ : state) {
+    log_array(x.data(), y.data(), x.size());
+    benchmark::DoNotOptimize(y.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Reference_VectorLog_1080);
 
 // One CS study summary (one sweep grid point): 360 table angles, three pairs.
 void BM_CsSummary(benchmark::State& state) {

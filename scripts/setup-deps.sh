@@ -11,6 +11,8 @@ packages=(
   libembree-dev libopenexr-dev
   liberfa-dev                 # the sun's apparent position (IAU SOFA-derived ERFA, as astropy)
   libhdf5-dev hdf5-tools       # sweep.h5 (serial HDF5 + its high-level dimension scales; h5dump to inspect it)
+  libhwy-dev                  # Highway: the CS study's vectorised logarithms (src/vector_log.cpp)
+  libsleef-dev libxsimd-dev   # the other candidates in the vectorised-log benchmark (bench/ only)
   gnuplot-nox fonts-dejavu-core
   python3-dev pybind11-dev    # the Python module (docs/python.md)
   python3-numpy python3-pytest python3-matplotlib  # its arrays, its tests, its examples' plots

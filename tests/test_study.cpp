@@ -29,6 +29,7 @@
 #include "polrig/study/heading_trials.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/study/sweep.h"
+#include "polrig/vector_log.h"
 #include "polrig/units.h"
 #include "thread_ranks.h"
 
@@ -427,6 +428,27 @@ TEST(Sweep, AnAxisOfListedValuesEqualsTheParsedAxisWithTheSameValues) {
   EXPECT_NE(message("eccentricity.L_S", {}).find("expected 1 to 1e8 values, got 0"), std::string::npos);
 }
 
+// The sweep steps one rig through the grid, setting only the keys whose index changed: every
+// point equals the study of a rig given all of that point's values in axis order (a key swept
+// twice: the later axis wins), field for field.
+TEST(Sweep, EachPointIsTheStudyOfTheRigWithThatPointsValues) {
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_IS=0:1:3"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:300:4"),
+                                   GridAxis::parse("eccentricity.L_S=0.01:0.5:7"),
+                                   GridAxis::parse("eccentricity.L_IS=0.5:2:5")};
+  const CsTurn turn(360);
+  const SweepResult result = sweep(Rig{}, axes, turn);
+  ASSERT_EQ(result.points(), 3u * 4 * 7 * 5);
+  std::vector<double> scratch;
+  for (std::size_t p = 0; p < result.points(); ++p) {
+    Rig r;
+    const std::vector<int> idx = grid_indices(axes, p);
+    for (std::size_t a = 0; a < axes.size(); ++a) axes[a].key->real(r) = axes[a].value(idx[a]);
+    const CsSummary expected = cs_summary(r, turn, scratch);
+    EXPECT_EQ(std::memcmp(&expected, &result.summaries[p], sizeof(CsSummary)), 0) << "point " << p;
+  }
+}
+
 TEST(Sweep, StreamsBlocksInGridOrderWithBoundedMemory) {
   const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
                                    GridAxis::parse("eccentricity.alpha_S=0:359:250")};
@@ -621,6 +643,93 @@ TEST(Sweep, IsBitIdenticalForAnyThreadCount) {
       EXPECT_EQ(one.summaries[p][i].asd_mV, two.summaries[p][i].asd_mV);
       EXPECT_EQ(one.summaries[p][i].mean_mr_mV, two.summaries[p][i].mean_mr_mV);
     }
+}
+
+// The AVX2 code paths of the CS study (vector_log.h) do the IEEE operations of the baseline
+// x86-64 ones in the same order: every summary and curve has the same bits, so a sweep gives the
+// same file on any x86-64 machine (MPI ranks may run on different CPUs).
+TEST(Cs, BaselineAndAvx2PathsGiveTheSameBits) {
+  if (!avx2_paths()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline paths exist";
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_IS=0:2:9"),
+                                   GridAxis::parse("eccentricity.L_S=0:1.5:7"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:37")};
+  const Rig rig;
+  const SweepResult best = sweep(rig, axes, CsTurn(360));
+  const CsStudy best_study = cs_study(rig, CsTurn(720));
+  set_baseline_paths_only(true);
+  const SweepResult baseline = sweep(rig, axes, CsTurn(360));
+  const CsStudy baseline_study = cs_study(rig, CsTurn(720));
+  set_baseline_paths_only(false);
+  ASSERT_EQ(best.points(), baseline.points());
+  std::size_t differing = 0;
+  for (std::size_t p = 0; p < best.points(); ++p)
+    differing += std::memcmp(&best.summaries[p], &baseline.summaries[p], sizeof(CsSummary)) != 0;
+  EXPECT_EQ(differing, 0u) << "of " << best.points() << " grid points";
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(best_study.dv_br_V[i], baseline_study.dv_br_V[i]);
+    EXPECT_EQ(best_study.dv_mr_V[i], baseline_study.dv_mr_V[i]);
+  }
+}
+
+// cos⁴'s closed form of Eq. 5's logarithm, ln(E_j/E_h) = 2·ln(D_h/D_j) (docs/physics.md),
+// against the irradiance-based computation every other source uses (Source's own
+// log_ratio_over_turn on the same rig: falloffs, their ratio, log_array). Both start from the same
+// D_m = L_o² + L_m². The irradiances' ratio carries at most 7 roundings of relative size u = 2⁻⁵³
+// (two quotients and two squares per falloff pair, then the ratio): ≤ 7u absolute in its log;
+// the closed form's quotient one, doubled: ≤ 2u. Each log_array adds ≤ 2 ulp of its result
+// (vector_log.h), the closed form's doubled with it. So |difference| ≤ 9u + 4·ulp(|value|): a
+// few ulp of the log values, and a few u where they are near 0 (ratios near 1). Random
+// eccentricities, port distances and table-turn sizes, on every code path.
+TEST(Cs, Cos4LogRatiosMatchTheIrradiancesWithinRounding) {
+  std::mt19937_64 rng(20261123);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const auto ulp = [](double x) {
+    x = std::abs(x);
+    return std::nextafter(x, std::numeric_limits<double>::infinity()) - x;
+  };
+  const double u = std::ldexp(1.0, -53);
+  double worst = 0;  // the largest |difference| in units of the bound
+  for (const bool baseline_only : {false, true}) {
+    set_baseline_paths_only(baseline_only);
+    for (int trial = 0; trial < 400; ++trial) {
+      Rig rig;
+      rig.eccentricity = {5.0 * std::pow(unit(rng), 3), 360.0 * unit(rng), 5.0 * std::pow(unit(rng), 3),
+                          360.0 * unit(rng)};
+      rig.source.cos4.L_o = 5.0 + 100.0 * unit(rng);
+      const CsTurn turn(2 * (1 + trial % 200));
+      const std::size_t values = static_cast<std::size_t>(3 * turn.steps());
+      std::vector<double> closed(values), from_irradiance(values);
+      rig.light->log_ratio_over_turn(rig.source_view(), turn, closed);
+      rig.light->Source::log_ratio_over_turn(rig.source_view(), turn, from_irradiance);
+      for (std::size_t v = 0; v < values; ++v) {
+        const double bound = 9 * u + 4 * ulp(std::max(std::abs(closed[v]), std::abs(from_irradiance[v])));
+        const double diff = std::abs(closed[v] - from_irradiance[v]);
+        ASSERT_LE(diff, bound) << "trial " << trial << " value " << v << ": " << closed[v] << " vs "
+                               << from_irradiance[v];
+        worst = std::max(worst, diff / bound);
+      }
+    }
+  }
+  set_baseline_paths_only(false);
+  RecordProperty("worst_fraction_of_bound", std::to_string(worst));
+}
+
+// The closed form's AVX2 and baseline paths give the same bits, value by value.
+TEST(Cs, Cos4LogRatiosBaselineAndAvx2GiveTheSameBits) {
+  if (!avx2_paths()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline paths exist";
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    Rig rig;
+    rig.eccentricity = {3.0 * unit(rng), 360.0 * unit(rng), 3.0 * unit(rng), 360.0 * unit(rng)};
+    const CsTurn turn(2 * (1 + trial * 7));
+    std::vector<double> best(static_cast<std::size_t>(3 * turn.steps())), baseline(best.size());
+    rig.light->log_ratio_over_turn(rig.source_view(), turn, best);
+    set_baseline_paths_only(true);
+    rig.light->log_ratio_over_turn(rig.source_view(), turn, baseline);
+    set_baseline_paths_only(false);
+    ASSERT_EQ(std::memcmp(best.data(), baseline.data(), best.size() * sizeof(double)), 0) << "trial " << trial;
+  }
 }
 
 // ---- Progress reports ---------------------------------------------------------------------

@@ -1,6 +1,9 @@
 #include "polrig/source/cos4_port.h"
 
+#include <array>
 #include <cmath>
+
+#include "polrig/vector_log.h"
 
 namespace polrig {
 
@@ -19,32 +22,120 @@ std::array<double, 6> Cos4PortSource::ideal_irradiance(const SourceView& rig, co
   return {E0, E0, E0, E0, E0, E0};
 }
 
-void Cos4PortSource::irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
-                                          const Progress&) const {
-  const int n = turn.steps();
-  const double* c = turn.cos_theta();
-  const double* s = turn.sin_theta();
-  const Point2 port = port_centre(rig.eccentricity);
-  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
-  const Cos4Source& source = rig.settings.cos4;
+namespace {
+// cos⁴φ of channel m over the turn: compiled twice, below, for baseline x86-64 and for AVX2, with
+// the same operations in the same order (no FMA: this file is built with -ffp-contract=off and
+// AVX2 alone brings none), so both give the same bits (test Cs.BaselineAndAvx2PathsGiveTheSameBits).
+[[gnu::always_inline]] inline void falloffs_over_turn(const Cos4Source& source, const double* c, const double* s,
+                                                      const std::array<Point2, 6>& p0, const Point2& port,
+                                                      double* E, int n) {
+  const double px = port.x(), py = port.y();
   for (int m = 0; m < 6; ++m) {
-    const double qx = p0[m].x(), qy = p0[m].y();
-    double* Em = E.data() + m * n;
+    const double qx = p0[static_cast<std::size_t>(m)].x(), qy = p0[static_cast<std::size_t>(m)].y();
+    double* Em = E + m * n;
     for (int k = 0; k < n; ++k) {
-      const double x = c[k] * qx - s[k] * qy - port.x();  // P_m(θ_R) − O_IS
-      const double y = s[k] * qx + c[k] * qy - port.y();
+      const double x = c[k] * qx - s[k] * qy - px;  // P_m(θ_R) − O_IS
+      const double y = s[k] * qx + c[k] * qy - py;
       Em[k] = source.falloff(x * x + y * y);
     }
   }
 }
 
-double Cos4PortSource::eq6_log_ratio(const SourceView& rig, int pair) const {
+__attribute__((target("avx2"))) void falloffs_over_turn_avx2(const Cos4Source& source, const double* c,
+                                                             const double* s, const std::array<Point2, 6>& p0,
+                                                             const Point2& port, double* E, int n) {
+  falloffs_over_turn(source, c, s, p0, port, E, n);
+}
+void falloffs_over_turn_baseline(const Cos4Source& source, const double* c, const double* s,
+                                 const std::array<Point2, 6>& p0, const Point2& port, double* E, int n) {
+  falloffs_over_turn(source, c, s, p0, port, E, n);
+}
+}  // namespace
+
+void Cos4PortSource::irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
+                                          const Progress&) const {
+  const Point2 port = port_centre(rig.eccentricity);
   const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
+  (avx2_paths() ? falloffs_over_turn_avx2 : falloffs_over_turn_baseline)(
+      rig.settings.cos4, turn.cos_theta(), turn.sin_theta(), p0, port, E.data(), turn.steps());
+}
+
+namespace {
+// Eq. 5's logarithm from the cos⁴ law in closed form. E_m ∝ (L_o²/D_m)², D_m = L_o² + L_m² and
+// L_m = |P_m(θ_R) − O_IS| (source/cos4.h), so E_j/E_h = (D_h/D_j)² and
+//   ln(E_j/E_h) = 2·ln(D_h/D_j)                                       (docs/physics.md, Eq. 5)
+// one division per value where the irradiances took three (two falloffs and their ratio), and a
+// value at least as exact: D_m are the falloffs' own denominators, computed with the same
+// operations, and one rounding (the quotient) replaces seven; ×2 is exact.
+// Here the quotients D_h/D_j of the three pairs into out[i·n + k]; compiled twice, below, for
+// baseline x86-64 and AVX2 with the same operations in the same order (no FMA): the same bits
+// (tests Cos4.LogRatiosBaselineAndAvx2GiveTheSameBits, Cs.BaselineAndAvx2PathsGiveTheSameBits).
+[[gnu::always_inline]] inline void distance_ratios_over_turn(double L_o2, const double* c, const double* s,
+                                                             const std::array<Point2, 6>& p0, const Point2& port,
+                                                             double* out, int n) {
+  const double px = port.x(), py = port.y();
+  for (int i = 0; i < 3; ++i) {
+    const Point2& pj = p0[static_cast<std::size_t>(pair_j(i))];
+    const Point2& ph = p0[static_cast<std::size_t>(pair_h(i))];
+    const double jx = pj.x(), jy = pj.y(), hx = ph.x(), hy = ph.y();
+    double* r = out + i * n;
+    for (int k = 0; k < n; ++k) {
+      const double xj = c[k] * jx - s[k] * jy - px;  // P_j(θ_R) − O_IS
+      const double yj = s[k] * jx + c[k] * jy - py;
+      const double xh = c[k] * hx - s[k] * hy - px;
+      const double yh = s[k] * hx + c[k] * hy - py;
+      r[k] = (L_o2 + (xh * xh + yh * yh)) / (L_o2 + (xj * xj + yj * yj));
+    }
+  }
+}
+
+// ×2, exact (the 2 of 2·ln(D_h/D_j)), twice compiled for the same reason.
+[[gnu::always_inline]] inline void doubled(double* v, std::size_t n) {
+  for (std::size_t k = 0; k < n; ++k) v[k] += v[k];
+}
+__attribute__((target("avx2"))) void doubled_avx2(double* v, std::size_t n) { doubled(v, n); }
+void doubled_baseline(double* v, std::size_t n) { doubled(v, n); }
+
+__attribute__((target("avx2"))) void distance_ratios_over_turn_avx2(double L_o2, const double* c, const double* s,
+                                                                    const std::array<Point2, 6>& p0,
+                                                                    const Point2& port, double* out, int n) {
+  distance_ratios_over_turn(L_o2, c, s, p0, port, out, n);
+}
+void distance_ratios_over_turn_baseline(double L_o2, const double* c, const double* s,
+                                        const std::array<Point2, 6>& p0, const Point2& port, double* out, int n) {
+  distance_ratios_over_turn(L_o2, c, s, p0, port, out, n);
+}
+}  // namespace
+
+void Cos4PortSource::log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> out) const {
+  const int n = turn.steps();
+  const Point2 port = port_centre(rig.eccentricity);
+  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
+  const double L_o2 = rig.settings.cos4.L_o * rig.settings.cos4.L_o;
+  (avx2_paths() ? distance_ratios_over_turn_avx2 : distance_ratios_over_turn_baseline)(
+      L_o2, turn.cos_theta(), turn.sin_theta(), p0, port, out.data(), n);
+  const std::size_t values = static_cast<std::size_t>(3 * n);
+  log_array(out.data(), out.data(), values);
+  (avx2_paths() ? doubled_avx2 : doubled_baseline)(out.data(), values);
+}
+
+namespace {
+double eq6_log_ratio_at(const SourceView& rig, const std::array<Point2, 6>& p0, int pair) {
   const double L_o2 = rig.settings.cos4.L_o * rig.settings.cos4.L_o;
   const double L_IS2 = rig.eccentricity.L_IS * rig.eccentricity.L_IS;
   const double L_Rj2 = p0[pair_j(pair)].squaredNorm();
   const double L_Rh2 = p0[pair_h(pair)].squaredNorm();
   return std::log10((L_o2 + L_Rh2 + L_IS2) / (L_o2 + L_Rj2 + L_IS2));
+}
+}  // namespace
+
+double Cos4PortSource::eq6_log_ratio(const SourceView& rig, int pair) const {
+  return eq6_log_ratio_at(rig, photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0), pair);
+}
+
+std::array<double, 3> Cos4PortSource::eq6_log_ratios(const SourceView& rig) const {
+  const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
+  return {eq6_log_ratio_at(rig, p0, 0), eq6_log_ratio_at(rig, p0, 1), eq6_log_ratio_at(rig, p0, 2)};
 }
 
 }  // namespace polrig

@@ -2,6 +2,8 @@
 
 #include <vector>
 
+#include "polrig/vector_log.h"
+
 namespace polrig {
 
 void Source::prepare(const Progress&) const {}
@@ -33,8 +35,29 @@ void Source::irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std
   }
 }
 
+void pair_log_ratios(const double* E, int n, double* out) {
+  for (int i = 0; i < 3; ++i) {
+    const double* Ej = E + pair_j(i) * n;
+    const double* Eh = E + pair_h(i) * n;
+    double* r = out + i * n;
+    for (int k = 0; k < n; ++k) r[k] = Ej[k] / Eh[k];
+  }
+  log_array(out, out, static_cast<std::size_t>(3 * n));
+}
+
+void Source::log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> out) const {
+  const int n = turn.steps();
+  std::vector<double> E(static_cast<std::size_t>(6 * shifts() * n));
+  irradiance_over_turn(rig, turn, E);
+  pair_log_ratios(E.data(), n, out.data());
+}
+
 double Source::eq6_log_ratio(const SourceView&, int) const {
   throw std::logic_error("Eq. 6's closed form belongs to the cos⁴ source only");
+}
+
+std::array<double, 3> Source::eq6_log_ratios(const SourceView& rig) const {
+  return {eq6_log_ratio(rig, 0), eq6_log_ratio(rig, 1), eq6_log_ratio(rig, 2)};
 }
 
 }  // namespace polrig

@@ -1,5 +1,6 @@
 #include "polrig/study/cs.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -7,57 +8,107 @@
 #include "polrig/device/sensor.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/statistics.h"
+#include "polrig/vector_log.h"
 
 namespace polrig {
 
 namespace {
 
-// ΔV_br of the three pairs over the turn (Eq. 5) from the irradiances E[m·n + k], into br[i·n + k].
-void deviations_before(const Rig& rig, const CsTurn& turn, const double* E, double* br) {
-  const int n = turn.steps();
-  for (int i = 0; i < 3; ++i) {
-    const double* Ej = E + pair_j(i) * n;
-    const double* Eh = E + pair_h(i) * n;
+// The means and population SDs of the six curves ΔV_br and ΔV_mr of each pair (br 1–3, mr 1–3).
+struct CurveMoments {
+  double mean[6];
+  double sd[6];
+};
+
+// One pass's arithmetic from ln(E_j/E_h) of the three pairs in br[i·n + k]: ΔV_br (Eq. 5) in
+// place; ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2 into mr (in two halves, so no index wraps
+// inside a loop); and the moments of the six curves, each summed in the same order as
+// mean_and_population_sd but the six side by side (independent sums, so the processor overlaps
+// them instead of waiting for each add).
+// Compiled twice, below: for baseline x86-64 and for AVX2, with the same operations in the same
+// order (no FMA, no reordered sums); AVX2 only takes more values at a time, so both give the same
+// bits (test Cs.BaselineAndAvx2PathsGiveTheSameBits).
+[[gnu::always_inline]] inline void curves_and_moments(const Rig& rig, double* br, double* mr, int n,
+                                                      CurveMoments& m) {
+  for (int i = 0; i < 3; ++i)
     for (int k = 0; k < n; ++k)
-      br[i * n + k] = eccentricity_bias(rig.device.truth, rig.electronics, i, Ej[k], Eh[k]);
-  }
-}
-
-// ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2.
-void central_symmetry_average(const double* br, double* mr, int n) {
+      br[i * n + k] = eccentricity_bias_of_log(rig.device.truth, rig.electronics, i, br[i * n + k]);
   const int half = n / 2;
-  for (int k = 0; k < n; ++k) mr[k] = 0.5 * (br[k] + br[(k + half) % n]);
+  for (int i = 0; i < 3; ++i) {
+    const double* b = br + i * n;
+    double* a = mr + i * n;
+    for (int k = 0; k < half; ++k) a[k] = 0.5 * (b[k] + b[k + half]);
+    for (int k = half; k < n; ++k) a[k] = 0.5 * (b[k] + b[k - half]);
+  }
+  constexpr int kCurves = 6;
+  const double* curve[kCurves] = {br, br + n, br + 2 * n, mr, mr + n, mr + 2 * n};
+  double sum[kCurves] = {}, ss[kCurves] = {};
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < kCurves; ++c) sum[c] += curve[c][k];
+  for (int c = 0; c < kCurves; ++c) m.mean[c] = sum[c] / static_cast<double>(n);
+  for (int k = 0; k < n; ++k)
+    for (int c = 0; c < kCurves; ++c) ss[c] += (curve[c][k] - m.mean[c]) * (curve[c][k] - m.mean[c]);
+  for (int c = 0; c < kCurves; ++c) m.sd[c] = std::sqrt(ss[c] / static_cast<double>(n));
 }
 
-CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
+__attribute__((target("avx2"))) void curves_and_moments_avx2(const Rig& rig, double* br, double* mr, int n,
+                                                             CurveMoments& m) {
+  curves_and_moments(rig, br, mr, n, m);
+}
+void curves_and_moments_baseline(const Rig& rig, double* br, double* mr, int n, CurveMoments& m) {
+  curves_and_moments(rig, br, mr, n, m);
+}
+
+// eq6_constant_V of the three pairs, the same values, from one call to the light.
+std::array<double, 3> eq6_constants_V(const Rig& rig) {
+  std::array<double, 3> v;
+  v.fill(std::numeric_limits<double>::quiet_NaN());
+  if (!rig.light->has(Source::kClosedFormEq6)) return v;
+  const std::array<double, 3> log_ratio = rig.light->eq6_log_ratios(rig.source_view());
+  for (int i = 0; i < 3; ++i)
+    v[i] = 2.0 * rig.device.truth.kv[i] * rig.electronics.volts_per_decade * log_ratio[i];
+  return v;
+}
+
+CsSummary summary_of(const Rig& rig, const CurveMoments& m) {
+  const std::array<double, 3> eq6 = eq6_constants_V(rig);
   CsSummary s;
-  for (int i = 0; i < 3; ++i) {
-    const auto [mean_br, bsd] = mean_and_population_sd({br + i * n, static_cast<std::size_t>(n)});
-    const auto [mean_mr, asd] = mean_and_population_sd({mr + i * n, static_cast<std::size_t>(n)});
-    s[i] = {bsd * 1e3, asd * 1e3, mean_br * 1e3, mean_mr * 1e3, eq6_constant_V(rig, i) * 1e3};
-  }
+  for (int i = 0; i < 3; ++i)
+    s[i] = {m.sd[i] * 1e3, m.sd[3 + i] * 1e3, m.mean[i] * 1e3, m.mean[3 + i] * 1e3, eq6[i] * 1e3};
   return s;
+}
+
+// The summary of curves computed elsewhere (the mean curves over shifts), as mean_and_population_sd gives it.
+CsSummary summarise(const Rig& rig, const double* br, const double* mr, int n) {
+  CurveMoments m;
+  for (int c = 0; c < 6; ++c) {
+    const double* curve = c < 3 ? br + c * n : mr + (c - 3) * n;
+    const auto [mean, sd] = mean_and_population_sd({curve, static_cast<std::size_t>(n)});
+    m.mean[c] = mean;
+    m.sd[c] = sd;
+  }
+  return summary_of(rig, m);
 }
 
 }  // namespace
 
 namespace {
 
-// One estimate of the turn from irradiances E[m·n + k] (when null, the source's own over the
-// turn: a source with a uniform reference and one shift): ΔV_br and ΔV_mr into scratch, and
-// their summary.
+// One estimate of the turn from irradiances E[m·n + k] (when null, the source's own
+// ln(E_j/E_h) over the turn: a source with a uniform reference and one shift): ΔV_br and ΔV_mr
+// into scratch, and their summary.
 CsSummary one_pass(const Rig& rig, const CsTurn& turn, const double* E, std::vector<double>& scratch) {
   const int n = turn.steps();
-  scratch.resize(static_cast<std::size_t>(12 * n));
+  scratch.resize(static_cast<std::size_t>(6 * n));
   double* br = scratch.data();
   double* mr = br + 3 * n;
-  if (!E) {
-    rig.light->irradiance_over_turn(rig.source_view(), turn, {mr + 3 * n, static_cast<std::size_t>(6 * n)});
-    E = mr + 3 * n;
-  }
-  deviations_before(rig, turn, E, br);
-  for (int i = 0; i < 3; ++i) central_symmetry_average(br + i * n, mr + i * n, n);
-  return summarise(rig, br, mr, n);
+  if (E)
+    pair_log_ratios(E, n, br);
+  else
+    rig.light->log_ratio_over_turn(rig.source_view(), turn, {br, static_cast<std::size_t>(3 * n)});
+  CurveMoments m;
+  (avx2_paths() ? curves_and_moments_avx2 : curves_and_moments_baseline)(rig, br, mr, n, m);
+  return summary_of(rig, m);
 }
 
 // The standard errors of the per-shift figures, into `out`.

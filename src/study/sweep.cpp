@@ -233,8 +233,18 @@ void compute_block(const Rig& base, const std::vector<GridAxis>& axes, const CsT
   tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
                     [&](const tbb::blocked_range<std::size_t>& r) {
                       std::vector<double>& s = scratch.local();
+                      // One rig and one index per range of points, stepped through the grid in
+                      // row-major order, setting only the keys whose index changed (in axis
+                      // order, as rig_at does): no copy of the rig (and of its shared light) and
+                      // no allocation per point.
+                      std::vector<int> idx = grid_indices(axes, r.begin());
+                      Rig rig = rig_at(base, axes, idx);
                       for (std::size_t p = r.begin(); p != r.end(); ++p) {
-                        const Rig rig = rig_at(base, axes, grid_indices(axes, p));
+                        if (p != r.begin()) {
+                          std::size_t a = axes.size();
+                          while (a-- > 0 && ++idx[a] == axes[a].count) idx[a] = 0;
+                          for (; a < axes.size(); ++a) axes[a].key->real(rig) = axes[a].value(idx[a]);
+                        }
                         if (check_rig(rig)) {
                           std::size_t seen = first_bad.load();
                           while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {

@@ -50,9 +50,15 @@ std::array<double, 3> pair_voltages(const CalibrationParams& p, const Electronic
 
 // Eq. 5: the part of V_i due to unequal irradiance alone, kv_i·v_dec·log10(E_j/E_h).
 // Inline: it is the inner loop of the CS study and of sweeps.
+inline double eccentricity_bias_of_log(const CalibrationParams& p, const Electronics& e, int i,
+                                       double ln_Ej_over_Eh) {
+  return p.kv[i] * e.volts_per_decade * (ln_Ej_over_Eh * (1.0 / std::numbers::ln10));
+}
+// The same from the irradiances (the CS study takes the logarithms of its ratios in vectors and
+// calls eccentricity_bias_of_log).
 inline double eccentricity_bias(const CalibrationParams& p, const Electronics& e, int i,
                                 double E_j, double E_h) {
-  return p.kv[i] * e.volts_per_decade * (std::log(E_j / E_h) * (1.0 / std::numbers::ln10));
+  return eccentricity_bias_of_log(p, e, i, std::log(E_j / E_h));
 }
 
 }  // namespace polrig

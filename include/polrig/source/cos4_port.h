@@ -16,8 +16,12 @@ class Cos4PortSource final : public Source {
   // cos⁴φ alone (E_0 is the common factor), written over the turn so that it vectorizes.
   void irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
                             const Progress& progress = {}) const override;
+  // 2·ln(D_h/D_j), D_m = L_o² + L_m²: cos⁴'s ln(E_j/E_h) in closed form (docs/physics.md).
+  void log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> out) const override;
   // log10[(L_o² + L_Rh² + L_IS²)/(L_o² + L_Rj² + L_IS²)], L_Rm = |O_R P_m| (fixed during the turn).
   double eq6_log_ratio(const SourceView& rig, int pair) const override;
+  // The three from one computation of the photodiode positions (sin and cos of the ring's angles).
+  std::array<double, 3> eq6_log_ratios(const SourceView& rig) const override;
 };
 
 }  // namespace polrig

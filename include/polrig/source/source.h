@@ -115,10 +115,22 @@ class Source {
   virtual void irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
                                     const Progress& progress = {}) const;
 
+  // Eq. 5's logarithm over a CS turn (the sweep's hot loop): ln(E_j/E_h) of pair i at step k into
+  // out[i·n + k], out.size() = 3·n, of the first shift's irradiances. By default from
+  // irradiance_over_turn, its ratios and log_array (pair_log_ratios); a source may override it
+  // with a closed form of the same quantity, as exact or more.
+  virtual void log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> out) const;
+
   // Eq. 6's light term where kClosedFormEq6: ΔV_mr,i ≈ 2·kv_i·v_dec·eq6_log_ratio(i). Throws
   // std::logic_error for a source without the flag.
   virtual double eq6_log_ratio(const SourceView& rig, int pair) const;
+  // eq6_log_ratio of the three pairs, the same values (every sweep point needs all three).
+  virtual std::array<double, 3> eq6_log_ratios(const SourceView& rig) const;
 };
+
+// ln(E_j/E_h) of the three pairs from channel irradiances E[m·n + k] (n steps) into
+// out[i·n + k]: the ratios, then their logarithms in vectors (log_array).
+void pair_log_ratios(const double* E, int n, double* out);
 
 // Reads the scene file a traced source names (io/scene_yaml's load_scene, resolved against the
 // rig file): the factory stays below io/, and a caller decides how errors are reported.

@@ -336,6 +336,18 @@ TEST_F(Cli, SweepWithoutCsvWritesOnlyTheHdf5File) {
   EXPECT_FALSE(m["files"]["sweep.csv"]);
 }
 
+TEST_F(Cli, SweepOfOneKeyOnTwoAxesNamesTheSecondAxisByItsPosition) {
+  const fs::path out = tmp / "twice";
+  ok("sweep " + shell_quote(kRig) + " --grid eccentricity.alpha_S=0:10:3 --grid eccentricity.alpha_S=5:15:2 -o " +
+     dir_arg(out) + " --no-plots");
+  const polrig::SweepH5Reader r(out / "sweep.h5");
+  std::vector<double> first(3), second(2);
+  r.read("eccentricity.alpha_S", 0, first);
+  r.read("eccentricity.alpha_S (axis 2)", 0, second);
+  EXPECT_EQ(first, (std::vector<double>{0, 5, 10}));
+  EXPECT_EQ(second, (std::vector<double>{5, 15}));
+}
+
 // A sweep long enough for several progress reports (200,000 grid points on one thread, seconds).
 const std::string kLongSweep = " --grid eccentricity.L_S=0.001:1:400 --grid eccentricity.L_IS=0.001:1:500 --no-plots --threads 1";
 

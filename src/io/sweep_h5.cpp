@@ -18,22 +18,33 @@ namespace {
 
 // HDF5's own error stack is silenced: errors become exceptions naming the file and the step,
 // with the library's innermost message.
-std::string hdf5_message() {
-  std::string msg;
+struct Hdf5Error {
+  std::string message;
+  bool system = false;  // the innermost error is the file system's: errno says more
+};
+
+Hdf5Error hdf5_error() {
+  Hdf5Error err;
   H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, [](unsigned, const H5E_error2_t* e, void* out) -> herr_t {
-    auto* m = static_cast<std::string*>(out);
-    if (m->empty() && e->desc && *e->desc) *m = e->desc;
+    auto* m = static_cast<Hdf5Error*>(out);
+    if (m->message.empty() && e->desc && *e->desc) {
+      m->message = e->desc;
+      m->system = e->maj_num == H5E_IO || e->maj_num == H5E_FILE;
+    }
     return 0;
-  }, &msg);
+  }, &err);
   H5Eclear2(H5E_DEFAULT);
-  return msg.empty() ? "HDF5 error" : msg;
+  if (err.message.empty()) err.message = "HDF5 error";
+  return err;
 }
 
 [[noreturn]] void fail(const fs::path& path, const std::string& what) {
-  const int err = errno;
-  std::string msg = hdf5_message();
-  if (err != 0 && msg.find("errno") == std::string::npos) msg += fmt::format(" ({})", std::strerror(err));
-  throw std::runtime_error(fmt::format("{}: cannot {}: {}", path.string(), what, msg));
+  const int errno_now = errno;
+  Hdf5Error err = hdf5_error();
+  // errno may be left from an unrelated earlier call: named only for the file system's errors.
+  if (err.system && errno_now != 0 && err.message.find("errno") == std::string::npos)
+    err.message += fmt::format(" ({})", std::strerror(errno_now));
+  throw std::runtime_error(fmt::format("{}: cannot {}: {}", path.string(), what, err.message));
 }
 
 // An identifier or a status (herr_t): negative on failure.

@@ -86,8 +86,13 @@ std::string fingerprint(std::string_view bytes) {
 SweepH5Layout sweep_h5_layout(const std::vector<GridAxis>& axes, bool eq6,
                               std::vector<std::pair<std::string, std::string>> attributes) {
   SweepH5Layout l;
-  for (const GridAxis& a : axes) {
-    l.axes.push_back({std::string(a.key->path), std::string(a.key->unit), std::string(a.key->doc),
+  for (std::size_t k = 0; k < axes.size(); ++k) {
+    const GridAxis& a = axes[k];
+    // A key may be swept on several axes; a dataset name is unique, so the later ones say which.
+    const bool repeated = std::any_of(axes.begin(), axes.begin() + static_cast<long>(k),
+                                      [&](const GridAxis& b) { return b.key == a.key; });
+    const std::string name = repeated ? fmt::format("{} (axis {})", a.key->path, k + 1) : std::string(a.key->path);
+    l.axes.push_back({name, std::string(a.key->unit), std::string(a.key->doc),
                       static_cast<std::size_t>(a.count), [a](std::size_t i) { return a.value(static_cast<int>(i)); }});
   }
   for (std::size_t c = 0; c < kColumns; ++c) {

@@ -787,6 +787,32 @@ TEST_F(Cli, SlowResumingRefusesOtherInputsAndForceStartsOver) {
   EXPECT_FALSE(fs::exists(out / polrig::kSweepStateFile));
 }
 
+TEST_F(Cli, ABadPointAfterACheckpointLeavesNothingToResume) {
+  // schedule.start_deg first: its bad value (400, past stop_deg) starts at point 4096, in the
+  // second block, after the first block's progress record; twelve more axes skip the corners.
+  const fs::path out = tmp / "bad";
+  std::string grid = " --grid schedule.start_deg=0:400:2";
+  for (int k = 0; k < 12; ++k) grid += " --grid eccentricity.alpha_S=0:1:2";
+  const Result r = polrig("sweep " + shell_quote(kRig) + grid + " --steps 4 --no-plots --threads 1 -o " + dir_arg(out));
+  EXPECT_EQ(r.status, 2) << r.err;
+  EXPECT_HAS(r.err, "schedule.start_deg=400");
+  EXPECT_FALSE(fs::exists(out));
+  EXPECT_FALSE(fs::exists(staging_of(out))) << "resuming would only meet the same point again";
+}
+
+TEST_F(Cli, AResumableStagingFolderWithALeftoverRenameProbeResumes) {
+  const fs::path out = tmp / "sweep";
+  const pid_t pid = spawn_polrig(resumable_sweep(out), false);
+  ASSERT_GT(pid, 0);
+  ASSERT_GT(interrupt_after_a_checkpoint(pid, out, SIGKILL), 0u);
+  fs::create_directory(staging_of(out) / ".rename-probe-a");  // as a kill while probing leaves it
+  std::vector<std::string> resume = resumable_sweep(out);
+  resume.push_back("--resume");
+  ok(joined(resume));
+  EXPECT_FALSE(fs::exists(staging_of(out)));
+  EXPECT_FALSE(fs::exists(out / ".rename-probe-a"));
+}
+
 TEST_F(Cli, ResumeWithNothingToResumeIsAnError) {
   const fs::path out = tmp / "nothing";
   const Result r = polrig("sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0:1:3 --no-plots --resume -o " + dir_arg(out));

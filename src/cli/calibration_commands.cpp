@@ -300,9 +300,15 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
     settings->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
-      const LoadedRig r = rig->load();
-      const TrialSettings s = trial_settings_for(r.rig, *trials, *L_IS_max, *L_S_max,
-                                                 settings->options(r.rig, r.rig.device.d));
+      std::optional<LoadedRig> loaded;
+      std::optional<TrialSettings> checked;
+      on_every_rank([&] {  // a rank that cannot read the rig (another node's files) stops all
+        loaded.emplace(rig->load());
+        checked.emplace(trial_settings_for(loaded->rig, *trials, *L_IS_max, *L_S_max,
+                                           settings->options(loaded->rig, loaded->rig.device.d)));
+      });
+      const LoadedRig& r = *loaded;
+      const TrialSettings& s = *checked;
       // Every rank checks the same input; rank 0 alone opens and writes the output, and
       // receives every trial in index order (docs/scale.md).
       std::optional<OutputDir> dir;

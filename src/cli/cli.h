@@ -50,6 +50,10 @@ class RanksFailure : public std::runtime_error {
 // every rank learns whether it failed and, if so, throws RanksFailure with rank 0's message and
 // exit code (on rank 0 as well, after `step`'s own clean-up).
 void on_rank_0(const std::function<void()>& step);
+// Collective: runs `step` on every rank (loading and checking the input), then every rank
+// learns whether any failed and, if so, throws RanksFailure with the lowest failing rank's
+// message and exit code. Alone, `step`'s own error passes through unchanged.
+void on_every_rank(const std::function<void()>& step);
 // Collective: rank 0's value on every rank (e.g. where a resumed sweep starts).
 template <class T>
 T from_rank_0(const T& value) {

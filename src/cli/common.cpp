@@ -54,6 +54,21 @@ Failure failure_of(std::exception_ptr error) {
   }
 }
 
+void on_every_rank(const std::function<void()>& step) {
+  if (ranks().size() == 1) return step();
+  std::optional<std::string> mine;
+  try {
+    step();
+  } catch (...) {
+    const Failure failure = failure_of(std::current_exception());
+    mine = std::to_string(failure.exit_code) + "\n" + failure.message;
+  }
+  const std::optional<std::string> first = ranks().first_failure(mine);
+  if (!first) return;
+  const auto newline = first->find('\n');
+  throw RanksFailure({std::stoi(first->substr(0, newline)), first->substr(newline + 1)});
+}
+
 void on_rank_0(const std::function<void()>& step) {
   std::optional<std::string> mine;
   Failure failure;

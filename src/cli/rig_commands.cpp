@@ -156,14 +156,18 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       // Every rank loads and checks the same input (the same verdict everywhere); rank 0 alone
       // prints, opens and writes the output, and receives every block (docs/scale.md).
       const Ranks& world = ranks();
-      const LoadedRig r = rig->load();
+      std::optional<LoadedRig> loaded;
       std::vector<GridAxis> axes;
-      for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
+      on_every_rank([&] {  // a rank that cannot read the rig (another node's files) stops all
+        loaded.emplace(rig->load());
+        for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
+        check_grid(loaded->rig, axes);
+      });
+      const LoadedRig& r = *loaded;
       if (world.is_root())
         for (const RigKey* key : axes_the_cs_study_ignores(axes))
           std::cerr << fmt::format("polrig: note: the CS study does not depend on '{}'; every "
                                    "row along that axis will be the same\n", key->path);
-      check_grid(r.rig, axes);
       on_rank_0([&] {
         if (axes.size() <= 2 && out->plots() && !gnuplot_available())
           throw std::runtime_error("gnuplot is needed for the PNG plots and was not found; install it "

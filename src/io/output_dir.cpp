@@ -74,6 +74,8 @@ long name_max_at(const fs::path& existing_folder) {
 void probe_atomic_renames(const fs::path& folder, bool exchange) {
   const fs::path a = folder / ".rename-probe-a", b = folder / ".rename-probe-b";
   std::error_code ec;
+  fs::remove(a, ec);  // left by a run killed while probing a kept (resumable) staging folder
+  fs::remove(b, ec);
   for (bool swap : {false, true}) {
     if (swap && !exchange) break;
     for (const fs::path& p : {a, b})
@@ -237,6 +239,11 @@ void OutputDir::create_parents() {
 void OutputDir::keep_on_failure() {
   const std::lock_guard lock(open_dirs_mutex());  // the signal thread reads it under this lock
   keep_ = true;
+}
+
+void OutputDir::discard_on_failure() {
+  const std::lock_guard lock(open_dirs_mutex());
+  keep_ = false;
 }
 
 void OutputDir::commit() {

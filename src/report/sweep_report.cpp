@@ -136,7 +136,7 @@ void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
         std::string at;
         for (std::size_t a = 0; a < axes_.size(); ++a)
           at += fmt::format("{}{}={}", a ? ", " : "", axes_[a].key->path, axes_[a].value(idx[a]));
-        throw std::runtime_error(fmt::format("sweep: {} is {} at grid point {} ({})", column_name(c), v,
+        throw std::domain_error(fmt::format("sweep: {} is {} at grid point {} ({})", column_name(c), v,
                                              first + k, at));
       }
       columns_[c * n + k] = v;
@@ -311,6 +311,7 @@ std::vector<DatasetFile> plot_two_axes(const fs::path& dir, const GridAxis& oute
 }  // namespace
 
 std::vector<DatasetFile> SweepReport::finish(bool plots) {
+  sync();  // the blocks since the last checkpoint reach the disk before the record goes
   h5_->close();
   h5_.reset();
   if (csv_) csv_->close();
@@ -426,27 +427,46 @@ fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, 
   using Clock = std::chrono::steady_clock;
   auto last = Clock::now();
   bool checkpointed = false;
-  sweep(r.rig, axes, CsTurn(steps), [&](std::size_t first, std::span<const CsSummary> block) {
-    o.report->write(first, block);
-    if (checkpointed && Clock::now() - last < std::chrono::seconds(1)) return;
-    const SweepReport::Resume at = o.report->sync();
-    o.state.points_done = at.points_done;
-    o.state.csv_bytes = at.csv_bytes;
-    o.dir->keep_on_failure();  // first: a signal between the record and this would remove it
-    write_sweep_state(o.dir->staging(), o.state);
-    checkpointed = true;
-    last = Clock::now();
-  }, progress, options);
+  // An error that would recur on resuming (a grid point that breaks a rule, a value out of its
+  // domain, a programming error) leaves nothing; an I/O error or a signal keeps the staging
+  // folder and its record for --resume.
+  try {
+    sweep(r.rig, axes, CsTurn(steps), [&](std::size_t first, std::span<const CsSummary> block) {
+      o.report->write(first, block);
+      if (checkpointed && Clock::now() - last < std::chrono::seconds(1)) return;
+      const SweepReport::Resume at = o.report->sync();
+      o.state.points_done = at.points_done;
+      o.state.csv_bytes = at.csv_bytes;
+      o.dir->keep_on_failure();  // first: a signal between the record and this would remove it
+      write_sweep_state(o.dir->staging(), o.state);
+      checkpointed = true;
+      last = Clock::now();
+    }, progress, options);
+  } catch (const RigError&) {
+    if (o.dir) o.dir->discard_on_failure();
+    throw;
+  } catch (const std::logic_error&) {
+    if (o.dir) o.dir->discard_on_failure();
+    throw;
+  }
   // Rank 0 finishes the folder; every rank learns whether it could, so all exit alike.
   if (ranks.is_root()) {
     try {
       const fs::path staging = o.dir->staging();
       o.manifest.files = o.report->finish(f.plots);
       write_manifest(staging, o.manifest);
+      // Every file on disk before the record goes and the folder moves: a power loss after
+      // "wrote" must not leave holes (zeros) in a folder that no record can resume.
+      for (const fs::directory_entry& e : fs::directory_iterator(staging))
+        if (e.is_regular_file() && e.path().filename() != kSweepStateFile) sync_to_disk(e.path());
+      sync_to_disk(staging);
       std::error_code ec;
       fs::remove(staging / kSweepStateFile, ec);
       if (ec) throw std::runtime_error(fmt::format("{}: cannot remove: {}", (staging / kSweepStateFile).string(), ec.message()));
+      o.dir->discard_on_failure();  // no record now: nothing to resume
+      sync_to_disk(staging);
       o.dir->commit();
+      sync_to_disk(o.dir->destination().parent_path());
     } catch (const std::exception& e) {
       error = std::current_exception();
       failure = rank_failure_text(e);

@@ -42,6 +42,9 @@ class OutputDir {
   // From now on the staging folder is kept when the folder is not committed (also by a signal
   // arriving meanwhile: call it before writing the first progress record).
   void keep_on_failure();
+  // From now on the staging folder is removed again when the folder is not committed: a failure
+  // that resuming would only repeat, or after the progress record is gone.
+  void discard_on_failure();
   ~OutputDir();
   OutputDir(const OutputDir&) = delete;
   OutputDir& operator=(const OutputDir&) = delete;

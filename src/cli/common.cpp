@@ -54,29 +54,16 @@ Failure failure_of(std::exception_ptr error) {
   }
 }
 
-void on_every_rank(const std::function<void()>& step) {
-  if (ranks().size() == 1) return step();
+namespace {
+// Runs `step` on this rank if `here`; then every rank learns the lowest failing rank's failure
+// (its exit code and message, as text) and throws it as RanksFailure.
+void run_and_agree(const std::function<void()>& step, bool here) {
   std::optional<std::string> mine;
-  try {
-    step();
-  } catch (...) {
-    const Failure failure = failure_of(std::current_exception());
-    mine = std::to_string(failure.exit_code) + "\n" + failure.message;
-  }
-  const std::optional<std::string> first = ranks().first_failure(mine);
-  if (!first) return;
-  const auto newline = first->find('\n');
-  throw RanksFailure({std::stoi(first->substr(0, newline)), first->substr(newline + 1)});
-}
-
-void on_rank_0(const std::function<void()>& step) {
-  std::optional<std::string> mine;
-  Failure failure;
-  if (ranks().is_root()) {
+  if (here) {
     try {
       step();
     } catch (...) {
-      failure = failure_of(std::current_exception());
+      const Failure failure = failure_of(std::current_exception());
       mine = std::to_string(failure.exit_code) + "\n" + failure.message;
     }
   }
@@ -85,6 +72,14 @@ void on_rank_0(const std::function<void()>& step) {
   const auto newline = first->find('\n');
   throw RanksFailure({std::stoi(first->substr(0, newline)), first->substr(newline + 1)});
 }
+}  // namespace
+
+void on_every_rank(const std::function<void()>& step) {
+  if (ranks().size() == 1) return step();
+  run_and_agree(step, true);
+}
+
+void on_rank_0(const std::function<void()>& step) { run_and_agree(step, ranks().is_root()); }
 
 void set_command_line(int argc, char** argv) {
   g_command_line = "polrig";

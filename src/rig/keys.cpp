@@ -367,15 +367,21 @@ const std::vector<RigKey>& rig_keys() {
   return keys;
 }
 
-bool RigKey::read_by_source(std::string_view model) const {
-  if (sources.empty()) return true;
-  for (std::size_t b = 0; b < sources.size();) {
-    const std::size_t e = std::min(sources.find(' ', b), sources.size());
-    if (sources.substr(b, e - b) == model) return true;
+namespace {
+// Whether `name` is one of the space-separated names of `list` (every name when it is empty).
+bool listed(std::string_view list, std::string_view name) {
+  if (list.empty()) return true;
+  for (std::size_t b = 0; b < list.size();) {
+    const std::size_t e = std::min(list.find(' ', b), list.size());
+    if (list.substr(b, e - b) == name) return true;
     b = e + 1;
   }
   return false;
 }
+}  // namespace
+
+bool RigKey::read_by_source(std::string_view model) const { return listed(sources, model); }
+bool RigKey::read_by_instrument(std::string_view kind) const { return listed(instruments, kind); }
 
 std::string RigKey::studies_text() const {
   std::string out;

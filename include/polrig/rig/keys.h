@@ -57,6 +57,10 @@ struct RigKey {
   // out of its effective rig.yaml.
   std::string_view sources = {};
   bool read_by_source(std::string_view model) const;
+  // The instruments that read it (device.kind names, space-separated); empty: every instrument.
+  // A rig whose instrument is not among them refuses the key, as for `sources`.
+  std::string_view instruments = {};
+  bool read_by_instrument(std::string_view kind) const;
   std::string studies_text() const;  // "simulate, cs"
 };
 

@@ -7,16 +7,25 @@
 #include <string>
 #include <string_view>
 
+#include "polrig/device/dofp_camera.h"
 #include "polrig/device/electronics.h"
 #include "polrig/device/sensor.h"
 #include "polrig/geometry/geometry.h"
 #include "polrig/geometry/schedule.h"
+#include "polrig/instrument/instrument.h"
 #include "polrig/source/source.h"
 
 namespace polrig {
 
 struct Rig {
+  // The instrument: device.kind names it; make_instrument builds `instrument` from it when the rig
+  // loads. Callers ask it what it can do (Instrument::flags), never which kind it is.
+  std::string device_kind = "six-photodiode";
+  std::shared_ptr<const Instrument> instrument = six_photodiode_instrument();
+  // The six-photodiode sensor's settings (device.* keys), and device.d: the degree of linear
+  // polarization of the light at the instrument, whichever it is.
   SensorSpec device;
+  DofpCameraSpec camera;  // the DoFP camera's settings (device.* keys of device.kind dofp-camera)
   SourceSpec source;  // the source.* keys' settings
   // The light, made by make_source from `source` when the rig loads (cos⁴ by default) and shared
   // by copies of the rig (sweeps): a traced sphere is solved once. Callers ask it what it can do

@@ -1,0 +1,47 @@
+// make_instrument: the only place that names the instrument kinds (as source/factory.cpp the
+// source models).
+#include <array>
+#include <stdexcept>
+#include <string>
+
+#include "polrig/instrument/instrument.h"
+
+namespace polrig {
+
+namespace {
+
+// W19's six-photodiode sensor: its physics is device/sensor.h, its chain sim/simulate.h.
+class SixPhotodiode final : public Instrument {
+ public:
+  std::string_view kind() const override { return "six-photodiode"; }
+  unsigned flags() const override { return kPairVoltages; }
+};
+
+// H17's DoFP camera: device/dofp_camera.h.
+class DofpCamera final : public Instrument {
+ public:
+  std::string_view kind() const override { return "dofp-camera"; }
+  unsigned flags() const override { return kFrames; }
+};
+
+constexpr std::array<std::string_view, 2> kKinds = {"six-photodiode", "dofp-camera"};
+
+}  // namespace
+
+std::span<const std::string_view> instrument_kinds() { return kKinds; }
+
+std::shared_ptr<const Instrument> six_photodiode_instrument() {
+  static const auto instrument = std::make_shared<const SixPhotodiode>();
+  return instrument;
+}
+
+std::shared_ptr<const Instrument> make_instrument(std::string_view kind) {
+  if (kind == "six-photodiode") return six_photodiode_instrument();
+  if (kind == "dofp-camera") {
+    static const auto camera = std::make_shared<const DofpCamera>();
+    return camera;
+  }
+  throw std::invalid_argument("unknown instrument '" + std::string(kind) + "'");
+}
+
+}  // namespace polrig

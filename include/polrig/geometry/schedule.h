@@ -18,6 +18,14 @@ struct Schedule {
   double speed_deg_s = 5.0;
   double dwell_s = 1.0;
 
+  // A camera's stops (device.kind dofp-camera; H17 §4.1, spec sky-and-compasses.md §2.4): first
+  // one stop per unpolarized level (the polarizer out, the table at start_deg: step 1's uniform
+  // frames), then every table angle at each polarized intensity, intensity-major (step 2).
+  // Intensities are relative to the source's own level (cos4's E_0, the sky's radiance).
+  std::vector<double> unpolarized_levels;  // step 1's levels; none: no unpolarized stops
+  std::vector<double> intensities = {1.0};  // step 2's intensities
+  int frames_per_stop = 1;                  // frames exposed at each stop
+
   std::vector<double> table_angles_deg() const;
   // Time of each stop since the first: t_k = Σ_{i=1..k} |θ_i − θ_{i−1}|/speed + k·dwell
   // (t_0 = 0), one per table_angles_deg().

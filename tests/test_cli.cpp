@@ -779,6 +779,16 @@ TEST_F(Cli, SlowResumingRefusesOtherInputsAndForceStartsOver) {
   EXPECT_HAS(r.err, "overrides (--set)");
   EXPECT_EQ(r.err.find("grid (--grid)"), std::string::npos) << r.err;
   EXPECT_TRUE(fs::exists(staging_of(out) / polrig::kSweepStateFile)) << "a refused resume must keep the progress";
+  // A sweep.csv cut short after its checkpoint is refused, not padded with zero bytes.
+  const fs::path csv = staging_of(out) / "sweep.csv";
+  fs::resize_file(csv, 10);
+  std::vector<std::string> same = resumable_sweep(out);
+  same.push_back("--resume");
+  const Result cut = polrig(joined(same));
+  EXPECT_NE(cut.status, 0);
+  EXPECT_HAS(cut.err, csv.string() + ": 10 bytes, shorter than its last checkpoint");
+  EXPECT_HAS(cut.err, "pass --force without --resume to start over");
+  EXPECT_EQ(fs::file_size(csv), 10u);
   // --force without --resume starts over (and finishes).
   std::vector<std::string> force = resumable_sweep(out);
   force.insert(force.end(), {"--steps", "8", "--force"});

@@ -366,6 +366,23 @@ TEST(TextFile, AFullDiskIsReportedWithTheSystemsReason) {
             std::string::npos) << missing;
 }
 
+TEST(TextFile, ContinuingAFileShorterThanItsCheckpointIsRefusedNotPadded) {
+  const fs::path dir = fresh_dir("textfile-resume");
+  fs::create_directories(dir);
+  const fs::path f = dir / "sweep.csv";
+  write_text_file(f, "a,b\n1,2\n");  // 8 bytes
+  {
+    TextFileWriter w(f, 4);  // cut after the header, then continue
+    w.write("3,4\n");
+  }
+  EXPECT_EQ(read_file(f), "a,b\n3,4\n");
+  const std::string msg = error_of([&] { TextFileWriter(f, 20); });
+  EXPECT_NE(msg.find(f.string() + ": 8 bytes, shorter than its last checkpoint (20 bytes)"), std::string::npos)
+      << msg;
+  EXPECT_EQ(read_file(f), "a,b\n3,4\n");  // untouched: no zero bytes appended
+  fs::remove_all(dir);
+}
+
 TEST(Manifest, NamesEveryFileWithItsSchema) {
   const fs::path dir = fresh_dir("manifest");
   fs::create_directories(dir);

@@ -57,6 +57,14 @@ TextFileWriter::TextFileWriter(const std::filesystem::path& path) : path_(path) 
 }
 
 TextFileWriter::TextFileWriter(const std::filesystem::path& path, std::uint64_t keep_bytes) : path_(path) {
+  // truncate() would pad a file shorter than its checkpoint with zero bytes: refuse it instead.
+  std::error_code ec;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (ec) fail("cannot read the file's length", ec.value());
+  if (size < keep_bytes)
+    throw std::runtime_error(fmt::format("{}: {} bytes, shorter than its last checkpoint ({} bytes): the file "
+                                         "was changed after the checkpoint",
+                                         path_.string(), size, keep_bytes));
   if (::truncate(path.c_str(), static_cast<off_t>(keep_bytes)) != 0) fail("cannot cut the file to its last checkpoint", errno);
   file_ = std::fopen(path.c_str(), "ab");
   if (!file_) fail("cannot open the file", errno);

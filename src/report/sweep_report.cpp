@@ -391,7 +391,12 @@ void open_sweep(OpenSweep& o, const LoadedRig& r, const std::vector<GridAxis>& a
     resume = SweepReport::Resume{o.state.points_done, o.state.csv_bytes};
   }
   o.manifest = Manifest{o.state.command, &r, {}, {}, o.state.working_directory};
-  o.report.emplace(staging, axes, r.rig.light->has(Source::kClosedFormEq6), f.csv, manifest_fields(o.manifest), resume);
+  try {
+    o.report.emplace(staging, axes, r.rig.light->has(Source::kClosedFormEq6), f.csv, manifest_fields(o.manifest), resume);
+  } catch (const std::runtime_error& e) {
+    if (!resume) throw;
+    throw std::runtime_error(fmt::format("--resume: {}; pass --force without --resume to start over", e.what()));
+  }
 }
 }  // namespace
 

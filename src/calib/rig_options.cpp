@@ -21,6 +21,7 @@ std::optional<std::string> noncontinuous_rule_problem(const NoncontinuousRule& r
 
 CalibrationOptions calibration_options(const Rig& rig, std::optional<double> d_a,
                                        const NoncontinuousRule& rule) {
+  require_instrument(rig, Instrument::kPairVoltages, "an Eq. 15 calibration");
   if (const auto problem = noncontinuous_rule_problem(rule)) throw RigError(*problem);
   CalibrationOptions o;
   o.d_a = d_a;

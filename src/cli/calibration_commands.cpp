@@ -123,12 +123,16 @@ void run_calibrate(const std::string& input, const std::string& method_text,
       if (!uses_raw_stops(m))
         throw DataError(fmt::format("--drift {} needs --method nc or section (the raw stops), not "
                                     "{}: a CS point mixes two times", drift.mode, method_text));
-  const MeasuredData data = read_measured(input);
+  const MeasuredData data = read_measured(input, "calibrate --method " + method_text);
   for (const StopVoltages& s : data.stops) check_adc_range(s);
   // The sensor description (film axes, amplifier scale): --rig, else the dataset's rig.yaml,
   // else the default rig. d_a: --d-a, else the dataset rig's d.
   std::optional<LoadedRig> given;
-  if (!rig_path.empty()) given = load_rig(rig_path);
+  if (!rig_path.empty()) {
+    given = load_rig(rig_path);
+    require_instrument(given->rig, Instrument::kPairVoltages, "calibrate --method " + method_text,
+                       given->origin);
+  }
   const Rig rig = given ? given->rig : data.rig ? *data.rig : Rig{};
   // A sky dataset's light turns with the sun during the run: a CS point would mix two times.
   if (rig.light->has(Source::kTimeDependent))
@@ -304,6 +308,7 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
       std::optional<TrialSettings> checked;
       on_every_rank([&] {  // a rank that cannot read the rig (another node's files) stops all
         loaded.emplace(rig->load());
+        require_instrument(loaded->rig, Instrument::kPairVoltages, "study calibration", loaded->origin);
         checked.emplace(trial_settings_for(loaded->rig, *trials, *L_IS_max, *L_S_max,
                                            settings->options(loaded->rig, loaded->rig.device.d)));
       });

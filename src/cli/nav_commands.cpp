@@ -208,6 +208,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
         throw DataError(e.what());
       }
       const LoadedRig r = rig->load();
+      require_instrument(r.rig, Instrument::kPairVoltages, "study heading", r.origin);
       // Site, time and the sun's settings: a sky rig's `sky:` block (site, first stop, UT1 − UTC,
       // refraction), else W19's dynamic run; an option given on the command line overrides either.
       const SunSettings given = settings.sun;

@@ -81,6 +81,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
+      // The camera's frames are the camera lane's (docs/cli.md); until then a camera rig is refused.
+      require_instrument(r.rig, Instrument::kPairVoltages, "simulate", r.origin);
       OutputDir dir = out->open();
       const Simulation sim = simulate(r.rig, *samples, progress());
       write_manifest(dir.staging(), {command_line(), &r, report_simulation(dir.staging(), sim, out->plots())});
@@ -103,6 +105,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
+      require_instrument(r.rig, Instrument::kPairVoltages, "study cs", r.origin);
       OutputDir dir = out->open();
       const CsStudy s = cs_study(r.rig, CsTurn(*steps), progress());
       write_manifest(dir.staging(), {command_line(), &r, report_cs_study(dir.staging(), s, out->plots())});
@@ -125,6 +128,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     commands.push_back({app, [=] {
       // Electronics and film axes come from the rig; without one, from the default rig.
       const LoadedRig r = rig->load();
+      require_instrument(r.rig, Instrument::kPairVoltages, "study adc", r.origin);
       const std::vector<double> ds = parse_d_list(*d_list);
       OutputDir dir = out->open();
       const auto files = report_adc_limits(dir.staging(), adc_accuracy_limits(ds, r.rig.electronics, r.rig.device.film_axis_deg, *step), out->plots());
@@ -160,6 +164,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       std::vector<GridAxis> axes;
       on_every_rank([&] {  // a rank that cannot read the rig (another node's files) stops all
         loaded.emplace(rig->load());
+        require_instrument(loaded->rig, Instrument::kPairVoltages, "sweep", loaded->origin);
         for (const std::string& g : *grids) axes.push_back(GridAxis::parse(g));
         check_grid(loaded->rig, axes);
       });
@@ -194,6 +199,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
+      require_instrument(r.rig, Instrument::kPairVoltages, "run", r.origin);
       if (r.rig.light->has(Source::kTimeDependent))
         throw RigError(fmt::format("{}: polrig run is the indoor job (CS calibration of a fixed "
                                    "light); this rig's light is the sky: use polrig simulate, then "
@@ -284,8 +290,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     auto* app = rig_app->add_subcommand("keys", "print every rig key as a Markdown table");
     commands.push_back({app, [] {
       Rig defaults;
-      std::cout << "| key | unit | default | accepts | meaning | why this range | read by | sources |\n"
-                   "|---|---|---|---|---|---|---|---|\n";
+      std::cout << "| key | unit | default | accepts | meaning | why this range | read by | sources | instruments |\n"
+                   "|---|---|---|---|---|---|---|---|---|\n";
       for (const RigKey& k : rig_keys()) {
         std::string def;
         using K = RigKey::Kind;
@@ -295,10 +301,14 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
           case K::Seed: def = fmt::format("{}", k.seed(defaults)); break;
           case K::Text: def = k.text(defaults).empty() ? "(none)" : k.text(defaults); break;
           case K::RealArray: def = fmt::format("[{}]", fmt::join(k.array(defaults), ", ")); break;
-          case K::RealList: def = "(none)"; break;
+          case K::RealList:
+            def = k.list(defaults).empty() ? "(none)" : fmt::format("[{}]", fmt::join(k.list(defaults), ", "));
+            break;
+          case K::Bool: def = k.boolean(defaults) ? "true" : "false"; break;
         }
-        std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects,
-                                 k.doc, k.why, k.studies_text(), k.sources.empty() ? "all" : k.sources);
+        std::cout << fmt::format("| `{}` | {} | {} | {} | {} | {} | {} | {} | {} |\n", k.path, k.unit, def, k.expects,
+                                 k.doc, k.why, k.studies_text(), k.sources.empty() ? "all" : k.sources,
+                                 k.instruments.empty() ? "all" : k.instruments);
       }
     }});
   }

@@ -26,9 +26,26 @@ class DofpCamera final : public Instrument {
 
 constexpr std::array<std::string_view, 2> kKinds = {"six-photodiode", "dofp-camera"};
 
+constexpr std::array<InstrumentFlagInfo, 2> kFlags = {{
+    {Instrument::kPairVoltages, "pair_voltages", "pair voltages"},
+    {Instrument::kFrames, "frames", "frames"},
+}};
+
 }  // namespace
 
 std::span<const std::string_view> instrument_kinds() { return kKinds; }
+
+std::span<const InstrumentFlagInfo> instrument_flags() { return kFlags; }
+
+std::string kinds_with(Instrument::Flag flag) {
+  std::string out;
+  for (std::string_view kind : kKinds)
+    if (make_instrument(kind)->has(flag)) {
+      if (!out.empty()) out += ' ';
+      out += kind;
+    }
+  return out;
+}
 
 std::shared_ptr<const Instrument> six_photodiode_instrument() {
   static const auto instrument = std::make_shared<const SixPhotodiode>();

@@ -125,7 +125,7 @@ MeasuredData stops_of(const CsvFile& f, bool need_angle) {
   return data;
 }
 
-MeasuredData read_stops(const fs::path& input, bool need_angle) {
+MeasuredData read_stops(const fs::path& input, bool need_angle, std::string_view what) {
   std::error_code ec;
   fs::path csv = input;
   std::optional<Rig> rig;
@@ -135,6 +135,7 @@ MeasuredData read_stops(const fs::path& input, bool need_angle) {
     if (fs::exists(input / "rig.yaml", ec)) {
       rig = load_rig(input / "rig.yaml").rig;
       rig_origin = (input / "rig.yaml").string();
+      require_instrument(*rig, Instrument::kPairVoltages, what, rig_origin);
     }
   }
   MeasuredData data = stops_of(CsvFile::read(csv), need_angle);
@@ -145,8 +146,12 @@ MeasuredData read_stops(const fs::path& input, bool need_angle) {
 
 }  // namespace
 
-MeasuredData read_measured(const fs::path& input) { return read_stops(input, true); }
-MeasuredData read_voltages(const fs::path& input) { return read_stops(input, false); }
+MeasuredData read_measured(const fs::path& input, std::string_view what) {
+  return read_stops(input, true, what);
+}
+MeasuredData read_voltages(const fs::path& input, std::string_view what) {
+  return read_stops(input, false, what);
+}
 
 MeasuredData parse_measured_csv(std::string_view text, std::string_view origin, bool need_angle) {
   return stops_of(CsvFile::parse(text, origin), need_angle);

@@ -39,6 +39,7 @@ class RigParser {
 
     Rig rig;
     walk(root, "", rig);
+    make_instrument_of(rig);
     check_schedule_form();
     load_truth_from(rig);
     make_light(rig);
@@ -201,6 +202,11 @@ class RigParser {
         for (std::size_t i = 0; i < dst.size(); ++i) dst[i] = read_real(k, path, n[i]);
         return;
       }
+      case K::Bool:
+        if (!n.IsScalar() || (n.Scalar() != "true" && n.Scalar() != "false"))
+          fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
+        k.boolean(rig) = n.Scalar() == "true";
+        return;
       case K::RealList: {
         if (!n.IsSequence() || n.size() == 0 || (k.max_items && n.size() > k.max_items))
           fail(path, fmt::format("expected {}, got {}", k.expects,
@@ -248,6 +254,20 @@ class RigParser {
                            k.path));
     }
     rig.device.truth_from.clear();
+  }
+
+  // The instrument: make_instrument builds the device.kind's; keys it does not read are refused
+  // (RigKey::instruments), as keys the source model does not read are.
+  void make_instrument_of(Rig& rig) const {
+    for (const RigKey& k : rig_keys())
+      if (present_.count(std::string(k.path)) && !k.read_by_instrument(rig.device_kind))
+        fail(std::string(k.path), fmt::format("expected no value with device.kind {} (only device.kind {} "
+                                              "reads it)", rig.device_kind, k.instruments));
+    try {
+      rig.instrument = make_instrument(rig.device_kind);
+    } catch (const std::invalid_argument& e) {
+      fail("device.kind", e.what());
+    }
   }
 
   // The light: make_source builds the rig's model; a scene it names is read relative to the rig
@@ -362,6 +382,7 @@ std::string rig_to_yaml(const Rig& rig_in) {
       case K::Integer: value = k.integer(rig); break;
       case K::Seed: value = k.seed(rig); break;
       case K::Text: value = k.text(rig); break;
+      case K::Bool: value = k.boolean(rig); break;
       case K::RealArray:
       case K::RealList: {
         std::span<const double> src =

@@ -247,6 +247,8 @@ PyCalibration run_calibrate(const py::handle& theta_R_deg, const py::handle& V,
   if (!rig_obj.is_none() && !py::isinstance<PyRig>(rig_obj))
     throw py::type_error(fmt::format("rig: expected a polrig.Rig or None, got {}",
                                      py::str(py::type::of(rig_obj)).cast<std::string>()));
+  if (!rig_obj.is_none())
+    require(rig_obj.cast<const PyRig&>(), Instrument::kPairVoltages, "calibrate method='" + method_name_text + "'");
   const Rig rig = rig_obj.is_none() ? Rig{} : rig_obj.cast<const PyRig&>().rig();
   if (rig.light->has(Source::kTimeDependent) && !raw_stops)
     throw py::value_error(fmt::format("method='{}': the rig's light is the sky, which drifts with "

@@ -349,6 +349,7 @@ void bind_nav(py::module_& m) {
                             double ins_tilt_sd, double mount_tilt_sd, double mount_azimuth_sd,
                             double p_max_min, double p_max_max, int samples,
                             std::optional<int> threads, const py::object& progress) {
+        require(rig, Instrument::kPairVoltages, "study heading");
         HeadingStudySettings s;
         s.trials = trials;
         s.samples = samples;

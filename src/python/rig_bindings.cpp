@@ -80,8 +80,14 @@ py::object value_of(const Rig& rig_in, const RigKey& k) {
       return take(std::vector<double>(a.begin(), a.end()));
     }
     case K::RealList: return take(std::vector<double>(k.list(rig)));
+    case K::Bool: return py::bool_(k.boolean(rig));
   }
   return py::none();
+}
+
+// Whether the rig's source and instrument read the key (Rig.keys(), `in`).
+bool reads_key(const PyRig& r, const RigKey& k) {
+  return k.read_by_source(r.rig().source.model) && k.read_by_instrument(r.rig().device_kind);
 }
 
 PyRig reparsed(const PyRig& r, const std::vector<RigOverride>& more) {
@@ -91,7 +97,7 @@ PyRig reparsed(const PyRig& r, const std::vector<RigOverride>& more) {
 }
 
 py::dict key_info(const RigKey& k) {
-  static const char* kinds[] = {"real", "integer", "seed", "text", "real array", "real list"};
+  static const char* kinds[] = {"real", "integer", "seed", "text", "real array", "real list", "bool"};
   Rig defaults;
   py::dict d;
   d["path"] = std::string(k.path);
@@ -103,6 +109,7 @@ py::dict key_info(const RigKey& k) {
   d["why"] = std::string(k.why);
   d["read_by"] = k.studies_text();
   d["sources"] = k.sources.empty() ? std::string("all") : std::string(k.sources);
+  d["instruments"] = k.instruments.empty() ? std::string("all") : std::string(k.instruments);
   return d;
 }
 
@@ -158,9 +165,9 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
       .def("keys", [](const PyRig& r) {
             std::vector<std::string> out;
             for (const RigKey& k : rig_keys())
-              if (k.read_by_source(r.rig().source.model)) out.emplace_back(k.path);
+              if (reads_key(r, k)) out.emplace_back(k.path);
             return out;
-          }, "The keys this rig's source reads, in the table's order.")
+          }, "The keys this rig's source and instrument read, in the table's order.")
       .def("__getitem__", [](const PyRig& r, const std::string& path) {
             const RigKey& k = key_or_throw(path);
             return value_of(r.rig(), k);
@@ -177,11 +184,34 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
           }, py::arg("values"), "Sets several keys at once (all or none).")
       .def("__contains__", [](const PyRig& r, const std::string& path) {
             const RigKey* k = find_rig_key(path);
-            return k && k->read_by_source(r.rig().source.model);
-          }, py::arg("key"), "Whether `key` is one of rig.keys() (a key this rig's source reads).")
+            return k && reads_key(r, *k);
+          }, py::arg("key"), "Whether `key` is one of rig.keys() (a key this rig's source and "
+                             "instrument read).")
       .def("copy", [](const PyRig& r) { return r; }, "An independent copy.")
       .def("__copy__", [](const PyRig& r) { return r; })
       .def("__deepcopy__", [](const PyRig& r, py::dict) { return r; }, py::arg("memo"))
+      .def_property_readonly("instrument", [](const PyRig& r) { return std::string(r.rig().instrument->kind()); },
+                             "The instrument's kind, as device.kind names it: \"six-photodiode\" "
+                             "or \"dofp-camera\" (ask Rig.can what it measures, not the kind).")
+      .def_property_readonly("capabilities", [](const PyRig& r) {
+            std::vector<std::string> out;
+            for (const InstrumentFlagInfo& f : instrument_flags())
+              if (r.rig().instrument->has(f.flag)) out.emplace_back(f.name);
+            return out;
+          }, "What the rig's instrument measures (its flags): \"pair_voltages\" (the "
+             "six-photodiode sensor: simulate, the studies, calibrate's Eq. 15 methods) and/or "
+             "\"frames\" (the DoFP camera).")
+      .def("can", [](const PyRig& r, const std::string& capability) {
+            for (const InstrumentFlagInfo& f : instrument_flags())
+              if (f.name == capability) return r.rig().instrument->has(f.flag);
+            std::string known;
+            for (const InstrumentFlagInfo& f : instrument_flags())
+              known += fmt::format("{}{}", known.empty() ? "" : ", ", f.name);
+            throw py::value_error(fmt::format("unknown capability '{}' (expected one of {})",
+                                              capability, known));
+          }, py::arg("capability"),
+          "Whether the rig's instrument has `capability` (\"pair_voltages\" or \"frames\"); "
+          "raises ValueError for another name.")
       .def_property_readonly("origin", [](const PyRig& r) { return r.loaded.origin; },
                              "The file the rig was read from, or \"(default rig)\", \"(dict)\", ...")
       .def_property_readonly("overrides", [](const PyRig& r) {
@@ -190,8 +220,11 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
             return out;
           }, "The overrides applied to the origin's text, oldest first (\"key=value\").")
       .def("__repr__", [](const PyRig& r) {
-            return fmt::format("<polrig.Rig {} ({} overrides), source.model {}>", r.loaded.origin,
-                               r.loaded.overrides.size(), r.rig().source.model);
+            return fmt::format("<polrig.Rig {} ({} overrides), source.model {}{}>", r.loaded.origin,
+                               r.loaded.overrides.size(), r.rig().source.model,
+                               r.rig().device_kind == kDefaultDeviceKind
+                                   ? std::string()
+                                   : ", device.kind " + r.rig().device_kind);
           })
       .def(py::pickle(
           [](const PyRig& r) {
@@ -216,7 +249,8 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
         for (const RigKey& k : rig_keys()) out.append(key_info(k));
         return out;
       }, "Every rig key, as the table `polrig rig keys` prints: a list of dicts with path, kind, "
-         "unit, default, expects, doc, why, read_by (the studies) and sources (the source models).");
+         "unit, default, expects, doc, why, read_by (the studies), sources (the source models) and "
+         "instruments (the device.kind values that read it; \"all\" for every one).");
 }
 
 }  // namespace polrig::python

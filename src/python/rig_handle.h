@@ -13,6 +13,11 @@ struct PyRig {
 };
 
 // The registered class polrig.Rig, for the parts that add methods to it (study_bindings.cpp).
+// The CLI's capability check (rig/rig.h), with the rig's origin: the same message as the CLI's.
+inline void require(const PyRig& r, Instrument::Flag needs, std::string_view what) {
+  require_instrument(r.rig(), needs, what, r.loaded.origin);
+}
+
 inline pybind11::class_<PyRig> rig_class(pybind11::module_& m) {
   return pybind11::reinterpret_borrow<pybind11::class_<PyRig>>(m.attr("Rig"));
 }

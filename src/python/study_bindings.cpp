@@ -731,6 +731,7 @@ void bind_studies(py::module_& m) {
   rig.def("simulate", [](const PyRig& self, bool samples, std::optional<std::filesystem::path> out,
                          bool force, bool plots, std::optional<int> threads,
                          const py::object& progress) {
+    require(self, Instrument::kPairVoltages, "simulate");
     const LoadedRig loaded = self.loaded;  // the GIL is released below: nothing of self is read then
     const Rig& r = loaded.rig;
     if (out && plots && !gnuplot_available())
@@ -815,6 +816,7 @@ scene file, line and key, or the photon count.
 
   rig.def("study_cs", [](const PyRig& self, int steps, std::optional<int> threads,
                          const py::object& progress) {
+    require(self, Instrument::kPairVoltages, "study cs");
     const std::shared_ptr<const CsTurn> turn = turn_of(steps);
     const Rig r = self.rig();
     const ThreadLimit limit(threads);
@@ -838,6 +840,7 @@ scene file, line and key, or the photon count.
   rig.def("sweep", [](const PyRig& self, const py::object& grid, int steps, std::optional<int> threads,
                       const py::object& progress, std::optional<std::filesystem::path> out, bool csv, bool resume,
                       bool force, bool plots) -> py::object {
+    require(self, Instrument::kPairVoltages, "sweep");
     if (!out) {
       if (csv || resume || force || plots)
         throw py::value_error("csv=, resume=, force= and plots= are options of out=: pass out=FOLDER");
@@ -851,6 +854,7 @@ scene file, line and key, or the photon count.
 
   rig.def("study_adc", [](const PyRig& self, const py::object& d, double step,
                           std::optional<int> threads) {
+    require(self, Instrument::kPairVoltages, "study adc");
     const std::vector<double> ds = d_values(d);
     finite_in(step, kMinAdcStep, kMaxAdcStep, "step", "deg");
     const Rig r = self.rig();
@@ -873,6 +877,7 @@ scene file, line and key, or the photon count.
                                   std::optional<double> L_S_max, std::optional<double> d_a,
                                   double nc_threshold, int nc_min_points, std::optional<int> threads,
                                   const py::object& progress) {
+    require(self, Instrument::kPairVoltages, "study calibration");
     if (d_a && !(*d_a > 0 && *d_a < 1))
       throw py::value_error(fmt::format("d_a={}: expected a degree of polarization in (0, 1)", *d_a));
     const NoncontinuousRule rule{nc_threshold, nc_min_points};
@@ -896,6 +901,7 @@ scene file, line and key, or the photon count.
      py::arg("progress") = py::none());
 
   rig.def("light_at_pose", [](const PyRig& self, const py::object& theta_R_deg, double t_s) {
+    require(self, Instrument::kPairVoltages, "light_at_pose");
     const DoubleArray a = as_array(theta_R_deg, "theta_R_deg", 0);
     if (a.ndim() > 1) throw py::value_error("theta_R_deg: expected a number or a 1-D array");
     const std::vector<double> angles = finite_values(a, "theta_R_deg");

@@ -85,12 +85,58 @@ RigKey reads(RigKey k, unsigned studies, std::string_view sources) {
   return k;
 }
 
+// A key only some instruments read (space-separated device.kind names).
+RigKey only(RigKey k, std::string_view instruments) {
+  k.instruments = instruments;
+  return k;
+}
+constexpr std::string_view kSix = "six-photodiode", kCamera = "dofp-camera";
+
+// An integer key in [lo, hi]; `even`: whole 2 × 2 mosaic cells.
+template <long long lo, long long hi, bool even = false>
+bool integer_within(long long v) { return v >= lo && v <= hi && (!even || v % 2 == 0); }
+
+RigKey boolean(std::string_view path, std::string_view doc, bool& (*ref)(Rig&)) {
+  RigKey k{path, RigKey::Kind::Bool, "", "true or false", doc};
+  k.boolean = ref;
+  return k;
+}
+
+RigKey integer(std::string_view path, std::string_view expects, std::string_view doc,
+               std::string_view why, int& (*ref)(Rig&), bool (*valid)(long long)) {
+  RigKey k{path, RigKey::Kind::Integer, "", std::string(expects), doc, why};
+  k.integer = ref;
+  k.valid_integer = valid;
+  return k;
+}
+
+// "\"six-photodiode\" or \"dofp-camera\"": the kinds make_instrument knows.
+std::string instrument_kinds_text() {
+  std::string out;
+  const auto kinds = instrument_kinds();
+  for (std::size_t i = 0; i < kinds.size(); ++i)
+    out += fmt::format("{}\"{}\"", i == 0 ? "" : i + 1 == kinds.size() ? " or " : ", ", kinds[i]);
+  return out;
+}
+
 constexpr unsigned kSimulate = RigKey::kSimulate, kCs = RigKey::kCs, kAdc = RigKey::kAdc,
                    kCalibrate = RigKey::kCalibrate;
 
 std::vector<RigKey> make_keys() {
   std::vector<RigKey> keys;
   // --- device -------------------------------------------------------------------------
+  {
+    RigKey k{"device.kind", K::Text, "", instrument_kinds_text(),
+             "the instrument: six-photodiode is W19's sensor (pair voltages), dofp-camera H17's "
+             "pixelated polarization camera (frames); it decides which device.* keys the rig reads"};
+    k.text = [](Rig& r) -> std::string& { return r.device_kind; };
+    k.valid_text = [](std::string_view v) {
+      for (std::string_view kind : instrument_kinds())
+        if (v == kind) return true;
+      return false;
+    };
+    keys.push_back(reads(k, kSimulate | kCs | kAdc | kCalibrate, ""));
+  }
   keys.push_back(reads(real<RealRange{0.1, 500.0}>(
       "device.L_photo", "mm", "a length",
       "radius of the photodiode ring around the sensor centre O_S",
@@ -140,7 +186,111 @@ std::vector<RigKey> make_keys() {
     k.valid_text = [](std::string_view v) { return !v.empty(); };
     keys.push_back(reads(k, kSimulate | kCs, ""));
   }
-  // --- source -------------------------------------------------------------------------
+  // Every device.* key above but device.kind and device.d (the light's degree, at any
+  // instrument) is the six-photodiode sensor's.
+  for (RigKey& k : keys)
+    if (k.path != "device.kind" && k.path != "device.d") k.instruments = kSix;
+  // --- device.kind dofp-camera (device/dofp_camera.h; spec sky-and-compasses.md §2.1–2.3) --
+  keys.push_back(reads(only(integer(
+      "device.width_px", "an even integer in [2, 16384]", "image columns (H17's CCD: 640)",
+      "whole 2 × 2 mosaic cells; 16384 columns is beyond any polarization camera made",
+      [](Rig& r) -> int& { return r.camera.width_px; }, &integer_within<2, 16384, true>), kCamera),
+      kSimulate | kCalibrate, ""));
+  keys.push_back(reads(only(integer(
+      "device.height_px", "an even integer in [2, 16384]", "image rows (H17's CCD: 480)",
+      "whole 2 × 2 mosaic cells; 16384 rows is beyond any polarization camera made",
+      [](Rig& r) -> int& { return r.camera.height_px; }, &integer_within<2, 16384, true>), kCamera),
+      kSimulate | kCalibrate, ""));
+  keys.push_back(reads(only(real<RealRange{0.5, 100.0}>(
+      "device.pixel_um", "um", "a pixel pitch", "pixel pitch (H17: 7.4 µm)",
+      "image sensors' pixels span about 1 µm (phones) to tens of µm (scientific CCDs)",
+      [](Rig& r) -> double& { return r.camera.pixel_um; }), kCamera), kSimulate | kCalibrate, ""));
+  keys.push_back(reads(only(real<RealRange{0.5, 1000.0}>(
+      "device.focal_mm", "mm", "a focal length",
+      "pinhole focal length (H17: 3 mm, f_c = focal_mm/pixel_um·1000 = 405.4 px)",
+      "from a fisheye's 0.5 mm to a 1 m telephoto",
+      [](Rig& r) -> double& { return r.camera.focal_mm; }), kCamera), kSimulate | kCalibrate, ""));
+  keys.push_back(reads(only(boolean(
+      "device.vignetting", "the lens's natural cos⁴ falloff of the image irradiance (off: H17's "
+      "pinhole model)",
+      [](Rig& r) -> bool& { return r.camera.vignetting; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(array<kTurn>(
+      "device.mosaic_deg", "deg", "4 angles",
+      "analyzer axes α of a 2 × 2 cell's pixels (top-left, top-right, bottom-left, bottom-right), "
+      "image frame from X_l towards Y_l (H17: 0, 90, 45, 135)",
+      kTurnWhy, [](Rig& r) { return std::span<double>(r.camera.mosaic_deg); }), kCamera),
+      kSimulate | kCalibrate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 1e9, true, false}>(
+      "device.gain_DN", "DN", "a gain", "mean gain K: DN per unit of the source's intensity",
+      "positive; 1e9 DN per unit saturates any ADC at any useful light",
+      [](Rig& r) -> double& { return r.camera.gain_DN; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 0.3}>(
+      "device.gain_spread", "", "a relative spread", "relative SD of the gain K over the pixels",
+      "beyond 30 % a Gaussian draw gives non-positive gains (3.3 σ) in a VGA frame",
+      [](Rig& r) -> double& { return r.camera.gain_spread; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{-16777216.0, 16777216.0}>(
+      "device.offset_DN", "DN", "an offset", "mean offset b",
+      "an offset beyond the largest ADC's range (24 bits) clips every pixel",
+      [](Rig& r) -> double& { return r.camera.offset_DN; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 16777216.0}>(
+      "device.offset_spread_DN", "DN", "a standard deviation", "SD of the offset b over the pixels",
+      "as device.offset_DN: the largest ADC's range",
+      [](Rig& r) -> double& { return r.camera.offset_spread_DN; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{0.0, 1.0}>(
+      "device.k", "", "4 efficiencies",
+      "polarization efficiency k of the cell's four positions (Eq. 17), before the extinction",
+      "0 is a pixel that does not analyze, 1 a perfect analyzer (spec §2.3: k is the modulus of a mean of unit phasors)",
+      [](Rig& r) { return std::span<double>(r.camera.k); }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{-90.0, 90.0}>(
+      "device.eps_deg", "deg", "4 angles", "angle error ε of the cell's four positions (Eq. 17)",
+      "an axial angle: ±90° is every orientation of an analyzer",
+      [](Rig& r) { return std::span<double>(r.camera.eps_deg); }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 0.5}>(
+      "device.k_spread", "", "a standard deviation", "SD of k over the pixels",
+      "k lies in [0, 1]: a spread of half that range is no longer a spread about a mean",
+      [](Rig& r) -> double& { return r.camera.k_spread; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 45.0}>(
+      "device.eps_spread_deg", "deg", "a standard deviation", "SD of ε over the pixels",
+      "an axial angle's spread beyond 45° is no longer a spread about a mean",
+      [](Rig& r) -> double& { return r.camera.eps_spread_deg; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{-1.0, 1.0}>(
+      "device.misregistration_dx_px", "px", "a shift",
+      "shift of the polarizer mosaic against the pixels along x (spec §2.3's overlap formula)",
+      "a whole pixel turns each analyzer into its neighbour's",
+      [](Rig& r) -> double& { return r.camera.misregistration_dx_px; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{-1.0, 1.0}>(
+      "device.misregistration_dy_px", "px", "a shift",
+      "shift of the polarizer mosaic against the pixels along y (spec §2.3's overlap formula)",
+      "a whole pixel turns each analyzer into its neighbour's",
+      [](Rig& r) -> double& { return r.camera.misregistration_dy_px; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{-45.0, 45.0}>(
+      "device.misregistration_rotation_deg", "deg", "an angle",
+      "rotation of the polarizer mosaic about the image centre, from X_l towards Y_l",
+      "a quarter turn maps the mosaic onto itself with its axes exchanged: ±45° covers it",
+      [](Rig& r) -> double& { return r.camera.misregistration_rotation_deg; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{1.0, 1e12, true, false}>(
+      "device.extinction_ratio", "", "a ratio",
+      "extinction ratio τ_M/τ_m of the wire grids: k is multiplied by (ER − 1)/(ER + 1)",
+      "1 is no polarizer; wire grids reach 10²–10⁴; 1e12 is an ideal one in double precision",
+      [](Rig& r) -> double& { return r.camera.extinction_ratio; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(boolean(
+      "device.noise", "Poisson–Gaussian noise (shot and read noise) on every frame",
+      [](Rig& r) -> bool& { return r.camera.noise; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 1e6, true, false}>(
+      "device.electrons_per_DN", "e/DN", "a conversion gain",
+      "shot noise: a signal of s DN holds s·electrons_per_DN electrons",
+      "image sensors' conversion gains lie around 0.1–100 e⁻/DN; 1e6 is noise-free in practice",
+      [](Rig& r) -> double& { return r.camera.electrons_per_DN; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 1e4}>(
+      "device.read_noise_DN", "DN", "a standard deviation", "Gaussian read noise per pixel and frame",
+      "more than 1e4 DN buries a 12-bit camera's whole range",
+      [](Rig& r) -> double& { return r.camera.read_noise_DN; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(integer(
+      "device.adc_bits", "an integer in [1, 24]", "the camera's ADC depth: raw values 0 … 2^bits − 1",
+      "cameras digitise to 8–16 bits; raw frames are unsigned 32-bit EXR channels, 24 bits leaves "
+      "headroom",
+      [](Rig& r) -> int& { return r.camera.adc_bits; }, &integer_within<1, 24>), kCamera),
+      kSimulate, ""));
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
@@ -266,16 +416,19 @@ std::vector<RigKey> make_keys() {
            "a point sample along the sensor's axis, or the lens's cone (spec §1.3)",
            [](Rig& r) -> std::string& { return r.source.sky.field; },
            [](std::string_view v) { return v == "point" || v == "cone"; }, kSimulate);
+  keys.back().instruments = kSix;  // a photodiode's view; a camera's pixels each have their own ray
   keys.push_back(reads(real<RealRange{0.0, 10.0, true, false}>(
       "sky.field_half_angle_deg", "deg", "an angle",
       "half-angle of the lens's cone, atan(0.65 mm/50 mm) = 0.74475° (spec §1.3)",
       "a photodiode at the focus of a lens sees a few degrees at most",
       [](Rig& r) -> double& { return r.source.sky.mount.field_half_angle_deg; }), kSimulate, "sky"));
+  keys.back().instruments = kSix;
   keys.push_back(reads(real<RealRange{1e-7, 1e5}>(
       "sky.E_0", "W/m^2", "an irradiance",
       "each channel's irradiance for the sky's radiance 1 (the zenith of a uniform sky)",
       "W19's log amplifier covers 1.46e-5 to 14.64 W/m²; from deep twilight to a hundred suns",
       [](Rig& r) -> double& { return r.source.sky.mount.E0_Wm2; }), kSimulate, "sky"));
+  keys.back().instruments = kSix;  // a channel's irradiance; a camera's intensity is the radiance
   // --- eccentricity -------------------------------------------------------------------
   keys.push_back(reads(real<kOffset>("eccentricity.L_IS", "mm", "a length",
                                "offset of the port centre O_IS from the table centre O_R",
@@ -316,7 +469,7 @@ std::vector<RigKey> make_keys() {
              "samples the sensor records at each stop (the paper averages 40)"};
     k.integer = [](Rig& r) -> int& { return r.schedule.samples_per_stop; };
     k.valid_integer = [](long long v) { return v >= 1 && v <= 100000; };
-    keys.push_back(reads(k, kSimulate, ""));
+    keys.push_back(reads(only(k, kSix), kSimulate, ""));
   }
   keys.push_back(reads(real<RealRange{0.01, 1000.0}>(
       "schedule.speed_deg_s", "deg/s", "a speed",
@@ -329,6 +482,34 @@ std::vector<RigKey> make_keys() {
       "time the table rests at each stop while the sensor records",
       "0 (no rest) to an hour per stop",
       [](Rig& r) -> double& { return r.schedule.dwell_s; }), kSimulate, ""));
+  // A camera's stops (geometry/schedule.h; H17 §4.1, spec §2.4): step 1's unpolarized levels,
+  // then every table angle at each polarized intensity.
+  for (const bool levels : {true, false}) {
+    constexpr RealRange kLevel{0.0, 100.0}, kIntensity{0.0, 100.0, true, false};
+    RigKey k{levels ? "schedule.unpolarized_levels" : "schedule.intensities", K::RealList, "",
+             levels ? expects_text("a list of 1 to 10000 relative intensities", kLevel, "")
+                    : expects_text("a list of 1 to 10000 relative intensities", kIntensity, ""),
+             levels ? "step 1: one unpolarized stop (polarizer out, table at its first stop) per "
+                      "level, relative to the source's level (H17: 0 to 1720 cd/m² in about 60 "
+                      "cd/m² steps)"
+                    : "step 2: the polarized intensities, relative to the source's level; every "
+                      "table stop at each (H17: 1, 0.5, 0.25, 0.1, 0.05, 0.025)",
+             levels ? "0 is dark; a hundredfold the source's level saturates any exposure set for it"
+                    : "a polarized frame needs light; a hundredfold the source's level saturates "
+                      "any exposure set for it"};
+    if (levels) k.list = [](Rig& r) -> std::vector<double>& { return r.schedule.unpolarized_levels; };
+    else k.list = [](Rig& r) -> std::vector<double>& { return r.schedule.intensities; };
+    k.range = levels ? kLevel : kIntensity;
+    k.max_items = 10000;
+    k.valid_real = levels ? &within<kLevel> : &within<kIntensity>;
+    keys.push_back(reads(only(k, kCamera), kSimulate, ""));
+  }
+  keys.push_back(reads(only(integer(
+      "schedule.frames_per_stop", "an integer in [1, 10000]",
+      "frames the camera exposes at each stop (H17: 5 per step-1 level, 1 per position)",
+      "H17 averages 5; 10000 frames is minutes of video at 80 fps",
+      [](Rig& r) -> int& { return r.schedule.frames_per_stop; }, &integer_within<1, 10000>), kCamera),
+      kSimulate, ""));
   // --- electronics --------------------------------------------------------------------
   keys.push_back(reads(real<RealRange{0.01, 10.0}>(
       "electronics.volts_per_decade", "V", "a gain", "log-amplifier scale (the 0.5 of Eq. 1)",
@@ -350,6 +531,10 @@ std::vector<RigKey> make_keys() {
       "Gaussian noise on each pair voltage, per sample, before the ADC",
       "noise of more than 1 V buries any log amplifier's signal (our rigs: 0.1 mV)",
       [](Rig& r) -> double& { return r.electronics.noise_sigma_V; }), kSimulate, ""));
+  // The log amplifiers and the signed ADC are the six-photodiode sensor's (the camera's own ADC
+  // and noise are device.* keys).
+  for (RigKey& k : keys)
+    if (k.path.starts_with("electronics.")) k.instruments = kSix;
   // --- seed ---------------------------------------------------------------------------
   {
     RigKey k{"seed", K::Seed, "", "an unsigned 64-bit integer",
@@ -412,7 +597,7 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
                         fmt::format("expected at most 1e6 stops, got {:.0f}",
                                     std::floor((s.stop_deg - s.start_deg) / s.step_deg) + 1)};
   }
-  for (int m = 0; m < 6; ++m) {
+  for (int m = 0; m < 6 && rig.instrument->has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.
     if ((1.0 + rig.device.truth.kd[m]) * rig.device.d >= 1.0)
       return RigProblem{"device.d", fmt::format("expected (1+kd_{})·d < 1, got {}", m + 1,
@@ -423,6 +608,8 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
 
 bool written_for(const RigKey& key, const Rig& rig_in) {
   if (!key.read_by_source(rig_in.source.model)) return false;
+  if (!key.read_by_instrument(rig_in.device_kind)) return false;
+  if (key.path == "device.kind" && rig_in.device_kind == kDefaultDeviceKind) return false;
   Rig rig = rig_in;  // accessors hand out references into a mutable Rig
   using K = RigKey::Kind;
   if (key.kind == K::Text && key.text(rig).empty()) return false;

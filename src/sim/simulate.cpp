@@ -13,6 +13,7 @@
 namespace polrig {
 
 PoseLight light_at_pose(const Rig& rig, double theta_R_deg, double t_s) {
+  require_instrument(rig, Instrument::kPairVoltages, "the light at the photodiodes");
   const Source& source = *rig.light;
   const SourceView view = rig.source_view();
   const SourcePose pose{theta_R_deg, t_s};
@@ -94,6 +95,7 @@ Stop simulate_stop(const Rig& rig, std::size_t index, double theta_R_deg, double
 }  // namespace
 
 Simulation simulate(const Rig& rig, bool keep_samples, const Progress& progress) {
+  require_instrument(rig, Instrument::kPairVoltages, "simulate");
   const std::vector<double> angles = rig.schedule.table_angles_deg();
   const std::vector<double> times = rig.schedule.stop_times_s();
   Simulation sim;

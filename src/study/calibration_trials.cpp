@@ -22,6 +22,7 @@ namespace polrig {
 
 TrialSettings trial_settings_for(const Rig& rig, int trials, std::optional<double> L_IS_max,
                                  std::optional<double> L_S_max, CalibrationOptions calibration) {
+  require_instrument(rig, Instrument::kPairVoltages, "study calibration");
   if (trials < 1 || trials > kMaxTrials)
     throw RigError(fmt::format("trials={}: expected a whole number in [1, {}]", trials, kMaxTrials));
   const auto offset = [](std::optional<double> given, double rig_mm, const char* name) {
@@ -80,6 +81,7 @@ double quantile(std::vector<double> sorted, double q) {
 std::vector<Trial> calibration_trials(const Rig& rig, const TrialSettings& s, const Progress& progress,
                                       const Ranks* ranks_or_null) {
   const Ranks& ranks = ranks_or_null ? *ranks_or_null : this_process_only();
+  require_instrument(rig, Instrument::kPairVoltages, "study calibration");
   // The CS types need every stop paired; that depends on the schedule alone, so it is the rig's
   // error, said once before any work, not a failure of every trial.
   std::vector<StopVoltages> schedule;

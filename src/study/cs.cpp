@@ -213,6 +213,7 @@ double eq6_dev_pct(const CsPairSummary& s) {
 }
 
 CsStudy cs_study(const Rig& rig, const CsTurn& turn, const Progress& progress) {
+  require_instrument(rig, Instrument::kPairVoltages, "study cs");
   const int n = turn.steps();
   std::vector<double> scratch;
   CsStudy study;

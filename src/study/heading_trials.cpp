@@ -283,6 +283,7 @@ void check_heading_study_settings(const HeadingStudySettings& s,
 
 std::vector<HeadingTrial> heading_trials(const Rig& rig, const HeadingStudySettings& s,
                                          const Progress& progress) {
+  require_instrument(rig, Instrument::kPairVoltages, "study heading");
   check_heading_study_settings(s);
   const Vec3 sun = sun_direction_enu(sun_position(s.utc, s.site, s.sun));
   std::vector<HeadingTrial> trials(static_cast<std::size_t>(std::max(0, s.trials)));

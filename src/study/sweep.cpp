@@ -193,13 +193,18 @@ RigError point_error(const std::vector<GridAxis>& axes, const std::vector<int>& 
 }  // namespace
 
 void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
+  require_instrument(base, Instrument::kPairVoltages, "sweep");
   double points = 1;
   for (const GridAxis& a : axes) points *= a.count;
   if (points > 1e9)
     throw RigError(fmt::format("--grid: {:.3g} grid points; at most 1e9 (a summary row each)", points));
-  // A key the rig's source does not read is refused (RigKey::sources), and so is device.d when
-  // the source sets the light's d itself (the traced port film): a swept value would be unused.
+  // A key the rig's source or instrument does not read is refused (RigKey::sources,
+  // RigKey::instruments), and so is device.d when the source sets the light's d itself (the
+  // traced port film): a swept value would be unused.
   for (const GridAxis& a : axes) {
+    if (!a.key->read_by_instrument(base.device_kind))
+      throw RigError(fmt::format("--grid {}: device.kind {} does not read '{}' (only device.kind {} "
+                                 "does); it cannot be swept", a.text(), base.device_kind, a.key->path, a.key->instruments));
     if (!a.key->read_by_source(base.source.model))
       throw RigError(fmt::format("--grid {}: source.model {} does not read '{}' (only source.model {} "
                                  "does); it cannot be swept", a.text(), base.source.model, a.key->path, a.key->sources));

@@ -7,6 +7,7 @@
 // (instrument/factory.cpp) is the only place that names the kinds.
 #include <memory>
 #include <span>
+#include <string>
 #include <string_view>
 
 namespace polrig {
@@ -36,5 +37,16 @@ std::shared_ptr<const Instrument> make_instrument(std::string_view kind);
 std::span<const std::string_view> instrument_kinds();
 // The six-photodiode sensor (shared; it holds nothing): a default Rig's.
 std::shared_ptr<const Instrument> six_photodiode_instrument();
+
+// Every flag, with its name (an identifier: Python's Rig.can("frames")) and what it gives, as
+// messages say it ("pair voltages").
+struct InstrumentFlagInfo {
+  Instrument::Flag flag;
+  std::string_view name;
+  std::string_view text;
+};
+std::span<const InstrumentFlagInfo> instrument_flags();
+// The kinds that have `flag`, space-separated ("six-photodiode"), for messages.
+std::string kinds_with(Instrument::Flag flag);
 
 }  // namespace polrig

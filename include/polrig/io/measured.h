@@ -54,11 +54,12 @@ struct MeasuredData {
 // `input` is a folder (reads stops.csv, and rig.yaml when present) or a CSV file. Requires
 // theta_R_deg, V1, V2, V3; an optional `utc` column gives each stop's time (for the sun-drift
 // corrections of an outdoor run); other columns are ignored. Throws DataError (or RigError for the
-// dataset's rig.yaml).
-MeasuredData read_measured(const std::filesystem::path& input);
+// dataset's rig.yaml). A folder whose rig's instrument gives no pair voltages (a camera's dataset)
+// is refused before stops.csv is read: RigError "DIR/rig.yaml: WHAT needs pair voltages …".
+MeasuredData read_measured(const std::filesystem::path& input, std::string_view what = "calibrate");
 
 // Voltages only (for `polrig apply`): V1, V2, V3 required, theta_R_deg optional (NaN if absent).
-MeasuredData read_voltages(const std::filesystem::path& input);
+MeasuredData read_voltages(const std::filesystem::path& input, std::string_view what = "apply");
 
 // A CSV's text, as read_measured (need_angle) or read_voltages read it; `origin` names it in
 // error messages.

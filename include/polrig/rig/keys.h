@@ -12,6 +12,9 @@
 
 namespace polrig {
 
+// The default instrument (device.kind).
+inline constexpr std::string_view kDefaultDeviceKind = "six-photodiode";
+
 // The most table stops a schedule may give (start/step/stop or an explicit list).
 inline constexpr std::size_t kMaxStops = 1000000;
 
@@ -26,7 +29,9 @@ struct RealRange {
 };
 
 struct RigKey {
-  enum class Kind { Real, Integer, Seed, Text, RealArray, RealList };
+  // Bool: a YAML true or false (the camera's on/off settings; yaml-cpp's yes/no/on/off are refused,
+  // so that a rig file reads one way).
+  enum class Kind { Real, Integer, Seed, Text, RealArray, RealList, Bool };
   std::string_view path;     // "eccentricity.L_IS"
   Kind kind;
   std::string_view unit;     // "mm", "deg", "V", "" …
@@ -41,6 +46,7 @@ struct RigKey {
   std::string& (*text)(Rig&) = nullptr;
   std::span<double> (*array)(Rig&) = nullptr;          // fixed length
   std::vector<double>& (*list)(Rig&) = nullptr;        // any length
+  bool& (*boolean)(Rig&) = nullptr;
   std::optional<RealRange> range = {};  // real keys (Real, RealArray, RealList)
   std::size_t max_items = 0;             // RealList: the most entries it may hold
   // Value check; returns false when the value is outside what `expects` says.
@@ -68,7 +74,8 @@ const std::vector<RigKey>& rig_keys();
 const RigKey* find_rig_key(std::string_view path);
 
 // Whether a rig file of `rig` writes the key (rig_to_yaml, Python's Rig.to_dict): not when the
-// rig's source does not read it, not an empty optional text or list (unset), and not
+// rig's source or instrument does not read it, not device.kind when it is the default
+// (six-photodiode: a rig.yaml written before the camera stays byte-identical), not an empty optional text or list (unset), and not
 // schedule.start/step/stop_deg when an explicit list of stops replaces them. What it writes reads
 // back to the same rig.
 bool written_for(const RigKey& key, const Rig& rig);

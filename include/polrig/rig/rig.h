@@ -46,4 +46,15 @@ std::optional<Sky> rig_sky(const Rig& rig);
 // source.model sky)" (`polrig sky RIG`, polrig.Sky.from_rig).
 std::string no_sky_message(const Rig& rig, std::string_view origin);
 
+// Why `what` (a command or study: "study cs") cannot run on the rig's instrument, or nothing when
+// it can, asked of its flags (never its kind): "ORIGIN: study cs needs pair voltages (device.kind
+// six-photodiode); device.kind dofp-camera has none" ("ORIGIN: " only with an origin). Commands
+// and Python ask it with the rig's origin before anything is written; the library's studies ask
+// it too, so every caller gets the same message.
+std::optional<std::string> instrument_problem(const Rig& rig, Instrument::Flag needs,
+                                              std::string_view what, std::string_view origin = {});
+// Throws RigError with instrument_problem's message when there is one.
+void require_instrument(const Rig& rig, Instrument::Flag needs, std::string_view what,
+                        std::string_view origin = {});
+
 }  // namespace polrig

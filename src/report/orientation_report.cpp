@@ -48,8 +48,11 @@ std::vector<DatasetFile> report_orientation(const std::filesystem::path& dir,
        "and elevation in the camera frame, the heading, its error against the true heading, the "
        "status"}};
   if (!plots || frames.empty()) return files;
-  Plot p{"heading_error.png", "Heading error per frame (H17 Eqs. 6–14 and the comparators of §4.2)",
-         "frame", "heading error (°)"};
+  Plot p;
+  p.png = "heading_error.png";
+  p.title = "Heading error per frame (H17 Eqs. 6–14 and the comparators of §4.2)";
+  p.xlabel = "frame";
+  p.ylabel = "heading error (°)";
   const auto only = [](const char* method) {
     return fmt::format("1:(strcol(2) eq '{}' ? $6 : NaN)", method);
   };

@@ -682,3 +682,45 @@ def sky_view_body(sun_enu: ArrayLike, heading_deg: ArrayLike, roll_deg: ArrayLik
                   pitch_deg: ArrayLike = 0.0, *, p_max: float = 0.7) -> BodySkyView: ...
 
 # ---- end of navigation
+
+# ---- orientation from a DoFP camera's sky image (orientation_bindings.cpp)
+class SunVector:
+    @property
+    def status(self) -> str: ...
+    @property
+    def root(self) -> str: ...
+    @property
+    def sun(self) -> Array: ...
+    sun_az_deg: float
+    sun_el_deg: float
+    @property
+    def eigenvalues(self) -> Array: ...
+    relative_gap: float
+    rms_residual: float
+    vectors_used: int
+
+class OrientationEstimate:
+    @property
+    def method(self) -> str: ...
+    @property
+    def status(self) -> str: ...
+    solved: bool
+    @property
+    def sun_az_deg(self) -> float | None: ...
+    sun_el_deg: float | None
+    heading_deg: float | None
+
+def sun_vector(aop_deg: ArrayLike, dop: ArrayLike | None = None, *, f_c_px: float = 405.40540540540536,
+               principal_point: tuple[float, float] | None = None, element_px: float = 2.0,
+               conversion: str = "meridional", dop_weighting: bool = False, min_dop: float = 0.0,
+               prior_sun: Sequence[float] | None = None, horizon_margin_deg: float = 2.0) -> SunVector: ...
+def orient(aop_deg: ArrayLike, dop: ArrayLike | None = None, *, sun_azimuth_deg: float | None = None,
+           f_c_px: float = 405.40540540540536, principal_point: tuple[float, float] | None = None,
+           element_px: float = 2.0, conversion: str = "meridional", dop_weighting: bool = False,
+           min_dop: float = 0.0, prior_sun: Sequence[float] | None = None,
+           horizon_margin_deg: float = 2.0, zenith_radius_px: float = 2.0,
+           line_aop_tolerance_deg: float = 1.0, line_min_radius_px: float = 10.0,
+           hough_bin_deg: float = 0.5) -> list[OrientationEstimate]: ...
+def camera_heading(sun_azimuth_deg: float, sun_az_camera_deg: float) -> float: ...
+
+# ---- end of orientation

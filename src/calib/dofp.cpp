@@ -181,6 +181,11 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
         for (int p = 0; p < 6; ++p) dP[p][a][b] = m.dP[p](a, b);
     }
   const bool dop = m.w != 0.0, fitres = m.we != 0.0;
+  // Local accumulators (the compiler keeps them out of memory; `out` may alias nothing, but it
+  // cannot know).
+  double jtj[6][6] = {}, j6[6] = {}, j7[6] = {}, jtr[8] = {};
+  double j66 = 0, j77 = 0, cost = 0, aop_ss = 0;
+  long long bad = -1;
   double nv[4], dnv[6][4];
   for (int b = 0; b < 4; ++b) {
     nv[b] = m.n[b];
@@ -192,7 +197,7 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
     const double q1 = dot4(P[0], f), q2 = dot4(P[1], f), q3 = dot4(P[2], f);
     const double s = q1 * q1 + q2 * q2;
     if (!(s > 0) || ((dop || fitres) && !(q3 > 0))) {
-      if (out.bad < 0) out.bad = static_cast<long long>(i);
+      if (bad < 0) bad = static_cast<long long>(i);
       continue;
     }
     const double cr = rot[3 * i] * m.c2psi - rot[3 * i + 1] * m.s2psi;
@@ -204,8 +209,8 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
     const double rd = dop ? ww * m.w * (a / q3 - m.d0) : 0.0;
     const double nf = fitres ? dot4(nv, f) : 0.0;
     const double re = fitres ? ww * m.we * nf / q3 : 0.0;
-    out.aop_ss += r0 * r0;
-    out.cost += r * r + rd * rd + re * re;
+    aop_ss += r0 * r0;
+    cost += r * r + rd * rd + re * re;
     if (residuals) {
       residuals[3 * i] = r;
       residuals[3 * i + 1] = rd;
@@ -224,15 +229,15 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
       // JᵀJ's upper triangle: rows g = [g, −ww, 0], h = [h, 0, −ww·w] and e = [e, 0, 0].
       const double g6 = -ww, h7 = -ww * m.w;
       for (int p = 0; p < 6; ++p) {
-        for (int q = p; q < 6; ++q) out.JtJ(p, q) += g[p] * g[q] + h[p] * h[q] + e[p] * e[q];
-        out.JtJ(p, 6) += g[p] * g6;
-        out.JtJ(p, 7) += h[p] * h7;
-        out.Jtr[p] += g[p] * r + h[p] * rd + e[p] * re;
+        for (int q = p; q < 6; ++q) jtj[p][q] += g[p] * g[q] + h[p] * h[q] + e[p] * e[q];
+        j6[p] += g[p] * g6;
+        j7[p] += h[p] * h7;
+        jtr[p] += g[p] * r + h[p] * rd + e[p] * re;
       }
-      out.JtJ(6, 6) += g6 * g6;
-      out.JtJ(7, 7) += h7 * h7;
-      out.Jtr[6] += g6 * r;
-      out.Jtr[7] += h7 * rd;
+      j66 += g6 * g6;
+      j77 += h7 * h7;
+      jtr[6] += g6 * r;
+      jtr[7] += h7 * rd;
       if (jacobian_rows) {
         double* row = jacobian_rows + 24 * i;
         for (int p = 0; p < 6; ++p) {
@@ -247,6 +252,19 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
         row[22] = row[23] = 0.0;
       }
     }
+  }
+  out.cost += cost;
+  out.aop_ss += aop_ss;
+  if (out.bad < 0) out.bad = bad;
+  if constexpr (kJacobian) {
+    for (int p = 0; p < 6; ++p) {
+      for (int q = p; q < 6; ++q) out.JtJ(p, q) += jtj[p][q];
+      out.JtJ(p, 6) += j6[p];
+      out.JtJ(p, 7) += j7[p];
+    }
+    out.JtJ(6, 6) += j66;
+    out.JtJ(7, 7) += j77;
+    for (int p = 0; p < 8; ++p) out.Jtr[p] += jtr[p];
   }
 }
 

@@ -1,6 +1,9 @@
 // The two-step DoFP calibration (calib/dofp.h) against frames made here, in the test, straight
 // from Eq. 18 with a known per-pixel truth (spec sky-and-compasses.md §2.3–2.4).
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
 
 #include <cmath>
 #include <complex>
@@ -11,6 +14,8 @@
 
 #include <Eigen/Dense>
 #include <tbb/global_control.h>
+
+#include <fmt/format.h>
 
 #include "polrig/calib/dofp.h"
 
@@ -311,6 +316,64 @@ TEST(DofpCalibration, TheWrongTableSenseDoesNotFit) {
   o.table_sense = -kDofpTableSense;
   const DofpStep2 s2 = calibrate_dofp_step2(s1, ds.stops, o);
   for (const DofpCellFit& f : s2.cells) EXPECT_FALSE(f.usable() && f.final_rms_deg < 1.0);
+}
+
+}  // namespace
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "polrig/io/exr.h"
+#include "polrig/io/plot.h"
+#include "polrig/report/dofp_calibration_report.h"
+
+namespace {
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The report's files hold what the calibration computed: params.exr's channels are the maps as
+// float, table1.csv's rows the three rows.
+TEST(DofpCalibrationReport, WritesParamsTableCellsAndPlots) {
+  const Truth t = make_truth(16, 12, 12, 1.0);
+  const Dataset ds = make_dataset(t, 30.0, 0.9, 2.0);
+  const DofpCalibration c = calibrate_dofp(t.W, t.H, ds.levels, ds.stops);
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / fmt::format("polrig_dofp_report_{}", ::getpid());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const bool plots = gnuplot_available();
+  const auto files = report_dofp_calibration(dir, c, plots);
+  for (const auto& f : files) EXPECT_TRUE(std::filesystem::exists(dir / f.name)) << f.name;
+  int w = 0, h = 0;
+  const std::vector<ExrChannel> ch = read_exr(dir / "params.exr", w, h);
+  EXPECT_EQ(w, 16);
+  EXPECT_EQ(h, 12);
+  const DofpTruth p = dofp_parameter_maps(c);
+  for (const ExrChannel& x : ch) {
+    const std::vector<double>* v = x.name == "K" ? &p.K : x.name == "b" ? &p.b
+                                 : x.name == "k" ? &p.k : x.name == "eps_deg" ? &p.eps_deg : nullptr;
+    if (!v) continue;
+    for (std::size_t i = 0; i < v->size(); ++i) EXPECT_EQ(x.pixels[i], static_cast<float>((*v)[i]));
+  }
+  const std::string t1 = slurp(dir / "table1.csv");
+  EXPECT_EQ(t1.substr(0, t1.find('\n')), "row,max_deg,mean_deg,std_deg");
+  for (const auto& r : c.table1.rows)
+    EXPECT_NE(t1.find(fmt::format("{},{},{},{}\n", r.name, r.max_deg, r.mean_deg, r.std_deg)),
+              std::string::npos) << r.name;
+  const std::string cells = slurp(dir / "cells.csv");
+  EXPECT_EQ(std::count(cells.begin(), cells.end(), '\n'), 1 + 8 * 6);
+  EXPECT_EQ(cells.find("nan"), std::string::npos);
+  if (plots) {
+    for (const char* png : {"errors.png", "map_K.png", "map_b.png", "map_k.png", "map_eps_deg.png"})
+      EXPECT_GT(std::filesystem::file_size(dir / png), 1000u) << png;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

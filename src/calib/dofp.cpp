@@ -372,7 +372,9 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
       }
       xn = x + step;
       trial = Sums{};
-      if (eval(xn, false, trial) && trial.bad < 0 && trial.cost <= cost) {
+      // The trial pass sums the Jacobian too: an accepted step (the usual case) needs no
+      // second pass over the observations.
+      if (eval(xn, true, trial) && trial.bad < 0 && trial.cost <= cost) {
         accepted = true;
         break;
       }
@@ -396,8 +398,7 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
     lambda = std::max(lambda / 10, 1e-12);
     fit.iterations = it;
     if (step.norm() < o.step_tolerance) converged = true;
-    acc = Sums{};
-    eval(x, true, acc);
+    acc = trial;
   }
   set_result(x);
   int weakest = 0;

@@ -197,6 +197,8 @@ TEST(DofpCalibration, AnUndeterminedPixelIsReportedNotANaN) {
                 std::isfinite(p.eps_deg[i]));
   EXPECT_EQ(usable[bad], 0);
   EXPECT_EQ(usable[0], 1);
+  EXPECT_EQ(p.k[bad], 1.0);  // the ideal values where the cell was not fitted
+  EXPECT_EQ(p.eps_deg[bad], 0.0);
 }
 
 TEST(DofpCalibration, OneTablePositionLeavesStep2RankDeficient) {

@@ -832,8 +832,10 @@ DofpTruth dofp_parameter_maps(const DofpCalibration& c, std::vector<std::uint8_t
       const std::size_t cell = static_cast<std::size_t>(row / 2) * cells_x + col / 2;
       const DofpCellFit& fit =
           c.step2.cells[c.step2.scope == DofpStep2Scope::Global ? 0 : cell];
-      t.k[p] = fit.k[j];
-      t.eps_deg[p] = fit.eps_deg[j];
+      // A fit that did not converge says where it stopped (cells.csv); the maps keep the ideal
+      // k = 1, ε = 0 there, flagged unusable.
+      t.k[p] = fit.usable() ? fit.k[j] : 1.0;
+      t.eps_deg[p] = fit.usable() ? fit.eps_deg[j] : 0.0;
       t.alpha_deg[p] = c.options.step2.mosaic_deg[j];
       if (usable) (*usable)[p] = fit.usable() && undetermined_pixel(s1, col / 2, row / 2) < 0;
     }

@@ -107,8 +107,9 @@ struct DofpStep2Options {
 };
 
 // One cell's (or the global) fit: the parameters of its four pixels and how the fit ended,
-// after calib/fit.h's FitSummary. Only usable() cells have parameters to use; the others keep
-// the start (k = 1, ε = 0).
+// after calib/fit.h's FitSummary. Only usable() cells have parameters to use; the others hold
+// where the fit stopped (k = 1, ε = 0 if it never ran), and dofp_parameter_maps puts the ideal
+// k = 1, ε = 0 there.
 struct DofpCellFit {
   std::array<double, 4> k = {1, 1, 1, 1};
   std::array<double, 4> eps_deg = {0, 0, 0, 0};

@@ -724,3 +724,10 @@ def orient(aop_deg: ArrayLike, dop: ArrayLike | None = None, *, sun_azimuth_deg:
 def camera_heading(sun_azimuth_deg: float, sun_az_camera_deg: float) -> float: ...
 
 # ---- end of orientation
+def calibrate_dofp(level_intensity: ArrayLike, level_frames: ArrayLike, theta_R_deg: ArrayLike,
+                   stop_intensity: ArrayLike, stop_frames: ArrayLike, *,
+                   mosaic_deg: Sequence[float] = (0.0, 90.0, 45.0, 135.0),
+                   table_sense: float = 1.0, scope: str = "per-cell", dop_weight: float = 0.5,
+                   fit_weight: float = 1.0, weight_by_intensity: bool = True,
+                   saturation_DN: float | None = None, table1_intensity: float = 0.0,
+                   threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...

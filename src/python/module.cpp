@@ -35,4 +35,5 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_sky(m);
   polrig::python::bind_nav(m);
   polrig::python::bind_orientation(m);
+  polrig::python::bind_dofp(m);
 }

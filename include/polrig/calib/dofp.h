@@ -1,0 +1,209 @@
+#pragma once
+// The two-step calibration of the pixelated (DoFP) polarization camera of Han et al. 2017
+// (spec sky-and-compasses.md §2.4; docs/physics.md §13):
+//   step 1 (Eq. 19): per pixel, gain K and offset b by linear least squares from uniform
+//     unpolarized frames, f = K·I/2 + b;
+//   step 2 (Eqs. 20–29): per 2 × 2 unit cell (or one global set), the polarization efficiencies
+//     k_2..k_4 and angle errors ε_2..ε_4 (gauge k_1 = 1, ε_1 = 0), the reference angle ψ_0 and
+//     the source's DoP d_0, by Levenberg–Marquardt with the analytic Jacobian, from frames of a
+//     polarized source turned by the table: residuals r_m = wrap90(φ̃_m − ψ_0 − s_R·θ_R,m) and
+//     [C] w·(d̃_m − d_0);
+//   Table 1 (spec §2.5 "Indoor orientation"): the orientation error of the circular mean AoP
+//     before calibration, after step 1 and after step 2.
+// Frames are row-major DN, top row first, width × height (the camera's frame convention,
+// device/dofp_camera.h); the cell (cx, cy) holds the pixels TL (2cx, 2cy), TR (2cx+1, 2cy),
+// BL (2cx, 2cy+1), BR (2cx+1, 2cy+1), whose axes are DofpCameraSpec::mosaic_deg in that order.
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "polrig/calib/fit.h"
+#include "polrig/device/dofp_camera.h"
+#include "polrig/progress.h"
+
+namespace polrig {
+
+// s_R: how a table turn θ_R shows in the image. The table turns the camera clockwise seen from
+// above (anticlockwise seen from the camera looking up, docs/physics.md §1), and image angles
+// run from X_l towards Y_l, anticlockwise seen from above for a camera looking up, so a fixed
+// polarizer at ψ is seen at φ = ψ + θ_R: the same sense as the six-photodiode sensor's
+// θ = θ_R − ψ_P. docs/physics.md §13.
+inline constexpr double kDofpTableSense = +1.0;
+
+// One uniform unpolarized level of step 1: its relative intensity I^i (the source's S0, any
+// unit; I_j^i = I^i/2 behind the analyzer) and the mean of its frames.
+struct DofpUnpolarizedLevel {
+  double intensity = 0;
+  std::span<const double> frame;
+};
+
+// One stop of step 2: the table angle θ_R (degrees), the source's relative intensity (to pick
+// Table 1's stops) and the stop's (mean) frame.
+struct DofpPolarizedStop {
+  double theta_R_deg = 0;
+  double intensity = 0;
+  std::span<const double> frame;
+};
+
+struct DofpStep1Options {
+  // A pixel's value at or above this (DN) is left out of its fit (a saturated level); the
+  // default keeps every level.
+  double saturation_DN = std::numeric_limits<double>::infinity();
+};
+
+// Step 1's result per pixel (row-major). rank is the rank of the pixel's design [I/2, 1]:
+// 2 with at least two distinct levels, 1 with one, 0 with none. A pixel with rank < 2 is
+// undetermined: it gets K = 0, b = 0 and residual 0 (never a division by zero), and step 2
+// reports its cell rank deficient.
+struct DofpStep1 {
+  int width = 0, height = 0;
+  std::vector<double> K;                // DN per unit intensity
+  std::vector<double> b;                // DN
+  std::vector<double> residual_rms_DN;  // √(Σ(K·I/2 + b − f)²/n) over the levels used
+  std::vector<std::uint8_t> rank;       // 0, 1 or 2
+  std::vector<std::uint16_t> levels_used;
+  long long rank_deficient_pixels = 0;
+};
+
+// Step 1 (Eq. 19). Throws std::invalid_argument naming the level for a frame of the wrong size
+// or a non-finite value, a non-finite or negative intensity, or an odd or empty frame.
+DofpStep1 calibrate_dofp_step1(int width, int height, std::span<const DofpUnpolarizedLevel> levels,
+                               const DofpStep1Options& options = {});
+
+enum class DofpStep2Scope { PerCell, Global };
+// "per-cell", "global"; parse_dofp_scope throws std::invalid_argument for anything else.
+std::string dofp_scope_name(DofpStep2Scope s);
+DofpStep2Scope parse_dofp_scope(const std::string& name);
+
+struct DofpStep2Options {
+  DofpStep2Scope scope = DofpStep2Scope::PerCell;  // [C] per cell (H17 does not say)
+  std::array<double, 4> mosaic_deg = {0, 90, 45, 135};  // α_j of TL, TR, BL, BR (DofpCameraSpec)
+  double table_sense = kDofpTableSense;                 // s_R: +1 or −1
+  int max_iterations = 50;         // spec §2.4 [C]
+  double step_tolerance = 1e-10;   // converged when |Δx| < this (ε, ψ_0 in rad; k unitless)
+  int max_halvings = 30;           // step halvings when a Gauss–Newton step raises the cost
+  // σ_min/σ_max of the column-scaled Jacobian below this: rank deficient. JᵀJ is what is
+  // decomposed, so the ratio is resolved down to about √ε_double ≈ 1e-8.
+  double min_singular_ratio = 1e-6;
+  // H17's AoP residual alone cannot determine (k, ε) (docs/physics.md §13): only 3 of its 7
+  // unknowns at a solution. Two more residuals per observation [C, not in H17] make the fit
+  // well posed (8 of 8):
+  //  - w·(d̃_m − d_0): the source's DoP is the same at every stop (d_0 an unknown); w in rad per
+  //    unit DoP, 0.5 ≈ σ_φ/σ_d = 1/(2d) at d ≈ 1;
+  //  - w_e·n̂ᵀF̃_m/q̃3,m: Eq. 21's least-squares residual (n̂ ⊥ Ã's columns), relative to the
+  //    intensity: the model must explain the four pixel values, not only their angle.
+  // Both 0: H17's cost; its fits end rank_deficient.
+  double dop_weight = 0.5;
+  double fit_weight = 1.0;
+  // Weight each stop's residuals by I_m/I_max [C]: with a constant pixel noise the AoP's and the
+  // DoP's noise grow as 1/I, so this is the weighted least squares; it keeps the dim stops'
+  // nonlinear (Rician) biases out of (k, ε). false: H17's equal weights.
+  bool weight_by_intensity = true;
+};
+
+// One cell's (or the global) fit: the parameters of its four pixels and how the fit ended,
+// after calib/fit.h's FitSummary. Only usable() cells have parameters to use; the others hold
+// where the fit stopped (k = 1, ε = 0 if it never ran), and dofp_parameter_maps puts the ideal
+// k = 1, ε = 0 there.
+struct DofpCellFit {
+  std::array<double, 4> k = {1, 1, 1, 1};
+  std::array<double, 4> eps_deg = {0, 0, 0, 0};
+  double psi0_deg = 0;  // ψ_0: the AoP at θ_R = 0 (image frame, (−90°, 90°])
+  double dop = std::numeric_limits<double>::quiet_NaN();  // d_0, the source's DoP (NaN if w = 0)
+  FitTermination termination = FitTermination::TooFewObservations;
+  std::string message;  // why a fit did not converge ("" when it did)
+  int iterations = 0;   // Gauss–Newton steps taken
+  int rank = 0;         // rank of J (of 8 unknowns with the DoP residual, else of 7)
+  int observations = 0;
+  double initial_rms_deg = std::numeric_limits<double>::quiet_NaN();  // at the start
+  double final_rms_deg = std::numeric_limits<double>::quiet_NaN();    // √(Σr²/N) at the end
+  // (both: of the AoP residuals r_m, m over the N observations)
+  bool usable() const { return termination == FitTermination::Converged; }
+};
+
+struct DofpStep2 {
+  DofpStep2Scope scope = DofpStep2Scope::PerCell;
+  int cells_x = 0, cells_y = 0;
+  std::vector<DofpCellFit> cells;  // cells_y × cells_x, row-major; one entry when Global
+  long long usable_cells = 0;
+};
+
+// Step 2 (Eqs. 20–29), in parallel over cells (TBB), bit-identical for any thread count.
+// Throws std::invalid_argument for bad input (sizes, non-finite values, a table_sense other
+// than ±1, non-positive limits); data that cannot be fitted is a cell's termination instead.
+DofpStep2 calibrate_dofp_step2(const DofpStep1& step1, std::span<const DofpPolarizedStop> stops,
+                               const DofpStep2Options& options = {},
+                               const Progress& progress = {});
+
+// Table 1 (spec §2.5 "Indoor orientation", §2.6): per stop of one intensity, the orientation is
+// the circular mean over the cells, o = ½·arg Σ exp(i·2φ̃); its error is
+// wrap90((o_m − o_0) − s_R·(θ_R,m − θ_R,0)), m = 1..N, stop 0 the first of those stops.
+struct DofpOrientationRow {
+  std::string name;                // "raw", "step1", "step2"
+  std::vector<double> error_deg;   // per stop m = 1..N
+  double max_deg = 0;   // max |error|
+  double mean_deg = 0;  // mean error (signed)
+  double std_deg = 0;   // sample SD (N − 1)
+};
+struct DofpTable1 {
+  double intensity = 0;              // the stops' intensity (the largest unless chosen)
+  std::vector<double> theta_R_deg;   // the stops m = 1..N (table angle)
+  long long cells_used = 0;          // cells with every pixel determined and step 2 usable
+  std::array<DofpOrientationRow, 3> rows;  // raw, step1, step2
+};
+
+// raw: F = f (nominal K = 1, b = 0), ideal k = 1, ε = 0; step1: F = (f − b)/K, ideal k, ε;
+// step2: F = (f − b)/K with the cell's fitted k and ε (the global set with Global). The same
+// cells in all three rows. intensity ≤ 0 takes the largest intensity among the stops. Throws
+// CalibrationError when fewer than two stops have that intensity or no cell is usable.
+DofpTable1 dofp_table1(const DofpStep1& step1, const DofpStep2& step2,
+                       std::span<const DofpPolarizedStop> stops, const DofpStep2Options& options,
+                       double intensity = 0);
+
+struct DofpCalibrationOptions {
+  DofpStep1Options step1;
+  DofpStep2Options step2;
+  double table1_intensity = 0;  // ≤ 0: the largest
+};
+
+struct DofpCalibration {
+  DofpCalibrationOptions options;
+  DofpStep1 step1;
+  DofpStep2 step2;
+  DofpTable1 table1;
+};
+
+// Both steps and Table 1.
+DofpCalibration calibrate_dofp(int width, int height,
+                               std::span<const DofpUnpolarizedLevel> levels,
+                               std::span<const DofpPolarizedStop> stops,
+                               const DofpCalibrationOptions& options = {},
+                               const Progress& progress = {});
+
+// The calibrated parameters per pixel (K, b from step 1; k, eps_deg from the pixel's cell;
+// alpha_deg the mosaic), in DofpTruth's layout so that they compare with a camera's truth.
+// `usable` is 1 where the pixel's K, b and its cell's k, ε are determined, else 0.
+DofpTruth dofp_parameter_maps(const DofpCalibration& c, std::vector<std::uint8_t>* usable = nullptr);
+
+// ---- One cell's model, exposed for tests (Jacobian against finite differences) ----
+// x = [ε2, ε3, ε4 (rad), k2, k3, k4, ψ_0 (rad), d_0]; F̃ holds 4 values per observation (TL, TR,
+// BL, BR), theta_R_deg one per observation. Residuals: per observation the AoP residual (rad)
+// , the weighted DoP residual and the weighted fit residual (0 when their weight is 0),
+// interleaved.
+Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F_tilde,
+                                    const std::vector<double>& theta_R_deg,
+                                    const Eigen::Matrix<double, 8, 1>& x,
+                                    const DofpStep2Options& options);
+// The analytic Jacobian (Appendix A's chain ∂φ̃/∂Q̃ · ∂Q̃/∂x in matrix form: ∂(R⁻¹Ãᵀ) =
+// R⁻¹(∂Ãᵀ − ∂R·R⁻¹Ãᵀ)), rows as dofp_cell_residuals; columns: x.
+Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F_tilde,
+                                   const std::vector<double>& theta_R_deg,
+                                   const Eigen::Matrix<double, 8, 1>& x,
+                                   const DofpStep2Options& options);
+
+}  // namespace polrig

@@ -1,0 +1,887 @@
+#include "polrig/calib/dofp.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "polrig/units.h"
+
+namespace polrig {
+
+namespace {
+
+using Vec8 = Eigen::Matrix<double, 8, 1>;
+using Mat8 = Eigen::Matrix<double, 8, 8>;
+
+// Into (−90°, 90°] (the spec's wrap90).
+double wrap90_deg(double deg) {
+  double w = std::fmod(deg, 180.0);
+  if (w <= -90.0) w += 180.0;
+  if (w > 90.0) w -= 180.0;
+  return w;
+}
+
+void check_frame(std::span<const double> frame, std::size_t pixels, std::size_t width,
+                 const std::string& what) {
+  if (frame.size() != pixels)
+    throw std::invalid_argument(
+        fmt::format("{}: the frame has {} values, the camera {} pixels", what, frame.size(), pixels));
+  for (std::size_t i = 0; i < frame.size(); ++i)
+    if (!std::isfinite(frame[i]))
+      throw std::invalid_argument(fmt::format("{}: the pixel at column {}, row {} is {}", what,
+                                              i % width, i / width, frame[i]));
+}
+
+void check_size(int width, int height) {
+  if (width <= 0 || height <= 0 || width % 2 != 0 || height % 2 != 0)
+    throw std::invalid_argument(fmt::format(
+        "DoFP calibration: the frame is {} × {} pixels; both must be positive and even "
+        "(whole 2 × 2 cells)", width, height));
+}
+
+// Checks every frame of a list in parallel; the lowest failing index is reported, so the message
+// does not depend on the thread schedule.
+template <class Item>
+void check_frames(std::span<const Item> items, std::size_t pixels, std::size_t width,
+                  const char* kind) {
+  std::vector<std::string> errors(items.size());
+  tbb::parallel_for(std::size_t{0}, items.size(), [&](std::size_t i) {
+    try {
+      check_frame(items[i].frame, pixels, width, fmt::format("{} {}", kind, i));
+    } catch (const std::invalid_argument& e) {
+      errors[i] = e.what();
+    }
+  });
+  for (const std::string& e : errors)
+    if (!e.empty()) throw std::invalid_argument("DoFP calibration: " + e);
+}
+
+// ---- The cell model of step 2 (Eqs. 20–22) and its derivatives ----
+// x = [ε2, ε3, ε4, k2, k3, k4, ψ0, d0]; pixel j = 0..3 (TL, TR, BL, BR) with k_0 = 1, ε_0 = 0.
+struct CellModel {
+  Eigen::Matrix<double, 3, 4> P;                    // R⁻¹Ãᵀ (Eq. 21): Q̃ = P·F̃
+  std::array<Eigen::Matrix<double, 3, 4>, 6> dP;    // its derivatives by x_0..x_5
+  double c2psi = 1, s2psi = 0;                      // cos, sin of −2ψ0
+  double d0 = 0, w = 0;                             // the DoP unknown and its residual's weight
+  Eigen::Vector4d n;                                // unit normal of Ã's columns in pixel space
+  std::array<Eigen::Vector4d, 6> dn;                // its derivatives by x_0..x_5
+  double we = 0;                                    // weight of the fit residual
+};
+
+// n_i = (−1)^i·det(Ã without row i): orthogonal to Ã's three columns (the 4-D cross product).
+Eigen::Vector4d cofactor_normal(const Eigen::Matrix<double, 4, 3>& A) {
+  Eigen::Vector4d n;
+  for (int i = 0; i < 4; ++i) {
+    Eigen::Matrix3d M;
+    for (int r = 0, k = 0; r < 4; ++r)
+      if (r != i) M.row(k++) = A.row(r);
+    n[i] = (i % 2 ? -1.0 : 1.0) * M.determinant();
+  }
+  return n;
+}
+
+// False when ÃᵀÃ is singular (k so small that the four analyzers do not span the Stokes plane).
+bool make_cell_model(const Vec8& x, const std::array<double, 4>& alpha_rad, double dop_weight,
+                     double fit_weight, bool derivatives, CellModel& m) {
+  Eigen::Matrix<double, 4, 3> A;
+  std::array<double, 4> c{}, s{}, k{};
+  for (int j = 0; j < 4; ++j) {
+    const double eps = j == 0 ? 0.0 : x[j - 1];
+    k[j] = j == 0 ? 1.0 : x[j + 2];
+    c[j] = std::cos(2.0 * (alpha_rad[j] - eps));
+    s[j] = std::sin(2.0 * (alpha_rad[j] - eps));
+    A.row(j) << k[j] * c[j], k[j] * s[j], 1.0;
+  }
+  if (!A.allFinite()) return false;
+  const Eigen::Matrix3d R = A.transpose() * A;
+  Eigen::Matrix3d Rinv;
+  bool invertible = false;
+  double det = 0;
+  R.computeInverseAndDetWithCheck(Rinv, det, invertible, 1e-12 * R.squaredNorm() * R.norm());
+  if (!invertible || !(det > 0)) return false;
+  m.P = Rinv * A.transpose();
+  m.c2psi = std::cos(-2.0 * x[6]);
+  m.s2psi = std::sin(-2.0 * x[6]);
+  m.d0 = x[7];
+  m.w = dop_weight;
+  m.we = fit_weight;
+  const Eigen::Vector4d n = cofactor_normal(A);
+  const double nn = n.norm();
+  if (!(nn > 0)) return false;
+  m.n = n / nn;
+  if (!derivatives) return true;
+  for (int p = 0; p < 6; ++p) {
+    const int j = p % 3 + 1;
+    Eigen::Vector3d u;  // ∂(row j of Ã)/∂x_p
+    if (p < 3)
+      u << 2.0 * k[j] * s[j], -2.0 * k[j] * c[j], 0.0;  // by ε_j
+    else
+      u << c[j], s[j], 0.0;                              // by k_j
+    const Eigen::Vector3d v = A.row(j).transpose();
+    const Eigen::Matrix3d dR = u * v.transpose() + v * u.transpose();
+    Eigen::Matrix<double, 3, 4> dAt = Eigen::Matrix<double, 3, 4>::Zero();
+    dAt.col(j) = u;
+    // ∂(R⁻¹Ãᵀ) = R⁻¹(∂Ãᵀ − ∂R·R⁻¹Ãᵀ)
+    m.dP[p] = Rinv * (dAt - dR * m.P);
+    // The cofactors are linear in row j: ∂n = the cofactors with row j replaced by u (n_j keeps
+    // no row j); then ∂(n/|n|) = (∂n − n̂·(n̂·∂n))/|n|.
+    Eigen::Matrix<double, 4, 3> Au = A;
+    Au.row(j) = u.transpose();
+    Eigen::Vector4d dn = cofactor_normal(Au);
+    dn[j] = 0.0;
+    m.dn[p] = (dn - m.n * m.n.dot(dn)) / nn;
+  }
+  return true;
+}
+
+// Sums over the observations of one block (4 F̃ values each, and cos, sin of −2·s_R·θ_R).
+struct Sums {
+  Mat8 JtJ = Mat8::Zero();  // upper triangle
+  Vec8 Jtr = Vec8::Zero();
+  double cost = 0;     // Σ r² over both kinds of residual
+  double aop_ss = 0;   // Σ r² of the AoP residuals (rad²)
+  long long bad = -1;  // first observation whose AoP or DoP is undefined, −1 if none
+  void add(const Sums& o) {
+    JtJ += o.JtJ;
+    Jtr += o.Jtr;
+    cost += o.cost;
+    aop_ss += o.aop_ss;
+    if (bad < 0) bad = o.bad;
+  }
+};
+
+inline double dot4(const double* a, const double* f) {
+  return a[0] * f[0] + a[1] * f[1] + a[2] * f[2] + a[3] * f[3];
+}
+
+// Per observation two residuals:
+//   AoP (H17 Eq. 24, well-posed form): r = wrap90(φ̃ − ψ0 − s_R·θ_R)
+//       = ½·arg[(q̃1 + i q̃2)·e^{−2i s_R θ_R}·e^{−2iψ0}] ∈ (−π/2, π/2],
+//       ∂r/∂x_p = (q̃1·∂q̃2 − q̃2·∂q̃1) / (2(q̃1² + q̃2²)) (Appendix A's ∂φ̃/∂Q̃), ∂r/∂ψ0 = −1;
+//   DoP [C]: r_d = w·(d̃ − d0), d̃ = √(q̃1² + q̃2²)/q̃3 (Eq. 22),
+//       ∂d̃/∂x_p = (q̃1·∂q̃1 + q̃2·∂q̃2)/(|q̃|·q̃3) − |q̃|·∂q̃3/q̃3², ∂r_d/∂d0 = −w;
+//   Eq. 21's fit [C]: r_e = w_e·n̂ᵀF̃/q̃3, the part of the four pixels that Ã cannot explain (n̂ ⊥
+//       Ã's columns), relative to the intensity; ∂r_e = w_e·(∂n̂ᵀF̃/q̃3 − n̂ᵀF̃·∂q̃3/q̃3²).
+// With w = w_e = 0 only the AoP residual counts (H17's cost).
+template <bool kJacobian>
+void accumulate(const CellModel& m, const double* F, const double* rot, std::size_t n, Sums& out,
+                double* residuals = nullptr, double* jacobian_rows = nullptr) {
+  // Row-major copies of P and dP for dot4.
+  double P[3][4], dP[6][3][4];
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 4; ++b) {
+      P[a][b] = m.P(a, b);
+      if constexpr (kJacobian)
+        for (int p = 0; p < 6; ++p) dP[p][a][b] = m.dP[p](a, b);
+    }
+  const bool dop = m.w != 0.0, fitres = m.we != 0.0;
+  // Local accumulators (the compiler keeps them out of memory; `out` may alias nothing, but it
+  // cannot know).
+  double jtj[6][6] = {}, j6[6] = {}, j7[6] = {}, jtr[8] = {};
+  double j66 = 0, j77 = 0, cost = 0, aop_ss = 0;
+  long long bad = -1;
+  double nv[4], dnv[6][4];
+  for (int b = 0; b < 4; ++b) {
+    nv[b] = m.n[b];
+    if constexpr (kJacobian)
+      for (int p = 0; p < 6; ++p) dnv[p][b] = m.dn[p][b];
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* f = F + 4 * i;
+    const double q1 = dot4(P[0], f), q2 = dot4(P[1], f), q3 = dot4(P[2], f);
+    const double s = q1 * q1 + q2 * q2;
+    if (!(s > 0) || ((dop || fitres) && !(q3 > 0))) {
+      if (bad < 0) bad = static_cast<long long>(i);
+      continue;
+    }
+    const double cr = rot[3 * i] * m.c2psi - rot[3 * i + 1] * m.s2psi;
+    const double sr = rot[3 * i] * m.s2psi + rot[3 * i + 1] * m.c2psi;
+    const double ww = rot[3 * i + 2];  // the observation's weight
+    const double r0 = 0.5 * std::atan2(q1 * sr + q2 * cr, q1 * cr - q2 * sr);
+    const double r = ww * r0;
+    const double a = std::sqrt(s);
+    const double rd = dop ? ww * m.w * (a / q3 - m.d0) : 0.0;
+    const double nf = fitres ? dot4(nv, f) : 0.0;
+    const double re = fitres ? ww * m.we * nf / q3 : 0.0;
+    aop_ss += r0 * r0;
+    cost += r * r + rd * rd + re * re;
+    if (residuals) {
+      residuals[3 * i] = r;
+      residuals[3 * i + 1] = rd;
+      residuals[3 * i + 2] = re;
+    }
+    if constexpr (kJacobian) {
+      double g[6], h[6], e[6];
+      const double inv = 0.5 / s, ia = 1.0 / (a * q3), iq = a / (q3 * q3), i3 = 1.0 / q3;
+      for (int p = 0; p < 6; ++p) {
+        const double dq1 = dot4(dP[p][0], f), dq2 = dot4(dP[p][1], f);
+        const double dq3 = dot4(dP[p][2], f);
+        g[p] = ww * (q1 * dq2 - q2 * dq1) * inv;
+        h[p] = dop ? ww * m.w * ((q1 * dq1 + q2 * dq2) * ia - iq * dq3) : 0.0;
+        e[p] = fitres ? ww * m.we * (dot4(dnv[p], f) - nf * dq3 * i3) * i3 : 0.0;
+      }
+      // JᵀJ's upper triangle: rows g = [g, −ww, 0], h = [h, 0, −ww·w] and e = [e, 0, 0].
+      const double g6 = -ww, h7 = -ww * m.w;
+      for (int p = 0; p < 6; ++p) {
+        for (int q = p; q < 6; ++q) jtj[p][q] += g[p] * g[q] + h[p] * h[q] + e[p] * e[q];
+        j6[p] += g[p] * g6;
+        j7[p] += h[p] * h7;
+        jtr[p] += g[p] * r + h[p] * rd + e[p] * re;
+      }
+      j66 += g6 * g6;
+      j77 += h7 * h7;
+      jtr[6] += g6 * r;
+      jtr[7] += h7 * rd;
+      if (jacobian_rows) {
+        double* row = jacobian_rows + 24 * i;
+        for (int p = 0; p < 6; ++p) {
+          row[p] = g[p];
+          row[8 + p] = h[p];
+          row[16 + p] = e[p];
+        }
+        row[6] = g6;
+        row[7] = 0.0;
+        row[14] = 0.0;
+        row[15] = h7;
+        row[22] = row[23] = 0.0;
+      }
+    }
+  }
+  out.cost += cost;
+  out.aop_ss += aop_ss;
+  if (out.bad < 0) out.bad = bad;
+  if constexpr (kJacobian) {
+    for (int p = 0; p < 6; ++p) {
+      for (int q = p; q < 6; ++q) out.JtJ(p, q) += jtj[p][q];
+      out.JtJ(p, 6) += j6[p];
+      out.JtJ(p, 7) += j7[p];
+    }
+    out.JtJ(6, 6) += j66;
+    out.JtJ(7, 7) += j77;
+    for (int p = 0; p < 8; ++p) out.Jtr[p] += jtr[p];
+  }
+}
+
+// Circular mean ½·arg Σ e^{2i(φ̃_m − s_R θ_R,m)} and mean DoP at x (ψ0, d0 ignored): the start.
+void start_sums(const CellModel& m, const double* F, const double* rot, std::size_t n, double& re,
+                double& im, double& dsum, long long& dn) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const double* f = F + 4 * i;
+    const double q1 = m.P(0, 0) * f[0] + m.P(0, 1) * f[1] + m.P(0, 2) * f[2] + m.P(0, 3) * f[3];
+    const double q2 = m.P(1, 0) * f[0] + m.P(1, 1) * f[1] + m.P(1, 2) * f[2] + m.P(1, 3) * f[3];
+    const double q3 = m.P(2, 0) * f[0] + m.P(2, 1) * f[1] + m.P(2, 2) * f[2] + m.P(2, 3) * f[3];
+    const double a = std::hypot(q1, q2);
+    if (!(a > 0)) continue;
+    re += (q1 * rot[3 * i] - q2 * rot[3 * i + 1]) / a;
+    im += (q1 * rot[3 * i + 1] + q2 * rot[3 * i]) / a;
+    if (q3 > 0) {
+      dsum += a / q3;
+      ++dn;
+    }
+  }
+}
+
+const char* const kUnknownNames[8] = {"eps2", "eps3", "eps4", "k2", "k3", "k4", "psi0", "d0"};
+
+// Rank of J from JᵀJ scaled to unit diagonal, over the first `n` unknowns; `weakest` names the
+// unknown with the largest share in the least determined direction.
+int jacobian_rank(const Mat8& JtJ_upper, int n, double min_ratio, int& weakest) {
+  const Mat8 full = JtJ_upper.selfadjointView<Eigen::Upper>();
+  Eigen::MatrixXd S = full.topLeftCorner(n, n);
+  Eigen::VectorXd d(n);
+  for (int i = 0; i < n; ++i) d[i] = S(i, i) > 0 ? 1.0 / std::sqrt(S(i, i)) : 0.0;
+  S = d.asDiagonal() * S * d.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(S);
+  const Eigen::VectorXd lambda = es.eigenvalues().cwiseMax(0.0);  // ascending
+  const double top = lambda[n - 1];
+  int rank = 0;
+  for (int i = 0; i < n; ++i)
+    if (top > 0 && std::sqrt(lambda[i] / top) > min_ratio) ++rank;
+  es.eigenvectors().col(0).cwiseAbs().maxCoeff(&weakest);
+  for (int i = 0; i < n; ++i)
+    if (d[i] == 0) weakest = i;
+  return rank;
+}
+
+// Levenberg–Marquardt (Eqs. 28–29 damped: (JᵀJ + λ·diag JᵀJ)·Δ = −Jᵀr; λ ÷ 10 after a step that
+// lowers the cost, × 10 and retry after one that does not); stopping rule of spec §2.4 [C]:
+// |Δx| < step_tolerance on an accepted step, or max_iterations. `eval(x, jac, sums)` returns the
+// sums over every observation of the fit.
+template <class Eval>
+DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start, long long n,
+                                const DofpStep2Options& o) {
+  DofpCellFit fit;
+  fit.observations = static_cast<int>(n);
+  const bool dop = o.dop_weight != 0.0;
+  const int unknowns = dop ? 8 : 7;
+  const long long residuals = n * (1 + dop + (o.fit_weight != 0.0));
+  if (residuals < unknowns) {
+    fit.termination = FitTermination::TooFewObservations;
+    fit.message = fmt::format("{} observations for {} unknowns", n, unknowns);
+    return fit;
+  }
+  Vec8 x;
+  x << 0, 0, 0, 1, 1, 1, psi0_start, dop ? d0_start : 0.0;
+  Sums acc;
+  if (!eval(x, true, acc) || acc.bad >= 0) {
+    fit.termination = FitTermination::OutsideDomain;
+    fit.message = acc.bad >= 0 ? fmt::format("the AoP or DoP is undefined at observation {} "
+                                             "(no polarized signal)", acc.bad)
+                               : "the start is outside the model";
+    return fit;
+  }
+  const double scale = static_cast<double>(n);
+  fit.initial_rms_deg = rad2deg(std::sqrt(acc.aop_ss / scale));
+  double cost = acc.cost, aop_ss = acc.aop_ss;
+  const auto set_result = [&](const Vec8& at) {
+    for (int j = 1; j < 4; ++j) {
+      fit.eps_deg[j] = rad2deg(at[j - 1]);
+      fit.k[j] = at[j + 2];
+    }
+    fit.psi0_deg = wrap90_deg(rad2deg(at[6]));
+    fit.dop = dop ? at[7] : std::numeric_limits<double>::quiet_NaN();
+    fit.final_rms_deg = rad2deg(std::sqrt(aop_ss / scale));
+  };
+  double lambda = 1e-3;
+  bool converged = false;
+  for (int it = 1; it <= o.max_iterations && !converged; ++it) {
+    Mat8 JtJ = acc.JtJ.selfadjointView<Eigen::Upper>();
+    if (!dop) {  // d0 is not an unknown: keep it where it is
+      JtJ.row(7).setZero();
+      JtJ.col(7).setZero();
+      JtJ(7, 7) = 1.0;
+    }
+    Vec8 grad = acc.Jtr;
+    if (!dop) grad[7] = 0;
+    bool accepted = false;
+    Vec8 step = Vec8::Zero(), xn;
+    Sums trial;
+    for (int h = 0; h <= o.max_halvings; ++h) {
+      Mat8 Aug = JtJ;
+      for (int p = 0; p < 8; ++p) Aug(p, p) += lambda * std::max(JtJ(p, p), 1e-12);
+      step = -Aug.ldlt().solve(grad);
+      if (!step.allFinite()) {
+        lambda *= 10;
+        continue;
+      }
+      xn = x + step;
+      trial = Sums{};
+      // The trial pass sums the Jacobian too: an accepted step (the usual case) needs no
+      // second pass over the observations.
+      if (eval(xn, true, trial) && trial.bad < 0 && trial.cost <= cost) {
+        accepted = true;
+        break;
+      }
+      if (step.norm() < o.step_tolerance) break;  // at the cost's floor
+      lambda *= 10;
+    }
+    if (!accepted) {
+      if (step.allFinite() && step.norm() < o.step_tolerance) {
+        converged = true;
+        break;
+      }
+      fit.termination = FitTermination::NoConvergence;
+      fit.message = fmt::format("no step lowered the cost after {} tries", o.max_halvings + 1);
+      fit.iterations = it - 1;
+      set_result(x);
+      return fit;
+    }
+    x = xn;
+    cost = trial.cost;
+    aop_ss = trial.aop_ss;
+    lambda = std::max(lambda / 10, 1e-12);
+    fit.iterations = it;
+    if (step.norm() < o.step_tolerance) converged = true;
+    acc = trial;
+  }
+  set_result(x);
+  int weakest = 0;
+  fit.rank = jacobian_rank(acc.JtJ, unknowns, o.min_singular_ratio, weakest);
+  if (fit.rank < unknowns) {
+    fit.termination = FitTermination::RankDeficient;
+    fit.message = fmt::format("the data determine {} of the {} unknowns (least: {})", fit.rank,
+                              unknowns, kUnknownNames[weakest]);
+    return fit;
+  }
+  if (!converged) {
+    fit.termination = FitTermination::NoConvergence;
+    fit.message = fmt::format("|dx| still >= {:g} after {} iterations", o.step_tolerance,
+                              o.max_iterations);
+    return fit;
+  }
+  for (int j = 1; j < 4; ++j)
+    if (!(fit.k[j] > 0)) {
+      fit.termination = FitTermination::OutsideDomain;
+      fit.message = fmt::format("k{} = {:.6g} is not positive", j + 1, fit.k[j]);
+      return fit;
+    }
+  fit.termination = FitTermination::Converged;
+  return fit;
+}
+
+Vec8 ideal_x() {
+  Vec8 x;
+  x << 0, 0, 0, 1, 1, 1, 0, 0;
+  return x;
+}
+
+std::array<double, 4> alpha_rad_of(const DofpStep2Options& o) {
+  std::array<double, 4> a{};
+  for (int j = 0; j < 4; ++j) a[j] = deg2rad(o.mosaic_deg[j]);
+  return a;
+}
+
+void check_step2_options(const DofpStep2Options& o) {
+  if (o.table_sense != 1.0 && o.table_sense != -1.0)
+    throw std::invalid_argument(
+        fmt::format("DoFP step 2: table_sense is {}; it must be +1 or -1", o.table_sense));
+  if (o.max_iterations <= 0 || o.max_halvings < 0 || !(o.step_tolerance > 0) ||
+      !(o.min_singular_ratio > 0 && o.min_singular_ratio < 1) ||
+      !(std::isfinite(o.dop_weight) && o.dop_weight >= 0) ||
+      !(std::isfinite(o.fit_weight) && o.fit_weight >= 0))
+    throw std::invalid_argument("DoFP step 2: max_iterations must be > 0, max_halvings >= 0, "
+                                "step_tolerance > 0, 0 < min_singular_ratio < 1, dop_weight >= 0 and fit_weight >= 0");
+  for (double a : o.mosaic_deg)
+    if (!std::isfinite(a))
+      throw std::invalid_argument("DoFP step 2: the mosaic angles must be finite");
+}
+
+// Per stop: cos and sin of −2·s_R·θ_R,m, and the weight of its residuals (I_m/I_max, or 1).
+std::vector<double> table_rotations(std::span<const DofpPolarizedStop> stops, double sense,
+                                    bool weight_by_intensity) {
+  double top = 0;
+  for (const DofpPolarizedStop& s : stops) top = std::max(top, s.intensity);
+  std::vector<double> rot(3 * stops.size());
+  for (std::size_t m = 0; m < stops.size(); ++m) {
+    const double a = -2.0 * sense * deg2rad(stops[m].theta_R_deg);
+    rot[3 * m] = std::cos(a);
+    rot[3 * m + 1] = std::sin(a);
+    rot[3 * m + 2] = weight_by_intensity && top > 0 ? stops[m].intensity / top : 1.0;
+  }
+  return rot;
+}
+
+// The first pixel of a cell that step 1 left undetermined, or −1.
+long long undetermined_pixel(const DofpStep1& s1, int cx, int cy) {
+  for (int j = 0; j < 4; ++j) {
+    const long long p = static_cast<long long>(2 * cy + j / 2) * s1.width + 2 * cx + j % 2;
+    if (s1.rank[p] < 2) return p;
+  }
+  return -1;
+}
+
+// F̃ = (f − b)/K of one cell row: out[(cx·M + m)·4 + j].
+void gather_cell_row(const DofpStep1& s1, std::span<const DofpPolarizedStop> stops, int cy,
+                     std::vector<double>& out) {
+  const std::size_t M = stops.size();
+  const int W = s1.width, cells_x = W / 2;
+  out.resize(static_cast<std::size_t>(cells_x) * M * 4);
+  const std::size_t r0 = static_cast<std::size_t>(2 * cy) * W, r1 = r0 + W;
+  for (std::size_t m = 0; m < M; ++m) {
+    const double* f = stops[m].frame.data();
+    for (int cx = 0; cx < cells_x; ++cx) {
+      const std::size_t p[4] = {r0 + 2 * cx, r0 + 2 * cx + 1, r1 + 2 * cx, r1 + 2 * cx + 1};
+      double* o = &out[(static_cast<std::size_t>(cx) * M + m) * 4];
+      for (int j = 0; j < 4; ++j)
+        o[j] = s1.rank[p[j]] == 2 ? (f[p[j]] - s1.b[p[j]]) / s1.K[p[j]] : 0.0;
+    }
+  }
+}
+
+}  // namespace
+
+std::string dofp_scope_name(DofpStep2Scope s) {
+  return s == DofpStep2Scope::PerCell ? "per-cell" : "global";
+}
+
+DofpStep2Scope parse_dofp_scope(const std::string& name) {
+  if (name == "per-cell") return DofpStep2Scope::PerCell;
+  if (name == "global") return DofpStep2Scope::Global;
+  throw std::invalid_argument(
+      fmt::format("DoFP step 2 scope '{}': expected per-cell or global", name));
+}
+
+// ---------------------------------------------------------------- step 1 (Eq. 19)
+DofpStep1 calibrate_dofp_step1(int width, int height, std::span<const DofpUnpolarizedLevel> levels,
+                               const DofpStep1Options& options) {
+  check_size(width, height);
+  if (levels.size() > 65535)
+    throw std::invalid_argument("DoFP step 1: more than 65535 levels");
+  if (std::isnan(options.saturation_DN))
+    throw std::invalid_argument("DoFP step 1: the saturation level is NaN");
+  for (std::size_t i = 0; i < levels.size(); ++i)
+    if (!std::isfinite(levels[i].intensity) || levels[i].intensity < 0)
+      throw std::invalid_argument(fmt::format(
+          "DoFP step 1: level {} has intensity {}; it must be finite and >= 0", i,
+          levels[i].intensity));
+  const std::size_t N = static_cast<std::size_t>(width) * height;
+  check_frames(levels, N, static_cast<std::size_t>(width), "unpolarized level");
+
+  DofpStep1 s;
+  s.width = width;
+  s.height = height;
+  s.K.assign(N, 0.0);
+  s.b.assign(N, 0.0);
+  s.residual_rms_DN.assign(N, 0.0);
+  s.rank.assign(N, 0);
+  s.levels_used.assign(N, 0);
+  const double sat = options.saturation_DN;
+  tbb::parallel_for(tbb::blocked_range<int>(0, height), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<double> sx(width), sy(width), xmin(width), xmax(width), sxx(width), sxy(width);
+    std::vector<int> n(width);
+    for (int row = rows.begin(); row < rows.end(); ++row) {
+      const std::size_t base = static_cast<std::size_t>(row) * width;
+      std::fill(sx.begin(), sx.end(), 0.0);
+      std::fill(sy.begin(), sy.end(), 0.0);
+      std::fill(sxx.begin(), sxx.end(), 0.0);
+      std::fill(sxy.begin(), sxy.end(), 0.0);
+      std::fill(n.begin(), n.end(), 0);
+      std::fill(xmin.begin(), xmin.end(), std::numeric_limits<double>::infinity());
+      std::fill(xmax.begin(), xmax.end(), -std::numeric_limits<double>::infinity());
+      for (const DofpUnpolarizedLevel& L : levels) {
+        const double x = 0.5 * L.intensity;  // I_j = I/2 behind the analyzer (spec §2.4)
+        const double* f = L.frame.data() + base;
+        for (int c = 0; c < width; ++c) {
+          if (!(f[c] < sat)) continue;
+          sx[c] += x;
+          sy[c] += f[c];
+          ++n[c];
+          xmin[c] = std::min(xmin[c], x);
+          xmax[c] = std::max(xmax[c], x);
+        }
+      }
+      for (int c = 0; c < width; ++c)
+        if (n[c] > 0) {
+          sx[c] /= n[c];  // now the means x̄, ȳ
+          sy[c] /= n[c];
+        }
+      // Centred sums: K = Σ(x − x̄)(f − f̄)/Σ(x − x̄)², b = f̄ − K·x̄.
+      for (const DofpUnpolarizedLevel& L : levels) {
+        const double x = 0.5 * L.intensity;
+        const double* f = L.frame.data() + base;
+        for (int c = 0; c < width; ++c) {
+          if (!(f[c] < sat)) continue;
+          const double dx = x - sx[c];
+          sxx[c] += dx * dx;
+          sxy[c] += dx * (f[c] - sy[c]);
+        }
+      }
+      for (int c = 0; c < width; ++c) {
+        const std::size_t p = base + c;
+        s.levels_used[p] = static_cast<std::uint16_t>(n[c]);
+        s.rank[p] = n[c] == 0 ? 0 : (xmax[c] > xmin[c] && sxx[c] > 0 ? 2 : 1);
+        if (s.rank[p] < 2) continue;
+        s.K[p] = sxy[c] / sxx[c];
+        s.b[p] = sy[c] - s.K[p] * sx[c];
+      }
+      std::fill(sxx.begin(), sxx.end(), 0.0);  // now Σ residual²
+      for (const DofpUnpolarizedLevel& L : levels) {
+        const double x = 0.5 * L.intensity;
+        const double* f = L.frame.data() + base;
+        for (int c = 0; c < width; ++c) {
+          if (!(f[c] < sat) || s.rank[base + c] < 2) continue;
+          const double r = s.K[base + c] * x + s.b[base + c] - f[c];
+          sxx[c] += r * r;
+        }
+      }
+      for (int c = 0; c < width; ++c)
+        if (s.rank[base + c] == 2) s.residual_rms_DN[base + c] = std::sqrt(sxx[c] / n[c]);
+    }
+  });
+  for (std::uint8_t r : s.rank) s.rank_deficient_pixels += r < 2;
+  return s;
+}
+
+// ---------------------------------------------------------------- step 2 (Eqs. 20–29)
+DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarizedStop> stops,
+                               const DofpStep2Options& o, const Progress& progress) {
+  check_step2_options(o);
+  check_size(s1.width, s1.height);
+  const std::size_t N = static_cast<std::size_t>(s1.width) * s1.height;
+  if (s1.K.size() != N || s1.b.size() != N || s1.rank.size() != N)
+    throw std::invalid_argument("DoFP step 2: step 1's maps do not match its frame size");
+  for (std::size_t m = 0; m < stops.size(); ++m)
+    if (!std::isfinite(stops[m].theta_R_deg) || !std::isfinite(stops[m].intensity))
+      throw std::invalid_argument(
+          fmt::format("DoFP step 2: stop {} has a non-finite table angle or intensity", m));
+  check_frames(stops, N, static_cast<std::size_t>(s1.width), "polarized stop");
+
+  const std::array<double, 4> alpha = alpha_rad_of(o);
+  const std::vector<double> rot = table_rotations(stops, o.table_sense, o.weight_by_intensity);
+  const std::size_t M = stops.size();
+  DofpStep2 out;
+  out.scope = o.scope;
+  out.cells_x = s1.width / 2;
+  out.cells_y = s1.height / 2;
+  const int cells_x = out.cells_x, cells_y = out.cells_y;
+
+  if (o.scope == DofpStep2Scope::PerCell) {
+    out.cells.resize(static_cast<std::size_t>(cells_x) * cells_y);
+    progress.begin("calibrate dofp: step 2 cells", static_cast<long long>(out.cells.size()));
+    tbb::parallel_for(tbb::blocked_range<int>(0, cells_y, 1), [&](const tbb::blocked_range<int>& r) {
+      std::vector<double> F;
+      for (int cy = r.begin(); cy < r.end(); ++cy) {
+        gather_cell_row(s1, stops, cy, F);
+        for (int cx = 0; cx < cells_x; ++cx) {
+          DofpCellFit& fit = out.cells[static_cast<std::size_t>(cy) * cells_x + cx];
+          if (const long long p = undetermined_pixel(s1, cx, cy); p >= 0) {
+            fit.termination = FitTermination::RankDeficient;
+            fit.observations = static_cast<int>(M);
+            fit.message = fmt::format("step 1 left pixel (column {}, row {}) undetermined (rank {})",
+                                      p % s1.width, p / s1.width, int{s1.rank[p]});
+            continue;
+          }
+          const double* Fc = &F[static_cast<std::size_t>(cx) * M * 4];
+          CellModel model;
+          const auto eval = [&](const Vec8& x, bool jac, Sums& sums) {
+            if (!make_cell_model(x, alpha, o.dop_weight, o.fit_weight, jac, model)) return false;
+            if (jac)
+              accumulate<true>(model, Fc, rot.data(), M, sums);
+            else
+              accumulate<false>(model, Fc, rot.data(), M, sums);
+            return true;
+          };
+          double re = 0, im = 0, dsum = 0;
+          long long dn = 0;
+          if (make_cell_model(ideal_x(), alpha, o.dop_weight, o.fit_weight, false, model))
+            start_sums(model, Fc, rot.data(), M, re, im, dsum, dn);
+          fit = levenberg_marquardt(eval, 0.5 * std::atan2(im, re), dn > 0 ? dsum / dn : 0.0,
+                                    static_cast<long long>(M), o);
+        }
+        progress.advance(cells_x);
+      }
+    });
+    progress.finish();
+  } else {
+    // One set for the whole array: the sums over cell rows, added in row order (deterministic).
+    std::vector<std::vector<double>> F(cells_y);
+    std::vector<std::uint8_t> ok(static_cast<std::size_t>(cells_x) * cells_y);
+    long long used = 0;
+    tbb::parallel_for(0, cells_y, [&](int cy) {
+      gather_cell_row(s1, stops, cy, F[cy]);
+      for (int cx = 0; cx < cells_x; ++cx)
+        ok[static_cast<std::size_t>(cy) * cells_x + cx] = undetermined_pixel(s1, cx, cy) < 0;
+    });
+    for (std::uint8_t v : ok) used += v;
+    const auto eval = [&](const Vec8& x, bool jac, Sums& total) {
+      CellModel model;
+      if (!make_cell_model(x, alpha, o.dop_weight, o.fit_weight, jac, model)) return false;
+      std::vector<Sums> rows(cells_y);
+      tbb::parallel_for(0, cells_y, [&](int cy) {
+        for (int cx = 0; cx < cells_x; ++cx) {
+          if (!ok[static_cast<std::size_t>(cy) * cells_x + cx]) continue;
+          const double* Fc = &F[cy][static_cast<std::size_t>(cx) * M * 4];
+          if (jac)
+            accumulate<true>(model, Fc, rot.data(), M, rows[cy]);
+          else
+            accumulate<false>(model, Fc, rot.data(), M, rows[cy]);
+        }
+      });
+      for (const Sums& s : rows) total.add(s);
+      return true;
+    };
+    double re = 0, im = 0, dsum = 0;
+    long long dn = 0;
+    CellModel model;
+    if (make_cell_model(ideal_x(), alpha, o.dop_weight, o.fit_weight, false, model))
+      for (int cy = 0; cy < cells_y; ++cy)
+        for (int cx = 0; cx < cells_x; ++cx)
+          if (ok[static_cast<std::size_t>(cy) * cells_x + cx])
+            start_sums(model, &F[cy][static_cast<std::size_t>(cx) * M * 4], rot.data(), M, re, im,
+                       dsum, dn);
+    out.cells.push_back(levenberg_marquardt(eval, 0.5 * std::atan2(im, re),
+                                            dn > 0 ? dsum / dn : 0.0,
+                                            used * static_cast<long long>(M), o));
+    if (used == 0) out.cells.back().message = "step 1 left every cell undetermined";
+  }
+  for (const DofpCellFit& c : out.cells) out.usable_cells += c.usable();
+  return out;
+}
+
+// ---------------------------------------------------------------- Table 1
+DofpTable1 dofp_table1(const DofpStep1& s1, const DofpStep2& s2,
+                       std::span<const DofpPolarizedStop> stops, const DofpStep2Options& o,
+                       double intensity) {
+  check_step2_options(o);
+  const int cells_x = s2.cells_x, cells_y = s2.cells_y;
+  const std::size_t ncells = static_cast<std::size_t>(cells_x) * cells_y;
+  if (s2.cells.size() != (s2.scope == DofpStep2Scope::Global ? 1 : ncells) ||
+      cells_x * 2 != s1.width || cells_y * 2 != s1.height)
+    throw std::invalid_argument("DoFP Table 1: step 1 and step 2 do not match");
+  if (!(intensity > 0))
+    for (const DofpPolarizedStop& s : stops) intensity = std::max(intensity, s.intensity);
+  std::vector<std::size_t> used;
+  for (std::size_t m = 0; m < stops.size(); ++m)
+    if (stops[m].intensity == intensity) used.push_back(m);
+  if (used.size() < 2)
+    throw CalibrationError(fmt::format(
+        "DoFP Table 1: {} stop(s) at intensity {}; the orientation error needs at least two",
+        used.size(), intensity));
+
+  const std::array<double, 4> alpha = alpha_rad_of(o);
+  CellModel ideal;
+  if (!make_cell_model(ideal_x(), alpha, 0.0, 0.0, false, ideal))
+    throw std::invalid_argument("DoFP Table 1: the mosaic's four axes do not span the Stokes plane");
+  // The cells used, and each one's fitted projection (rows q̃1, q̃2 of R⁻¹Ãᵀ).
+  std::vector<std::size_t> cells;
+  std::vector<Eigen::Matrix<double, 2, 4>> fitted;
+  for (int cy = 0; cy < cells_y; ++cy)
+    for (int cx = 0; cx < cells_x; ++cx) {
+      const std::size_t c = static_cast<std::size_t>(cy) * cells_x + cx;
+      const DofpCellFit& fit = s2.cells[s2.scope == DofpStep2Scope::Global ? 0 : c];
+      if (!fit.usable() || undetermined_pixel(s1, cx, cy) >= 0) continue;
+      Vec8 x;
+      x << deg2rad(fit.eps_deg[1]), deg2rad(fit.eps_deg[2]), deg2rad(fit.eps_deg[3]), fit.k[1],
+          fit.k[2], fit.k[3], 0, 0;
+      CellModel m;
+      if (!make_cell_model(x, alpha, 0.0, 0.0, false, m)) continue;
+      cells.push_back(c);
+      fitted.push_back(m.P.topRows<2>());
+    }
+  if (cells.empty())
+    throw CalibrationError("DoFP Table 1: no cell has a usable step 1 and step 2");
+
+  // Circular mean per stop and row: ½·arg Σ_cells (q̃1 + i q̃2)/|q̃|.
+  std::vector<std::array<double, 3>> orient(used.size());
+  tbb::parallel_for(std::size_t{0}, used.size(), [&](std::size_t u) {
+    const double* f = stops[used[u]].frame.data();
+    std::array<double, 3> re{}, im{};
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const std::size_t c = cells[i];
+      const int cx = static_cast<int>(c % cells_x), cy = static_cast<int>(c / cells_x);
+      const std::size_t r0 = static_cast<std::size_t>(2 * cy) * s1.width + 2 * cx;
+      const std::size_t p[4] = {r0, r0 + 1, r0 + s1.width, r0 + s1.width + 1};
+      Eigen::Vector4d raw, F;
+      for (int j = 0; j < 4; ++j) {
+        raw[j] = f[p[j]];
+        F[j] = (f[p[j]] - s1.b[p[j]]) / s1.K[p[j]];
+      }
+      const Eigen::Vector2d q[3] = {ideal.P.topRows<2>() * raw, ideal.P.topRows<2>() * F,
+                                    fitted[i] * F};
+      for (int k = 0; k < 3; ++k) {
+        const double a = q[k].norm();
+        if (!(a > 0)) continue;
+        re[k] += q[k][0] / a;
+        im[k] += q[k][1] / a;
+      }
+    }
+    for (int k = 0; k < 3; ++k) orient[u][k] = rad2deg(0.5 * std::atan2(im[k], re[k]));
+  });
+
+  DofpTable1 t;
+  t.intensity = intensity;
+  t.cells_used = static_cast<long long>(cells.size());
+  const char* names[3] = {"raw", "step1", "step2"};
+  for (std::size_t u = 1; u < used.size(); ++u)
+    t.theta_R_deg.push_back(stops[used[u]].theta_R_deg);
+  for (int k = 0; k < 3; ++k) {
+    DofpOrientationRow& row = t.rows[k];
+    row.name = names[k];
+    const double theta0 = stops[used[0]].theta_R_deg;
+    for (std::size_t u = 1; u < used.size(); ++u)
+      row.error_deg.push_back(wrap90_deg(orient[u][k] - orient[0][k] -
+                                         o.table_sense * (stops[used[u]].theta_R_deg - theta0)));
+    double sum = 0;
+    for (double e : row.error_deg) {
+      row.max_deg = std::max(row.max_deg, std::abs(e));
+      sum += e;
+    }
+    const double n = static_cast<double>(row.error_deg.size());
+    row.mean_deg = sum / n;
+    double ss = 0;
+    for (double e : row.error_deg) ss += (e - row.mean_deg) * (e - row.mean_deg);
+    row.std_deg = n > 1 ? std::sqrt(ss / (n - 1)) : 0.0;
+  }
+  return t;
+}
+
+DofpCalibration calibrate_dofp(int width, int height, std::span<const DofpUnpolarizedLevel> levels,
+                               std::span<const DofpPolarizedStop> stops,
+                               const DofpCalibrationOptions& options, const Progress& progress) {
+  DofpCalibration c;
+  c.options = options;
+  c.step1 = calibrate_dofp_step1(width, height, levels, options.step1);
+  c.step2 = calibrate_dofp_step2(c.step1, stops, options.step2, progress);
+  c.table1 = dofp_table1(c.step1, c.step2, stops, options.step2, options.table1_intensity);
+  return c;
+}
+
+DofpTruth dofp_parameter_maps(const DofpCalibration& c, std::vector<std::uint8_t>* usable) {
+  const DofpStep1& s1 = c.step1;
+  const std::size_t N = static_cast<std::size_t>(s1.width) * s1.height;
+  DofpTruth t;
+  t.width = s1.width;
+  t.height = s1.height;
+  t.K = s1.K;
+  t.b = s1.b;
+  t.k.resize(N);
+  t.eps_deg.resize(N);
+  t.alpha_deg.resize(N);
+  if (usable) usable->assign(N, 0);
+  const int cells_x = s1.width / 2;
+  for (int row = 0; row < s1.height; ++row)
+    for (int col = 0; col < s1.width; ++col) {
+      const std::size_t p = static_cast<std::size_t>(row) * s1.width + col;
+      const int j = (row % 2) * 2 + col % 2;
+      const std::size_t cell = static_cast<std::size_t>(row / 2) * cells_x + col / 2;
+      const DofpCellFit& fit =
+          c.step2.cells[c.step2.scope == DofpStep2Scope::Global ? 0 : cell];
+      // A fit that did not converge says where it stopped (cells.csv); the maps keep the ideal
+      // k = 1, ε = 0 there, flagged unusable.
+      t.k[p] = fit.usable() ? fit.k[j] : 1.0;
+      t.eps_deg[p] = fit.usable() ? fit.eps_deg[j] : 0.0;
+      t.alpha_deg[p] = c.options.step2.mosaic_deg[j];
+      if (usable) (*usable)[p] = fit.usable() && undetermined_pixel(s1, col / 2, row / 2) < 0;
+    }
+  return t;
+}
+
+// ---------------------------------------------------------------- exposed for tests
+namespace {
+std::vector<double> rotations_of(const std::vector<double>& theta, double sense) {
+  std::vector<DofpPolarizedStop> stops(theta.size());
+  for (std::size_t m = 0; m < theta.size(); ++m) stops[m].theta_R_deg = theta[m];
+  return table_rotations(stops, sense, false);
+}
+}  // namespace
+
+Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F, const std::vector<double>& theta,
+                                    const Eigen::Matrix<double, 8, 1>& x,
+                                    const DofpStep2Options& o) {
+  if (F.size() != 4 * theta.size())
+    throw std::invalid_argument("dofp_cell_residuals: F needs 4 values per table angle");
+  const std::vector<double> rot = rotations_of(theta, o.table_sense);
+  CellModel model;
+  if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, false, model))
+    throw std::invalid_argument("dofp_cell_residuals: the model is singular at x");
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * theta.size()));
+  Sums sums;
+  accumulate<false>(model, F.data(), rot.data(), theta.size(), sums, r.data());
+  return r;
+}
+
+Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F, const std::vector<double>& theta,
+                                   const Eigen::Matrix<double, 8, 1>& x,
+                                   const DofpStep2Options& o) {
+  if (F.size() != 4 * theta.size())
+    throw std::invalid_argument("dofp_cell_jacobian: F needs 4 values per table angle");
+  const std::vector<double> rot = rotations_of(theta, o.table_sense);
+  CellModel model;
+  if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
+    throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
+  std::vector<double> rows(24 * theta.size(), 0.0);
+  Sums sums;
+  accumulate<true>(model, F.data(), rot.data(), theta.size(), sums, nullptr, rows.data());
+  Eigen::MatrixXd J(static_cast<Eigen::Index>(3 * theta.size()), 8);
+  for (std::size_t i = 0; i < 3 * theta.size(); ++i)
+    for (int p = 0; p < 8; ++p) J(static_cast<Eigen::Index>(i), p) = rows[8 * i + p];
+  return J;
+}
+
+}  // namespace polrig

@@ -175,6 +175,13 @@ TEST(DofpCamera, NormalQuantileInvertsTheNormalCdf) {
   }
 }
 
+TEST(DofpCamera, NoiseDeviateIsTheQuantileWithin2e5) {
+  for (int i = 1; i < 100000; ++i) {
+    const double u = i / 100000.0;
+    ASSERT_NEAR(noise_deviate(u), normal_quantile(u), 2e-5) << u;
+  }
+}
+
 TEST(DofpCamera, NoiseHasThePoissonGaussianVariance) {
   DofpCameraSpec cam;
   cam.adc_bits = 16;

@@ -77,6 +77,7 @@ std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame,
     for (auto* v : {&layers->S0, &layers->S1, &layers->S2, &layers->AoP, &layers->DoP}) v->assign(n, 0.0f);
   }
   const DofpCameraSpec& spec = rig_.camera;
+  const DofpExposure expose(spec, noise_seed_, static_cast<std::uint64_t>(stop.index), static_cast<std::uint64_t>(frame));
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
     std::vector<Vec3> views(static_cast<std::size_t>(W));
     std::vector<ViewLight> lights(static_cast<std::size_t>(W));
@@ -106,8 +107,7 @@ std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame,
         const double n2 = u * u + w * w;
         if (n2 > 0) c2 = (u * u - w * w) / n2, s2 = 2.0 * u * w / n2;
         const double f = 0.5 * truth_.K[i] * I * (1.0 + truth_.k[i] * d * (c2 * c2b_[i] + s2 * s2b_[i])) + truth_.b[i];
-        raw[i] = expose_DN(spec, f, truth_.b[i], noise_seed_, static_cast<std::uint64_t>(stop.index),
-                           static_cast<std::uint64_t>(frame), i);
+        raw[i] = expose(f, truth_.b[i], i);
         if (layers) {
           layers->S0[i] = static_cast<float>(I);
           layers->S1[i] = static_cast<float>(I * d * c2);

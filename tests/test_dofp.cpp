@@ -3,10 +3,18 @@
 #include <numbers>
 #include <set>
 
+#include <unistd.h>
+
+#include <filesystem>
+
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include "polrig/device/dofp_camera.h"
+#include "polrig/io/dofp_dataset.h"
+#include "polrig/io/exr.h"
+#include "polrig/report/dofp_dataset.h"
 #include "polrig/sim/dofp_frames.h"
 #include "polrig/sky/sun.h"
 #include "polrig/source/source.h"
@@ -351,4 +359,78 @@ TEST(DofpFrames, RefusesRigsWithoutFramesOrLightAlongViews) {
   Rig sky = sky_camera_rig();
   sky.schedule.unpolarized_levels = {1};
   EXPECT_THROW(DofpSimulator{sky}, std::invalid_argument);
+}
+
+namespace {
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto p = std::filesystem::temp_directory_path() / fmt::format("polrig_test_dofp_{}_{}", name, ::getpid());
+  std::filesystem::remove_all(p);
+  return p;
+}
+}  // namespace
+
+TEST(DofpDataset, WritesAndReadsBackEveryFrameAndTheSums) {
+  Rig rig = camera_rig();
+  rig.camera.width_px = 32, rig.camera.height_px = 24;
+  rig.camera.noise = true, rig.camera.gain_DN = 2000, rig.camera.adc_bits = 12;
+  rig.camera.gain_spread = 0.03;
+  rig.schedule.unpolarized_levels = {0, 0.5};
+  rig.schedule.frames_per_stop = 3;
+  const LoadedRig loaded{rig, "test", "", {}};
+  const DofpSimulator sim(rig);
+  for (DofpFrameStorage storage : {DofpFrameStorage::Every, DofpFrameStorage::Sum}) {
+    const auto dir = fresh_dir(storage == DofpFrameStorage::Every ? "every" : "sum");
+    DofpDatasetOptions o;
+    o.storage = storage;
+    o.truth_layers = true;
+    write_dofp_dataset(loaded, dir, o, "polrig simulate test", false);
+    EXPECT_THROW(write_dofp_dataset(loaded, dir, o, "again", false), std::runtime_error);  // never replaced
+    const DofpDataset d = read_dofp_dataset(dir);
+    EXPECT_EQ(d.width, 32);
+    EXPECT_NEAR(d.f_c_px, 405.405, 1e-3);
+    EXPECT_EQ(d.cx, 16);
+    ASSERT_EQ(d.stops.size(), 4u);
+    EXPECT_FALSE(d.stops[0].polarized);
+    EXPECT_EQ(d.stops[2].theta_R_deg, 0);
+    EXPECT_EQ(d.stops[3].theta_R_deg, 30);
+    EXPECT_FALSE(d.stops[3].heading_deg);
+    EXPECT_EQ(d.truth.K.size(), 32u * 24u);
+    for (std::size_t i = 0; i < d.truth.K.size(); ++i) EXPECT_EQ(d.truth.K[i], static_cast<float>(sim.truth().K[i]));
+    for (std::size_t s = 0; s < d.stops.size(); ++s) {
+      std::vector<double> mean(32 * 24, 0.0);
+      for (int f = 0; f < 3; ++f) {
+        const auto raw = sim.frame(sim.stops()[s], f);
+        for (std::size_t i = 0; i < raw.size(); ++i) mean[i] += raw[i];
+        if (storage == DofpFrameStorage::Every) {
+          EXPECT_EQ(read_dofp_frames(d, s)[static_cast<std::size_t>(f)], raw);
+        }
+      }
+      for (double& m : mean) m /= 3;
+      EXPECT_EQ(read_dofp_mean_frame(d, s), mean);
+    }
+    EXPECT_TRUE(std::filesystem::exists(dir / "manifest.yaml"));
+    std::filesystem::remove_all(dir);
+  }
+}
+
+TEST(DofpDataset, SkyStopsCarryUtcHeadingAndTheSun) {
+  Rig rig = sky_camera_rig();
+  rig.camera.width_px = 16, rig.camera.height_px = 12;
+  const auto dir = fresh_dir("sky");
+  write_dofp_dataset(LoadedRig{rig, "test", "", {}}, dir, {}, "polrig simulate test", false);
+  const DofpDataset d = read_dofp_dataset(dir);
+  ASSERT_EQ(d.stops.size(), 2u);
+  EXPECT_EQ(d.stops[0].utc, "2017-05-28T10:00:00Z");
+  EXPECT_NEAR(*d.stops[1].heading_deg, 50, 1e-12);
+  const ExrImage image = read_exr_image(dir / d.stops[1].file);
+  bool sun = false;
+  for (const auto& [name, v] : image.attributes.vectors)
+    if (name == "sun_enu") {
+      const Sky sky = rig.source.sky.resolved_sky();
+      const Vec3 s = sun_direction_enu(sun_position(sky.first_stop.plus_seconds(d.stops[1].t_s), sky.site, sky.sun));
+      EXPECT_EQ(v, s);
+      sun = true;
+    }
+  EXPECT_TRUE(sun);
+  std::filesystem::remove_all(dir);
 }

@@ -5,6 +5,8 @@
 
 #include <unistd.h>
 
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -433,4 +435,37 @@ TEST(DofpDataset, SkyStopsCarryUtcHeadingAndTheSun) {
     }
   EXPECT_TRUE(sun);
   std::filesystem::remove_all(dir);
+}
+
+// The han2017 indoor dataset (spec §2.4: 30 unpolarized levels, 79 positions at 4.6036° × six
+// intensities, 5 frames per stop) at the default camera: its size on disk, printed with the time
+// it took (docs/formats.md quotes them). Slow: ~2,500 frames.
+TEST(SlowDofpDataset, Han2017IndoorSize) {
+  Rig rig = camera_rig();
+  rig.camera.noise = true, rig.camera.gain_DN = 2000, rig.camera.adc_bits = 12;
+  rig.camera.gain_spread = 0.02, rig.camera.offset_DN = 40, rig.camera.offset_spread_DN = 2;
+  rig.device.d = 1.0;
+  rig.schedule.angles_deg.clear();
+  rig.schedule.start_deg = 0, rig.schedule.step_deg = 4.6036, rig.schedule.stop_deg = 359.1;
+  for (int i = 0; i < 30; ++i) rig.schedule.unpolarized_levels.push_back(i / 29.0);
+  rig.schedule.intensities = {1, 0.5, 0.25, 0.1, 0.05, 0.025};
+  rig.schedule.frames_per_stop = 5;
+  ASSERT_EQ(dofp_stops(rig.schedule).size(), 30u + 79u * 6u);
+  for (DofpFrameStorage storage : {DofpFrameStorage::Sum, DofpFrameStorage::Every}) {
+    const auto dir = fresh_dir("han2017");
+    DofpDatasetOptions o;
+    o.storage = storage;
+    const auto t0 = std::chrono::steady_clock::now();
+    write_dofp_dataset(LoadedRig{rig, "test", "", {}}, dir, o, "polrig simulate han2017-indoor", false);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::uintmax_t bytes = 0;
+    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+      if (e.is_regular_file()) bytes += e.file_size();
+    std::printf("han2017 indoor, %s: %.1f MB in %.1f s\n", storage == DofpFrameStorage::Sum ? "per-stop sums" : "every frame",
+                bytes / 1e6, s);
+    if (storage == DofpFrameStorage::Sum) {
+      EXPECT_LT(bytes, 300e6);
+    }
+    std::filesystem::remove_all(dir);
+  }
 }

@@ -12,5 +12,6 @@ void bind_studies(pybind11::module_& m);      // study_bindings.cpp: simulate, C
 void bind_calibration(pybind11::module_& m);  // calibration_bindings.cpp: calibrate, params, apply
 void bind_sky(pybind11::module_& m);          // sky_bindings.cpp: sun, sky, drift, spectral
 void bind_nav(pybind11::module_& m);          // nav_bindings.cpp: heading, study heading
+void bind_dofp(pybind11::module_& m);         // dofp_bindings.cpp: the DoFP camera's frames and dataset
 
 }  // namespace polrig::python

@@ -34,4 +34,5 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_calibration(m);
   polrig::python::bind_sky(m);
   polrig::python::bind_nav(m);
+  polrig::python::bind_dofp(m);
 }

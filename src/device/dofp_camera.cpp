@@ -196,10 +196,10 @@ namespace {
 // Open (0, 1): (k + ½)·2⁻⁵², k the top 52 bits, every value exact and never 0 or 1.
 double open_unit(std::uint64_t bits) { return (static_cast<double>(bits >> 12) + 0.5) * 0x1.0p-52; }
 
+// Φ⁻¹ at the ends of 4096 intervals of u. The outer 64 at each end (u < 1/64, 3 % of the draws),
+// where the quantile curves too much for the linear interpolation to keep its error under 2e-5,
+// are computed exactly (DofpExposure::deviate).
 constexpr int kQuantileIntervals = 4096;
-// The outer 64 intervals at each end (u < 1/64, 3 % of the draws), where the quantile curves too
-// much for the linear interpolation to keep its error under 2e-5, are computed exactly.
-constexpr int kExactIntervals = 64;
 const std::vector<double>& quantile_table() {
   static const std::vector<double> table = [] {
     std::vector<double> t(kQuantileIntervals + 1);
@@ -210,50 +210,37 @@ const std::vector<double>& quantile_table() {
 }
 }  // namespace
 
-double noise_deviate(double u) {
-  const std::vector<double>& T = quantile_table();
-  const double x = u * kQuantileIntervals;
-  const int k = static_cast<int>(x);
-  if (k < kExactIntervals || k >= kQuantileIntervals - kExactIntervals) return normal_quantile(u);
-  const std::size_t i = static_cast<std::size_t>(k);
-  return T[i] + (x - k) * (T[i + 1] - T[i]);
-}
-
 DofpExposure::DofpExposure(const DofpCameraSpec& spec, std::uint64_t seed, std::uint64_t stop, std::uint64_t frame)
     : noise_(spec.noise),
       electrons_per_DN_(spec.electrons_per_DN),
       read2_(spec.read_noise_DN * spec.read_noise_DN),
       read_(spec.read_noise_DN),
-      top_(std::ldexp(1.0, spec.adc_bits) - 1.0) {
+      top_(std::ldexp(1.0, spec.adc_bits) - 1.0),
+      table_(quantile_table().data()) {
   using detail::splitmix64;
   prefix_ = splitmix64(splitmix64(seed ^ stop) ^ (frame + 0x632BE59BD9B4E019ull));
-  quantile_table();
 }
 
-std::uint16_t DofpExposure::operator()(double f_DN, double b_DN, std::uint64_t pixel) const {
-  double v = f_DN;
-  if (noise_) {
-    using detail::splitmix64;
-    const std::uint64_t h = splitmix64(prefix_ ^ (pixel + 0x8CB92BA72F3D8DD7ull));
-    const double s = std::max(f_DN - b_DN, 0.0);  // the photo-signal, DN
-    const double lambda = s * electrons_per_DN_;
-    const double z = noise_deviate(open_unit(h));
-    if (lambda >= 32.0) {
-      v = b_DN + s + std::sqrt(s / electrons_per_DN_ + read2_) * z;
-    } else {
-      // Exact Poisson by inversion of its CDF (at most a few dozen terms for λ < 32).
-      const double u = open_unit(splitmix64(h ^ 0xA24BAED4963EE407ull));
-      double p = std::exp(-lambda), F = p;
-      int count = 0;
-      while (u > F && count < 1000) {
-        ++count;
-        p *= lambda / count;
-        F += p;
-      }
-      v = b_DN + count / electrons_per_DN_ + read_ * z;
-    }
+double DofpExposure::few_electrons(double s, double b_DN, std::uint64_t h) const {
+  const double lambda = s * electrons_per_DN_;
+  const double u = open_unit(detail::splitmix64(h ^ 0xA24BAED4963EE407ull));
+  double p = std::exp(-lambda), F = p;
+  int count = 0;
+  while (u > F && count < 1000) {
+    ++count;
+    p *= lambda / count;
+    F += p;
   }
-  return static_cast<std::uint16_t>(std::clamp(std::floor(v + 0.5), 0.0, top_));
+  return b_DN + count / electrons_per_DN_ + read_ * deviate(h);
+}
+
+double noise_deviate(double u) {
+  const std::vector<double>& T = quantile_table();
+  const double x = u * kQuantileIntervals;
+  const int k = static_cast<int>(x);
+  if (k < 64 || k >= kQuantileIntervals - 64) return normal_quantile(u);
+  const std::size_t i = static_cast<std::size_t>(k);
+  return T[i] + (x - k) * (T[i + 1] - T[i]);
 }
 
 std::uint16_t expose_DN(const DofpCameraSpec& spec, double f_DN, double b_DN, std::uint64_t seed,

@@ -105,7 +105,10 @@ std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame,
           u = -m[1], w = m[0];
         }
         const double n2 = u * u + w * w;
-        if (n2 > 0) c2 = (u * u - w * w) / n2, s2 = 2.0 * u * w / n2;
+        if (n2 > 0) {
+          const double r = 1.0 / n2;
+          c2 = (u * u - w * w) * r, s2 = 2.0 * u * w * r;
+        }
         const double f = 0.5 * truth_.K[i] * I * (1.0 + truth_.k[i] * d * (c2 * c2b_[i] + s2 * s2b_[i])) + truth_.b[i];
         raw[i] = expose(f, truth_.b[i], i);
         if (layers) {

@@ -16,10 +16,12 @@
 // Units: lengths in mm, except the pixel pitch in µm; angles in degrees at the interface; the
 // intensity I is the source's S0 in its own unit, DN per that unit is K.
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
 
+#include "polrig/random.h"
 #include "polrig/vec3.h"
 
 namespace polrig {
@@ -109,6 +111,10 @@ DofpTruth make_dofp_truth(const DofpCameraSpec& spec, std::uint64_t seed);
 double eq18_DN(double K, double b, double k, double eps_deg, double alpha_deg, double I, double d,
                double phi_deg);
 
+// The standard normal quantile Φ⁻¹(p), p in (0, 1): Wichura's AS 241 (PPND16, relative error
+// ~1e-16), the noise's deviate (through noise_deviate's table).
+double normal_quantile(double p);
+
 // Poisson–Gaussian noise and the ADC: the photo-signal s = f − b (DN, ≥ 0) holds
 // λ = s·electrons_per_DN electrons, Poisson; plus Gaussian read noise; rounded and clamped to
 // 0 … 2^adc_bits − 1. Poisson is drawn exactly (inversion) for λ < 32 and as N(λ, λ) above
@@ -118,15 +124,41 @@ std::uint16_t expose_DN(const DofpCameraSpec& spec, double f_DN, double b_DN, st
                         std::uint64_t stop, std::uint64_t frame, std::uint64_t pixel);
 
 // expose_DN for one frame's pixels, the hash of (seed, stop, frame) computed once: the same values.
+// Inline: the frame simulation's per-pixel step.
 class DofpExposure {
  public:
   DofpExposure(const DofpCameraSpec& spec, std::uint64_t seed, std::uint64_t stop, std::uint64_t frame);
-  std::uint16_t operator()(double f_DN, double b_DN, std::uint64_t pixel) const;
+  std::uint16_t operator()(double f_DN, double b_DN, std::uint64_t pixel) const {
+    double v = f_DN;
+    if (noise_) {
+      const std::uint64_t h = detail::splitmix64(prefix_ ^ (pixel + 0x8CB92BA72F3D8DD7ull));
+      const double s = f_DN > b_DN ? f_DN - b_DN : 0.0;  // the photo-signal, DN
+      v = s * electrons_per_DN_ >= 32.0 ? b_DN + s + std::sqrt(s / electrons_per_DN_ + read2_) * deviate(h)
+                                        : few_electrons(s, b_DN, h);
+    }
+    // Rounded to the nearest DN and clamped: v + 0.5 ≥ 0 truncates to its floor.
+    if (!(v > -0.5)) return 0;
+    if (v >= top_) return static_cast<std::uint16_t>(top_);
+    return static_cast<std::uint16_t>(v + 0.5);
+  }
 
  private:
+  static constexpr int kIntervals = 4096, kExact = 64;  // noise_deviate's table
+  double deviate(std::uint64_t h) const {
+    const double u = (static_cast<double>(h >> 12) + 0.5) * 0x1.0p-52;  // (0, 1), never 0 or 1
+    const double x = u * kIntervals;
+    const int k = static_cast<int>(x);
+    if (k < kExact || k >= kIntervals - kExact) return normal_quantile(u);
+    const double* T = table_ + k;
+    return T[0] + (x - k) * (T[1] - T[0]);
+  }
+  // λ < 32: exact Poisson by inversion, plus the read noise.
+  double few_electrons(double s, double b_DN, std::uint64_t h) const;
+
   bool noise_;
   double electrons_per_DN_, read2_, read_, top_;
   std::uint64_t prefix_;
+  const double* table_;
 };
 
 // The normal deviate of the noise from a uniform u in (0, 1): Φ⁻¹(u) interpolated linearly in a
@@ -134,8 +166,5 @@ class DofpExposure {
 // u < 1/64 and u > 63/64, so the tails are not cut.
 double noise_deviate(double u);
 
-// The standard normal quantile Φ⁻¹(p), p in (0, 1): Wichura's AS 241 (PPND16, relative error
-// ~1e-16), the noise's one deviate per pixel without a transcendental call in 85% of draws.
-double normal_quantile(double p);
 
 }  // namespace polrig

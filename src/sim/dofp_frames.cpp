@@ -47,22 +47,14 @@ DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig),
   stops_ = dofp_stops(rig.schedule);
   const int W = truth_.width, H = truth_.height;
   const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
-  view_.resize(n), P_.resize(n), Q_.resize(n), cos4_.resize(n), c2b_.resize(n), s2b_.resize(n);
+  pixels_.resize(n);
   for (int row = 0; row < H; ++row)
     for (int col = 0; col < W; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * static_cast<std::size_t>(W) + static_cast<std::size_t>(col);
       const Vec3 v = pixel_view(rig.camera, col, row);
-      view_[i] = v;
-      cos4_[i] = v[2] * v[2] * v[2] * v[2];
-      // Frame i of the view (spec §2.5): X_i = (cos γ cos α, cos γ sin α, −sin γ), Y_i = (−sin α, cos α, 0).
-      const double rho = std::hypot(v[0], v[1]);
-      const double ca = rho > 0 ? v[0] / rho : 1.0, sa = rho > 0 ? v[1] / rho : 0.0;
-      const double cg = v[2], sg = rho;
-      const Vec3 Xi{cg * ca, cg * sa, -sg}, Yi{-sa, ca, 0.0};
-      P_[i] = vec3::sub(vec3::mul(Xi, ca), vec3::mul(Yi, sa));
-      Q_[i] = vec3::add(vec3::mul(Xi, sa), vec3::mul(Yi, ca));
       const double beta = 2.0 * deg2rad(truth_.alpha_deg[i] - truth_.eps_deg[i]);
-      c2b_[i] = std::cos(beta), s2b_[i] = std::sin(beta);
+      const double A = 0.5 * truth_.K[i], Ak = A * truth_.k[i];
+      pixels_[i] = {v[0], v[1], v[2], 1.0 / (1.0 + v[2]), A, Ak * std::cos(beta), Ak * std::sin(beta), truth_.b[i]};
     }
 }
 
@@ -84,24 +76,30 @@ std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame,
     for (int row = rows.begin(); row < rows.end(); ++row) {
       const std::size_t first = static_cast<std::size_t>(row) * static_cast<std::size_t>(W);
       for (std::size_t c = 0; c < views.size(); ++c) {
-        const Vec3& v = view_[first + c];
-        views[c] = {v[0] * A.x[0] + v[1] * A.y[0] + v[2] * A.z[0], v[0] * A.x[1] + v[1] * A.y[1] + v[2] * A.z[1],
-                    v[0] * A.x[2] + v[1] * A.y[2] + v[2] * A.z[2]};
+        const PixelConstants& p = pixels_[first + c];
+        views[c] = {p.vx * A.x[0] + p.vy * A.y[0] + p.vz * A.z[0], p.vx * A.x[1] + p.vy * A.y[1] + p.vz * A.z[1],
+                    p.vx * A.x[2] + p.vy * A.y[2] + p.vz * A.z[2]};
       }
       light->along(views, lights);
       for (std::size_t c = 0; c < views.size(); ++c) {
         const std::size_t i = first + c;
+        const PixelConstants& p = pixels_[i];
         const ViewLight& L = lights[c];
         const Vec3 e{vec3::dot(L.e, A.x), vec3::dot(L.e, A.y), vec3::dot(L.e, A.z)};  // frame l
         double I = L.S0 * stop.intensity;
-        if (spec.vignetting) I *= cos4_[i];
+        if (spec.vignetting) I *= (p.vz * p.vz) * (p.vz * p.vz);  // cos⁴γ
         const double d = stop.polarized ? L.d : 0.0;
         double c2 = 1.0, s2 = 0.0;
         double u, w;
         if (analyzer_ == DofpAnalyzer::ImagePlane) {
-          u = vec3::dot(e, P_[i]), w = vec3::dot(e, Q_[i]);
+          // Frame i's axes turned by α, P = cos α·X_i − sin α·Y_i and Q = sin α·X_i + cos α·Y_i, are
+          // the rotation taking ẑ to v applied to x̂ and ŷ: with g = 1/(1 + v_z),
+          // P = (1 − g·v_x², −g·v_x·v_y, −v_x), Q = (−g·v_x·v_y, 1 − g·v_y², −v_y); φ_pix = atan2(e·Q, e·P).
+          const double gxy = p.g * p.vx * p.vy;
+          u = e[0] * (1.0 - p.g * p.vx * p.vx) - e[1] * gxy - e[2] * p.vx;
+          w = -e[0] * gxy + e[1] * (1.0 - p.g * p.vy * p.vy) - e[2] * p.vy;
         } else {
-          const Vec3 m = vec3::cross(view_[i], e);  // the axis in the image is ⊥ (m_x, m_y)
+          const Vec3 m = vec3::cross({p.vx, p.vy, p.vz}, e);  // the axis in the image is ⊥ (m_x, m_y)
           u = -m[1], w = m[0];
         }
         const double n2 = u * u + w * w;
@@ -109,8 +107,8 @@ std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame,
           const double r = 1.0 / n2;
           c2 = (u * u - w * w) * r, s2 = 2.0 * u * w * r;
         }
-        const double f = 0.5 * truth_.K[i] * I * (1.0 + truth_.k[i] * d * (c2 * c2b_[i] + s2 * s2b_[i])) + truth_.b[i];
-        raw[i] = expose(f, truth_.b[i], i);
+        const double f = I * (p.A + d * (c2 * p.B + s2 * p.C)) + p.b;
+        raw[i] = expose(f, p.b, i);
         if (layers) {
           layers->S0[i] = static_cast<float>(I);
           layers->S1[i] = static_cast<float>(I * d * c2);

@@ -66,11 +66,14 @@ class DofpSimulator {
   DofpAnalyzer analyzer_;
   DofpTruth truth_;
   std::vector<DofpStop> stops_;
-  // Per pixel: its view in frame l, its cos⁴γ, cos/sin 2(α_j − ε_j), and the image-plane
-  // model's axes P = cos α·X_i − sin α·Y_i, Q = sin α·X_i + cos α·Y_i (frame l), so that
-  // φ_pix = atan2(e·Q, e·P).
-  std::vector<Vec3> view_, P_, Q_;
-  std::vector<double> cos4_, c2b_, s2b_;
+  // Per pixel, what the hot loop reads (64 bytes: the loop is bound by memory traffic): its view
+  // v in frame l and g = 1/(1 + v_z), from which frame i's axes rotated by α follow
+  // (P = x̂ − g·v_x·(v_x, v_y, 1 + v_z)ᵀ… see frame()), and Eq. 18's factors A = K/2,
+  // B = (K/2)·k·cos 2(α − ε), C = (K/2)·k·sin 2(α − ε) and b: f = I·(A + d·(B·cos 2φ + C·sin 2φ)) + b.
+  struct PixelConstants {
+    double vx, vy, vz, g, A, B, C, b;
+  };
+  std::vector<PixelConstants> pixels_;
   std::uint64_t noise_seed_ = 0;
 };
 

@@ -76,7 +76,7 @@ struct Dataset {
 };
 
 // 30 unpolarized levels 0..1; 79 positions at 4.6036° × six intensities (spec §2.4); the AoP at
-// table angle θ_R is ψ + θ_R (kDofpTableSense = +1: docs/physics.md §13).
+// table angle θ_R is ψ + θ_R (kDofpTableSense = +1: docs/physics.md §14).
 Dataset make_dataset(const Truth& t, double psi_deg, double d, double sigma_DN, int positions = 79,
                      unsigned seed = 7) {
   Dataset ds;
@@ -214,7 +214,7 @@ TEST(DofpCalibration, OneTablePositionLeavesStep2RankDeficient) {
 }
 
 // H17's cost (the AoP residual alone) cannot tell every (k, ε): at a perfect fit its Jacobian
-// has rank 3 of 7 (docs/physics.md §13).
+// has rank 3 of 7 (docs/physics.md §14).
 TEST(DofpCalibration, TheAopResidualAloneLeavesTwoDirectionsUndetermined) {
   const Truth t = make_truth(4, 2, 11, 1.0);
   const Dataset ds = make_dataset(t, 5.0, 0.8, 0.0, 79);

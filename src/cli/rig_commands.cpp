@@ -19,6 +19,7 @@
 #include "polrig/study/adc_limit.h"
 #include "polrig/report/calibration_reports.h"
 #include "polrig/study/cs.h"
+#include "polrig/report/dofp_dataset.h"
 #include "polrig/report/reports.h"
 #include "polrig/report/sweep_report.h"
 #include "polrig/io/plot.h"
@@ -78,11 +79,42 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     rig->add_to(*app, true);
     out->add_to(*app);
     app->add_flag("--samples", *samples, "also write every quantized sample (samples.csv)");
+    // A camera rig (an instrument that takes frames): the frames' storage, truth layers, analyzer.
+    auto frames = std::make_shared<std::string>("every");
+    auto truth_layers = std::make_shared<bool>(false);
+    auto analyzer = std::make_shared<std::string>("image-plane");
+    auto* frames_opt = app->add_option("--frames", *frames,
+                                       "a camera rig: every frame, or the per-stop mean (stored exactly as the "
+                                       "frames' sum, raw_sum)")
+                           ->check(CLI::IsMember({"every", "mean"}))->capture_default_str();
+    auto* layers_opt = app->add_flag("--truth-layers", *truth_layers,
+                                     "a camera rig: also write each stop's S0, S1, S2, AoP, DoP");
+    auto* analyzer_opt = app->add_option("--analyzer", *analyzer,
+                                         "a camera rig: the micro-polarizers in the image plane or in front of the "
+                                         "lens (spec §2.5)")
+                             ->check(CLI::IsMember({"image-plane", "in-front"}))->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
-      // The camera's frames are the camera lane's (docs/cli.md); until then a camera rig is refused.
-      require_instrument(r.rig, Instrument::kPairVoltages, "simulate", r.origin);
+      if (r.rig.instrument->has(Instrument::kFrames)) {
+        if (*samples) throw RigError(fmt::format("--samples: device.kind {} takes frames, not samples", r.rig.device_kind));
+        DofpDatasetOptions o;
+        o.storage = *frames == "mean" ? DofpFrameStorage::Sum : DofpFrameStorage::Every;
+        o.truth_layers = *truth_layers;
+        o.analyzer = *analyzer == "in-front" ? DofpAnalyzer::InFront : DofpAnalyzer::ImagePlane;
+        try {
+          const DofpSimulator check(r.rig, o.analyzer);  // refused before the folder is opened
+        } catch (const std::invalid_argument& e) {
+          throw RigError(fmt::format("{}: {}", r.origin, e.what()));
+        }
+        OutputDir dir = out->open();
+        write_manifest(dir.staging(), {command_line(), &r, report_dofp_dataset(dir.staging(), r.rig, o, progress())});
+        finish(dir);
+        return;
+      }
+      for (const CLI::Option* o : {frames_opt, layers_opt, analyzer_opt})
+        if (o->count() > 0)
+          throw RigError(fmt::format("{}: device.kind {} takes no frames", o->get_name(), r.rig.device_kind));
       OutputDir dir = out->open();
       const Simulation sim = simulate(r.rig, *samples, progress());
       write_manifest(dir.staging(), {command_line(), &r, report_simulation(dir.staging(), sim, out->plots())});

@@ -5,7 +5,13 @@
 #include <cstring>
 #include <stdexcept>
 
+#include <ImfAttribute.h>
 #include <ImfChannelList.h>
+#include <ImfDoubleAttribute.h>
+#include <ImfFloatAttribute.h>
+#include <ImfIntAttribute.h>
+#include <ImfStringAttribute.h>
+#include <ImfVecAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <tbb/task_arena.h>
@@ -107,6 +113,93 @@ std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, 
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return out;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot read the EXR image: {}", path.string(), e.what()));
+  }
+}
+
+void write_exr_image(const std::filesystem::path& path, const ExrImage& image, ExrCompression compression) {
+  const int width = image.width, height = image.height;
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  try {
+    Imf::Header header(width, height);
+    header.compression() = compression == ExrCompression::None  ? Imf::NO_COMPRESSION
+                           : compression == ExrCompression::Rle ? Imf::RLE_COMPRESSION
+                                                                : Imf::ZIP_COMPRESSION;
+    for (const auto& [name, value] : image.attributes.strings) header.insert(name, Imf::StringAttribute(value));
+    for (const auto& [name, value] : image.attributes.doubles) header.insert(name, Imf::DoubleAttribute(value));
+    for (const auto& [name, v] : image.attributes.vectors)
+      header.insert(name, Imf::V3dAttribute(Imath::V3d(v[0], v[1], v[2])));
+    Imf::FrameBuffer fb;
+    for (const ExrChannel& c : image.floats) {
+      if (c.pixels.size() != n)
+        throw std::logic_error(fmt::format("EXR channel {} has {} pixels for {}×{}", c.name, c.pixels.size(), width, height));
+      header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
+      fb.insert(c.name, Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(c.pixels.data())),
+                                   sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
+    }
+    for (const ExrUintChannel& c : image.uints) {
+      if (c.pixels.size() != n)
+        throw std::logic_error(fmt::format("EXR channel {} has {} pixels for {}×{}", c.name, c.pixels.size(), width, height));
+      header.channels().insert(c.name, Imf::Channel(Imf::UINT));
+      fb.insert(c.name, Imf::Slice(Imf::UINT, const_cast<char*>(reinterpret_cast<const char*>(c.pixels.data())),
+                                   sizeof(std::uint32_t), sizeof(std::uint32_t) * static_cast<std::size_t>(width)));
+    }
+    CheckedOStream stream(path);
+    {
+      Imf::OutputFile file(stream, header, tbb::this_task_arena::max_concurrency());
+      file.setFrameBuffer(fb);
+      file.writePixels(height);
+    }
+    stream.close();
+  } catch (const std::logic_error&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot write the EXR image: {}", path.string(), e.what()));
+  }
+}
+
+ExrImage read_exr_image(const std::filesystem::path& path) {
+  try {
+    Imf::InputFile file(path.string().c_str());
+    const Imf::Header& h = file.header();
+    const Imath::Box2i dw = h.dataWindow();
+    ExrImage image;
+    image.width = dw.max.x - dw.min.x + 1;
+    image.height = dw.max.y - dw.min.y + 1;
+    const std::size_t n = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
+    const std::size_t row_floats = sizeof(float) * static_cast<std::size_t>(image.width);
+    for (auto it = h.channels().begin(); it != h.channels().end(); ++it) {
+      if (it.channel().type == Imf::UINT)
+        image.uints.push_back({it.name(), std::vector<std::uint32_t>(n)});
+      else
+        image.floats.push_back({it.name(), std::vector<float>(n)});
+    }
+    Imf::FrameBuffer fb;
+    // The data window may not start at (0, 0): the slices' base is shifted to its origin.
+    const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(dw.min.x) +
+                                  static_cast<std::ptrdiff_t>(dw.min.y) * static_cast<std::ptrdiff_t>(image.width);
+    for (ExrChannel& c : image.floats)
+      fb.insert(c.name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(c.pixels.data() - origin), sizeof(float), row_floats));
+    for (ExrUintChannel& c : image.uints)
+      fb.insert(c.name, Imf::Slice(Imf::UINT, reinterpret_cast<char*>(c.pixels.data() - origin), sizeof(std::uint32_t),
+                                   sizeof(std::uint32_t) * static_cast<std::size_t>(image.width)));
+    file.setFrameBuffer(fb);
+    file.readPixels(dw.min.y, dw.max.y);
+    for (auto it = h.begin(); it != h.end(); ++it) {
+      const Imf::Attribute& a = it.attribute();
+      if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&a))
+        image.attributes.strings.emplace_back(it.name(), s->value());
+      else if (const auto* d = dynamic_cast<const Imf::DoubleAttribute*>(&a))
+        image.attributes.doubles.emplace_back(it.name(), d->value());
+      else if (const auto* f = dynamic_cast<const Imf::FloatAttribute*>(&a))
+        image.attributes.doubles.emplace_back(it.name(), f->value());
+      else if (const auto* i = dynamic_cast<const Imf::IntAttribute*>(&a))
+        image.attributes.doubles.emplace_back(it.name(), i->value());
+      else if (const auto* v = dynamic_cast<const Imf::V3dAttribute*>(&a))
+        image.attributes.vectors.push_back({it.name(), {v->value().x, v->value().y, v->value().z}});
+    }
+    return image;
   } catch (const std::exception& e) {
     throw std::runtime_error(fmt::format("{}: cannot read the EXR image: {}", path.string(), e.what()));
   }

@@ -1,159 +1,219 @@
-// polrig.calibrate_dofp: H17's two-step DoFP calibration (calib/dofp.h) on NumPy arrays.
-#include <cmath>
+// The DoFP camera from Python (docs/python.md §9): Rig.dofp_stops, Rig.dofp_frame, Rig.dofp_truth,
+// Rig.simulate_frames and polrig.read_dofp_dataset. Thin: each converts its arguments, runs the
+// library with the GIL released and hands its vectors to NumPy.
+#include <cstring>
 #include <optional>
 #include <string>
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "bindings.h"
 #include "convert.h"
-#include "polrig/calib/dofp.h"
+#include "polrig/io/dofp_dataset.h"
+#include "polrig/io/output_dir.h"
+#include "polrig/report/dofp_dataset.h"
+#include "polrig/sim/dofp_frames.h"
+#include "rig_handle.h"
 
 namespace polrig::python {
-
 namespace {
 
-py::array_t<double> image(std::vector<double>&& v, int W, int H) {
-  return take(std::move(v), {static_cast<py::ssize_t>(H), static_cast<py::ssize_t>(W)});
+DofpAnalyzer analyzer_of(const std::string& name) {
+  if (name == "image-plane") return DofpAnalyzer::ImagePlane;
+  if (name == "in-front") return DofpAnalyzer::InFront;
+  throw py::value_error(fmt::format("analyzer='{}' (expected 'image-plane' or 'in-front')", name));
 }
 
-py::dict row_dict(const DofpOrientationRow& r) {
+// DofpSimulator's refusals as the CLI words them (ValueError here).
+DofpSimulator simulator(const LoadedRig& loaded, DofpAnalyzer analyzer) {
+  try {
+    return DofpSimulator(loaded.rig, analyzer);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(fmt::format("{}: {}", loaded.origin, e.what()));
+  }
+}
+
+std::string with_shared(const char* text) {
+  std::string s = text;
+  for (const auto& [mark, what] : {std::pair{"{threads}", kThreadsDoc}, std::pair{"{progress}", kProgressDoc}})
+    if (const auto at = s.find(mark); at != std::string::npos) s.replace(at, std::strlen(mark), what);
+  return s;
+}
+
+py::dict image_dict(int H, int W, std::initializer_list<std::pair<const char*, std::vector<double>*>> layers) {
   py::dict d;
-  d["max_deg"] = r.max_deg;
-  d["mean_deg"] = r.mean_deg;
-  d["std_deg"] = r.std_deg;
-  d["error_deg"] = take(std::vector<double>(r.error_deg));
+  for (const auto& [name, v] : layers) d[name] = take(std::move(*v), {H, W});
   return d;
 }
+
+constexpr const char* kStopsDoc = R"doc(
+The camera's stops (a rig whose instrument takes frames; docs/physics.md §13): first one per
+unpolarized level, then every table angle at each intensity. A dict of arrays: stop,
+theta_R_deg, t_s, intensity, polarized (bool), frames.
+)doc";
+
+constexpr const char* kFrameDoc = R"doc(
+One simulated frame of the camera (`polrig simulate`'s frames, bit for bit): raw DN as a
+(height, width) uint16 array, top row first. With truth_layers=True a pair (raw, layers), layers a
+dict of (height, width) float32 arrays S0, S1, S2, AoP (degrees, image frame), DoP.
+
+  stop: the stop's index (Rig.dofp_stops()); frame: the frame's index at that stop.
+  analyzer: 'image-plane' (spec §2.5's default) or 'in-front'.
+  {threads}
+)doc";
+
+constexpr const char* kTruthDoc = R"doc(
+The camera's per-pixel truth (what calibration must recover), a dict of (height, width) float64
+arrays K, b, k, eps_deg, alpha_deg (truth.exr of `polrig simulate`).
+)doc";
+
+constexpr const char* kSimulateFramesDoc = R"doc(
+Writes the camera's dataset into the new folder `out` (the CLI's `polrig simulate RIG -o OUT` for a
+camera rig; docs/formats.md) and returns its path.
+
+  frames: 'every' (every frame) or 'mean' (the per-stop mean, stored exactly as the frames' sum).
+  truth_layers: also write each stop's S0, S1, S2, AoP, DoP.  analyzer: as dofp_frame.
+  force: replace an existing folder.
+  {threads}
+  {progress}
+)doc";
+
+constexpr const char* kReadDoc = R"doc(
+Reads a camera dataset (docs/formats.md): a dict with width, height, f_c_px, cx, cy, the truth
+(dict of (height, width) arrays K, b, k, eps_deg, alpha_deg) and the stops (dict of arrays as
+stops.csv's columns; heading_deg NaN where unknown). mean_frames=True adds 'mean_frames', an
+(N, height, width) float64 array of every stop's mean frame.
+)doc";
 
 }  // namespace
 
 void bind_dofp(py::module_& m) {
-  m.def(
-      "calibrate_dofp",
-      [](const ArrayLike& level_intensity, const ArrayLike& level_frames, const ArrayLike& theta_R_deg,
-         const ArrayLike& stop_intensity, const ArrayLike& stop_frames,
-         const std::array<double, 4>& mosaic_deg, double table_sense, const std::string& scope,
-         double dop_weight, double fit_weight, bool weight_by_intensity,
-         std::optional<double> saturation_DN, double table1_intensity, std::optional<int> threads,
-         const py::object& progress) {
-        const DoubleArray li = as_array(level_intensity.obj, "level_intensity", 1);
-        const DoubleArray lf = as_array(level_frames.obj, "level_frames", 3);
-        const DoubleArray th = as_array(theta_R_deg.obj, "theta_R_deg", 1);
-        const DoubleArray si = as_array(stop_intensity.obj, "stop_intensity", 1);
-        const DoubleArray sf = as_array(stop_frames.obj, "stop_frames", 3);
-        const py::ssize_t H = lf.shape(1), W = lf.shape(2);
-        if (lf.shape(0) != li.shape(0))
-          throw py::value_error(fmt::format("level_frames: {} frames for {} level intensities",
-                                            lf.shape(0), li.shape(0)));
-        if (sf.shape(0) != th.shape(0) || si.shape(0) != th.shape(0))
-          throw py::value_error(fmt::format(
-              "stop_frames, theta_R_deg, stop_intensity: {}, {} and {} stops; they must agree",
-              sf.shape(0), th.shape(0), si.shape(0)));
-        if (sf.shape(1) != H || sf.shape(2) != W)
-          throw py::value_error(fmt::format("stop_frames: frames of {} × {}, level_frames {} × {}",
-                                            sf.shape(2), sf.shape(1), W, H));
-        const std::size_t N = static_cast<std::size_t>(W * H);
-        std::vector<DofpUnpolarizedLevel> levels(static_cast<std::size_t>(li.shape(0)));
-        for (std::size_t i = 0; i < levels.size(); ++i)
-          levels[i] = {li.data()[i], std::span<const double>(lf.data() + i * N, N)};
-        std::vector<DofpPolarizedStop> stops(static_cast<std::size_t>(th.shape(0)));
-        for (std::size_t i = 0; i < stops.size(); ++i)
-          stops[i] = {th.data()[i], si.data()[i], std::span<const double>(sf.data() + i * N, N)};
-        DofpCalibrationOptions o;
-        if (saturation_DN) o.step1.saturation_DN = *saturation_DN;
-        o.step2.mosaic_deg = mosaic_deg;
-        o.step2.table_sense = table_sense;
-        o.step2.dop_weight = dop_weight;
-        o.step2.fit_weight = fit_weight;
-        o.step2.weight_by_intensity = weight_by_intensity;
-        o.table1_intensity = table1_intensity;
-        DofpCalibration c;
-        const Progress p = progress_from(progress);
-        ThreadLimit limit(threads);
-        try {
-          o.step2.scope = parse_dofp_scope(scope);
-          py::gil_scoped_release release;
-          c = calibrate_dofp(static_cast<int>(W), static_cast<int>(H), levels, stops, o, p);
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
+  auto rig = rig_class(m);
+
+  rig.def("dofp_stops", [](const PyRig& self) {
+    const std::vector<DofpStop> stops = dofp_stops(self.rig().schedule);
+    std::vector<double> index, theta, t, intensity, frames;
+    std::vector<bool> polarized;
+    for (const DofpStop& s : stops) {
+      index.push_back(s.index), theta.push_back(s.theta_R_deg), t.push_back(s.t_s);
+      intensity.push_back(s.intensity), frames.push_back(s.frames), polarized.push_back(s.polarized);
+    }
+    py::dict d;
+    d["stop"] = take(std::move(index));
+    d["theta_R_deg"] = take(std::move(theta));
+    d["t_s"] = take(std::move(t));
+    d["intensity"] = take(std::move(intensity));
+    d["polarized"] = py::array(py::cast(polarized)).attr("astype")("bool");
+    d["frames"] = take(std::move(frames));
+    return d;
+  }, kStopsDoc);
+
+  rig.def("dofp_frame", [](const PyRig& self, int stop, int frame, bool truth_layers, const std::string& analyzer,
+                           std::optional<int> threads) -> py::object {
+    const DofpAnalyzer a = analyzer_of(analyzer);
+    const LoadedRig loaded = self.loaded;  // the GIL is released below: nothing of self is read then
+    const ThreadLimit limit(threads);
+    std::vector<std::uint16_t> raw;
+    DofpTruthLayers layers;
+    int H = 0, W = 0;
+    {
+      py::gil_scoped_release release;
+      const DofpSimulator sim(simulator(loaded, a));
+      if (stop < 0 || static_cast<std::size_t>(stop) >= sim.stops().size()) {
+        py::gil_scoped_acquire acquire;
+        throw py::index_error(fmt::format("stop={} (the rig has {} stops)", stop, sim.stops().size()));
+      }
+      const DofpStop& s = sim.stops()[static_cast<std::size_t>(stop)];
+      if (frame < 0) {
+        py::gil_scoped_acquire acquire;
+        throw py::index_error(fmt::format("frame={} (expected ≥ 0)", frame));
+      }
+      H = sim.height(), W = sim.width();
+      raw = sim.frame(s, frame, truth_layers ? &layers : nullptr);
+    }
+    py::array out = take(std::move(raw), {H, W});
+    if (!truth_layers) return out;
+    py::dict d;
+    d["S0"] = take(std::move(layers.S0), {H, W});
+    d["S1"] = take(std::move(layers.S1), {H, W});
+    d["S2"] = take(std::move(layers.S2), {H, W});
+    d["AoP"] = take(std::move(layers.AoP), {H, W});
+    d["DoP"] = take(std::move(layers.DoP), {H, W});
+    return py::make_tuple(out, d);
+  }, with_shared(kFrameDoc).c_str(), py::arg("stop"), py::arg("frame") = 0, py::kw_only(),
+     py::arg("truth_layers") = false, py::arg("analyzer") = "image-plane", py::arg("threads") = py::none());
+
+  rig.def("dofp_truth", [](const PyRig& self) {
+    DofpTruth t;
+    const LoadedRig loaded = self.loaded;
+    {
+      py::gil_scoped_release release;
+      t = simulator(loaded, DofpAnalyzer::ImagePlane).truth();
+    }
+    return image_dict(t.height, t.width, {{"K", &t.K}, {"b", &t.b}, {"k", &t.k}, {"eps_deg", &t.eps_deg}, {"alpha_deg", &t.alpha_deg}});
+  }, kTruthDoc);
+
+  rig.def("simulate_frames", [](const PyRig& self, const std::filesystem::path& out, const std::string& frames,
+                                bool truth_layers, const std::string& analyzer, bool force, std::optional<int> threads,
+                                const py::object& progress) {
+    DofpDatasetOptions o;
+    if (frames != "every" && frames != "mean")
+      throw py::value_error(fmt::format("frames='{}' (expected 'every' or 'mean')", frames));
+    o.storage = frames == "mean" ? DofpFrameStorage::Sum : DofpFrameStorage::Every;
+    o.truth_layers = truth_layers;
+    o.analyzer = analyzer_of(analyzer);
+    const LoadedRig loaded = self.loaded;
+    simulator(loaded, o.analyzer);  // refused before the folder is made
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    const std::string command = fmt::format("python: polrig.Rig({}).simulate_frames(out='{}', frames='{}', "
+                                            "truth_layers={}, analyzer='{}')",
+                                            loaded.origin, out.string(), frames, truth_layers ? "True" : "False", analyzer);
+    {
+      py::gil_scoped_release release;
+      write_dofp_dataset(loaded, out, o, command, force, p);
+    }
+    return out;
+  }, with_shared(kSimulateFramesDoc).c_str(), py::arg("out"), py::kw_only(), py::arg("frames") = "every",
+     py::arg("truth_layers") = false, py::arg("analyzer") = "image-plane", py::arg("force") = false,
+     py::arg("threads") = py::none(), py::arg("progress") = py::none());
+
+  m.def("read_dofp_dataset", [](const std::filesystem::path& dir, bool mean_frames) {
+    DofpDataset d;
+    std::vector<double> means;
+    {
+      py::gil_scoped_release release;
+      d = read_dofp_dataset(dir);
+      if (mean_frames)
+        for (std::size_t s = 0; s < d.stops.size(); ++s) {
+          const std::vector<double> f = read_dofp_mean_frame(d, s);
+          means.insert(means.end(), f.begin(), f.end());
         }
-        std::vector<std::uint8_t> usable;
-        DofpTruth maps = dofp_parameter_maps(c, &usable);
-        const int w = static_cast<int>(W), h = static_cast<int>(H);
-        py::dict out;
-        out["K"] = image(std::move(maps.K), w, h);
-        out["b"] = image(std::move(maps.b), w, h);
-        out["k"] = image(std::move(maps.k), w, h);
-        out["eps_deg"] = image(std::move(maps.eps_deg), w, h);
-        out["usable"] = take(std::move(usable), {h, w});
-        out["step1_rank"] = take(std::vector<std::uint8_t>(c.step1.rank), {h, w});
-        out["step1_residual_DN"] = image(std::vector<double>(c.step1.residual_rms_DN), w, h);
-        const std::size_t n = c.step2.cells.size();
-        std::vector<double> k(4 * n), eps(4 * n), psi0(n), dop(n), rms0(n), rms(n);
-        std::vector<int> iterations(n), rank(n), observations(n);
-        py::list termination, message;
-        for (std::size_t i = 0; i < n; ++i) {
-          const DofpCellFit& f = c.step2.cells[i];
-          for (int j = 0; j < 4; ++j) {
-            k[4 * i + j] = f.k[j];
-            eps[4 * i + j] = f.eps_deg[j];
-          }
-          psi0[i] = f.psi0_deg;
-          dop[i] = f.dop;
-          rms0[i] = f.initial_rms_deg;
-          rms[i] = f.final_rms_deg;
-          iterations[i] = f.iterations;
-          rank[i] = f.rank;
-          observations[i] = f.observations;
-          termination.append(std::string(termination_name(f.termination)));
-          message.append(f.message);
-        }
-        const auto ni = static_cast<py::ssize_t>(n);
-        py::dict cells;
-        cells["scope"] = dofp_scope_name(c.step2.scope);
-        cells["shape"] = py::make_tuple(c.step2.cells_y, c.step2.cells_x);
-        cells["termination"] = termination;
-        cells["message"] = message;
-        cells["iterations"] = take(std::move(iterations));
-        cells["rank"] = take(std::move(rank));
-        cells["observations"] = take(std::move(observations));
-        cells["k"] = take(std::move(k), {ni, 4});
-        cells["eps_deg"] = take(std::move(eps), {ni, 4});
-        cells["psi0_deg"] = take(std::move(psi0));
-        cells["dop"] = take(std::move(dop));
-        cells["initial_rms_deg"] = take(std::move(rms0));
-        cells["final_rms_deg"] = take(std::move(rms));
-        out["cells"] = cells;
-        py::dict t1;
-        t1["intensity"] = c.table1.intensity;
-        t1["cells_used"] = c.table1.cells_used;
-        t1["theta_R_deg"] = take(std::vector<double>(c.table1.theta_R_deg));
-        for (const DofpOrientationRow& r : c.table1.rows) t1[py::str(r.name)] = row_dict(r);
-        out["table1"] = t1;
-        return out;
-      },
-      py::arg("level_intensity"), py::arg("level_frames"), py::arg("theta_R_deg"),
-      py::arg("stop_intensity"), py::arg("stop_frames"), py::kw_only(),
-      py::arg("mosaic_deg") = std::array<double, 4>{0, 90, 45, 135},
-      py::arg("table_sense") = kDofpTableSense, py::arg("scope") = "per-cell",
-      py::arg("dop_weight") = 0.5, py::arg("fit_weight") = 1.0,
-      py::arg("weight_by_intensity") = true, py::arg("saturation_DN") = py::none(),
-      py::arg("table1_intensity") = 0.0, py::arg("threads") = py::none(),
-      py::arg("progress") = py::none(),
-      (std::string(
-           "H17's two-step calibration of a DoFP camera (docs/physics.md §13).\n\n"
-           "level_intensity (L,), level_frames (L, H, W): step 1's unpolarized levels (relative "
-           "intensity, mean frame in DN). theta_R_deg, stop_intensity (S,), stop_frames (S, H, W): "
-           "step 2's polarized stops. Returns a dict: per-pixel maps K, b, k, eps_deg, usable, "
-           "step1_rank, step1_residual_DN (H, W); 'cells' (per-cell fit summaries: termination, "
-           "message, iterations, rank, observations, k and eps_deg (n, 4), psi0_deg, dop, "
-           "initial_rms_deg, final_rms_deg; NaN where a quantity does not exist); 'table1' (raw, "
-           "step1, step2: max_deg, mean_deg, std_deg, error_deg; theta_R_deg, intensity, "
-           "cells_used). scope: 'per-cell' or 'global'. ValueError for bad input.\n") +
-       kThreadsDoc + "\n" + kProgressDoc)
-          .c_str());
+    }
+    py::dict out;
+    out["width"] = d.width, out["height"] = d.height, out["f_c_px"] = d.f_c_px, out["cx"] = d.cx, out["cy"] = d.cy;
+    out["truth"] = image_dict(d.height, d.width, {{"K", &d.truth.K}, {"b", &d.truth.b}, {"k", &d.truth.k},
+                                                  {"eps_deg", &d.truth.eps_deg}, {"alpha_deg", &d.truth.alpha_deg}});
+    std::vector<double> stop, theta, t, intensity, heading, frames;
+    std::vector<bool> polarized;
+    py::list utc, file;
+    for (const DofpDatasetStop& s : d.stops) {
+      stop.push_back(s.stop), theta.push_back(s.theta_R_deg), t.push_back(s.t_s), intensity.push_back(s.intensity);
+      heading.push_back(s.heading_deg ? *s.heading_deg : std::nan("")), frames.push_back(s.frames);
+      polarized.push_back(s.polarized), utc.append(s.utc), file.append(s.file);
+    }
+    py::dict stops;
+    stops["stop"] = take(std::move(stop)), stops["theta_R_deg"] = take(std::move(theta)), stops["t_s"] = take(std::move(t));
+    stops["utc"] = utc, stops["intensity"] = take(std::move(intensity));
+    stops["polarized"] = py::array(py::cast(polarized)).attr("astype")("bool");
+    stops["heading_deg"] = take(std::move(heading)), stops["frames"] = take(std::move(frames)), stops["file"] = file;
+    out["stops"] = stops;
+    if (mean_frames)
+      out["mean_frames"] = take(std::move(means), {static_cast<py::ssize_t>(d.stops.size()), d.height, d.width});
+    return out;
+  }, kReadDoc, py::arg("dir"), py::kw_only(), py::arg("mean_frames") = false);
 }
 
 }  // namespace polrig::python

@@ -45,6 +45,11 @@ Stokes3 seen_along(const Vec3& s, const Vec3& v, const Frame& f, const SkyModel&
 
 }  // namespace
 
+SensorAxesEnu sensor_axes_enu(const SkyMount& mount, double theta_R_deg) {
+  const Frame f = sensor_frame(mount, theta_R_deg);
+  return {f.x, f.y, f.z};
+}
+
 double sensor_frame_angle_rad(const Vec3& e, const Vec3& X_s, const Vec3& Y_s) {
   return std::atan2(vec3::dot(e, Y_s), vec3::dot(e, X_s));
 }

@@ -3,6 +3,7 @@
 #include <array>
 #include <cmath>
 
+#include "polrig/units.h"
 #include "polrig/vector_log.h"
 
 namespace polrig {
@@ -136,6 +137,38 @@ double Cos4PortSource::eq6_log_ratio(const SourceView& rig, int pair) const {
 std::array<double, 3> Cos4PortSource::eq6_log_ratios(const SourceView& rig) const {
   const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
   return {eq6_log_ratio_at(rig, p0, 0), eq6_log_ratio_at(rig, p0, 1), eq6_log_ratio_at(rig, p0, 2)};
+}
+
+namespace {
+class Cos4PortViews final : public LightAlongViews {
+ public:
+  Cos4PortViews(double S0, double polarizer_deg, double d) : S0_(S0), d_(d) {
+    p_ = {std::cos(deg2rad(polarizer_deg)), std::sin(deg2rad(polarizer_deg)), 0.0};
+  }
+  void along(std::span<const Vec3> views, std::span<ViewLight> out) const override {
+    for (std::size_t i = 0; i < views.size(); ++i) {
+      const Vec3& v = views[i];
+      if (!(v[2] < 0)) {  // not looking up into the port
+        out[i] = {};
+        continue;
+      }
+      const Vec3 e = vec3::sub(p_, vec3::mul(v, vec3::dot(p_, v)));  // |e| ≥ |v_z| > 0
+      out[i] = {S0_, d_ > 0 ? vec3::unit(e) : Vec3{0, 0, 0}, d_};
+    }
+  }
+
+ private:
+  double S0_, d_;
+  Vec3 p_;
+};
+}  // namespace
+
+std::unique_ptr<const LightAlongViews> Cos4PortSource::light_along_views(const SourceView& rig,
+                                                                         const SourcePose& pose) const {
+  auto light = std::make_unique<Cos4PortViews>(rig.settings.cos4.E_0, rig.settings.polarizer_deg, rig.sensor.d);
+  const double c = std::cos(deg2rad(pose.theta_R_deg)), s = std::sin(deg2rad(pose.theta_R_deg));
+  light->axes = {{c, s, 0}, {s, -c, 0}, {0, 0, -1}};
+  return light;
 }
 
 }  // namespace polrig

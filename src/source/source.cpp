@@ -52,6 +52,11 @@ void Source::log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std:
   pair_log_ratios(E.data(), n, out.data());
 }
 
+std::unique_ptr<const LightAlongViews> Source::light_along_views(const SourceView&, const SourcePose&) const {
+  throw std::logic_error(std::string("the ") + std::string(kind()) +
+                         " source gives no light along views (it lacks kStokesAlongViews)");
+}
+
 double Source::eq6_log_ratio(const SourceView&, int) const {
   throw std::logic_error("Eq. 6's closed form belongs to the cos⁴ source only");
 }

@@ -1,6 +1,6 @@
 #pragma once
 // The two-step calibration of the pixelated (DoFP) polarization camera of Han et al. 2017
-// (spec sky-and-compasses.md §2.4; docs/physics.md §13):
+// (spec sky-and-compasses.md §2.4; docs/physics.md §14):
 //   step 1 (Eq. 19): per pixel, gain K and offset b by linear least squares from uniform
 //     unpolarized frames, f = K·I/2 + b;
 //   step 2 (Eqs. 20–29): per 2 × 2 unit cell (or one global set), the polarization efficiencies
@@ -32,7 +32,7 @@ namespace polrig {
 // above (anticlockwise seen from the camera looking up, docs/physics.md §1), and image angles
 // run from X_l towards Y_l, anticlockwise seen from above for a camera looking up, so a fixed
 // polarizer at ψ is seen at φ = ψ + θ_R: the same sense as the six-photodiode sensor's
-// θ = θ_R − ψ_P. docs/physics.md §13.
+// θ = θ_R − ψ_P. docs/physics.md §14.
 inline constexpr double kDofpTableSense = +1.0;
 
 // One uniform unpolarized level of step 1: its relative intensity I^i (the source's S0, any
@@ -90,7 +90,7 @@ struct DofpStep2Options {
   // σ_min/σ_max of the column-scaled Jacobian below this: rank deficient. JᵀJ is what is
   // decomposed, so the ratio is resolved down to about √ε_double ≈ 1e-8.
   double min_singular_ratio = 1e-6;
-  // H17's AoP residual alone cannot determine (k, ε) (docs/physics.md §13): only 3 of its 7
+  // H17's AoP residual alone cannot determine (k, ε) (docs/physics.md §14): only 3 of its 7
   // unknowns at a solution. Two more residuals per observation [C, not in H17] make the fit
   // well posed (8 of 8):
   //  - w·(d̃_m − d_0): the source's DoP is the same at every stop (d_0 an unknown); w in rad per

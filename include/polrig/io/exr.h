@@ -1,7 +1,11 @@
 #pragma once
-// OpenEXR output: named 32-bit float channels of one image, row-major, top row first.
+// OpenEXR output: named 32-bit float and unsigned-integer channels of one image, row-major, top
+// row first, and header attributes.
+#include <array>
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace polrig {
@@ -22,5 +26,33 @@ void write_exr(const std::filesystem::path& path, int width, int height,
 
 // Reads the named channels back (for tests and users' checks).
 std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, int& height);
+
+// A 32-bit unsigned-integer channel (OpenEXR's UINT): raw counts, stored exactly.
+struct ExrUintChannel {
+  std::string name;
+  std::vector<std::uint32_t> pixels;  // width × height
+};
+
+// Header attributes: strings, doubles and 3-vectors (OpenEXR's string, double and V3d).
+struct ExrAttributes {
+  std::vector<std::pair<std::string, std::string>> strings;
+  std::vector<std::pair<std::string, double>> doubles;
+  std::vector<std::pair<std::string, std::array<double, 3>>> vectors;
+};
+
+// An image with both kinds of channel and its attributes.
+struct ExrImage {
+  int width = 0, height = 0;
+  std::vector<ExrChannel> floats;
+  std::vector<ExrUintChannel> uints;
+  ExrAttributes attributes;
+};
+
+// Writes every channel of `image` (lossless `compression`) and its attributes. Throws as write_exr.
+void write_exr_image(const std::filesystem::path& path, const ExrImage& image,
+                     ExrCompression compression = ExrCompression::Zip);
+// Reads an image back: FLOAT and HALF channels as floats, UINT channels as uints, and the string,
+// double, float, int and V3d attributes (float and int as doubles). Throws naming the file.
+ExrImage read_exr_image(const std::filesystem::path& path);
 
 }  // namespace polrig

@@ -42,6 +42,13 @@ struct SkyView {
 // (−π, π]. Every model of a sensor looking at the sky reads its angle here.
 double sensor_frame_angle_rad(const Vec3& e, const Vec3& X_s, const Vec3& Y_s);
 
+// The sensor's axes [X_s Y_s Z_s] in ENU at table angle θ_R (the header's formula): what a
+// camera on the same mount uses as its frame l.
+struct SensorAxesEnu {
+  Vec3 x, y, z;
+};
+SensorAxesEnu sensor_axes_enu(const SkyMount& mount, double theta_R_deg);
+
 // The sky seen at table angle θ_R, t_s seconds after sky.first_stop (looking along the sun's line
 // the light is unpolarized: d = 0, θ = 0).
 SkyView sky_seen(const Sky& sky, const SkyMount& mount, double theta_R_deg, double t_s);

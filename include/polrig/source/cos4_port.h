@@ -9,7 +9,14 @@ namespace polrig {
 class Cos4PortSource final : public Source {
  public:
   std::string_view kind() const override { return "cos4"; }
-  unsigned flags() const override { return kClosedFormEq6 | kUniformReference; }
+  unsigned flags() const override { return kClosedFormEq6 | kUniformReference | kStokesAlongViews; }
+  // The port fills every view (a camera looking up into it): uniform radiance S0 = E_0, polarized
+  // by the port polarizer ψ_P with the rig's device.d; the E-vector along a view is the polarizer's
+  // axis (cos ψ_P, sin ψ_P, 0) projected ⊥ the view (an ideal sheet polarizer). A view that does
+  // not look up (v_z ≥ 0 in the rig frame) sees no light. The camera's axes at θ_R:
+  // X = Rot(θ_R)·x̂, Y = −Rot(θ_R)·ŷ, Z = −ẑ (docs/physics.md §13).
+  std::unique_ptr<const LightAlongViews> light_along_views(const SourceView& rig,
+                                                           const SourcePose& pose) const override;
   Polarization polarization(const SourceView& rig, const SourcePose& pose) const override;
   void irradiance(const SourceView& rig, const SourcePose& pose, std::span<double> E) const override;
   std::array<double, 6> ideal_irradiance(const SourceView& rig, const SourcePose& pose) const override;

@@ -13,7 +13,11 @@ namespace polrig {
 class SkySource final : public Source {
  public:
   std::string_view kind() const override { return "sky"; }
-  unsigned flags() const override { return kTimeDependent | kUniformReference; }
+  unsigned flags() const override { return kTimeDependent | kUniformReference | kStokesAlongViews; }
+  // The sky along each view (ENU) at the stop's time (the sun computed once): S0 = E0·radiance,
+  // e = s × v/|s × v|, d = P(γ) (sky/rayleigh.h); the axes the mount's (sky/sensor_view.h).
+  std::unique_ptr<const LightAlongViews> light_along_views(const SourceView& rig,
+                                                           const SourcePose& pose) const override;
   Polarization polarization(const SourceView& rig, const SourcePose& pose) const override;
   void irradiance(const SourceView& rig, const SourcePose& pose, std::span<double> E) const override;
   std::array<double, 6> ideal_irradiance(const SourceView& rig, const SourcePose& pose) const override;

@@ -24,6 +24,7 @@
 #include "polrig/source/cos4.h"
 #include "polrig/source/scene.h"
 #include "polrig/source/sky_settings.h"
+#include "polrig/vec3.h"
 
 namespace polrig {
 
@@ -58,6 +59,39 @@ struct Polarization {
   double d = 0;
 };
 
+// The light arriving along one view, in the rig frame (below): no Stokes reference axis crosses
+// the seam, only the E-vector's direction.
+struct ViewLight {
+  double S0 = 0;  // radiance along the view, in the source's intensity unit (≥ 0)
+  Vec3 e{};       // the E-vector's direction: unit, ⊥ the view; zero when d = 0
+  double d = 0;   // degree of linear polarization, [0, 1]
+};
+
+// An instrument's frame at a pose: its axes X, Y, Z (right-handed, Z its optical axis, towards
+// the light) as unit vectors in the rig frame.
+struct InstrumentAxes {
+  Vec3 x{1, 0, 0}, y{0, 1, 0}, z{0, 0, 1};
+};
+
+// The light along many views at one pose (Source::light_along_views): what is expensive per pose
+// (the sun's place) is computed once when it is made; along() is thread-safe.
+//
+// The rig frame, 3-D: for the sphere rig (cos4, traced) x and y are geometry/geometry.h's rig
+// frame in the photosensitive plane (angles anticlockwise seen from the instrument looking up
+// into the port) and z = x × y points down, from the port towards the instrument (the light's
+// direction); for the sky, ENU (x east, y north, z up).
+class LightAlongViews {
+ public:
+  virtual ~LightAlongViews() = default;
+  // The instrument's frame at the pose: for the sphere rig a camera turned by the table as the
+  // six-photodiode sensor is (docs/physics.md §1: a port polarizer at ψ_P is seen on the axis at
+  // θ_R − ψ_P from X towards Y); under the sky, sky/sensor_view.h's [X_s Y_s Z_s].
+  InstrumentAxes axes;
+  // The light arriving along each view: views[i] a unit vector in the rig frame, from the
+  // instrument towards where the light comes from; out.size() == views.size().
+  virtual void along(std::span<const Vec3> views, std::span<ViewLight> out) const = 0;
+};
+
 class Source {
  public:
   // What a source can do; callers choose their path and their columns from these.
@@ -72,6 +106,9 @@ class Source {
     // The ideal, eccentricity-free irradiance is uniform (cos⁴'s E_0): the CS study needs no
     // coaxial reference, and ΔV is Eq. 5's bias of the pose's irradiances alone.
     kUniformReference = 1u << 3,
+    // The polarized radiance along any view at the instrument (light_along_views): what a pixel
+    // array (the DoFP camera) sees.
+    kStokesAlongViews = 1u << 4,
   };
 
   virtual ~Source() = default;
@@ -120,6 +157,11 @@ class Source {
   // irradiance_over_turn, its ratios and log_array (pair_log_ratios); a source may override it
   // with a closed form of the same quantity, as exact or more.
   virtual void log_ratio_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> out) const;
+
+  // The light along views at the pose, with kStokesAlongViews; throws std::logic_error for a
+  // source without it.
+  virtual std::unique_ptr<const LightAlongViews> light_along_views(const SourceView& rig,
+                                                                   const SourcePose& pose) const;
 
   // Eq. 6's light term where kClosedFormEq6: ΔV_mr,i ≈ 2·kv_i·v_dec·eq6_log_ratio(i). Throws
   // std::logic_error for a source without the flag.

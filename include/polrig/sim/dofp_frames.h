@@ -1,0 +1,84 @@
+#pragma once
+// The DoFP camera's frames over a rig's schedule (spec sky-and-compasses.md §2.3–2.5): per pixel
+// its view, the light along it (Source::light_along_views), the E-vector's angle in the image,
+// Eq. 18 with the pixel's truth, Poisson–Gaussian noise and the ADC. docs/physics.md §13.
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "polrig/device/dofp_camera.h"
+#include "polrig/progress.h"
+#include "polrig/rig/rig.h"
+
+namespace polrig {
+
+// One stop of a camera's schedule (geometry/schedule.h): first one per unpolarized level (the
+// port polarizer out: d = 0; the table at start_deg), then every table angle at each polarized
+// intensity, intensity-major. The stops' times: t_0 = 0, t_k = t_{k−1} + |θ_k − θ_{k−1}|/speed +
+// dwell (Schedule::stop_times_s's rule over this sequence; the same times for a schedule without
+// unpolarized levels and with one intensity).
+struct DofpStop {
+  int index = 0;
+  bool polarized = true;
+  double intensity = 1;   // relative to the source's own level
+  double theta_R_deg = 0;
+  double t_s = 0;
+  int frames = 1;
+};
+std::vector<DofpStop> dofp_stops(const Schedule& schedule);
+
+// How a pixel's AoP φ_pix (image frame, from X_l) follows from the E-vector e along its view v.
+enum class DofpAnalyzer {
+  // Spec §2.5: the analyzer in the image plane, a lens that keeps the meridional frame:
+  // φ_pix = φ + α, φ the E-vector's angle in frame i (X_i the direction of increasing zenith
+  // angle of the view, Y_i = Rz(α)·ŷ), α the view's azimuth (Eq. 9).
+  ImagePlane,
+  // Spec §2.5's alternative: the analyzer in front of the lens; φ_pix is the angle in the image
+  // of the axis (cos φ_pix, sin φ_pix, 0) whose projection ⊥ v is along e.
+  InFront,
+};
+
+// The truth of one frame, per pixel in the image frame (reference axis X_l), float, row-major:
+// S0 = I (the intensity reaching the pixel), S1 = I·d·cos 2φ_pix, S2 = I·d·sin 2φ_pix,
+// AoP = φ_pix in degrees [0°, 180°), DoP = d.
+struct DofpTruthLayers {
+  std::vector<float> S0, S1, S2, AoP, DoP;
+};
+
+// A camera rig's simulator: the pixel views and the truth, made once; frames on request.
+class DofpSimulator {
+ public:
+  // Throws std::invalid_argument when the rig's instrument has no frames, its source gives no light
+  // along views (kStokesAlongViews), or a sky source has unpolarized stops.
+  explicit DofpSimulator(const Rig& rig, DofpAnalyzer analyzer = DofpAnalyzer::ImagePlane);
+  const DofpTruth& truth() const { return truth_; }
+  const std::vector<DofpStop>& stops() const { return stops_; }
+  int width() const { return truth_.width; }
+  int height() const { return truth_.height; }
+
+  // The raw DN of frame `frame` at `stop` (row-major, top row first), its noise a pure function
+  // of (rig seed, stop, frame, pixel): bit-identical for any number of threads (TBB over rows).
+  // With `layers`, the frame's truth too.
+  std::vector<std::uint16_t> frame(const DofpStop& stop, int frame, DofpTruthLayers* layers = nullptr) const;
+
+ private:
+  Rig rig_;
+  DofpAnalyzer analyzer_;
+  DofpTruth truth_;
+  std::vector<DofpStop> stops_;
+  // Per pixel, what the hot loop reads (64 bytes: the loop is bound by memory traffic): its view
+  // v in frame l and g = 1/(1 + v_z), from which frame i's axes rotated by α follow
+  // (P = x̂ − g·v_x·(v_x, v_y, 1 + v_z)ᵀ… see frame()), and Eq. 18's factors A = K/2,
+  // B = (K/2)·k·cos 2(α − ε), C = (K/2)·k·sin 2(α − ε) and b: f = I·(A + d·(B·cos 2φ + C·sin 2φ)) + b.
+  struct PixelConstants {
+    double vx, vy, vz, g, A, B, C, b;
+  };
+  std::vector<PixelConstants> pixels_;
+  std::uint64_t noise_seed_ = 0;
+};
+
+// The true heading of a camera's X_l at a stop under a sky rig: the geographic azimuth (from north
+// towards east) of X_l's horizontal part, [0°, 360°); none for a source without a sky.
+std::optional<double> dofp_true_heading_deg(const Rig& rig, const DofpStop& stop);
+
+}  // namespace polrig

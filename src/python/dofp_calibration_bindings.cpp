@@ -1,0 +1,159 @@
+// polrig.calibrate_dofp: H17's two-step DoFP calibration (calib/dofp.h) on NumPy arrays.
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+
+#include "bindings.h"
+#include "convert.h"
+#include "polrig/calib/dofp.h"
+
+namespace polrig::python {
+
+namespace {
+
+py::array_t<double> image(std::vector<double>&& v, int W, int H) {
+  return take(std::move(v), {static_cast<py::ssize_t>(H), static_cast<py::ssize_t>(W)});
+}
+
+py::dict row_dict(const DofpOrientationRow& r) {
+  py::dict d;
+  d["max_deg"] = r.max_deg;
+  d["mean_deg"] = r.mean_deg;
+  d["std_deg"] = r.std_deg;
+  d["error_deg"] = take(std::vector<double>(r.error_deg));
+  return d;
+}
+
+}  // namespace
+
+void bind_dofp_calibration(py::module_& m) {
+  m.def(
+      "calibrate_dofp",
+      [](const ArrayLike& level_intensity, const ArrayLike& level_frames, const ArrayLike& theta_R_deg,
+         const ArrayLike& stop_intensity, const ArrayLike& stop_frames,
+         const std::array<double, 4>& mosaic_deg, double table_sense, const std::string& scope,
+         double dop_weight, double fit_weight, bool weight_by_intensity,
+         std::optional<double> saturation_DN, double table1_intensity, std::optional<int> threads,
+         const py::object& progress) {
+        const DoubleArray li = as_array(level_intensity.obj, "level_intensity", 1);
+        const DoubleArray lf = as_array(level_frames.obj, "level_frames", 3);
+        const DoubleArray th = as_array(theta_R_deg.obj, "theta_R_deg", 1);
+        const DoubleArray si = as_array(stop_intensity.obj, "stop_intensity", 1);
+        const DoubleArray sf = as_array(stop_frames.obj, "stop_frames", 3);
+        const py::ssize_t H = lf.shape(1), W = lf.shape(2);
+        if (lf.shape(0) != li.shape(0))
+          throw py::value_error(fmt::format("level_frames: {} frames for {} level intensities",
+                                            lf.shape(0), li.shape(0)));
+        if (sf.shape(0) != th.shape(0) || si.shape(0) != th.shape(0))
+          throw py::value_error(fmt::format(
+              "stop_frames, theta_R_deg, stop_intensity: {}, {} and {} stops; they must agree",
+              sf.shape(0), th.shape(0), si.shape(0)));
+        if (sf.shape(1) != H || sf.shape(2) != W)
+          throw py::value_error(fmt::format("stop_frames: frames of {} × {}, level_frames {} × {}",
+                                            sf.shape(2), sf.shape(1), W, H));
+        const std::size_t N = static_cast<std::size_t>(W * H);
+        std::vector<DofpUnpolarizedLevel> levels(static_cast<std::size_t>(li.shape(0)));
+        for (std::size_t i = 0; i < levels.size(); ++i)
+          levels[i] = {li.data()[i], std::span<const double>(lf.data() + i * N, N)};
+        std::vector<DofpPolarizedStop> stops(static_cast<std::size_t>(th.shape(0)));
+        for (std::size_t i = 0; i < stops.size(); ++i)
+          stops[i] = {th.data()[i], si.data()[i], std::span<const double>(sf.data() + i * N, N)};
+        DofpCalibrationOptions o;
+        if (saturation_DN) o.step1.saturation_DN = *saturation_DN;
+        o.step2.mosaic_deg = mosaic_deg;
+        o.step2.table_sense = table_sense;
+        o.step2.dop_weight = dop_weight;
+        o.step2.fit_weight = fit_weight;
+        o.step2.weight_by_intensity = weight_by_intensity;
+        o.table1_intensity = table1_intensity;
+        DofpCalibration c;
+        const Progress p = progress_from(progress);
+        ThreadLimit limit(threads);
+        try {
+          o.step2.scope = parse_dofp_scope(scope);
+          py::gil_scoped_release release;
+          c = calibrate_dofp(static_cast<int>(W), static_cast<int>(H), levels, stops, o, p);
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        std::vector<std::uint8_t> usable;
+        DofpTruth maps = dofp_parameter_maps(c, &usable);
+        const int w = static_cast<int>(W), h = static_cast<int>(H);
+        py::dict out;
+        out["K"] = image(std::move(maps.K), w, h);
+        out["b"] = image(std::move(maps.b), w, h);
+        out["k"] = image(std::move(maps.k), w, h);
+        out["eps_deg"] = image(std::move(maps.eps_deg), w, h);
+        out["usable"] = take(std::move(usable), {h, w});
+        out["step1_rank"] = take(std::vector<std::uint8_t>(c.step1.rank), {h, w});
+        out["step1_residual_DN"] = image(std::vector<double>(c.step1.residual_rms_DN), w, h);
+        const std::size_t n = c.step2.cells.size();
+        std::vector<double> k(4 * n), eps(4 * n), psi0(n), dop(n), rms0(n), rms(n);
+        std::vector<int> iterations(n), rank(n), observations(n);
+        py::list termination, message;
+        for (std::size_t i = 0; i < n; ++i) {
+          const DofpCellFit& f = c.step2.cells[i];
+          for (int j = 0; j < 4; ++j) {
+            k[4 * i + j] = f.k[j];
+            eps[4 * i + j] = f.eps_deg[j];
+          }
+          psi0[i] = f.psi0_deg;
+          dop[i] = f.dop;
+          rms0[i] = f.initial_rms_deg;
+          rms[i] = f.final_rms_deg;
+          iterations[i] = f.iterations;
+          rank[i] = f.rank;
+          observations[i] = f.observations;
+          termination.append(std::string(termination_name(f.termination)));
+          message.append(f.message);
+        }
+        const auto ni = static_cast<py::ssize_t>(n);
+        py::dict cells;
+        cells["scope"] = dofp_scope_name(c.step2.scope);
+        cells["shape"] = py::make_tuple(c.step2.cells_y, c.step2.cells_x);
+        cells["termination"] = termination;
+        cells["message"] = message;
+        cells["iterations"] = take(std::move(iterations));
+        cells["rank"] = take(std::move(rank));
+        cells["observations"] = take(std::move(observations));
+        cells["k"] = take(std::move(k), {ni, 4});
+        cells["eps_deg"] = take(std::move(eps), {ni, 4});
+        cells["psi0_deg"] = take(std::move(psi0));
+        cells["dop"] = take(std::move(dop));
+        cells["initial_rms_deg"] = take(std::move(rms0));
+        cells["final_rms_deg"] = take(std::move(rms));
+        out["cells"] = cells;
+        py::dict t1;
+        t1["intensity"] = c.table1.intensity;
+        t1["cells_used"] = c.table1.cells_used;
+        t1["theta_R_deg"] = take(std::vector<double>(c.table1.theta_R_deg));
+        for (const DofpOrientationRow& r : c.table1.rows) t1[py::str(r.name)] = row_dict(r);
+        out["table1"] = t1;
+        return out;
+      },
+      py::arg("level_intensity"), py::arg("level_frames"), py::arg("theta_R_deg"),
+      py::arg("stop_intensity"), py::arg("stop_frames"), py::kw_only(),
+      py::arg("mosaic_deg") = std::array<double, 4>{0, 90, 45, 135},
+      py::arg("table_sense") = kDofpTableSense, py::arg("scope") = "per-cell",
+      py::arg("dop_weight") = 0.5, py::arg("fit_weight") = 1.0,
+      py::arg("weight_by_intensity") = true, py::arg("saturation_DN") = py::none(),
+      py::arg("table1_intensity") = 0.0, py::arg("threads") = py::none(),
+      py::arg("progress") = py::none(),
+      (std::string(
+           "H17's two-step calibration of a DoFP camera (docs/physics.md §14).\n\n"
+           "level_intensity (L,), level_frames (L, H, W): step 1's unpolarized levels (relative "
+           "intensity, mean frame in DN). theta_R_deg, stop_intensity (S,), stop_frames (S, H, W): "
+           "step 2's polarized stops. Returns a dict: per-pixel maps K, b, k, eps_deg, usable, "
+           "step1_rank, step1_residual_DN (H, W); 'cells' (per-cell fit summaries: termination, "
+           "message, iterations, rank, observations, k and eps_deg (n, 4), psi0_deg, dop, "
+           "initial_rms_deg, final_rms_deg; NaN where a quantity does not exist); 'table1' (raw, "
+           "step1, step2: max_deg, mean_deg, std_deg, error_deg; theta_R_deg, intensity, "
+           "cells_used). scope: 'per-cell' or 'global'. ValueError for bad input.\n") +
+       kThreadsDoc + "\n" + kProgressDoc)
+          .c_str());
+}
+
+}  // namespace polrig::python

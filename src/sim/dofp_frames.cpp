@@ -1,0 +1,136 @@
+#include "polrig/sim/dofp_frames.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "polrig/random.h"
+#include "polrig/units.h"
+
+namespace polrig {
+
+std::vector<DofpStop> dofp_stops(const Schedule& schedule) {
+  std::vector<DofpStop> stops;
+  const int frames = schedule.frames_per_stop;
+  for (double level : schedule.unpolarized_levels)
+    stops.push_back({0, false, level, schedule.start_deg, 0.0, frames});
+  const std::vector<double> angles = schedule.table_angles_deg();
+  for (double intensity : schedule.intensities)
+    for (double a : angles) stops.push_back({0, true, intensity, a, 0.0, frames});
+  for (std::size_t k = 0; k < stops.size(); ++k) {
+    stops[k].index = static_cast<int>(k);
+    if (k > 0)
+      stops[k].t_s = stops[k - 1].t_s + std::abs(stops[k].theta_R_deg - stops[k - 1].theta_R_deg) / schedule.speed_deg_s +
+                     schedule.dwell_s;
+  }
+  return stops;
+}
+
+DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig), analyzer_(analyzer) {
+  if (!rig.instrument || !rig.instrument->has(Instrument::kFrames))
+    throw std::invalid_argument(fmt::format("device.kind {} takes no frames (expected a camera, e.g. dofp-camera)",
+                                            rig.device_kind));
+  if (!rig.light || !rig.light->has(Source::kStokesAlongViews))
+    throw std::invalid_argument(fmt::format(
+        "source.model {} gives no light along a camera's views (cos4 and sky do; the traced source not yet)",
+        rig.source.model));
+  if (rig_sky(rig) && !rig.schedule.unpolarized_levels.empty())
+    throw std::invalid_argument(
+        "schedule.unpolarized_levels: the sky cannot be unpolarized (expected no unpolarized levels under the sky)");
+  if (rig.schedule.frames_per_stop < 1)
+    throw std::invalid_argument(fmt::format("schedule.frames_per_stop = {} (expected ≥ 1)", rig.schedule.frames_per_stop));
+  truth_ = make_dofp_truth(rig.camera, derive_seed(rig.seed, 1));
+  noise_seed_ = derive_seed(rig.seed, 2);
+  stops_ = dofp_stops(rig.schedule);
+  const int W = truth_.width, H = truth_.height;
+  const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  pixels_.resize(n);
+  for (int row = 0; row < H; ++row)
+    for (int col = 0; col < W; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row) * static_cast<std::size_t>(W) + static_cast<std::size_t>(col);
+      const Vec3 v = pixel_view(rig.camera, col, row);
+      const double beta = 2.0 * deg2rad(truth_.alpha_deg[i] - truth_.eps_deg[i]);
+      const double A = 0.5 * truth_.K[i], Ak = A * truth_.k[i];
+      pixels_[i] = {v[0], v[1], v[2], 1.0 / (1.0 + v[2]), A, Ak * std::cos(beta), Ak * std::sin(beta), truth_.b[i]};
+    }
+}
+
+std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame, DofpTruthLayers* layers) const {
+  const int W = truth_.width, H = truth_.height;
+  const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  const std::unique_ptr<const LightAlongViews> light =
+      rig_.light->light_along_views(rig_.source_view(), {stop.theta_R_deg, stop.t_s});
+  const InstrumentAxes& A = light->axes;
+  std::vector<std::uint16_t> raw(n);
+  if (layers) {
+    for (auto* v : {&layers->S0, &layers->S1, &layers->S2, &layers->AoP, &layers->DoP}) v->assign(n, 0.0f);
+  }
+  const DofpCameraSpec& spec = rig_.camera;
+  const DofpExposure expose(spec, noise_seed_, static_cast<std::uint64_t>(stop.index), static_cast<std::uint64_t>(frame));
+  tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
+    std::vector<Vec3> views(static_cast<std::size_t>(W));
+    std::vector<ViewLight> lights(static_cast<std::size_t>(W));
+    for (int row = rows.begin(); row < rows.end(); ++row) {
+      const std::size_t first = static_cast<std::size_t>(row) * static_cast<std::size_t>(W);
+      for (std::size_t c = 0; c < views.size(); ++c) {
+        const PixelConstants& p = pixels_[first + c];
+        views[c] = {p.vx * A.x[0] + p.vy * A.y[0] + p.vz * A.z[0], p.vx * A.x[1] + p.vy * A.y[1] + p.vz * A.z[1],
+                    p.vx * A.x[2] + p.vy * A.y[2] + p.vz * A.z[2]};
+      }
+      light->along(views, lights);
+      for (std::size_t c = 0; c < views.size(); ++c) {
+        const std::size_t i = first + c;
+        const PixelConstants& p = pixels_[i];
+        const ViewLight& L = lights[c];
+        const Vec3 e{vec3::dot(L.e, A.x), vec3::dot(L.e, A.y), vec3::dot(L.e, A.z)};  // frame l
+        double I = L.S0 * stop.intensity;
+        if (spec.vignetting) I *= (p.vz * p.vz) * (p.vz * p.vz);  // cos⁴γ
+        const double d = stop.polarized ? L.d : 0.0;
+        double c2 = 1.0, s2 = 0.0;
+        double u, w;
+        if (analyzer_ == DofpAnalyzer::ImagePlane) {
+          // Frame i's axes turned by α, P = cos α·X_i − sin α·Y_i and Q = sin α·X_i + cos α·Y_i, are
+          // the rotation taking ẑ to v applied to x̂ and ŷ: with g = 1/(1 + v_z),
+          // P = (1 − g·v_x², −g·v_x·v_y, −v_x), Q = (−g·v_x·v_y, 1 − g·v_y², −v_y); φ_pix = atan2(e·Q, e·P).
+          const double gxy = p.g * p.vx * p.vy;
+          u = e[0] * (1.0 - p.g * p.vx * p.vx) - e[1] * gxy - e[2] * p.vx;
+          w = -e[0] * gxy + e[1] * (1.0 - p.g * p.vy * p.vy) - e[2] * p.vy;
+        } else {
+          const Vec3 m = vec3::cross({p.vx, p.vy, p.vz}, e);  // the axis in the image is ⊥ (m_x, m_y)
+          u = -m[1], w = m[0];
+        }
+        const double n2 = u * u + w * w;
+        if (n2 > 0) {
+          const double r = 1.0 / n2;
+          c2 = (u * u - w * w) * r, s2 = 2.0 * u * w * r;
+        }
+        const double f = I * (p.A + d * (c2 * p.B + s2 * p.C)) + p.b;
+        raw[i] = expose(f, p.b, i);
+        if (layers) {
+          layers->S0[i] = static_cast<float>(I);
+          layers->S1[i] = static_cast<float>(I * d * c2);
+          layers->S2[i] = static_cast<float>(I * d * s2);
+          double aop = rad2deg(0.5 * std::atan2(s2, c2));
+          if (aop < 0) aop += 180.0;
+          layers->AoP[i] = static_cast<float>(aop);
+          layers->DoP[i] = static_cast<float>(d);
+        }
+      }
+    }
+  });
+  return raw;
+}
+
+std::optional<double> dofp_true_heading_deg(const Rig& rig, const DofpStop& stop) {
+  if (!rig_sky(rig)) return std::nullopt;
+  const SensorAxesEnu a = sensor_axes_enu(rig.source.sky.resolved_mount(), stop.theta_R_deg);
+  double h = rad2deg(std::atan2(a.x[0], a.x[1]));
+  if (h < 0) h += 360.0;
+  if (h >= 360.0) h -= 360.0;
+  return h;
+}
+
+}  // namespace polrig

@@ -18,6 +18,7 @@
 #include <fmt/format.h>
 
 #include "polrig/calib/dofp.h"
+#include "polrig/calib/dofp_polarization.h"
 
 namespace {
 using namespace polrig;
@@ -379,3 +380,65 @@ TEST(DofpCalibrationReport, WritesParamsTableCellsAndPlots) {
 }
 
 }  // namespace
+
+// ------------------------------------------------------------ the per-cell polarization of a frame
+namespace {
+// Eq. 18 without noise for one pixel, written here from the spec (§2.3), not from polrig's code.
+double eq18_pixel_DN(double K, double b, double k, double alpha_deg, double eps_deg, double I, double d, double phi_deg) {
+  const double r = std::numbers::pi / 180.0;
+  return 0.5 * K * I * (1.0 + k * d * std::cos(2.0 * phi_deg * r - 2.0 * (alpha_deg - eps_deg) * r)) + b;
+}
+}  // namespace
+
+TEST(DofpCellPolarization, RecoversTheLightOfEveryCellWithTheTrueParametersAndEq5WithTheNominalOnes) {
+  const int W = 8, H = 6;
+  const std::array<double, 4> mosaic = {0, 90, 45, 135};
+  polrig::DofpTruth truth = polrig::nominal_dofp_parameters(W, H, mosaic);
+  std::vector<double> frame(static_cast<std::size_t>(W * H)), ideal(frame.size());
+  const double I = 3.0;
+  for (int row = 0; row < H; ++row)
+    for (int col = 0; col < W; ++col) {
+      const std::size_t p = static_cast<std::size_t>(row) * W + col;
+      const int cell = (row / 2) * (W / 2) + col / 2;
+      const double phi = 7.0 + 11.0 * cell, d = 0.2 + 0.02 * cell;  // a different light per cell
+      truth.K[p] = 1000.0 * (1.0 + 0.01 * ((p * 7) % 5));
+      truth.b[p] = 3.0 + (p % 4);
+      truth.k[p] = 0.9 + 0.01 * (p % 3);
+      truth.eps_deg[p] = 0.5 * ((p % 5) - 2.0);
+      frame[p] = eq18_pixel_DN(truth.K[p], truth.b[p], truth.k[p], truth.alpha_deg[p], truth.eps_deg[p], I, d, phi);
+      ideal[p] = eq18_pixel_DN(1.0, 0.0, 1.0, truth.alpha_deg[p], 0.0, I, d, phi);
+    }
+  const polrig::DofpCellPolarization c = polrig::dofp_cell_polarization(frame, truth);
+  const polrig::DofpCellPolarization n =
+      polrig::dofp_cell_polarization(ideal, polrig::nominal_dofp_parameters(W, H, mosaic));
+  ASSERT_EQ(c.cells_x, W / 2);
+  ASSERT_EQ(c.cells_y, H / 2);
+  for (int cell = 0; cell < c.cells_x * c.cells_y; ++cell) {
+    const double phi = std::fmod(7.0 + 11.0 * cell, 180.0), d = 0.2 + 0.02 * cell;
+    for (const polrig::DofpCellPolarization* r : {&c, &n}) {
+      EXPECT_NEAR(r->aop_deg[static_cast<std::size_t>(cell)], phi, 1e-9) << cell;
+      EXPECT_NEAR(r->dop[static_cast<std::size_t>(cell)], d, 1e-12) << cell;
+      EXPECT_NEAR(r->S0[static_cast<std::size_t>(cell)], I, 1e-12) << cell;
+    }
+  }
+  // Eq. 5 in closed form for α = (0, 90, 45, 135): q1 = (f1 − f2)/2, q2 = (f3 − f4)/2, q3 = Σf/4.
+  const double f1 = ideal[0], f2 = ideal[1], f3 = ideal[static_cast<std::size_t>(W)], f4 = ideal[static_cast<std::size_t>(W) + 1];
+  const double q1 = (f1 - f2) / 2, q2 = (f3 - f4) / 2, q3 = (f1 + f2 + f3 + f4) / 4;
+  EXPECT_NEAR(n.dop[0], std::hypot(q1, q2) / q3, 1e-14);
+}
+
+TEST(DofpCellPolarization, RefusesMismatchedSizesAndBadParameters) {
+  polrig::DofpTruth p = polrig::nominal_dofp_parameters(4, 2, {0, 90, 45, 135});
+  std::vector<double> frame(8, 100.0);
+  EXPECT_THROW(polrig::dofp_cell_polarization(std::vector<double>(7, 1.0), p), std::invalid_argument);
+  p.K[5] = 0.0;
+  EXPECT_THROW(polrig::dofp_cell_polarization(frame, p), std::invalid_argument);
+  p = polrig::nominal_dofp_parameters(4, 2, {0, 0, 0, 0});  // four parallel analyzers: no Stokes plane
+  try {
+    polrig::dofp_cell_polarization(frame, p);
+    ADD_FAILURE() << "parallel analyzers accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cell (0, 0) do not span the Stokes plane"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(polrig::nominal_dofp_parameters(3, 2, {0, 90, 45, 135}), std::invalid_argument);
+}

@@ -742,3 +742,6 @@ def calibrate_dofp(level_intensity: ArrayLike, level_frames: ArrayLike, theta_R_
                    fit_weight: float = 1.0, weight_by_intensity: bool = True,
                    saturation_DN: float | None = None, table1_intensity: float = 0.0,
                    threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
+def dofp_cell_polarization(frame: ArrayLike, *, mosaic_deg: Sequence[float] = (0.0, 90.0, 45.0, 135.0),
+                           K: ArrayLike | None = None, b: ArrayLike | None = None,
+                           k: ArrayLike | None = None, eps_deg: ArrayLike | None = None) -> dict[str, Any]: ...

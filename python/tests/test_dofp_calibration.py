@@ -81,3 +81,21 @@ def test_h17_cost_alone_is_rank_deficient_and_bad_input_is_said():
     sf[2, 1, 1] = np.nan
     with pytest.raises(ValueError, match="polarized stop 2: the pixel at column 1, row 1 is nan"):
         polrig.calibrate_dofp(li, lf, th, si, sf)
+
+
+def test_cell_polarization_is_eq5_on_raw_frames_and_refuses_bad_maps():
+    """Nominal parameters: H17 Eq. 5 in closed form for α = (0, 90, 45, 135), in NumPy."""
+    rng = np.random.default_rng(3)
+    frame = rng.uniform(100.0, 200.0, size=(6, 8))
+    got = polrig.dofp_cell_polarization(frame)
+    f1, f2, f3, f4 = frame[0::2, 0::2], frame[0::2, 1::2], frame[1::2, 0::2], frame[1::2, 1::2]
+    q1, q2, q3 = (f1 - f2) / 2, (f3 - f4) / 2, (f1 + f2 + f3 + f4) / 4
+    np.testing.assert_allclose(got["S0"], 2 * q3, rtol=1e-13)
+    np.testing.assert_allclose(got["dop"], np.hypot(q1, q2) / q3, rtol=1e-12)
+    np.testing.assert_allclose(got["aop_deg"], np.degrees(0.5 * np.arctan2(q2, q1)) % 180.0, atol=1e-10)
+    with pytest.raises(ValueError, match="K: a map of 4 × 3 for a frame of 8 × 6"):
+        polrig.dofp_cell_polarization(frame, K=np.ones((3, 4)))
+    with pytest.raises(ValueError, match=r"pixel \(1, 0\) has K = 0"):
+        K = np.ones((6, 8))
+        K[0, 1] = 0
+        polrig.dofp_cell_polarization(frame, K=K)

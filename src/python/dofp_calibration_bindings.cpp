@@ -9,6 +9,7 @@
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/calib/dofp.h"
+#include "polrig/calib/dofp_polarization.h"
 
 namespace polrig::python {
 
@@ -154,6 +155,56 @@ void bind_dofp_calibration(py::module_& m) {
            "cells_used). scope: 'per-cell' or 'global'. ValueError for bad input.\n") +
        kThreadsDoc + "\n" + kProgressDoc)
           .c_str());
+}
+
+
+void bind_dofp_polarization(py::module_& m) {
+  m.def(
+      "dofp_cell_polarization",
+      [](const ArrayLike& frame, const std::array<double, 4>& mosaic_deg, const py::object& K,
+         const py::object& b, const py::object& k, const py::object& eps_deg) {
+        const DoubleArray f = as_array(frame.obj, "frame", 2);
+        const int H = static_cast<int>(f.shape(0)), W = static_cast<int>(f.shape(1));
+        DofpTruth p;
+        try {
+          p = nominal_dofp_parameters(W, H, mosaic_deg);
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        const auto map = [&](const py::object& o, const char* name, std::vector<double>& into) {
+          if (o.is_none()) return;
+          const DoubleArray a = as_array(o, name, 2);
+          if (a.shape(0) != H || a.shape(1) != W)
+            throw py::value_error(fmt::format("{}: a map of {} × {} for a frame of {} × {}", name, a.shape(1),
+                                              a.shape(0), W, H));
+          into.assign(a.data(), a.data() + a.size());
+        };
+        map(K, "K", p.K);
+        map(b, "b", p.b);
+        map(k, "k", p.k);
+        map(eps_deg, "eps_deg", p.eps_deg);
+        DofpCellPolarization c;
+        try {
+          py::gil_scoped_release release;
+          c = dofp_cell_polarization(std::span<const double>(f.data(), static_cast<std::size_t>(f.size())), p);
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        const std::vector<py::ssize_t> shape = {c.cells_y, c.cells_x};
+        py::dict out;
+        out["S0"] = take(std::move(c.S0), shape);
+        out["aop_deg"] = take(std::move(c.aop_deg), shape);
+        out["dop"] = take(std::move(c.dop), shape);
+        return out;
+      },
+      py::arg("frame"), py::kw_only(), py::arg("mosaic_deg") = std::array<double, 4>{0, 90, 45, 135},
+      py::arg("K") = py::none(), py::arg("b") = py::none(), py::arg("k") = py::none(),
+      py::arg("eps_deg") = py::none(),
+      "The polarization each 2 × 2 cell of a DoFP frame measures (H17 Eqs. 3–5; with per-pixel "
+      "parameters, Eqs. 20–22; docs/physics.md §14). frame (H, W) in DN; K, b, k, eps_deg: "
+      "per-pixel maps (H, W), e.g. calibrate_dofp's (None: the nominal 1, 0, 1, 0). Returns a dict "
+      "of (H/2, W/2) arrays: S0 (2·q̃3), aop_deg (image frame, [0, 180), NaN without polarization), "
+      "dop. ValueError for bad input.");
 }
 
 }  // namespace polrig::python

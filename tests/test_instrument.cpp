@@ -337,7 +337,8 @@ TEST_F(InstrumentCli, CommandsThatNeedPairVoltagesRefuseACameraRigAndWriteNothin
   const std::string cam = shell_quote(kIndoor);
   const fs::path out = tmp / "out";
   const std::vector<std::pair<std::string, std::string>> commands = {
-      {"simulate " + cam, "simulate"}, {"study cs " + cam, "study cs"}, {"study adc " + cam, "study adc"},
+      // (simulate takes frames from a camera rig: tests/test_dofp.cpp, python/tests/test_dofp.py)
+      {"study cs " + cam, "study cs"}, {"study adc " + cam, "study adc"},
       {"run " + cam, "run"}, {"sweep " + cam + " --grid eccentricity.L_S=0:1:2", "sweep"},
       {"study calibration " + cam + " --trials 1", "study calibration"},
       {"study heading " + shell_quote(kOutdoor) + " --trials 1", "study heading"}};

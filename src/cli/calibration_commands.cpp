@@ -17,6 +17,9 @@
 #include "polrig/io/params_yaml.h"
 #include "polrig/io/plot.h"
 #include "polrig/report/calibration_reports.h"
+#include "polrig/report/dofp_calibration_report.h"
+#include "polrig/io/dofp_dataset.h"
+#include "polrig/io/rig_yaml.h"
 #include "polrig/sky/drift.h"
 #include "polrig/study/calibration_trials.h"
 #include "polrig/units.h"
@@ -107,16 +110,33 @@ StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSe
   }
 }
 
+// `calibrate DIR --method dofp`: H17's two-step calibration of a camera dataset (report/
+// dofp_calibration_report.h), whose rig.yaml must describe an instrument that takes frames.
+void run_calibrate_dofp(const std::string& input, const std::string& rig_path, const DriftSettings& drift,
+                        const OutputOptions& out) {
+  if (!rig_path.empty()) throw DataError("--rig: --method dofp reads the camera from the dataset (its truth.exr and rig.yaml)");
+  if (drift.mode != "none") throw DataError(fmt::format("--drift {}: --method dofp calibrates indoors (no sun drift)", drift.mode));
+  const DofpCalibration c = calibrate_dofp_folder(input, {}, progress());
+  OutputDir d = out.open();
+  write_manifest(d.staging(), {command_line(), nullptr, report_dofp_calibration(d.staging(), c, out.plots()), {input}});
+  finish(d);
+  std::cout << fmt::format("dofp: {} of {} cells usable; Table 1 at intensity {} (max / mean / std, deg):\n",
+                           c.step2.usable_cells, c.step2.cells.size(), c.table1.intensity);
+  for (const DofpOrientationRow& row : c.table1.rows)
+    std::cout << fmt::format("  {:6s} {:.4f} / {:.4f} / {:.4f}\n", row.name, row.max_deg, row.mean_deg, row.std_deg);
+}
+
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
                    const DriftSettings& drift, const OutputOptions& out) {
+  if (method_text == "dofp") return run_calibrate_dofp(input, rig_path, drift, out);
   std::vector<CalibrationMethod> methods;
   if (method_text == "all") {
     methods.assign(kAllMethods.begin(), kAllMethods.end());
   } else if (auto m = parse_method(method_text)) {
     methods.push_back(*m);
   } else {
-    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc or all", method_text));
+    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc, all or dofp", method_text));
   }
   if (drift.mode != "none")
     for (CalibrationMethod m : methods)
@@ -260,7 +280,8 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
     app->add_option("INPUT", *input, "a folder written by polrig simulate, or a CSV with "
                                      "theta_R_deg,V1,V2,V3 (volts) and optionally utc")->required();
     app->add_option("--method", *method, "section | cs | cs-nc | nc | all (nc: the raw stops, "
-                                         "noncontinuous + section, as outdoors)")->capture_default_str();
+                                         "noncontinuous + section, as outdoors) | dofp (a DoFP camera "
+                                         "dataset: H17's two steps)")->capture_default_str();
     app->add_option("--drift", drift->mode, "sun-drift correction of an outdoor run: none | angle | "
                                             "per-stop | linear (needs the stops' times and the site: a utc column and --site, or a sky rig's simulate folder)")
         ->capture_default_str();

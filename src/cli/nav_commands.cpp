@@ -17,6 +17,10 @@
 #include "polrig/sky/sun.h"
 #include "polrig/sky/sun_rows.h"
 #include "polrig/report/heading_reports.h"
+#include "polrig/report/orientation_report.h"
+#include "polrig/io/dofp_dataset.h"
+#include "polrig/io/rig_yaml.h"
+#include "polrig/rig/rig.h"
 #include "polrig/study/heading_trials.h"
 
 namespace polrig::cli {
@@ -142,6 +146,25 @@ void run_heading(const std::string& input, const std::string& site_text, const S
                            rows.size() - static_cast<std::size_t>(solved));
 }
 
+// `orient DIR`: every polarized frame of a camera dataset oriented by the eigenvector method and
+// the two comparators (report/orientation_report.h); the sun's geographic azimuth from the
+// dataset's sky rig (rig.yaml), the true heading from its stops.csv.
+void run_orient(const std::string& input, const std::string& params, const std::string& conversion,
+                bool dop_weighting, std::optional<double> heading_prior, const OutputOptions& out) {
+  OrientationSettings settings;
+  settings.conversion = *parse_aop_conversion(conversion);
+  settings.dop_weighting = dop_weighting;
+  const std::vector<FrameOrientation> frames = orient_dofp_folder(input, params, settings, heading_prior, progress());
+  OutputDir d = out.open();
+  std::vector<std::string> inputs = {input};
+  if (!params.empty()) inputs.push_back(params);
+  write_manifest(d.staging(), {command_line(), nullptr, report_orientation(d.staging(), frames, out.plots()), inputs});
+  finish(d);
+  int solved = 0;
+  for (const FrameOrientation& f : frames) solved += f.estimates[0].solved ? 1 : 0;
+  std::cout << fmt::format("{} frames, {} solved by the eigenvector method\n", frames.size(), solved);
+}
+
 }  // namespace
 
 std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& threads) {
@@ -161,6 +184,30 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     add_sun_options(*app, *sun);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] { run_heading(*input, *site, *sun, *out); }});
+  }
+  {
+    auto* app = root.add_subcommand(
+        "orient", "sun vector and heading from a DoFP camera dataset's sky frames (H17 Eqs. 6-14)");
+    auto input = std::make_shared<std::string>();
+    auto params = std::make_shared<std::string>();
+    auto conversion = std::make_shared<std::string>("meridional");
+    auto dop_weighting = std::make_shared<bool>(false);
+    auto heading_prior = std::make_shared<std::optional<double>>();
+    auto out = std::make_shared<OutputOptions>();
+    app->add_option("DIR", *input, "a folder written by polrig simulate for a camera rig")->required();
+    app->add_option("--params", *params, "a calibration's params.exr (polrig calibrate --method dofp); "
+                                         "default: the nominal K = 1, b = 0, k = 1, eps = 0");
+    app->add_option("--conversion", *conversion, "the pixel AoP to E-vector model: meridional | "
+                                                 "analyzer-in-front")
+        ->check(CLI::IsMember({"meridional", "analyzer-in-front"}))->capture_default_str();
+    app->add_flag("--dop-weighting", *dop_weighting, "weight the eigenvector method's EEᵀ by DoP");
+    app->add_option("--heading-prior", *heading_prior, "an approximate heading of the camera's X_l at table angle 0 "
+                                                       "(deg, clockwise from north; each frame adds its table angle): "
+                                                       "chooses between the sun and the antisun near the horizon")
+        ->check(CLI::Range(-360.0, 360.0));
+    out->add_to(*app);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] { run_orient(*input, *params, *conversion, *dop_weighting, *heading_prior, *out); }});
   }
   {
     auto* app = study.add_subcommand(

@@ -142,4 +142,19 @@ std::vector<std::vector<std::uint16_t>> read_dofp_frames(const DofpDataset& data
   return frames;
 }
 
+DofpTruth read_dofp_parameters(const std::filesystem::path& params_exr, const DofpDataset& dataset) {
+  const ExrImage image = read_exr_image(params_exr);
+  if (image.width != dataset.width || image.height != dataset.height)
+    throw std::runtime_error(fmt::format("{}: {} × {} px (the dataset {}: {} × {})", params_exr.string(), image.width,
+                                         image.height, dataset.dir.string(), dataset.width, dataset.height));
+  DofpTruth t;
+  t.width = image.width, t.height = image.height;
+  t.K = channel(image, "K", params_exr);
+  t.b = channel(image, "b", params_exr);
+  t.k = channel(image, "k", params_exr);
+  t.eps_deg = channel(image, "eps_deg", params_exr);
+  t.alpha_deg = dataset.truth.alpha_deg;
+  return t;
+}
+
 }  // namespace polrig

@@ -14,7 +14,8 @@ void bind_sky(pybind11::module_& m);          // sky_bindings.cpp: sun, sky, dri
 void bind_nav(pybind11::module_& m);          // nav_bindings.cpp: heading, study heading
 void bind_orientation(pybind11::module_& m);  // orientation_bindings.cpp: DoFP sun vector, orient
 void bind_dofp_calibration(pybind11::module_& m);
-void bind_dofp_polarization(pybind11::module_& m);  // dofp_calibration_bindings.cpp: a frame's per-cell AoP, DoP  // dofp_calibration_bindings.cpp: the DoFP camera's calibration
+void bind_dofp_polarization(pybind11::module_& m);
+void bind_dofp_dataset_calibration(pybind11::module_& m);  // dofp_calibration_bindings.cpp: a camera dataset  // dofp_calibration_bindings.cpp: a frame's per-cell AoP, DoP  // dofp_calibration_bindings.cpp: the DoFP camera's calibration
 void bind_dofp(pybind11::module_& m);         // dofp_bindings.cpp: the DoFP camera's frames and dataset
 
 }  // namespace polrig::python

@@ -5,11 +5,13 @@
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/calib/dofp.h"
 #include "polrig/calib/dofp_polarization.h"
+#include "polrig/report/dofp_calibration_report.h"
 
 namespace polrig::python {
 
@@ -26,6 +28,64 @@ py::dict row_dict(const DofpOrientationRow& r) {
   d["std_deg"] = r.std_deg;
   d["error_deg"] = take(std::vector<double>(r.error_deg));
   return d;
+}
+
+// calibrate_dofp's dict: per-pixel maps, per-cell summaries, Table 1.
+py::dict calibration_dict(const DofpCalibration& c) {
+  std::vector<std::uint8_t> usable;
+  DofpTruth maps = dofp_parameter_maps(c, &usable);
+  const int w = c.step1.width, h = c.step1.height;
+  py::dict out;
+  out["K"] = image(std::move(maps.K), w, h);
+  out["b"] = image(std::move(maps.b), w, h);
+  out["k"] = image(std::move(maps.k), w, h);
+  out["eps_deg"] = image(std::move(maps.eps_deg), w, h);
+  out["usable"] = take(std::move(usable), {h, w});
+  out["step1_rank"] = take(std::vector<std::uint8_t>(c.step1.rank), {h, w});
+  out["step1_residual_DN"] = image(std::vector<double>(c.step1.residual_rms_DN), w, h);
+  const std::size_t n = c.step2.cells.size();
+  std::vector<double> k(4 * n), eps(4 * n), psi0(n), dop(n), rms0(n), rms(n);
+  std::vector<int> iterations(n), rank(n), observations(n);
+  py::list termination, message;
+  for (std::size_t i = 0; i < n; ++i) {
+    const DofpCellFit& f = c.step2.cells[i];
+    for (int j = 0; j < 4; ++j) {
+      k[4 * i + j] = f.k[j];
+      eps[4 * i + j] = f.eps_deg[j];
+    }
+    psi0[i] = f.psi0_deg;
+    dop[i] = f.dop;
+    rms0[i] = f.initial_rms_deg;
+    rms[i] = f.final_rms_deg;
+    iterations[i] = f.iterations;
+    rank[i] = f.rank;
+    observations[i] = f.observations;
+    termination.append(std::string(termination_name(f.termination)));
+    message.append(f.message);
+  }
+  const auto ni = static_cast<py::ssize_t>(n);
+  py::dict cells;
+  cells["scope"] = dofp_scope_name(c.step2.scope);
+  cells["shape"] = py::make_tuple(c.step2.cells_y, c.step2.cells_x);
+  cells["termination"] = termination;
+  cells["message"] = message;
+  cells["iterations"] = take(std::move(iterations));
+  cells["rank"] = take(std::move(rank));
+  cells["observations"] = take(std::move(observations));
+  cells["k"] = take(std::move(k), {ni, 4});
+  cells["eps_deg"] = take(std::move(eps), {ni, 4});
+  cells["psi0_deg"] = take(std::move(psi0));
+  cells["dop"] = take(std::move(dop));
+  cells["initial_rms_deg"] = take(std::move(rms0));
+  cells["final_rms_deg"] = take(std::move(rms));
+  out["cells"] = cells;
+  py::dict t1;
+  t1["intensity"] = c.table1.intensity;
+  t1["cells_used"] = c.table1.cells_used;
+  t1["theta_R_deg"] = take(std::vector<double>(c.table1.theta_R_deg));
+  for (const DofpOrientationRow& r : c.table1.rows) t1[py::str(r.name)] = row_dict(r);
+  out["table1"] = t1;
+  return out;
 }
 
 }  // namespace
@@ -80,60 +140,7 @@ void bind_dofp_calibration(py::module_& m) {
         } catch (const std::invalid_argument& e) {
           throw py::value_error(e.what());
         }
-        std::vector<std::uint8_t> usable;
-        DofpTruth maps = dofp_parameter_maps(c, &usable);
-        const int w = static_cast<int>(W), h = static_cast<int>(H);
-        py::dict out;
-        out["K"] = image(std::move(maps.K), w, h);
-        out["b"] = image(std::move(maps.b), w, h);
-        out["k"] = image(std::move(maps.k), w, h);
-        out["eps_deg"] = image(std::move(maps.eps_deg), w, h);
-        out["usable"] = take(std::move(usable), {h, w});
-        out["step1_rank"] = take(std::vector<std::uint8_t>(c.step1.rank), {h, w});
-        out["step1_residual_DN"] = image(std::vector<double>(c.step1.residual_rms_DN), w, h);
-        const std::size_t n = c.step2.cells.size();
-        std::vector<double> k(4 * n), eps(4 * n), psi0(n), dop(n), rms0(n), rms(n);
-        std::vector<int> iterations(n), rank(n), observations(n);
-        py::list termination, message;
-        for (std::size_t i = 0; i < n; ++i) {
-          const DofpCellFit& f = c.step2.cells[i];
-          for (int j = 0; j < 4; ++j) {
-            k[4 * i + j] = f.k[j];
-            eps[4 * i + j] = f.eps_deg[j];
-          }
-          psi0[i] = f.psi0_deg;
-          dop[i] = f.dop;
-          rms0[i] = f.initial_rms_deg;
-          rms[i] = f.final_rms_deg;
-          iterations[i] = f.iterations;
-          rank[i] = f.rank;
-          observations[i] = f.observations;
-          termination.append(std::string(termination_name(f.termination)));
-          message.append(f.message);
-        }
-        const auto ni = static_cast<py::ssize_t>(n);
-        py::dict cells;
-        cells["scope"] = dofp_scope_name(c.step2.scope);
-        cells["shape"] = py::make_tuple(c.step2.cells_y, c.step2.cells_x);
-        cells["termination"] = termination;
-        cells["message"] = message;
-        cells["iterations"] = take(std::move(iterations));
-        cells["rank"] = take(std::move(rank));
-        cells["observations"] = take(std::move(observations));
-        cells["k"] = take(std::move(k), {ni, 4});
-        cells["eps_deg"] = take(std::move(eps), {ni, 4});
-        cells["psi0_deg"] = take(std::move(psi0));
-        cells["dop"] = take(std::move(dop));
-        cells["initial_rms_deg"] = take(std::move(rms0));
-        cells["final_rms_deg"] = take(std::move(rms));
-        out["cells"] = cells;
-        py::dict t1;
-        t1["intensity"] = c.table1.intensity;
-        t1["cells_used"] = c.table1.cells_used;
-        t1["theta_R_deg"] = take(std::vector<double>(c.table1.theta_R_deg));
-        for (const DofpOrientationRow& r : c.table1.rows) t1[py::str(r.name)] = row_dict(r);
-        out["table1"] = t1;
-        return out;
+        return calibration_dict(c);
       },
       py::arg("level_intensity"), py::arg("level_frames"), py::arg("theta_R_deg"),
       py::arg("stop_intensity"), py::arg("stop_frames"), py::kw_only(),
@@ -157,6 +164,29 @@ void bind_dofp_calibration(py::module_& m) {
           .c_str());
 }
 
+
+void bind_dofp_dataset_calibration(py::module_& m) {
+  m.def(
+      "calibrate_dofp_dataset",
+      [](const std::filesystem::path& dir, std::optional<int> threads, const py::object& progress) {
+        const Progress p = progress_from(progress);
+        ThreadLimit limit(threads);
+        DofpCalibration c;
+        {
+          py::gil_scoped_release release;
+          c = calibrate_dofp_folder(dir, {}, p);
+        }
+        return calibration_dict(c);
+      },
+      py::arg("dir"), py::kw_only(), py::arg("threads") = py::none(), py::arg("progress") = py::none(),
+      (std::string("`polrig calibrate DIR --method dofp`'s computation (report/dofp_calibration_report.h): "
+                   "both steps and Table 1 on a DoFP camera dataset (its unpolarized stops for step 1, "
+                   "its polarized stops for step 2, the dataset's mosaic). Returns calibrate_dofp's dict. "
+                   "Raises RigError for a rig without frames, DataError for a file that cannot be read, "
+                   "CalibrationError when Table 1 cannot be formed.\n") +
+       kThreadsDoc + "\n" + kProgressDoc)
+          .c_str());
+}
 
 void bind_dofp_polarization(py::module_& m) {
   m.def(

@@ -37,5 +37,6 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_orientation(m);
   polrig::python::bind_dofp_calibration(m);
   polrig::python::bind_dofp_polarization(m);
+  polrig::python::bind_dofp_dataset_calibration(m);
   polrig::python::bind_dofp(m);
 }

@@ -8,10 +8,12 @@
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/nav/orientation.h"
+#include "polrig/report/orientation_report.h"
 #include "sky_args.h"
 
 namespace polrig::python {
@@ -224,6 +226,38 @@ void bind_orientation(py::module_& m) {
       "H17 Eq. 14 in the sense of spec §0: the heading of a level camera (the geographic azimuth of "
       "X_l, degrees clockwise from north, [0, 360)) from the sun's geographic azimuth A_s and its "
       "azimuth α_S in frame l (from X_l towards Y_l): H = A_s + α_S.");
+
+  m.def("orient_dofp_dataset", [](const std::filesystem::path& dir, const std::optional<std::filesystem::path>& params,
+                                  const std::string& conversion, bool dop_weighting,
+                                  std::optional<double> heading_prior_deg, const py::object& progress) {
+        OrientationSettings s = settings_from(conversion, dop_weighting, 0.0, std::nullopt,
+                                              OrientationSettings{}.horizon_margin_deg);
+        if (heading_prior_deg && !std::isfinite(*heading_prior_deg))
+          throw py::value_error(fmt::format("heading_prior_deg: {} is not finite", *heading_prior_deg));
+        const Progress p = progress_from(progress);
+        std::vector<FrameOrientation> frames;
+        {
+          py::gil_scoped_release release;
+          frames = orient_dofp_folder(dir, params.value_or(std::filesystem::path()), s, heading_prior_deg, p);
+        }
+        py::list out;
+        for (const FrameOrientation& f : frames) {
+          py::dict d;
+          d["frame"] = f.frame;
+          d["true_heading_deg"] = f.true_heading_deg;
+          d["estimates"] = std::vector<OrientationEstimate>(f.estimates.begin(), f.estimates.end());
+          out.append(d);
+        }
+        return out;
+      }, "dir"_a, py::kw_only(), "params"_a = py::none(), "conversion"_a = "meridional",
+      "dop_weighting"_a = false, "heading_prior_deg"_a = py::none(), "progress"_a = py::none(),
+      (std::string("`polrig orient DIR`'s computation (report/orientation_report.h): every polarized "
+                   "frame of a DoFP camera dataset through the three methods. params: a calibration's "
+                   "params.exr (None: the nominal parameters); heading_prior_deg: an approximate heading "
+                   "of X_l at table angle 0 (each frame adds its table angle), for the sun/antisun "
+                   "choice near the horizon. Returns a list of dicts (frame, true_heading_deg or None, "
+                   "estimates: three polrig.OrientationEstimate). Raises RigError for a rig without "
+                   "frames, DataError for a file that cannot be read.\n") + kProgressDoc).c_str());
 }
 
 }  // namespace polrig::python

@@ -8,6 +8,10 @@
 #include <fmt/format.h>
 
 #include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "polrig/io/rig_yaml.h"
+#include "polrig/rig/rig.h"
+#include "polrig/io/dofp_dataset.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/plot.h"
 
@@ -169,6 +173,54 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
     files.push_back({png, 1, "a map of the parameter by mosaic position"});
   files.push_back({"maps.gp", 1, "the gnuplot script of the maps"});
   return files;
+}
+
+DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrationOptions options,
+                                       const Progress& progress) {
+  const int W = dataset.width;
+  if (W < 2 || dataset.height < 2) throw std::invalid_argument(fmt::format("{}: no frame", dataset.dir.string()));
+  for (int j = 0; j < 4; ++j)  // the first cell's TL, TR, BL, BR
+    options.step2.mosaic_deg[static_cast<std::size_t>(j)] =
+        dataset.truth.alpha_deg[static_cast<std::size_t>((j / 2) * W + j % 2)];
+  std::vector<std::vector<double>> frames(dataset.stops.size());
+  progress.begin("dofp: reading frames", static_cast<long long>(frames.size()));
+  for (std::size_t s = 0; s < frames.size(); ++s) {
+    frames[s] = read_dofp_mean_frame(dataset, s);
+    progress.advance(1);
+  }
+  progress.finish();
+  std::vector<DofpUnpolarizedLevel> levels;
+  std::vector<DofpPolarizedStop> stops;
+  for (std::size_t s = 0; s < frames.size(); ++s) {
+    const DofpDatasetStop& st = dataset.stops[s];
+    if (st.polarized)
+      stops.push_back({st.theta_R_deg, st.intensity, frames[s]});
+    else
+      levels.push_back({st.intensity, frames[s]});
+  }
+  return calibrate_dofp(W, dataset.height, levels, stops, options, progress);
+}
+
+DofpCalibration calibrate_dofp_folder(const std::filesystem::path& dir, const DofpCalibrationOptions& options,
+                                      const Progress& progress) {
+  if (std::filesystem::exists(dir / "rig.yaml")) {
+    const LoadedRig r = load_rig(dir / "rig.yaml");
+    require_instrument(r.rig, Instrument::kFrames, "calibrate --method dofp", r.origin);
+  }
+  DofpDataset dataset;
+  try {
+    dataset = read_dofp_dataset(dir);
+  } catch (const std::runtime_error& e) {
+    throw DataError(e.what());
+  }
+  try {
+    return calibrate_dofp_dataset(dataset, options, progress);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("{}: {}", dir.string(), e.what()));
+  } catch (const std::runtime_error& e) {
+    if (dynamic_cast<const CalibrationError*>(&e)) throw;
+    throw DataError(e.what());  // a stop's frame file
+  }
 }
 
 }  // namespace polrig

@@ -6,7 +6,11 @@
 
 #include <fmt/format.h>
 
+#include "polrig/calib/dofp_polarization.h"
 #include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "polrig/io/rig_yaml.h"
+#include "polrig/rig/rig.h"
 #include "polrig/io/plot.h"
 #include "polrig/nav/heading.h"
 
@@ -66,6 +70,77 @@ std::vector<DatasetFile> report_orientation(const std::filesystem::path& dir,
   render_plots(dir, "plots.gp", {p});
   files.push_back({"heading_error.png", 1, "heading error per frame of the three methods"});
   return files;
+}
+
+std::vector<FrameOrientation> orient_dofp_dataset(const DofpDataset& dataset, const std::optional<Sky>& sky,
+                                                  const DofpTruth* parameters,
+                                                  const OrientationSettings& settings,
+                                                  std::optional<double> heading_prior_deg,
+                                                  const Progress& progress) {
+  const int W = dataset.width, H = dataset.height;
+  DofpTruth nominal;
+  if (!parameters) {
+    std::array<double, 4> mosaic{};
+    for (int j = 0; j < 4; ++j)  // the first cell's TL, TR, BL, BR
+      mosaic[static_cast<std::size_t>(j)] = dataset.truth.alpha_deg[static_cast<std::size_t>((j / 2) * W + j % 2)];
+    nominal = nominal_dofp_parameters(W, H, mosaic);
+    parameters = &nominal;
+  }
+  if (parameters->width != W || parameters->height != H)
+    throw std::invalid_argument(fmt::format("parameters of {} × {} px for the dataset {} of {} × {} px",
+                                            parameters->width, parameters->height, dataset.dir.string(), W, H));
+  const CameraIntrinsics camera{dataset.f_c_px, dataset.cx, dataset.cy};
+  check_intrinsics(camera);
+  std::vector<FrameOrientation> out;
+  progress.begin("orient: frames", static_cast<long long>(dataset.stops.size()));
+  for (std::size_t s = 0; s < dataset.stops.size(); ++s) {
+    const DofpDatasetStop& st = dataset.stops[s];
+    if (st.polarized) {
+      const std::vector<double> frame = read_dofp_mean_frame(dataset, s);
+      DofpCellPolarization cells = dofp_cell_polarization(frame, *parameters);
+      const SkyPoints points =
+          grid_points(cells.cells_x, cells.cells_y, 2.0, std::move(cells.aop_deg), std::move(cells.dop));
+      std::optional<double> sun_azimuth;
+      OrientationSettings s = settings;
+      if (sky && !st.utc.empty()) {
+        const SunPosition sun = sun_position(parse_utc(st.utc), sky->site, sky->sun);
+        sun_azimuth = sun.azimuth_deg;
+        if (heading_prior_deg) s.prior_sun = sun_in_level_camera(sun.azimuth_deg, sun.elevation_deg,
+                                                             *heading_prior_deg + st.theta_R_deg);
+      }
+      out.push_back({st.stop, orient_frame(points, camera, sun_azimuth, s), st.heading_deg});
+    }
+    progress.advance(1);
+  }
+  progress.finish();
+  return out;
+}
+
+std::vector<FrameOrientation> orient_dofp_folder(const std::filesystem::path& dir, const std::filesystem::path& params,
+                                                 const OrientationSettings& settings,
+                                                 std::optional<double> heading_prior_deg, const Progress& progress) {
+  std::optional<Sky> sky;
+  if (std::filesystem::exists(dir / "rig.yaml")) {
+    const LoadedRig r = load_rig(dir / "rig.yaml");
+    require_instrument(r.rig, Instrument::kFrames, "orient", r.origin);
+    sky = rig_sky(r.rig);
+  }
+  if (heading_prior_deg && !sky)
+    throw DataError(fmt::format("heading prior: {} has no sky rig (rig.yaml with source.model sky) to place the sun",
+                                dir.string()));
+  DofpDataset dataset;
+  std::optional<DofpTruth> parameters;
+  try {
+    dataset = read_dofp_dataset(dir);
+    if (!params.empty()) parameters = read_dofp_parameters(params, dataset);
+  } catch (const std::runtime_error& e) {
+    throw DataError(e.what());
+  }
+  try {
+    return orient_dofp_dataset(dataset, sky, parameters ? &*parameters : nullptr, settings, heading_prior_deg, progress);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("{}: {}", dir.string(), e.what()));
+  }
 }
 
 }  // namespace polrig

@@ -43,4 +43,9 @@ std::vector<double> read_dofp_mean_frame(const DofpDataset& dataset, std::size_t
 // Every frame of a stop (a dataset written with every frame; throws for a sum-only one).
 std::vector<std::vector<std::uint16_t>> read_dofp_frames(const DofpDataset& dataset, std::size_t stop_index);
 
+// A calibration's per-pixel parameters (`polrig calibrate --method dofp`'s params.exr: channels K,
+// b, k, eps_deg, as float) for the dataset's camera; alpha_deg is the dataset's mosaic. Throws
+// std::runtime_error naming the file for a missing channel or another image size.
+DofpTruth read_dofp_parameters(const std::filesystem::path& params_exr, const DofpDataset& dataset);
+
 }  // namespace polrig

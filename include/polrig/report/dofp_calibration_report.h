@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "polrig/calib/dofp.h"
+#include "polrig/io/dofp_dataset.h"
+#include "polrig/progress.h"
 #include "polrig/io/manifest.h"
 
 namespace polrig {
@@ -14,5 +16,21 @@ namespace polrig {
 // the manifest. Throws std::runtime_error naming a file that cannot be written.
 std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& dir,
                                                  const DofpCalibration& calibration, bool plots);
+
+// Both steps and Table 1 on a camera dataset (`polrig calibrate DIR --method dofp`, Python's
+// calibrate_dofp_dataset): its unpolarized stops are step 1's levels, its polarized stops step 2's,
+// each stop's mean frame; the mosaic's axes are the dataset's (truth.exr's alpha_deg) and replace
+// options.step2.mosaic_deg. Reports "dofp: reading frames" to `progress`. Throws
+// std::runtime_error naming a file that cannot be read, std::invalid_argument for bad input and
+// CalibrationError when Table 1 cannot be formed.
+DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrationOptions options,
+                                       const Progress& progress = {});
+
+// calibrate_dofp_dataset on a dataset folder, as `polrig calibrate DIR --method dofp` and Python's
+// calibrate_dofp_dataset take it: DIR/rig.yaml (when present) must describe an instrument with
+// frames. Throws RigError (a rig without frames), DataError naming a file that cannot be read or a
+// bad value, CalibrationError when Table 1 cannot be formed.
+DofpCalibration calibrate_dofp_folder(const std::filesystem::path& dir, const DofpCalibrationOptions& options = {},
+                                      const Progress& progress = {});
 
 }  // namespace polrig

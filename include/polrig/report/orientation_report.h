@@ -6,8 +6,12 @@
 #include <optional>
 #include <vector>
 
+#include "polrig/device/dofp_camera.h"
+#include "polrig/io/dofp_dataset.h"
 #include "polrig/io/manifest.h"
 #include "polrig/nav/orientation.h"
+#include "polrig/progress.h"
+#include "polrig/sky/sky.h"
 
 namespace polrig {
 
@@ -26,5 +30,32 @@ struct FrameOrientation {
 // written then).
 std::vector<DatasetFile> report_orientation(const std::filesystem::path& dir,
                                             const std::vector<FrameOrientation>& frames, bool plots);
+
+// Every polarized stop of a camera dataset oriented (`polrig orient DIR`, Python's
+// orient_dofp_dataset): the stop's mean frame → each cell's AoP and DoP (calib/dofp_polarization:
+// with `parameters`, a calibration's per-pixel maps; else the nominal ones of the dataset's mosaic)
+// → orient_frame with the dataset's intrinsics and, where the stop has a UTC and `sky` is given,
+// the sun's geographic azimuth from the ephemeris; the true heading from stops.csv. With
+// heading_prior_deg (an approximate heading of X_l at table angle 0, e.g. a magnetic compass's)
+// and a sky, each frame's prior sun is sun_in_level_camera of heading_prior_deg + θ_R (the table
+// turns the camera's heading up by θ_R: docs/physics.md §13): the solar/antisolar choice near the
+// horizon (spec §2.5); it replaces settings.prior_sun. Reports
+// "orient: frames" to `progress`. Throws std::runtime_error naming a file that cannot be read and
+// std::invalid_argument for parameters of another size.
+std::vector<FrameOrientation> orient_dofp_dataset(const DofpDataset& dataset, const std::optional<Sky>& sky,
+                                                  const DofpTruth* parameters,
+                                                  const OrientationSettings& settings = {},
+                                                  std::optional<double> heading_prior_deg = std::nullopt,
+                                                  const Progress& progress = {});
+
+// orient_dofp_dataset on a dataset folder, as `polrig orient DIR` and Python's orient_dofp_dataset
+// take it: DIR/rig.yaml (when present) must describe an instrument with frames and gives the sky;
+// `params` (when not empty) is a calibration's params.exr. Throws RigError (a rig without frames),
+// DataError naming a file that cannot be read or a bad value, std::invalid_argument for
+// heading_prior_deg without a sky rig.
+std::vector<FrameOrientation> orient_dofp_folder(const std::filesystem::path& dir, const std::filesystem::path& params,
+                                                 const OrientationSettings& settings = {},
+                                                 std::optional<double> heading_prior_deg = std::nullopt,
+                                                 const Progress& progress = {});
 
 }  // namespace polrig

@@ -11,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "dofp_lanes.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -269,17 +270,17 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
   }
 }
 
-// The vectorised pass: accumulate's sums with the observations in lanes of kLanes (structure of
-// arrays, GCC vector types: SSE2 without -march, so 4 instructions per lane operation), so that
-// each operation works on kLanes observations at once. Every q̃ and ∂q̃ is a linear form of F̃;
-// per lane block the 28 forms (q̃1..3, n̂ᵀF̃, 6 × ∂q̃1..3, 6 × ∂n̂ᵀF̃), the residuals and the
-// Jacobian's rows stay in registers or L1, and JᵀJ, Jᵀr are summed per lane and reduced once
-// at the end in lane order. Only atan2 stays scalar. The cell's observations are padded to
-// whole blocks with copies of the first one at weight 0 (their terms are exact zeros). When an
-// observation's AoP or DoP is undefined the scalar loop runs instead (it names the first such
-// observation and skips them, as before). The sums differ from accumulate's by rounding only
-// (the order of the additions); a test compares the two.
-constexpr int kLanes = 8;
+// The vectorised pass (src/calib/dofp_lanes.*): accumulate's sums with the observations in
+// lanes of 8 (structure of arrays), so that each operation works on 8 observations at once:
+// every q̃ and ∂q̃ is a linear form of F̃; per lane block the 28 forms (q̃1..3, n̂ᵀF̃,
+// 6 × ∂q̃1..3, 6 × ∂n̂ᵀF̃), the residuals and the Jacobian's rows stay in registers or L1, and
+// JᵀJ, Jᵀr are summed per lane and reduced once at the end in lane order. Only atan2 stays
+// scalar. The cell's observations are padded to whole blocks with copies of the first one at
+// weight 0 (their terms are exact zeros). When an observation's AoP or DoP is undefined the
+// scalar loop runs instead (it names the first such observation and skips them, as before).
+// The sums differ from accumulate's by rounding only (the order of the additions), and the
+// SSE2 and AVX2 variants give the same bits; a test checks both.
+constexpr int kLanes = dofp_lanes::kLanes;
 
 // The per-stop constants padded to whole lane blocks: cos, sin of −2·s_R·θ_R,m, the stop's
 // weight (0 in the padding) and 1 for a real observation (0 in the padding).
@@ -307,15 +308,23 @@ struct SoaScratch {
   std::vector<double> F;
 };
 
+enum class LanePath { Scalar, Sse2, Avx2 };
+
+bool cpu_has_avx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+
 template <bool kJacobian>
 void accumulate_soa(const CellModel& m, const double* F, const StopArrays& st, const double* rot,
-                    SoaScratch& sc, Sums& out) {
-  using Lane = double __attribute__((vector_size(8 * kLanes)));
-  const bool dop = m.w != 0.0, fitres = m.we != 0.0;
+                    SoaScratch& sc, Sums& out,
+                    LanePath path = cpu_has_avx2() ? LanePath::Avx2 : LanePath::Sse2) {
   const std::size_t n = st.n, np = st.padded;
-  if (n == 0) return;
-  constexpr int kForms = kJacobian ? 28 : 4;
-  double L[4][28];
+  if (path == LanePath::Scalar || n == 0) {
+    accumulate<kJacobian>(m, F, rot, n, out);
+    return;
+  }
+  double L[4][28] = {};
   for (int j = 0; j < 4; ++j) {
     for (int a = 0; a < 3; ++a) L[j][a] = m.P(a, j);
     L[j][3] = m.n[j];
@@ -328,83 +337,33 @@ void accumulate_soa(const CellModel& m, const double* F, const StopArrays& st, c
   sc.F.resize(4 * np);
   for (std::size_t i = 0; i < np; ++i)
     for (int j = 0; j < 4; ++j) sc.F[j * np + i] = F[4 * (i < n ? i : 0) + j];
-
-  const Lane zero = {};
-  Lane cost = zero, aop = zero, A[6][6], A6[6], A7[6], B[6], A66 = zero, B6 = zero, B7 = zero;
-  for (int p = 0; p < 6; ++p) {
-    for (int q = 0; q < 6; ++q) A[p][q] = zero;
-    A6[p] = A7[p] = B[p] = zero;
+  dofp_lanes::Input in;
+  in.L = &L[0][0];
+  in.F = sc.F.data();
+  in.c = st.c.data();
+  in.s = st.s.data();
+  in.w = st.w.data();
+  in.real = st.real.data();
+  in.padded = np;
+  in.c2psi = m.c2psi;
+  in.s2psi = m.s2psi;
+  in.dop_weight = m.w;
+  in.fit_weight = m.we;
+  in.d0 = m.d0;
+  in.jacobian = kJacobian;
+  dofp_lanes::Output o;
+  const bool ok = path == LanePath::Avx2 ? dofp_lanes::sums_avx2(in, o) : dofp_lanes::sums_sse2(in, o);
+  if (!ok) {
+    accumulate<kJacobian>(m, F, rot, n, out);
+    return;
   }
-  for (std::size_t i0 = 0; i0 < np; i0 += kLanes) {
-    Lane f[4], cw, sw, ww, real;
-    for (int j = 0; j < 4; ++j) std::memcpy(&f[j], &sc.F[j * np + i0], sizeof(Lane));
-    std::memcpy(&cw, &st.c[i0], sizeof(Lane));
-    std::memcpy(&sw, &st.s[i0], sizeof(Lane));
-    std::memcpy(&ww, &st.w[i0], sizeof(Lane));
-    std::memcpy(&real, &st.real[i0], sizeof(Lane));
-    Lane Q[kForms];
-    for (int c = 0; c < kForms; ++c)
-      Q[c] = f[0] * L[0][c] + f[1] * L[1][c] + f[2] * L[2][c] + f[3] * L[3][c];
-    const Lane q1 = Q[0], q2 = Q[1], q3 = Q[2], nf = Q[3];
-    const Lane sq = q1 * q1 + q2 * q2;
-    for (int k = 0; k < kLanes; ++k)
-      if (!(sq[k] > 0) || ((dop || fitres) && !(q3[k] > 0))) {
-        accumulate<kJacobian>(m, F, rot, n, out);
-        return;
-      }
-    const Lane cr = cw * m.c2psi - sw * m.s2psi, sr = cw * m.s2psi + sw * m.c2psi;
-    const Lane yv = q1 * sr + q2 * cr, xv = q1 * cr - q2 * sr;
-    Lane r0, a;
-    for (int k = 0; k < kLanes; ++k) {
-      r0[k] = 0.5 * std::atan2(yv[k], xv[k]);
-      a[k] = std::sqrt(sq[k]);
-    }
-    aop += real * r0 * r0;
-    const Lane r = ww * r0;
-    const Lane rd = dop ? ww * m.w * (a / q3 - m.d0) : zero;
-    const Lane re = fitres ? ww * m.we * nf / q3 : zero;
-    cost += r * r + rd * rd + re * re;
-    if constexpr (kJacobian) {
-      const Lane wg = ww * 0.5 / sq, i3 = 1.0 / q3;
-      const Lane ia = ww * m.w / (a * q3), iq = ww * m.w * a * i3 * i3, wi3 = ww * m.we * i3;
-      Lane g[6], h[6], e[6];
-      for (int p = 0; p < 6; ++p) {
-        const Lane dq1 = Q[4 + 3 * p], dq2 = Q[5 + 3 * p], dq3 = Q[6 + 3 * p];
-        g[p] = wg * (q1 * dq2 - q2 * dq1);
-        h[p] = dop ? (q1 * dq1 + q2 * dq2) * ia - iq * dq3 : zero;
-        e[p] = fitres ? wi3 * (Q[22 + p] - nf * dq3 * i3) : zero;
-      }
-      for (int p = 0; p < 6; ++p) {
-        for (int q = p; q < 6; ++q) A[p][q] += g[p] * g[q] + h[p] * h[q] + e[p] * e[q];
-        A6[p] += g[p] * ww;
-        A7[p] += h[p] * ww;
-        B[p] += g[p] * r + h[p] * rd + e[p] * re;
-      }
-      A66 += ww * ww;
-      B6 += ww * r;
-      B7 += ww * rd;
-    }
-  }
-  // Lane sums in lane order (the same on any machine and thread).
-  const auto sum = [](const Lane& v) {
-    double s = 0;
-    for (int k = 0; k < kLanes; ++k) s += v[k];
-    return s;
-  };
-  out.cost += sum(cost);
-  out.aop_ss += sum(aop);
+  out.cost += o.cost;
+  out.aop_ss += o.aop_ss;
   if constexpr (kJacobian) {
-    // ψ0's row is −w in the AoP residual only, d0's −w·w_d in the DoP residual only.
-    for (int p = 0; p < 6; ++p) {
-      for (int q = p; q < 6; ++q) out.JtJ(p, q) += sum(A[p][q]);
-      out.JtJ(p, 6) -= sum(A6[p]);
-      out.JtJ(p, 7) -= m.w * sum(A7[p]);
-      out.Jtr[p] += sum(B[p]);
+    for (int p = 0; p < 8; ++p) {
+      for (int q = p; q < 8; ++q) out.JtJ(p, q) += o.JtJ[p][q];
+      out.Jtr[p] += o.Jtr[p];
     }
-    out.JtJ(6, 6) += sum(A66);
-    out.JtJ(7, 7) += m.w * m.w * sum(A66);
-    out.Jtr[6] -= sum(B6);
-    out.Jtr[7] -= m.w * sum(B7);
   }
 }
 
@@ -1025,6 +984,31 @@ Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F, const std::vect
   for (std::size_t i = 0; i < 3 * theta.size(); ++i)
     for (int p = 0; p < 8; ++p) J(static_cast<Eigen::Index>(i), p) = rows[8 * i + p];
   return J;
+}
+
+bool dofp_cell_sums(const std::vector<double>& F, const std::vector<double>& theta,
+                    const Eigen::Matrix<double, 8, 1>& x, const DofpStep2Options& o,
+                    DofpSumsPath path, DofpCellSums& out) {
+  if (F.size() != 4 * theta.size())
+    throw std::invalid_argument("dofp_cell_sums: F needs 4 values per table angle");
+  if (path == DofpSumsPath::LanesAvx2 && !cpu_has_avx2()) return false;
+  const std::vector<double> rot = rotations_of(theta, o.table_sense);
+  CellModel model;
+  if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
+    throw std::invalid_argument("dofp_cell_sums: the model is singular at x");
+  const StopArrays st(rot);
+  SoaScratch sc;
+  Sums sums;
+  accumulate_soa<true>(model, F.data(), st, rot.data(), sc, sums,
+                       path == DofpSumsPath::Scalar      ? LanePath::Scalar
+                       : path == DofpSumsPath::LanesSse2 ? LanePath::Sse2
+                                                         : LanePath::Avx2);
+  out.JtJ = sums.JtJ;
+  out.Jtr = sums.Jtr;
+  out.cost = sums.cost;
+  out.aop_ss = sums.aop_ss;
+  out.bad = sums.bad;
+  return true;
 }
 
 }  // namespace polrig

@@ -311,8 +311,12 @@ struct SoaScratch {
 enum class LanePath { Scalar, Sse2, Avx2 };
 
 bool cpu_has_avx2() {
+#if defined(__x86_64__) || defined(__i386__)
   static const bool has = __builtin_cpu_supports("avx2");
   return has;
+#else
+  return false;
+#endif
 }
 
 template <bool kJacobian>

@@ -66,13 +66,18 @@ const DofpBenchData& bench_data(int width) {
 // "160 × 120 units"), 640 × 480 the 76,800 2 × 2 cells of H17's sensor.
 void BM_DofpCalibration_Full(benchmark::State& state) {
   const DofpBenchData& data = bench_data(static_cast<int>(state.range(0)));
-  long long usable = 0;
+  long long usable = 0, iterations = 0;
   for (auto _ : state) {
     const DofpCalibration c = calibrate_dofp(data.W, data.H, data.levels, data.stops);
     usable = c.step2.usable_cells;
+    iterations = 0;
+    for (const DofpCellFit& f : c.step2.cells) iterations += f.iterations;
     benchmark::DoNotOptimize(c.table1.rows[2].std_deg);
   }
   state.counters["usable_cells"] = static_cast<double>(usable);
+  // LM iterations per cell (each one pass over the cell's observations, plus one at the start).
+  state.counters["iterations_per_cell"] =
+      static_cast<double>(iterations) / ((data.W / 2) * (data.H / 2));
   state.SetItemsProcessed(state.iterations() * (data.W / 2) * (data.H / 2));
 }
 BENCHMARK(BM_DofpCalibration_Full)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)

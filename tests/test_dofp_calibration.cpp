@@ -173,6 +173,54 @@ TEST(DofpCalibration, JacobianMatchesCentralDifferences) {
   EXPECT_LT(r.cwiseAbs().maxCoeff(), kPi / 4);
 }
 
+// Step 2 sums each cell's normal equations in lanes of 8 (SSE2, or AVX2 where the CPU has it);
+// the scalar loop (the one the Jacobian test above checks) is the reference: the same sums up to
+// the order of the additions, and the two instruction sets give the same bits. 79 observations
+// leave a partial lane block (padding).
+TEST(DofpCalibration, LanesSumTheSameNormalEquationsAsTheScalarLoop) {
+  const Truth t = make_truth(2, 2, 5, 1.0);
+  std::mt19937_64 gen(7);
+  std::vector<double> F, theta;
+  for (int m = 0; m < 79; ++m) {
+    theta.push_back(4.6036 * m);
+    const std::vector<double> f = frame(t, 0.6, 0.9, -20.0 + theta.back(), 3.0, &gen);
+    for (int j = 0; j < 4; ++j) F.push_back((f[j] - t.b[j]) / t.K[j]);
+  }
+  DofpStep2Options o;
+  Eigen::Matrix<double, 8, 1> x;
+  x << rad(1.0), rad(-0.5), rad(0.7), 0.95, 0.92, 0.9, rad(-19.0), 0.85;
+  DofpCellSums scalar, sse2, avx2;
+  ASSERT_TRUE(dofp_cell_sums(F, theta, x, o, DofpSumsPath::Scalar, scalar));
+  ASSERT_TRUE(dofp_cell_sums(F, theta, x, o, DofpSumsPath::LanesSse2, sse2));
+  EXPECT_EQ(scalar.bad, -1);
+  EXPECT_EQ(sse2.bad, -1);
+  // Rounding of sums of 79 positive-and-negative terms: a few ulp of the largest term's scale.
+  const double tol = 1e-12;
+  for (int p = 0; p < 8; ++p) {
+    for (int q = p; q < 8; ++q)
+      EXPECT_NEAR(sse2.JtJ(p, q), scalar.JtJ(p, q),
+                  tol * std::sqrt(scalar.JtJ(p, p) * scalar.JtJ(q, q))) << p << "," << q;
+    EXPECT_NEAR(sse2.Jtr[p], scalar.Jtr[p], tol * std::sqrt(scalar.JtJ(p, p) * scalar.cost)) << p;
+  }
+  EXPECT_NEAR(sse2.cost, scalar.cost, tol * scalar.cost);
+  EXPECT_NEAR(sse2.aop_ss, scalar.aop_ss, tol * scalar.aop_ss);
+  EXPECT_GT(scalar.cost, 0);
+  if (dofp_cell_sums(F, theta, x, o, DofpSumsPath::LanesAvx2, avx2)) {
+    EXPECT_EQ(0, std::memcmp(avx2.JtJ.data(), sse2.JtJ.data(), sizeof(double) * 64));
+    EXPECT_EQ(0, std::memcmp(avx2.Jtr.data(), sse2.Jtr.data(), sizeof(double) * 8));
+    EXPECT_EQ(0, std::memcmp(&avx2.cost, &sse2.cost, sizeof(double)));
+    EXPECT_EQ(0, std::memcmp(&avx2.aop_ss, &sse2.aop_ss, sizeof(double)));
+  }
+  // An observation without signal (four dark pixels: no AoP): the lanes hand the cell to the
+  // scalar loop, which names it.
+  for (int j = 0; j < 4; ++j) F[4 * 40 + j] = 0.0;
+  ASSERT_TRUE(dofp_cell_sums(F, theta, x, o, DofpSumsPath::Scalar, scalar));
+  ASSERT_TRUE(dofp_cell_sums(F, theta, x, o, DofpSumsPath::LanesSse2, sse2));
+  EXPECT_EQ(scalar.bad, 40);
+  EXPECT_EQ(sse2.bad, 40);
+  EXPECT_EQ(sse2.cost, scalar.cost);
+}
+
 TEST(DofpCalibration, AnUndeterminedPixelIsReportedNotANaN) {
   Truth t = make_truth(8, 6, 4, 1.0);
   Dataset ds = make_dataset(t, 5.0, 0.8, 0.0, 20);

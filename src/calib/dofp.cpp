@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <stdexcept>
 
@@ -10,6 +11,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "dofp_lanes.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -265,6 +267,107 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
     out.JtJ(6, 6) += j66;
     out.JtJ(7, 7) += j77;
     for (int p = 0; p < 8; ++p) out.Jtr[p] += jtr[p];
+  }
+}
+
+// The vectorised pass (src/calib/dofp_lanes.*): accumulate's sums with the observations in
+// lanes of 8 (structure of arrays), so that each operation works on 8 observations at once:
+// every q̃ and ∂q̃ is a linear form of F̃; per lane block the 28 forms (q̃1..3, n̂ᵀF̃,
+// 6 × ∂q̃1..3, 6 × ∂n̂ᵀF̃), the residuals and the Jacobian's rows stay in registers or L1, and
+// JᵀJ, Jᵀr are summed per lane and reduced once at the end in lane order. Only atan2 stays
+// scalar. The cell's observations are padded to whole blocks with copies of the first one at
+// weight 0 (their terms are exact zeros). When an observation's AoP or DoP is undefined the
+// scalar loop runs instead (it names the first such observation and skips them, as before).
+// The sums differ from accumulate's by rounding only (the order of the additions), and the
+// SSE2 and AVX2 variants give the same bits; a test checks both.
+constexpr int kLanes = dofp_lanes::kLanes;
+
+// The per-stop constants padded to whole lane blocks: cos, sin of −2·s_R·θ_R,m, the stop's
+// weight (0 in the padding) and 1 for a real observation (0 in the padding).
+struct StopArrays {
+  std::size_t n = 0, padded = 0;
+  std::vector<double> c, s, w, real;
+  explicit StopArrays(const std::vector<double>& rot) {
+    n = rot.size() / 3;
+    padded = (n + kLanes - 1) / kLanes * kLanes;
+    c.assign(padded, 1.0);
+    s.assign(padded, 0.0);
+    w.assign(padded, 0.0);
+    real.assign(padded, 0.0);
+    for (std::size_t i = 0; i < n; ++i) {
+      c[i] = rot[3 * i];
+      s[i] = rot[3 * i + 1];
+      w[i] = rot[3 * i + 2];
+      real[i] = 1.0;
+    }
+  }
+};
+
+// One thread's work space: the cell's F̃ by pixel, each padded to st.padded.
+struct SoaScratch {
+  std::vector<double> F;
+};
+
+enum class LanePath { Scalar, Sse2, Avx2 };
+
+bool cpu_has_avx2() {
+#if defined(__x86_64__) || defined(__i386__)
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+#else
+  return false;
+#endif
+}
+
+template <bool kJacobian>
+void accumulate_soa(const CellModel& m, const double* F, const StopArrays& st, const double* rot,
+                    SoaScratch& sc, Sums& out,
+                    LanePath path = cpu_has_avx2() ? LanePath::Avx2 : LanePath::Sse2) {
+  const std::size_t n = st.n, np = st.padded;
+  if (path == LanePath::Scalar || n == 0) {
+    accumulate<kJacobian>(m, F, rot, n, out);
+    return;
+  }
+  double L[4][28] = {};
+  for (int j = 0; j < 4; ++j) {
+    for (int a = 0; a < 3; ++a) L[j][a] = m.P(a, j);
+    L[j][3] = m.n[j];
+    if constexpr (kJacobian)
+      for (int p = 0; p < 6; ++p) {
+        for (int a = 0; a < 3; ++a) L[j][4 + 3 * p + a] = m.dP[p](a, j);
+        L[j][22 + p] = m.dn[p][j];
+      }
+  }
+  sc.F.resize(4 * np);
+  for (std::size_t i = 0; i < np; ++i)
+    for (int j = 0; j < 4; ++j) sc.F[j * np + i] = F[4 * (i < n ? i : 0) + j];
+  dofp_lanes::Input in;
+  in.L = &L[0][0];
+  in.F = sc.F.data();
+  in.c = st.c.data();
+  in.s = st.s.data();
+  in.w = st.w.data();
+  in.real = st.real.data();
+  in.padded = np;
+  in.c2psi = m.c2psi;
+  in.s2psi = m.s2psi;
+  in.dop_weight = m.w;
+  in.fit_weight = m.we;
+  in.d0 = m.d0;
+  in.jacobian = kJacobian;
+  dofp_lanes::Output o;
+  const bool ok = path == LanePath::Avx2 ? dofp_lanes::sums_avx2(in, o) : dofp_lanes::sums_sse2(in, o);
+  if (!ok) {
+    accumulate<kJacobian>(m, F, rot, n, out);
+    return;
+  }
+  out.cost += o.cost;
+  out.aop_ss += o.aop_ss;
+  if constexpr (kJacobian) {
+    for (int p = 0; p < 8; ++p) {
+      for (int q = p; q < 8; ++q) out.JtJ(p, q) += o.JtJ[p][q];
+      out.Jtr[p] += o.Jtr[p];
+    }
   }
 }
 
@@ -614,6 +717,7 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
 
   const std::array<double, 4> alpha = alpha_rad_of(o);
   const std::vector<double> rot = table_rotations(stops, o.table_sense, o.weight_by_intensity);
+  const StopArrays st(rot);
   const std::size_t M = stops.size();
   DofpStep2 out;
   out.scope = o.scope;
@@ -626,6 +730,7 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
     progress.begin("calibrate dofp: step 2 cells", static_cast<long long>(out.cells.size()));
     tbb::parallel_for(tbb::blocked_range<int>(0, cells_y, 1), [&](const tbb::blocked_range<int>& r) {
       std::vector<double> F;
+      SoaScratch sc;
       for (int cy = r.begin(); cy < r.end(); ++cy) {
         gather_cell_row(s1, stops, cy, F);
         for (int cx = 0; cx < cells_x; ++cx) {
@@ -642,9 +747,9 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
           const auto eval = [&](const Vec8& x, bool jac, Sums& sums) {
             if (!make_cell_model(x, alpha, o.dop_weight, o.fit_weight, jac, model)) return false;
             if (jac)
-              accumulate<true>(model, Fc, rot.data(), M, sums);
+              accumulate_soa<true>(model, Fc, st, rot.data(), sc, sums);
             else
-              accumulate<false>(model, Fc, rot.data(), M, sums);
+              accumulate_soa<false>(model, Fc, st, rot.data(), sc, sums);
             return true;
           };
           double re = 0, im = 0, dsum = 0;
@@ -674,13 +779,14 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
       if (!make_cell_model(x, alpha, o.dop_weight, o.fit_weight, jac, model)) return false;
       std::vector<Sums> rows(cells_y);
       tbb::parallel_for(0, cells_y, [&](int cy) {
+        SoaScratch sc;
         for (int cx = 0; cx < cells_x; ++cx) {
           if (!ok[static_cast<std::size_t>(cy) * cells_x + cx]) continue;
           const double* Fc = &F[cy][static_cast<std::size_t>(cx) * M * 4];
           if (jac)
-            accumulate<true>(model, Fc, rot.data(), M, rows[cy]);
+            accumulate_soa<true>(model, Fc, st, rot.data(), sc, rows[cy]);
           else
-            accumulate<false>(model, Fc, rot.data(), M, rows[cy]);
+            accumulate_soa<false>(model, Fc, st, rot.data(), sc, rows[cy]);
         }
       });
       for (const Sums& s : rows) total.add(s);
@@ -882,6 +988,31 @@ Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F, const std::vect
   for (std::size_t i = 0; i < 3 * theta.size(); ++i)
     for (int p = 0; p < 8; ++p) J(static_cast<Eigen::Index>(i), p) = rows[8 * i + p];
   return J;
+}
+
+bool dofp_cell_sums(const std::vector<double>& F, const std::vector<double>& theta,
+                    const Eigen::Matrix<double, 8, 1>& x, const DofpStep2Options& o,
+                    DofpSumsPath path, DofpCellSums& out) {
+  if (F.size() != 4 * theta.size())
+    throw std::invalid_argument("dofp_cell_sums: F needs 4 values per table angle");
+  if (path == DofpSumsPath::LanesAvx2 && !cpu_has_avx2()) return false;
+  const std::vector<double> rot = rotations_of(theta, o.table_sense);
+  CellModel model;
+  if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
+    throw std::invalid_argument("dofp_cell_sums: the model is singular at x");
+  const StopArrays st(rot);
+  SoaScratch sc;
+  Sums sums;
+  accumulate_soa<true>(model, F.data(), st, rot.data(), sc, sums,
+                       path == DofpSumsPath::Scalar      ? LanePath::Scalar
+                       : path == DofpSumsPath::LanesSse2 ? LanePath::Sse2
+                                                         : LanePath::Avx2);
+  out.JtJ = sums.JtJ;
+  out.Jtr = sums.Jtr;
+  out.cost = sums.cost;
+  out.aop_ss = sums.aop_ss;
+  out.bad = sums.bad;
+  return true;
 }
 
 }  // namespace polrig

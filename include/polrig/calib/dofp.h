@@ -206,4 +206,21 @@ Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F_tilde,
                                    const Eigen::Matrix<double, 8, 1>& x,
                                    const DofpStep2Options& options);
 
+// One cell's sums at x by each code path of step 2, for tests: the scalar loop (the one
+// dofp_cell_residuals and dofp_cell_jacobian use), and the pass in lanes of 8 that step 2 runs
+// (SSE2, or AVX2 where the CPU has it; both must give the same bits). JtJ holds the upper
+// triangle; bad is the first observation whose AoP or DoP is undefined (−1 if none; the lanes
+// then fall back to the scalar loop). Returns false when the path cannot run on this CPU.
+enum class DofpSumsPath { Scalar, LanesSse2, LanesAvx2 };
+struct DofpCellSums {
+  Eigen::Matrix<double, 8, 8> JtJ = Eigen::Matrix<double, 8, 8>::Zero();
+  Eigen::Matrix<double, 8, 1> Jtr = Eigen::Matrix<double, 8, 1>::Zero();
+  double cost = 0;    // Σ r² over every residual
+  double aop_ss = 0;  // Σ r² of the unweighted AoP residuals
+  long long bad = -1;
+};
+bool dofp_cell_sums(const std::vector<double>& F_tilde, const std::vector<double>& theta_R_deg,
+                    const Eigen::Matrix<double, 8, 1>& x, const DofpStep2Options& options,
+                    DofpSumsPath path, DofpCellSums& out);
+
 }  // namespace polrig

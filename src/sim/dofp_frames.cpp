@@ -59,17 +59,33 @@ DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig),
 }
 
 std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame, DofpTruthLayers* layers) const {
+  return this->frame(signal(stop, layers), frame);
+}
+
+std::vector<std::uint16_t> DofpSimulator::frame(const StopSignal& signal, int frame) const {
+  const std::size_t n = signal.f.size();
+  std::vector<std::uint16_t> raw(n);
+  const DofpExposure expose(rig_.camera, noise_seed_, static_cast<std::uint64_t>(signal.stop.index),
+                            static_cast<std::uint64_t>(frame));
+  const double* f = signal.f.data();
+  const double* b = truth_.b.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) raw[i] = expose(f[i], b[i], i);
+  });
+  return raw;
+}
+
+DofpSimulator::StopSignal DofpSimulator::signal(const DofpStop& stop, DofpTruthLayers* layers) const {
   const int W = truth_.width, H = truth_.height;
   const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
   const std::unique_ptr<const LightAlongViews> light =
       rig_.light->light_along_views(rig_.source_view(), {stop.theta_R_deg, stop.t_s});
   const InstrumentAxes& A = light->axes;
-  std::vector<std::uint16_t> raw(n);
+  StopSignal out{stop, std::vector<double>(n)};
   if (layers) {
     for (auto* v : {&layers->S0, &layers->S1, &layers->S2, &layers->AoP, &layers->DoP}) v->assign(n, 0.0f);
   }
   const DofpCameraSpec& spec = rig_.camera;
-  const DofpExposure expose(spec, noise_seed_, static_cast<std::uint64_t>(stop.index), static_cast<std::uint64_t>(frame));
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
     std::vector<Vec3> views(static_cast<std::size_t>(W));
     std::vector<ViewLight> lights(static_cast<std::size_t>(W));
@@ -107,8 +123,7 @@ std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame,
           const double r = 1.0 / n2;
           c2 = (u * u - w * w) * r, s2 = 2.0 * u * w * r;
         }
-        const double f = I * (p.A + d * (c2 * p.B + s2 * p.C)) + p.b;
-        raw[i] = expose(f, p.b, i);
+        out.f[i] = I * (p.A + d * (c2 * p.B + s2 * p.C)) + p.b;
         if (layers) {
           layers->S0[i] = static_cast<float>(I);
           layers->S1[i] = static_cast<float>(I * d * c2);
@@ -121,7 +136,7 @@ std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame,
       }
     }
   });
-  return raw;
+  return out;
 }
 
 std::optional<double> dofp_true_heading_deg(const Rig& rig, const DofpStop& stop) {

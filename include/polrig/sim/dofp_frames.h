@@ -58,8 +58,18 @@ class DofpSimulator {
 
   // The raw DN of frame `frame` at `stop` (row-major, top row first), its noise a pure function
   // of (rig seed, stop, frame, pixel): bit-identical for any number of threads (TBB over rows).
-  // With `layers`, the frame's truth too.
+  // With `layers`, the frame's truth too. The same as frame(signal(stop, layers), frame).
   std::vector<std::uint16_t> frame(const DofpStop& stop, int frame, DofpTruthLayers* layers = nullptr) const;
+
+  // What does not change between a stop's frames: the light along the views and Eq. 18 without
+  // noise, f (DN) per pixel. Made once per stop; its frames then cost only the noise and the ADC.
+  struct StopSignal {
+    DofpStop stop;
+    std::vector<double> f;
+  };
+  StopSignal signal(const DofpStop& stop, DofpTruthLayers* layers = nullptr) const;
+  // Frame `frame` of the signal's stop: Poisson–Gaussian noise and the ADC on f.
+  std::vector<std::uint16_t> frame(const StopSignal& signal, int frame) const;
 
  private:
   Rig rig_;

@@ -1,5 +1,6 @@
 #include "polrig/sim/dofp_frames.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -59,7 +60,15 @@ DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig),
 }
 
 std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame, DofpTruthLayers* layers) const {
-  return this->frame(signal(stop, layers), frame);
+  // frame(signal(stop, layers), frame) without keeping f: each row exposed as it is made.
+  std::vector<std::uint16_t> raw(truth_.b.size());
+  const DofpExposure expose(rig_.camera, noise_seed_, static_cast<std::uint64_t>(stop.index),
+                            static_cast<std::uint64_t>(frame));
+  const double* b = truth_.b.data();
+  signal_rows(stop, layers, [&](std::size_t first, std::span<const double> f) {
+    for (std::size_t c = 0; c < f.size(); ++c) raw[first + c] = expose(f[c], b[first + c], first + c);
+  });
+  return raw;
 }
 
 std::vector<std::uint16_t> DofpSimulator::frame(const StopSignal& signal, int frame) const {
@@ -76,12 +85,20 @@ std::vector<std::uint16_t> DofpSimulator::frame(const StopSignal& signal, int fr
 }
 
 DofpSimulator::StopSignal DofpSimulator::signal(const DofpStop& stop, DofpTruthLayers* layers) const {
+  StopSignal out{stop, std::vector<double>(truth_.b.size())};
+  signal_rows(stop, layers, [&](std::size_t first, std::span<const double> f) {
+    std::copy(f.begin(), f.end(), out.f.begin() + static_cast<std::ptrdiff_t>(first));
+  });
+  return out;
+}
+
+void DofpSimulator::signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
+                                const std::function<void(std::size_t, std::span<const double>)>& row_done) const {
   const int W = truth_.width, H = truth_.height;
   const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
   const std::unique_ptr<const LightAlongViews> light =
       rig_.light->light_along_views(rig_.source_view(), {stop.theta_R_deg, stop.t_s});
   const InstrumentAxes& A = light->axes;
-  StopSignal out{stop, std::vector<double>(n)};
   if (layers) {
     for (auto* v : {&layers->S0, &layers->S1, &layers->S2, &layers->AoP, &layers->DoP}) v->assign(n, 0.0f);
   }
@@ -95,7 +112,7 @@ DofpSimulator::StopSignal DofpSimulator::signal(const DofpStop& stop, DofpTruthL
     const std::size_t w_px = static_cast<std::size_t>(W);
     std::vector<Vec3> views(w_px);
     std::vector<ViewLight> lights(w_px);
-    std::vector<double> u(w_px), w(w_px), c2(w_px), s2(w_px), I(w_px), d(w_px);
+    std::vector<double> u(w_px), w(w_px), c2(w_px), s2(w_px), I(w_px), d(w_px), f(w_px);
     for (int row = rows.begin(); row < rows.end(); ++row) {
       const std::size_t first = static_cast<std::size_t>(row) * w_px;
       const PixelConstants* px = pixels_.data() + first;
@@ -132,8 +149,9 @@ DofpSimulator::StopSignal DofpSimulator::signal(const DofpStop& stop, DofpTruthL
         c2[c] = some ? (u[c] * u[c] - w[c] * w[c]) * r : 1.0;
         s2[c] = some ? 2.0 * u[c] * w[c] * r : 0.0;
         const PixelConstants& p = px[c];
-        out.f[first + c] = I[c] * (p.A + d[c] * (c2[c] * p.B + s2[c] * p.C)) + p.b;
+        f[c] = I[c] * (p.A + d[c] * (c2[c] * p.B + s2[c] * p.C)) + p.b;
       }
+      row_done(first, f);
       if (layers)
         for (std::size_t c = 0; c < w_px; ++c) {
           const std::size_t i = first + c;
@@ -147,7 +165,6 @@ DofpSimulator::StopSignal DofpSimulator::signal(const DofpStop& stop, DofpTruthL
         }
     }
   });
-  return out;
 }
 
 std::optional<double> dofp_true_heading_deg(const Rig& rig, const DofpStop& stop) {

@@ -3,7 +3,9 @@
 // its view, the light along it (Source::light_along_views), the E-vector's angle in the image,
 // Eq. 18 with the pixel's truth, Poisson–Gaussian noise and the ADC. docs/physics.md §13.
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "polrig/device/dofp_camera.h"
@@ -84,6 +86,9 @@ class DofpSimulator {
     double vx, vy, vz, g, A, B, C, b;
   };
   std::vector<PixelConstants> pixels_;
+  // Eq. 18 without noise, row by row (TBB over rows): row_done(first pixel, the row's f) per row.
+  void signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
+                   const std::function<void(std::size_t, std::span<const double>)>& row_done) const;
   std::uint64_t noise_seed_ = 0;
 };
 

@@ -44,6 +44,15 @@ void dofp_frame(benchmark::State& state, bool sky) {
 // A sphere-rig frame (cos4: uniform polarized light), noise on: the indoor dataset's frames.
 void BM_DofpFrame_Cos4_640x480(benchmark::State& state) { dofp_frame(state, false); }
 BENCHMARK(BM_DofpFrame_Cos4_640x480)->Unit(benchmark::kMillisecond)->UseRealTime();
+// A further frame of a stop whose signal (the light along the views, Eq. 18 without noise) is
+// made: the noise and the ADC alone, what each of a stop's frames_per_stop frames after its first costs.
+void BM_DofpFrame_Cos4_NextFrameOfStop_640x480(benchmark::State& state) {
+  const DofpSimulator sim(camera_rig(false));
+  const DofpSimulator::StopSignal signal = sim.signal(sim.stops()[1]);
+  int frame = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(sim.frame(signal, frame++).data());
+}
+BENCHMARK(BM_DofpFrame_Cos4_NextFrameOfStop_640x480)->Unit(benchmark::kMillisecond)->UseRealTime();
 // A sky frame: the Rayleigh sky along every pixel's view (the sun once per frame).
 void BM_DofpFrame_Sky_640x480(benchmark::State& state) { dofp_frame(state, true); }
 BENCHMARK(BM_DofpFrame_Sky_640x480)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -355,6 +355,30 @@ TEST(DofpFrames, BitIdenticalForAnyThreadCount) {
   EXPECT_NE(one, sim.frame(sim.stops()[1], 4));
 }
 
+TEST(DofpFrames, AStopsSignalMadeOnceGivesTheSameFramesAndLayers) {
+  Rig rig = camera_rig();
+  rig.camera.noise = true;
+  rig.camera.gain_DN = 2000, rig.camera.adc_bits = 12;
+  const DofpSimulator sim(rig);
+  const DofpStop& stop = sim.stops()[2];
+  DofpTruthLayers direct, once;
+  const DofpSimulator::StopSignal signal = sim.signal(stop, &once);
+  for (int f : {0, 1, 7}) {
+    std::vector<std::uint16_t> split;
+    {
+      tbb::global_control c(tbb::global_control::max_allowed_parallelism, f == 1 ? 1 : 2);
+      split = sim.frame(signal, f);
+    }
+    EXPECT_EQ(sim.frame(stop, f, f == 0 ? &direct : nullptr), split) << "frame " << f;
+  }
+  EXPECT_EQ(direct.S0, once.S0);
+  EXPECT_EQ(direct.S1, once.S1);
+  EXPECT_EQ(direct.AoP, once.AoP);
+  EXPECT_EQ(direct.DoP, once.DoP);
+  // The frames differ from one another (independent noise), the signal not.
+  EXPECT_NE(sim.frame(signal, 0), sim.frame(signal, 1));
+}
+
 TEST(DofpFrames, RefusesRigsWithoutFramesOrLightAlongViews) {
   Rig rig;
   EXPECT_THROW(DofpSimulator{rig}, std::invalid_argument);

@@ -57,8 +57,9 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
     image.width = sim.width(), image.height = sim.height();
     DofpTruthLayers layers;
     std::vector<std::uint32_t> sum(options.storage == DofpFrameStorage::Sum ? n : 0);
+    const DofpSimulator::StopSignal signal = sim.signal(stop, options.truth_layers ? &layers : nullptr);
     for (int f = 0; f < stop.frames; ++f) {
-      const std::vector<std::uint16_t> raw = sim.frame(stop, f, options.truth_layers && f == 0 ? &layers : nullptr);
+      const std::vector<std::uint16_t> raw = sim.frame(signal, f);
       if (options.storage == DofpFrameStorage::Every)
         image.uints.push_back({fmt::format("raw.{:03}", f), std::vector<std::uint32_t>(raw.begin(), raw.end())});
       else

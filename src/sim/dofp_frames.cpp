@@ -1,5 +1,6 @@
 #include "polrig/sim/dofp_frames.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -59,69 +60,111 @@ DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig),
 }
 
 std::vector<std::uint16_t> DofpSimulator::frame(const DofpStop& stop, int frame, DofpTruthLayers* layers) const {
+  // frame(signal(stop, layers), frame) without keeping f: each row exposed as it is made.
+  std::vector<std::uint16_t> raw(truth_.b.size());
+  const DofpExposure expose(rig_.camera, noise_seed_, static_cast<std::uint64_t>(stop.index),
+                            static_cast<std::uint64_t>(frame));
+  const double* b = truth_.b.data();
+  signal_rows(stop, layers, [&](std::size_t first, std::span<const double> f) {
+    for (std::size_t c = 0; c < f.size(); ++c) raw[first + c] = expose(f[c], b[first + c], first + c);
+  });
+  return raw;
+}
+
+std::vector<std::uint16_t> DofpSimulator::frame(const StopSignal& signal, int frame) const {
+  const std::size_t n = signal.f.size();
+  std::vector<std::uint16_t> raw(n);
+  const DofpExposure expose(rig_.camera, noise_seed_, static_cast<std::uint64_t>(signal.stop.index),
+                            static_cast<std::uint64_t>(frame));
+  const double* f = signal.f.data();
+  const double* b = truth_.b.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) raw[i] = expose(f[i], b[i], i);
+  });
+  return raw;
+}
+
+DofpSimulator::StopSignal DofpSimulator::signal(const DofpStop& stop, DofpTruthLayers* layers) const {
+  StopSignal out{stop, std::vector<double>(truth_.b.size())};
+  signal_rows(stop, layers, [&](std::size_t first, std::span<const double> f) {
+    std::copy(f.begin(), f.end(), out.f.begin() + static_cast<std::ptrdiff_t>(first));
+  });
+  return out;
+}
+
+void DofpSimulator::signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
+                                const std::function<void(std::size_t, std::span<const double>)>& row_done) const {
   const int W = truth_.width, H = truth_.height;
   const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
   const std::unique_ptr<const LightAlongViews> light =
       rig_.light->light_along_views(rig_.source_view(), {stop.theta_R_deg, stop.t_s});
   const InstrumentAxes& A = light->axes;
-  std::vector<std::uint16_t> raw(n);
   if (layers) {
     for (auto* v : {&layers->S0, &layers->S1, &layers->S2, &layers->AoP, &layers->DoP}) v->assign(n, 0.0f);
   }
   const DofpCameraSpec& spec = rig_.camera;
-  const DofpExposure expose(spec, noise_seed_, static_cast<std::uint64_t>(stop.index), static_cast<std::uint64_t>(frame));
+  const bool image_plane = analyzer_ == DofpAnalyzer::ImagePlane, vignetting = spec.vignetting;
+  const double intensity = stop.intensity;
+  const bool polarized = stop.polarized;
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
-    std::vector<Vec3> views(static_cast<std::size_t>(W));
-    std::vector<ViewLight> lights(static_cast<std::size_t>(W));
+    // Per row, loops without branches over plain arrays (the compiler vectorises them); the
+    // analyzer's choice and the truth layers outside them.
+    const std::size_t w_px = static_cast<std::size_t>(W);
+    std::vector<Vec3> views(w_px);
+    std::vector<ViewLight> lights(w_px);
+    std::vector<double> u(w_px), w(w_px), c2(w_px), s2(w_px), I(w_px), d(w_px), f(w_px);
     for (int row = rows.begin(); row < rows.end(); ++row) {
-      const std::size_t first = static_cast<std::size_t>(row) * static_cast<std::size_t>(W);
-      for (std::size_t c = 0; c < views.size(); ++c) {
-        const PixelConstants& p = pixels_[first + c];
+      const std::size_t first = static_cast<std::size_t>(row) * w_px;
+      const PixelConstants* px = pixels_.data() + first;
+      for (std::size_t c = 0; c < w_px; ++c) {
+        const PixelConstants& p = px[c];
         views[c] = {p.vx * A.x[0] + p.vy * A.y[0] + p.vz * A.z[0], p.vx * A.x[1] + p.vy * A.y[1] + p.vz * A.z[1],
                     p.vx * A.x[2] + p.vy * A.y[2] + p.vz * A.z[2]};
       }
       light->along(views, lights);
-      for (std::size_t c = 0; c < views.size(); ++c) {
-        const std::size_t i = first + c;
-        const PixelConstants& p = pixels_[i];
+      for (std::size_t c = 0; c < w_px; ++c) {
+        const PixelConstants& p = px[c];
         const ViewLight& L = lights[c];
-        const Vec3 e{vec3::dot(L.e, A.x), vec3::dot(L.e, A.y), vec3::dot(L.e, A.z)};  // frame l
-        double I = L.S0 * stop.intensity;
-        if (spec.vignetting) I *= (p.vz * p.vz) * (p.vz * p.vz);  // cos⁴γ
-        const double d = stop.polarized ? L.d : 0.0;
-        double c2 = 1.0, s2 = 0.0;
-        double u, w;
-        if (analyzer_ == DofpAnalyzer::ImagePlane) {
+        const double e0 = vec3::dot(L.e, A.x), e1 = vec3::dot(L.e, A.y), e2 = vec3::dot(L.e, A.z);  // frame l
+        if (image_plane) {
           // Frame i's axes turned by α, P = cos α·X_i − sin α·Y_i and Q = sin α·X_i + cos α·Y_i, are
           // the rotation taking ẑ to v applied to x̂ and ŷ: with g = 1/(1 + v_z),
           // P = (1 − g·v_x², −g·v_x·v_y, −v_x), Q = (−g·v_x·v_y, 1 − g·v_y², −v_y); φ_pix = atan2(e·Q, e·P).
           const double gxy = p.g * p.vx * p.vy;
-          u = e[0] * (1.0 - p.g * p.vx * p.vx) - e[1] * gxy - e[2] * p.vx;
-          w = -e[0] * gxy + e[1] * (1.0 - p.g * p.vy * p.vy) - e[2] * p.vy;
+          u[c] = e0 * (1.0 - p.g * p.vx * p.vx) - e1 * gxy - e2 * p.vx;
+          w[c] = -e0 * gxy + e1 * (1.0 - p.g * p.vy * p.vy) - e2 * p.vy;
         } else {
-          const Vec3 m = vec3::cross({p.vx, p.vy, p.vz}, e);  // the axis in the image is ⊥ (m_x, m_y)
-          u = -m[1], w = m[0];
+          // m = v × e; the axis in the image is ⊥ (m_x, m_y): u = −m_y, w = m_x.
+          u[c] = -(p.vz * e0 - p.vx * e2);
+          w[c] = p.vy * e2 - p.vz * e1;
         }
-        const double n2 = u * u + w * w;
-        if (n2 > 0) {
-          const double r = 1.0 / n2;
-          c2 = (u * u - w * w) * r, s2 = 2.0 * u * w * r;
-        }
-        const double f = I * (p.A + d * (c2 * p.B + s2 * p.C)) + p.b;
-        raw[i] = expose(f, p.b, i);
-        if (layers) {
-          layers->S0[i] = static_cast<float>(I);
-          layers->S1[i] = static_cast<float>(I * d * c2);
-          layers->S2[i] = static_cast<float>(I * d * s2);
-          double aop = rad2deg(0.5 * std::atan2(s2, c2));
+        const double Ic = L.S0 * intensity;
+        I[c] = vignetting ? Ic * ((p.vz * p.vz) * (p.vz * p.vz)) : Ic;  // cos⁴γ
+        d[c] = polarized ? L.d : 0.0;
+      }
+      for (std::size_t c = 0; c < w_px; ++c) {
+        const double n2 = u[c] * u[c] + w[c] * w[c];
+        const bool some = n2 > 0;
+        const double r = 1.0 / (some ? n2 : 1.0);
+        c2[c] = some ? (u[c] * u[c] - w[c] * w[c]) * r : 1.0;
+        s2[c] = some ? 2.0 * u[c] * w[c] * r : 0.0;
+        const PixelConstants& p = px[c];
+        f[c] = I[c] * (p.A + d[c] * (c2[c] * p.B + s2[c] * p.C)) + p.b;
+      }
+      row_done(first, f);
+      if (layers)
+        for (std::size_t c = 0; c < w_px; ++c) {
+          const std::size_t i = first + c;
+          layers->S0[i] = static_cast<float>(I[c]);
+          layers->S1[i] = static_cast<float>(I[c] * d[c] * c2[c]);
+          layers->S2[i] = static_cast<float>(I[c] * d[c] * s2[c]);
+          double aop = rad2deg(0.5 * std::atan2(s2[c], c2[c]));
           if (aop < 0) aop += 180.0;
           layers->AoP[i] = static_cast<float>(aop);
-          layers->DoP[i] = static_cast<float>(d);
+          layers->DoP[i] = static_cast<float>(d[c]);
         }
-      }
     }
   });
-  return raw;
 }
 
 std::optional<double> dofp_true_heading_deg(const Rig& rig, const DofpStop& stop) {

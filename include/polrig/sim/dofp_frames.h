@@ -3,7 +3,9 @@
 // its view, the light along it (Source::light_along_views), the E-vector's angle in the image,
 // Eq. 18 with the pixel's truth, Poisson–Gaussian noise and the ADC. docs/physics.md §13.
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "polrig/device/dofp_camera.h"
@@ -58,8 +60,18 @@ class DofpSimulator {
 
   // The raw DN of frame `frame` at `stop` (row-major, top row first), its noise a pure function
   // of (rig seed, stop, frame, pixel): bit-identical for any number of threads (TBB over rows).
-  // With `layers`, the frame's truth too.
+  // With `layers`, the frame's truth too. The same as frame(signal(stop, layers), frame).
   std::vector<std::uint16_t> frame(const DofpStop& stop, int frame, DofpTruthLayers* layers = nullptr) const;
+
+  // What does not change between a stop's frames: the light along the views and Eq. 18 without
+  // noise, f (DN) per pixel. Made once per stop; its frames then cost only the noise and the ADC.
+  struct StopSignal {
+    DofpStop stop;
+    std::vector<double> f;
+  };
+  StopSignal signal(const DofpStop& stop, DofpTruthLayers* layers = nullptr) const;
+  // Frame `frame` of the signal's stop: Poisson–Gaussian noise and the ADC on f.
+  std::vector<std::uint16_t> frame(const StopSignal& signal, int frame) const;
 
  private:
   Rig rig_;
@@ -74,6 +86,9 @@ class DofpSimulator {
     double vx, vy, vz, g, A, B, C, b;
   };
   std::vector<PixelConstants> pixels_;
+  // Eq. 18 without noise, row by row (TBB over rows): row_done(first pixel, the row's f) per row.
+  void signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
+                   const std::function<void(std::size_t, std::span<const double>)>& row_done) const;
   std::uint64_t noise_seed_ = 0;
 };
 

@@ -4,6 +4,7 @@ and 2 (spec sky-and-compasses.md §2.7 items 3 and 5) on small simulated dataset
 import csv
 import math
 
+import numpy as np
 import pytest
 
 import polrig
@@ -78,3 +79,24 @@ def test_orient_and_calibrate_dofp_refuse_what_they_cannot_read(tmp_path, indoor
     assert not (tmp_path / "o").exists() and not (tmp_path / "c").exists()
     with pytest.raises(polrig.RigError, match="orient needs frames"):
         polrig.orient_dofp_dataset(tmp_path / "six")
+
+
+def wrap180(x):
+    return (x + 180.0) % 360.0 - 180.0
+
+
+def test_aop_is_90_degrees_from_the_meridian_along_the_solar_meridian():
+    """H17 (spec §2.7 item 2): on the solar meridian the E-vector is perpendicular to it, so a
+    pixel's AoP less its view azimuth α is 90°. The camera is turned so that the sun's azimuth in
+    the image is 45° (the mount at A_s + 45°: H = A_s + α_S); the pixels (c, c − 80) of the
+    640 × 480 camera lie exactly on that diagonal through the principal point (320, 240), on both
+    sides (solar and antisolar halves). Off the meridian (α_S = 60°) the same pixels are not at 90°,
+    so the test can fail."""
+    A_s = float(polrig.sun_position("2017-05-28T11:17:00Z", (28.2, 112.9)).azimuth_deg)
+    rows = np.arange(480)
+    for alpha_s, on_meridian in ((45.0, True), (60.0, False)):
+        rig = polrig.Rig.load(OUTDOOR, set={"sky.mount_deg": wrap180(A_s + alpha_s), "schedule.angles_deg": [0]})
+        _, layers = rig.dofp_frame(0, truth_layers=True)
+        phi = (layers["AoP"].astype(float)[rows, rows + 80] - 45.0) % 180.0
+        # float32 layers: 180° · 2⁻²⁴ ≈ 1e-5° of rounding
+        assert (np.abs(phi - 90.0).max() < 1e-4) == on_meridian

@@ -479,8 +479,12 @@ TEST(DofpCellPolarization, RefusesMismatchedSizesAndBadParameters) {
   polrig::DofpTruth p = polrig::nominal_dofp_parameters(4, 2, {0, 90, 45, 135});
   std::vector<double> frame(8, 100.0);
   EXPECT_THROW(polrig::dofp_cell_polarization(std::vector<double>(7, 1.0), p), std::invalid_argument);
-  p.K[5] = 0.0;
+  p.K[5] = -1.0;
   EXPECT_THROW(polrig::dofp_cell_polarization(frame, p), std::invalid_argument);
+  p.K[5] = 0.0;  // step 1's undetermined pixel (1, 1): its cell (0, 0) has no value, cell (1, 0) has
+  const polrig::DofpCellPolarization undetermined = polrig::dofp_cell_polarization(frame, p);
+  EXPECT_TRUE(std::isnan(undetermined.aop_deg[0]) && std::isnan(undetermined.dop[0]) && std::isnan(undetermined.S0[0]));
+  EXPECT_TRUE(std::isfinite(undetermined.S0[1]));
   p = polrig::nominal_dofp_parameters(4, 2, {0, 0, 0, 0});  // four parallel analyzers: no Stokes plane
   try {
     polrig::dofp_cell_polarization(frame, p);

@@ -178,9 +178,9 @@ TEST(InstrumentKeys, CameraKeysCheckTheirValues) {
   EXPECT_HAS(bad("device.noise", "yes"), "key 'device.noise': expected true or false, got 'yes'");
   EXPECT_HAS(bad("device.vignetting", "1"), "expected true or false, got '1'");
   EXPECT_HAS(bad("device.k", "[1, 1, 1.5, 1]"), "key 'device.k': expected 4 efficiencies in [0, 1], got 1.5");
-  EXPECT_HAS(bad("device.adc_bits", "25"), "expected an integer in [1, 24], got 25");
+  EXPECT_HAS(bad("device.adc_bits", "25"), "expected an integer in [1, 16], got 25");
   EXPECT_HAS(bad("schedule.intensities", "[1, 0]"), "key 'schedule.intensities'");
-  EXPECT_HAS(bad("schedule.frames_per_stop", "0"), "expected an integer in [1, 10000], got 0");
+  EXPECT_HAS(bad("schedule.frames_per_stop", "0"), "expected an integer in [1, 999], got 0");
   const Rig r = parse_rig(head, "x", {{"device.noise", "false"}, {"device.vignetting", "true"},
                                                          {"device.width_px", "64"}}).rig;
   EXPECT_FALSE(r.camera.noise);
@@ -237,8 +237,11 @@ TEST(InstrumentRigFiles, ASixPhotodiodeKeyInACameraRigIsRefused) {
              "--set device.truth.kv=[1, 1, 1]: key 'device.truth.kv': expected no value with device.kind dofp-camera");
   EXPECT_HAS(error_of([&] { load_rig(kIndoor, {{"electronics.vref_V", "1"}}); }),
              "key 'electronics.vref_V': expected no value with device.kind dofp-camera");
-  EXPECT_HAS(error_of([&] { load_rig(kOutdoor, {{"sky.E_0", "1"}}); }),
-             "key 'sky.E_0': expected no value with device.kind dofp-camera");
+  EXPECT_HAS(error_of([&] { load_rig(kOutdoor, {{"eccentricity.L_S", "0.1"}}); }),
+             "key 'eccentricity.L_S': expected no value with device.kind dofp-camera");
+  EXPECT_HAS(error_of([&] { load_rig(kIndoor, {{"source.L_o", "20"}}); }),
+             "key 'source.L_o': expected no value with device.kind dofp-camera");
+  EXPECT_NO_THROW(load_rig(kOutdoor, {{"sky.E_0", "2"}}));  // a pixel's intensity for the sky's radiance 1
   // And a camera key in a six-photodiode rig.
   EXPECT_EQ(error_of([&] { parse_rig("device:\n  d: 0.5\n  focal_mm: 3\n", "six.yaml"); }),
             "six.yaml:3: key 'device.focal_mm': expected no value with device.kind six-photodiode (only "

@@ -95,7 +95,7 @@ def test_cell_polarization_is_eq5_on_raw_frames_and_refuses_bad_maps():
     np.testing.assert_allclose(got["aop_deg"], np.degrees(0.5 * np.arctan2(q2, q1)) % 180.0, atol=1e-10)
     with pytest.raises(ValueError, match="K: a map of 4 × 3 for a frame of 8 × 6"):
         polrig.dofp_cell_polarization(frame, K=np.ones((3, 4)))
-    with pytest.raises(ValueError, match=r"pixel \(1, 0\) has K = 0"):
+    with pytest.raises(ValueError, match=r"pixel \(1, 0\) has K = -1"):
         K = np.ones((6, 8))
-        K[0, 1] = 0
+        K[0, 1] = -1
         polrig.dofp_cell_polarization(frame, K=K)

@@ -1,8 +1,8 @@
 """polrig.sun_vector, polrig.orient and polrig.camera_heading: orientation from a DoFP camera's sky
 image (nav/orientation.h, H17 Eqs. 6-14). The sky images are rendered here with polrig.Sky.light
 (the Rayleigh sky's AoP chi in the local meridian frame), projected into the image in NumPy:
-phi_pix = chi + alpha for a level camera. There is no `polrig orient` CLI in this lane yet (the
-lead glues it onto the camera dataset reader), so no CSV comparison here."""
+phi_pix = chi + alpha for a level camera. The CLI `polrig orient` on simulated camera frames is
+compared with Python in test_dofp_pipeline.py."""
 import numpy as np
 import pytest
 

@@ -465,6 +465,11 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
     bool accepted = false;
     Vec8 step = Vec8::Zero(), xn;
     Sums trial;
+    // The decrease the model predicts for the first trial step, −gᵀΔ − ½ΔᵀJᵀJΔ: a step that is
+    // rejected although the model promises more than rounding — 1e-10 of the cost (≈ 1e-13 for
+    // ~10³ residuals), or, at an exact fit, the cost of residuals of a few ulps of 1 rad each
+    // (3n·(4·2⁻⁵²)²) — is a stall, not the cost's floor.
+    double predicted = std::numeric_limits<double>::infinity();
     for (int h = 0; h <= o.max_halvings; ++h) {
       Mat8 Aug = JtJ;
       for (int p = 0; p < 8; ++p) Aug(p, p) += lambda * std::max(JtJ(p, p), 1e-12);
@@ -473,6 +478,7 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
         lambda *= 10;
         continue;
       }
+      if (!std::isfinite(predicted)) predicted = -grad.dot(step) - 0.5 * step.dot(JtJ * step);
       xn = x + step;
       trial = Sums{};
       // The trial pass sums the Jacobian too: an accepted step (the usual case) needs no
@@ -485,12 +491,14 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
       lambda *= 10;
     }
     if (!accepted) {
-      if (step.allFinite() && step.norm() < o.step_tolerance) {
+      const double rounding = 1e-10 * cost + 3.0 * scale * std::pow(4.0 * std::numeric_limits<double>::epsilon(), 2);
+      if (step.allFinite() && step.norm() < o.step_tolerance && predicted <= rounding) {
         converged = true;
         break;
       }
       fit.termination = FitTermination::NoConvergence;
-      fit.message = fmt::format("no step lowered the cost after {} tries", o.max_halvings + 1);
+      fit.message = fmt::format("no step lowered the cost after {} tries (the model promised {:.3g} of {:.3g})",
+                                o.max_halvings + 1, predicted, cost);
       fit.iterations = it - 1;
       set_result(x);
       return fit;
@@ -709,6 +717,7 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
   const std::size_t N = static_cast<std::size_t>(s1.width) * s1.height;
   if (s1.K.size() != N || s1.b.size() != N || s1.rank.size() != N)
     throw std::invalid_argument("DoFP step 2: step 1's maps do not match its frame size");
+  if (stops.empty()) throw std::invalid_argument("DoFP step 2: no polarized stop");
   for (std::size_t m = 0; m < stops.size(); ++m)
     if (!std::isfinite(stops[m].theta_R_deg) || !std::isfinite(stops[m].intensity))
       throw std::invalid_argument(

@@ -46,9 +46,10 @@ DofpCellPolarization dofp_cell_polarization(std::span<const double> frame, const
   out.aop_deg.resize(cells);
   out.dop.resize(cells);
   for (std::size_t q = 0; q < n; ++q)
-    if (!(p.K[q] > 0) || !std::isfinite(p.b[q]) || !std::isfinite(p.k[q]) || !std::isfinite(p.eps_deg[q]))
+    if (!(p.K[q] >= 0) || !std::isfinite(p.K[q]) || !std::isfinite(p.b[q]) || !std::isfinite(p.k[q]) ||
+        !std::isfinite(p.eps_deg[q]))
       throw std::invalid_argument(fmt::format("DoFP parameters: pixel ({}, {}) has K = {}, b = {}, k = {}, eps = {}° "
-                                              "(expected K > 0 and finite values)",
+                                              "(expected K ≥ 0 and finite values)",
                                               q % width, q / width, p.K[q], p.b[q], p.k[q], p.eps_deg[q]));
   constexpr double kDeg = std::numbers::pi / 180.0;
   std::vector<unsigned char> singular(cells, 0);  // checked after the loop: the first one is reported
@@ -56,6 +57,12 @@ DofpCellPolarization dofp_cell_polarization(std::span<const double> frame, const
     for (int cx = 0; cx < out.cells_x; ++cx) {
       const std::size_t r0 = static_cast<std::size_t>(2 * cy) * width + 2 * cx;
       const std::size_t px[4] = {r0, r0 + 1, r0 + width, r0 + width + 1};
+      const std::size_t c = static_cast<std::size_t>(cy) * out.cells_x + cx;
+      constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+      if (p.K[px[0]] == 0 || p.K[px[1]] == 0 || p.K[px[2]] == 0 || p.K[px[3]] == 0) {
+        out.S0[c] = out.aop_deg[c] = out.dop[c] = kNaN;  // step 1 left a pixel undetermined (K = 0)
+        continue;
+      }
       Eigen::Matrix<double, 4, 3> A;
       Eigen::Vector4d F;
       for (int j = 0; j < 4; ++j) {
@@ -64,7 +71,6 @@ DofpCellPolarization dofp_cell_polarization(std::span<const double> frame, const
         A.row(j) << p.k[q] * std::cos(a), p.k[q] * std::sin(a), 1.0;
         F[j] = (frame[q] - p.b[q]) / p.K[q];
       }
-      const std::size_t c = static_cast<std::size_t>(cy) * out.cells_x + cx;
       const Eigen::Matrix3d R = A.transpose() * A;
       const Eigen::LDLT<Eigen::Matrix3d> ldlt(R);
       if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * ldlt.vectorD().maxCoeff())) {

@@ -112,10 +112,12 @@ StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSe
 
 // `calibrate DIR --method dofp`: H17's two-step calibration of a camera dataset (report/
 // dofp_calibration_report.h), whose rig.yaml must describe an instrument that takes frames.
-void run_calibrate_dofp(const std::string& input, const std::string& rig_path, const DriftSettings& drift,
-                        const OutputOptions& out) {
+void run_calibrate_dofp(const std::string& input, const std::string& rig_path, const CalibrationSettings& settings,
+                        const DriftSettings& drift, const OutputOptions& out) {
   if (!rig_path.empty()) throw DataError("--rig: --method dofp reads the camera from the dataset (its truth.exr and rig.yaml)");
   if (drift.mode != "none") throw DataError(fmt::format("--drift {}: --method dofp calibrates indoors (no sun drift)", drift.mode));
+  if (!drift.site.empty()) throw DataError(fmt::format("--site {}: --method dofp calibrates indoors (no sun)", drift.site));
+  if (settings.d_a) throw DataError(fmt::format("--d-a {}: --method dofp fits the source's DoP itself", *settings.d_a));
   const DofpCalibration c = calibrate_dofp_folder(input, {}, progress());
   OutputDir d = out.open();
   write_manifest(d.staging(), {command_line(), nullptr, report_dofp_calibration(d.staging(), c, out.plots()), {input}});
@@ -129,7 +131,7 @@ void run_calibrate_dofp(const std::string& input, const std::string& rig_path, c
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
                    const DriftSettings& drift, const OutputOptions& out) {
-  if (method_text == "dofp") return run_calibrate_dofp(input, rig_path, drift, out);
+  if (method_text == "dofp") return run_calibrate_dofp(input, rig_path, settings, drift, out);
   std::vector<CalibrationMethod> methods;
   if (method_text == "all") {
     methods.assign(kAllMethods.begin(), kAllMethods.end());

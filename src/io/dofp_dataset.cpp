@@ -55,6 +55,8 @@ DofpDataset read_dofp_dataset(const std::filesystem::path& dir) {
   d.f_c_px = attribute(truth, "f_c_px", truth_file);
   d.cx = attribute(truth, "cx_px", truth_file);
   d.cy = attribute(truth, "cy_px", truth_file);
+  for (const auto& [name, value] : truth.attributes.doubles)
+    if (name == "adc_bits" && value >= 1 && value <= 16 && value == std::floor(value)) d.adc_bits = static_cast<int>(value);
   d.truth.width = d.width, d.truth.height = d.height;
   d.truth.K = channel(truth, "K", truth_file);
   d.truth.b = channel(truth, "b", truth_file);

@@ -182,6 +182,9 @@ DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrati
   for (int j = 0; j < 4; ++j)  // the first cell's TL, TR, BL, BR
     options.step2.mosaic_deg[static_cast<std::size_t>(j)] =
         dataset.truth.alpha_deg[static_cast<std::size_t>((j / 2) * W + j % 2)];
+  // A mean frame at the ADC's top was clipped: step 1 leaves it out (Eq. 19 is linear below it).
+  if (dataset.adc_bits > 0 && !std::isfinite(options.step1.saturation_DN))
+    options.step1.saturation_DN = std::ldexp(1.0, dataset.adc_bits) - 1.0;
   std::vector<std::vector<double>> frames(dataset.stops.size());
   progress.begin("dofp: reading frames", static_cast<long long>(frames.size()));
   for (std::size_t s = 0; s < frames.size(); ++s) {

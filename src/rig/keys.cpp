@@ -286,10 +286,9 @@ std::vector<RigKey> make_keys() {
       "more than 1e4 DN buries a 12-bit camera's whole range",
       [](Rig& r) -> double& { return r.camera.read_noise_DN; }), kCamera), kSimulate, ""));
   keys.push_back(reads(only(integer(
-      "device.adc_bits", "an integer in [1, 24]", "the camera's ADC depth: raw values 0 … 2^bits − 1",
-      "cameras digitise to 8–16 bits; raw frames are unsigned 32-bit EXR channels, 24 bits leaves "
-      "headroom",
-      [](Rig& r) -> int& { return r.camera.adc_bits; }, &integer_within<1, 24>), kCamera),
+      "device.adc_bits", "an integer in [1, 16]", "the camera's ADC depth: raw values 0 … 2^bits − 1",
+      "cameras digitise to 8–16 bits; a raw frame holds 16-bit values",
+      [](Rig& r) -> int& { return r.camera.adc_bits; }, &integer_within<1, 16>), kCamera),
       kSimulate, ""));
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
@@ -317,6 +316,7 @@ std::vector<RigKey> make_keys() {
       "the paper's is 20 mm; at 0 the cos⁴ law gives no light off-axis, beyond 1 m the port is "
       "a point",
       [](Rig& r) -> double& { return r.source.cos4.L_o; }), kSimulate | kCs, ""));
+  keys.back().instruments = kSix;  // the camera's port fills its view: no eccentricity, no L_o
   keys.push_back(reads(real<RealRange{1e-3, 1e5}>(
       "source.E_0", "W/m^2", "an irradiance",
       "irradiance on the port axis at the photosensitive plane",
@@ -425,23 +425,27 @@ std::vector<RigKey> make_keys() {
   keys.back().instruments = kSix;
   keys.push_back(reads(real<RealRange{1e-7, 1e5}>(
       "sky.E_0", "W/m^2", "an irradiance",
-      "each channel's irradiance for the sky's radiance 1 (the zenith of a uniform sky)",
+      "each channel's irradiance (a camera: each pixel's intensity S0) for the sky's radiance 1 "
+      "(the zenith of a uniform sky)",
       "W19's log amplifier covers 1.46e-5 to 14.64 W/m²; from deep twilight to a hundred suns",
       [](Rig& r) -> double& { return r.source.sky.mount.E0_Wm2; }), kSimulate, "sky"));
-  keys.back().instruments = kSix;  // a channel's irradiance; a camera's intensity is the radiance
   // --- eccentricity -------------------------------------------------------------------
   keys.push_back(reads(real<kOffset>("eccentricity.L_IS", "mm", "a length",
                                "offset of the port centre O_IS from the table centre O_R",
                                kOffsetWhy, [](Rig& r) -> double& { return r.eccentricity.L_IS; }), kSimulate | kCs, ""));
+  keys.back().instruments = kSix;  // the camera's port fills its view: no eccentricity, no L_o
   keys.push_back(reads(real<kTurn>("eccentricity.alpha_IS", "deg", "an angle",
                              "direction of the port centre's offset", kTurnWhy,
                              [](Rig& r) -> double& { return r.eccentricity.alpha_IS; }), kSimulate | kCs, ""));
+  keys.back().instruments = kSix;  // the camera's port fills its view: no eccentricity, no L_o
   keys.push_back(reads(real<kOffset>("eccentricity.L_S", "mm", "a length",
                                "offset of the sensor centre O_S from O_R at θ_R = 0", kOffsetWhy,
                                [](Rig& r) -> double& { return r.eccentricity.L_S; }), kSimulate | kCs, ""));
+  keys.back().instruments = kSix;  // the camera's port fills its view: no eccentricity, no L_o
   keys.push_back(reads(real<kTurn>("eccentricity.alpha_S", "deg", "an angle",
                              "direction of the sensor centre's offset at θ_R = 0", kTurnWhy,
                              [](Rig& r) -> double& { return r.eccentricity.alpha_S; }), kSimulate | kCs, ""));
+  keys.back().instruments = kSix;  // the camera's port fills its view: no eccentricity, no L_o
   // --- schedule -----------------------------------------------------------------------
   keys.push_back(reads(real<kTableAngle>("schedule.start_deg", "deg", "an angle", "first table stop",
                                    kTableWhy,
@@ -505,10 +509,11 @@ std::vector<RigKey> make_keys() {
     keys.push_back(reads(only(k, kCamera), kSimulate, ""));
   }
   keys.push_back(reads(only(integer(
-      "schedule.frames_per_stop", "an integer in [1, 10000]",
+      "schedule.frames_per_stop", "an integer in [1, 999]",
       "frames the camera exposes at each stop (H17: 5 per step-1 level, 1 per position)",
-      "H17 averages 5; 10000 frames is minutes of video at 80 fps",
-      [](Rig& r) -> int& { return r.schedule.frames_per_stop; }, &integer_within<1, 10000>), kCamera),
+      "H17 averages 5; 999 frames is 12 s of video at 80 fps (and the dataset's channels raw.000 … "
+      "raw.998 keep their order)",
+      [](Rig& r) -> int& { return r.schedule.frames_per_stop; }, &integer_within<1, 999>), kCamera),
       kSimulate, ""));
   // --- electronics --------------------------------------------------------------------
   keys.push_back(reads(real<RealRange{0.01, 10.0}>(
@@ -596,6 +601,17 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
       return RigProblem{"schedule.step_deg",
                         fmt::format("expected at most 1e6 stops, got {:.0f}",
                                     std::floor((s.stop_deg - s.start_deg) / s.step_deg) + 1)};
+  }
+  if (rig.instrument->has(Instrument::kFrames)) {
+    // A camera's stops: every unpolarized level, then every table angle at each intensity.
+    const double angles = s.angles_deg.empty() ? std::floor((s.stop_deg - s.start_deg) / s.step_deg + 1e-9) + 1
+                                               : static_cast<double>(s.angles_deg.size());
+    const double stops = static_cast<double>(s.unpolarized_levels.size()) +
+                         angles * static_cast<double>(s.intensities.size());
+    if (stops > static_cast<double>(kMaxStops))
+      return RigProblem{"schedule.intensities",
+                        fmt::format("expected at most 1e6 camera stops (levels + angles × intensities), got {:.0f}",
+                                    stops), "schedule.step_deg"};
   }
   for (int m = 0; m < 6 && rig.instrument->has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.

@@ -26,8 +26,9 @@ DofpTruth nominal_dofp_parameters(int width, int height, const std::array<double
 
 // Every cell of `frame` (DN, row-major, top row first, width × height) with the per-pixel
 // parameters (a calibration's maps, dofp_parameter_maps or params.exr, or the nominal ones).
-// Throws std::invalid_argument for sizes that do not match, an odd size, or parameters whose
-// cell's analyzers do not span the Stokes plane (ÃᵀÃ singular) or K ≤ 0.
+// A cell with a pixel of K = 0 (step 1's mark of an undetermined pixel) gets NaN. Throws
+// std::invalid_argument for sizes that do not match, an odd size, a negative or non-finite
+// parameter, or a cell whose analyzers do not span the Stokes plane (ÃᵀÃ singular).
 DofpCellPolarization dofp_cell_polarization(std::span<const double> frame, const DofpTruth& parameters);
 
 }  // namespace polrig

@@ -27,6 +27,7 @@ struct DofpDataset {
   std::filesystem::path dir;
   int width = 0, height = 0;
   double f_c_px = 0;            // focal length in pixels
+  int adc_bits = 0;             // the ADC's depth (truth.exr's adc_bits), 0 when not recorded
   double cx = 0, cy = 0;        // principal point (width/2, height/2); pixel (col, row)'s centre
                                 // is at (col + 0.5, row + 0.5)
   DofpTruth truth;              // from truth.exr

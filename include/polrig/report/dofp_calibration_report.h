@@ -20,7 +20,8 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
 // Both steps and Table 1 on a camera dataset (`polrig calibrate DIR --method dofp`, Python's
 // calibrate_dofp_dataset): its unpolarized stops are step 1's levels, its polarized stops step 2's,
 // each stop's mean frame; the mosaic's axes are the dataset's (truth.exr's alpha_deg) and replace
-// options.step2.mosaic_deg. Reports "dofp: reading frames" to `progress`. Throws
+// options.step2.mosaic_deg; without a saturation level set, step 1 leaves out values at the
+// dataset's ADC top (2^adc_bits − 1). Reports "dofp: reading frames" to `progress`. Throws
 // std::runtime_error naming a file that cannot be read, std::invalid_argument for bad input and
 // CalibrationError when Table 1 cannot be formed.
 DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrationOptions options,

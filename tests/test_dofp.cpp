@@ -359,7 +359,9 @@ TEST(DofpFrames, AStopsSignalMadeOnceGivesTheSameFramesAndLayers) {
   Rig rig = camera_rig();
   rig.camera.noise = true;
   rig.camera.gain_DN = 2000, rig.camera.adc_bits = 12;
+  rig.schedule.unpolarized_levels = {0.5};  // stops: the level, then 0° and 30°
   const DofpSimulator sim(rig);
+  ASSERT_EQ(sim.stops().size(), 3u);
   const DofpStop& stop = sim.stops()[2];
   DofpTruthLayers direct, once;
   const DofpSimulator::StopSignal signal = sim.signal(stop, &once);

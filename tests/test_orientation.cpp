@@ -11,7 +11,6 @@
 #include <fstream>
 #include <sstream>
 #include <limits>
-#include <numbers>
 #include <string>
 #include <unistd.h>
 #include <vector>
@@ -31,21 +30,19 @@ using Eigen::AngleAxisd;
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
 
-double rad(double deg) { return deg * std::numbers::pi / 180.0; }
-double deg(double r) { return r * 180.0 / std::numbers::pi; }
-
 constexpr int kCols = 320, kRows = 240;  // unit cells
 constexpr double kFc = 405.4;            // px (spec §2.1)
 const CameraIntrinsics kCamera{kFc, 320.0, 240.0};
 
 Vector3d sun_enu(double A, double h) {  // spec §0: A from north towards east
-  return {std::cos(rad(h)) * std::sin(rad(A)), std::cos(rad(h)) * std::cos(rad(A)), std::sin(rad(h))};
+  const double a = deg2rad(A), e = deg2rad(h);
+  return {std::cos(e) * std::sin(a), std::cos(e) * std::cos(a), std::sin(e)};
 }
 
 // The camera's axes in ENU: columns X_l, Y_l, Z_l. A level camera whose X_l points at geographic
 // azimuth H: X_l = (sin H, cos H, 0), Z_l = up, Y_l = Z_l × X_l.
 Matrix3d level_camera(double H) {
-  const Vector3d x{std::sin(rad(H)), std::cos(rad(H)), 0}, z{0, 0, 1};
+  const Vector3d x{std::sin(deg2rad(H)), std::cos(deg2rad(H)), 0}, z{0, 0, 1};
   Matrix3d c;
   c.col(0) = x;
   c.col(1) = z.cross(x);
@@ -55,7 +52,7 @@ Matrix3d level_camera(double H) {
 
 // The true heading of a level camera: the geographic azimuth of its X_l.
 double true_heading(const Matrix3d& c) {
-  const double a = deg(std::atan2(c(0, 0), c(1, 0)));
+  const double a = rad2deg(std::atan2(c(0, 0), c(1, 0)));
   return a < 0 ? a + 360 : a;
 }
 
@@ -76,7 +73,7 @@ std::vector<double> render_aop(const Matrix3d& C, const Vector3d& s, bool level,
       const SkyLight L = sky_light({s.x(), s.y(), s.z()}, {v.x(), v.y(), v.z()}, model);
       double phi;
       if (level) {
-        phi = rad(L.aop_deg);
+        phi = deg2rad(L.aop_deg);
       } else {
         const Vector3d e_l = C.transpose() * Vector3d(L.e_vector[0], L.e_vector[1], L.e_vector[2]);
         const Vector3d xi{std::cos(gamma) * std::cos(alpha), std::cos(gamma) * std::sin(alpha),
@@ -84,7 +81,7 @@ std::vector<double> render_aop(const Matrix3d& C, const Vector3d& s, bool level,
         const Vector3d yi{-std::sin(alpha), std::cos(alpha), 0};
         phi = std::atan2(e_l.dot(yi), e_l.dot(xi));
       }
-      aop.push_back(deg(phi + alpha));
+      aop.push_back(rad2deg(phi + alpha));
       if (dop) dop->push_back(L.dop);
     }
   return aop;
@@ -92,7 +89,7 @@ std::vector<double> render_aop(const Matrix3d& C, const Vector3d& s, bool level,
 
 double angle_between_deg(const Vec3& a, const Vector3d& b) {
   const Vector3d u{a[0], a[1], a[2]};
-  return deg(std::atan2(u.cross(b).norm(), u.dot(b)));
+  return rad2deg(std::atan2(u.cross(b).norm(), u.dot(b)));
 }
 
 // The sun in frame l: Cᵀ·s.
@@ -100,8 +97,8 @@ Vector3d sun_in_camera(const Matrix3d& C, const Vector3d& s) { return C.transpos
 
 TEST(Orientation, FieldOfViewAndCellCount) {
   // Spec §2.7 item 1: 76.6° × 61.3°; the cells' centres cover the image (1 … 639, 1 … 479).
-  EXPECT_NEAR(2 * deg(point_view(0.0, 240.0, {3.0 / 7.4e-3, 320, 240}).gamma_rad), 76.6, 0.05);
-  EXPECT_NEAR(2 * deg(point_view(320.0, 0.0, {3.0 / 7.4e-3, 320, 240}).gamma_rad), 61.3, 0.05);
+  EXPECT_NEAR(2 * rad2deg(point_view(0.0, 240.0, {3.0 / 7.4e-3, 320, 240}).gamma_rad), 76.6, 0.05);
+  EXPECT_NEAR(2 * rad2deg(point_view(320.0, 0.0, {3.0 / 7.4e-3, 320, 240}).gamma_rad), 61.3, 0.05);
   const SkyPoints p = grid_points(kCols, kRows, 2.0, std::vector<double>(kCols * kRows, 0.0));
   EXPECT_EQ(p.aop_deg.size(), 76800u);
   EXPECT_DOUBLE_EQ(p.x_px[0], 1.0);
@@ -142,8 +139,8 @@ TEST(Orientation, EigenvectorRecoversTheSunWithATiltedCamera) {
   // The E-vector route of the rendering (not the level-only χ shortcut): the camera rolled 7°
   // and pitched −4°; the sun's direction in frame l is recovered, whatever the tilt.
   const Vector3d s = sun_enu(200.0, 22.0);
-  const Matrix3d C = level_camera(71.0) * AngleAxisd(rad(7.0), Vector3d::UnitY()).toRotationMatrix() *
-                     AngleAxisd(rad(-4.0), Vector3d::UnitX()).toRotationMatrix();
+  const Matrix3d C = level_camera(71.0) * AngleAxisd(deg2rad(7.0), Vector3d::UnitY()).toRotationMatrix() *
+                     AngleAxisd(deg2rad(-4.0), Vector3d::UnitX()).toRotationMatrix();
   const SkyPoints p = grid_points(kCols, kRows, 2.0, render_aop(C, s, false));
   const SunVectorSolution sol = sun_vector_eigen(p, kCamera);
   ASSERT_EQ(sol.status, SunVectorStatus::Ok);
@@ -158,7 +155,7 @@ TEST(Orientation, WithoutTheConversionTheSunIsWrong) {
   std::vector<double> aop = render_aop(C, s, true);
   for (int r = 0; r < kRows; ++r)
     for (int c = 0; c < kCols; ++c)
-      aop[static_cast<std::size_t>(r * kCols + c)] -= deg(std::atan2(2.0 * r + 1 - 240, 2.0 * c + 1 - 320));
+      aop[static_cast<std::size_t>(r * kCols + c)] -= rad2deg(std::atan2(2.0 * r + 1 - 240, 2.0 * c + 1 - 320));
   const SunVectorSolution sol = sun_vector_eigen(grid_points(kCols, kRows, 2.0, aop), kCamera);
   EXPECT_GT(angle_between_deg(sol.sun, sun_in_camera(C, s)), 1.0);
 }
@@ -168,7 +165,7 @@ TEST(Orientation, HeadingSignTestOfSpec0) {
   // rotation about the up axis); the heading, clockwise from north, must fall by 10°.
   const Vector3d s = sun_enu(250.0, 35.0);
   const Matrix3d C0 = level_camera(80.0);
-  const Matrix3d C1 = AngleAxisd(rad(10.0), Vector3d::UnitZ()).toRotationMatrix() * C0;
+  const Matrix3d C1 = AngleAxisd(deg2rad(10.0), Vector3d::UnitZ()).toRotationMatrix() * C0;
   double h[2];
   int i = 0;
   for (const Matrix3d* C : {&C0, &C1}) {
@@ -193,14 +190,14 @@ TEST(Orientation, ComparatorsRecoverTheSunAzimuthOnACleanSky) {
   // (0.25°), bounds the line it finds (measured: under 0.03° after the mean-shift refinement).
   const double theta_s = 60.75;
   const double gamma = std::sqrt(2.0) / kFc;
-  const double tol_single = deg(std::pow(gamma / std::tan(rad(theta_s)), 2));
+  const double tol_single = rad2deg(std::pow(gamma / std::tan(deg2rad(theta_s)), 2));
   const double tol_line = 0.5 * OrientationSettings{}.hough_bin_deg;
   for (double H : {0.0, 33.3, 91.0, 200.0, 301.7}) {
     const Vector3d s = sun_enu(35.0, 90.0 - theta_s);
     const Matrix3d C = level_camera(H);
     const SkyPoints p = grid_points(kCols, kRows, 2.0, render_aop(C, s, true));
     const Vector3d s_l = sun_in_camera(C, s);
-    const double az = deg(std::atan2(s_l.y(), s_l.x()));
+    const double az = rad2deg(std::atan2(s_l.y(), s_l.x()));
     // Without a prior: the meridian only.
     const SunAzimuthSolution sp0 = sun_azimuth_single_point(p, kCamera);
     EXPECT_EQ(sp0.status, SunAzimuthStatus::Ambiguous180);
@@ -280,8 +277,8 @@ TEST(Orientation, DopWeightingIgnoresUnpolarizedPoints) {
 
 TEST(Orientation, AnalyzerInFrontDiffersFromMeridionalBySpecsBound) {
   // Spec §2.5: the two conversions differ by up to 6.8° at γ = 38°, α = 45°.
-  const double r = kFc * std::tan(rad(38.0));
-  const double x = 320.0 + r * std::cos(rad(45.0)), y = 240.0 + r * std::sin(rad(45.0));
+  const double r = kFc * std::tan(deg2rad(38.0));
+  const double x = 320.0 + r * std::cos(deg2rad(45.0)), y = 240.0 + r * std::sin(deg2rad(45.0));
   double worst = 0;
   for (int k = 0; k < 1800; ++k) {
     const double phi_pix = 0.1 * k;

@@ -9,6 +9,7 @@ import pytest
 
 import polrig
 from conftest import ROOT, run_cli
+from eigen_response import heading_and_elevation_gains
 
 INDOOR = str(ROOT / "rigs" / "han2017-indoor.yaml")
 OUTDOOR = str(ROOT / "rigs" / "han2017-outdoor.yaml")
@@ -66,6 +67,61 @@ def test_orient_cli_equals_python_and_the_eigenvector_method_is_the_best(tmp_pat
     mean = {m: sum(v) / len(v) for m, v in errors.items()}
     # H17 Table 2's order: the eigenvector method below both comparators.
     assert mean["eigenvector"] < mean["single-point"] and mean["eigenvector"] < mean["line-detection"]
+
+
+def eigenvector_heading_sd_deg(frame, f_c, cx, cy, sun_l, electrons_per_DN, read_DN):
+    """The SD of the eigenvector method's heading from the camera's noise, to first order;
+    `frame` is a noise-free frame (DN, offset 0), `sun_l` the true sun in frame l.
+
+    Noise per pixel (device/dofp_camera.h's Poisson–Gaussian model, in its normal limit: every
+    pixel here holds ≫ 32 electrons): var f = f/electrons_per_DN + read_DN², plus 1/6 DN² for the
+    two roundings (the noisy and the noise-free frame are each rounded to whole DN). The cell's
+    AoP (mosaic 0, 90, 45, 135°: TL, TR, BL, BR) is φ = ½·atan2(U, Q), Q = f0 − f90,
+    U = f45 − f135, so var φ = (Q²·var U + U²·var Q) / (4·(Q² + U²)²). The cells' errors are
+    independent, so var H = Σ Gᵢ²·var φᵢ with eigen_response's gains Gᵢ."""
+    f = frame.astype(float)
+    f0, f90, f45, f135 = f[0::2, 0::2], f[0::2, 1::2], f[1::2, 0::2], f[1::2, 1::2]
+    assert min(x.min() for x in (f0, f90, f45, f135)) * electrons_per_DN > 32  # the normal limit
+
+    def var(x):
+        return x / electrons_per_DN + read_DN ** 2 + 1.0 / 6.0
+
+    Q, U = f0 - f90, f45 - f135
+    var_phi = (Q ** 2 * (var(f45) + var(f135)) + U ** 2 * (var(f0) + var(f90))) / (4 * (Q ** 2 + U ** 2) ** 2)
+    G, _ = heading_and_elevation_gains(Q.shape[1], Q.shape[0], f_c, cx, cy, sun_l)
+    return math.degrees(math.sqrt(np.sum(G ** 2 * var_phi.reshape(-1))))
+
+
+def test_the_eigenvector_headings_noise_is_the_cameras(tmp_path):
+    """An absolute bound from the noise (spec §2.7 item 5 asks for the method's error): the sky rig
+    run twice, with the camera's noise and without (device.noise false; the same frames less the
+    noise). Per frame, the heading difference noisy − noise-free is the noise's part of the error;
+    its SD σ_k follows from the Poisson–Gaussian model (eigenvector_heading_sd_deg). So
+    |Δ_k| < 4σ_k for all 40 frames (P(any |z| > 4) = 40·6.3e-5 = 2.5e-3 for Gaussian z), and
+    Σ(Δ_k/σ_k)²/40 lies in χ²₄₀'s central 99.8 %: [17.92, 73.40]/40. Too little noise in the
+    headings fails this as too much does."""
+    runs = {}
+    for name, extra in (("noisy", []), ("clean", ["--set", "device.noise=false"])):
+        run_cli("simulate", OUTDOOR, *SKY, *extra, "-o", tmp_path / name, "--quiet")
+        runs[name] = polrig.orient_dofp_dataset(tmp_path / name, heading_prior_deg=20)
+    rig = polrig.Rig.load(OUTDOOR)
+    ds = polrig.read_dofp_dataset(tmp_path / "clean", mean_frames=True)
+    site = (rig["sky.lat_deg"], rig["sky.lon_deg"])
+    z = []
+    for k, (noisy, clean) in enumerate(zip(runs["noisy"], runs["clean"])):
+        assert noisy["true_heading_deg"] == clean["true_heading_deg"] == ds["stops"]["heading_deg"][k]
+        sun = polrig.sun_position(ds["stops"]["utc"][k], site)
+        az = math.radians(ds["stops"]["heading_deg"][k] - sun.azimuth_deg)  # the sun's azimuth in frame l
+        h = math.radians(sun.elevation_deg)
+        sun_l = np.array([math.cos(h) * math.cos(az), math.cos(h) * math.sin(az), math.sin(h)])
+        sd = eigenvector_heading_sd_deg(ds["mean_frames"][k], ds["f_c_px"], ds["cx"], ds["cy"], sun_l,
+                                        rig["device.electrons_per_DN"], rig["device.read_noise_DN"])
+        delta = wrap180(noisy["estimates"][0].heading_deg - clean["estimates"][0].heading_deg)
+        z.append(delta / sd)
+    z = np.array(z)
+    print(f"σ_k {sd:.4f}°, max |z| {np.abs(z).max():.2f}, mean z² {np.mean(z ** 2):.3f}")
+    assert np.abs(z).max() < 4.0
+    assert 17.92 / 40 < np.mean(z ** 2) < 73.40 / 40
 
 
 def test_orient_and_calibrate_dofp_refuse_what_they_cannot_read(tmp_path, indoor):

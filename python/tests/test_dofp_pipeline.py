@@ -130,6 +130,15 @@ def test_orient_and_calibrate_dofp_refuse_what_they_cannot_read(tmp_path, indoor
     assert r.returncode == 2 and "orient needs frames (device.kind dofp-camera)" in r.stderr
     r = run_cli("calibrate", tmp_path / "six", "--method", "dofp", "-o", tmp_path / "c", check=False)
     assert r.returncode == 2 and "calibrate --method dofp needs frames" in r.stderr
+    # Options that do not apply to --method dofp are refused by name, not ignored.
+    for option, value, reason in (("--rig", INDOOR, "reads the camera from the dataset"),
+                                  ("--drift", "angle", "calibrates indoors"),
+                                  ("--site", "28.2,112.9", "calibrates indoors"),
+                                  ("--d-a", "0.5", "fits the source's DoP itself"),
+                                  ("--nc-threshold", "0.2", "has no noncontinuous rule"),
+                                  ("--nc-min-points", "12", "has no noncontinuous rule")):
+        r = run_cli("calibrate", indoor / "data", "--method", "dofp", option, value, "-o", tmp_path / "c", check=False)
+        assert r.returncode == 2 and option in r.stderr and reason in r.stderr, (option, r.stderr)
     r = run_cli("orient", indoor / "data", "--heading-prior", "10", "-o", tmp_path / "o", check=False)
     assert r.returncode == 2 and "has no sky rig" in r.stderr
     assert not (tmp_path / "o").exists() and not (tmp_path / "c").exists()

@@ -4,6 +4,7 @@
 #include <iostream>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include <fmt/format.h>
 
@@ -34,6 +35,9 @@ struct CalibrationSettings {
   std::optional<double> d_a;
   double nc_threshold = NoncontinuousRule{}.min_relative_slope;
   int nc_min_points = NoncontinuousRule{}.min_points;
+  // The noncontinuous rule's options, to tell whether they were given (--method dofp refuses them).
+  CLI::Option* nc_threshold_option = nullptr;
+  CLI::Option* nc_min_points_option = nullptr;
 
   void add_to(CLI::App& app) {
     app.add_option("--d-a", d_a, "the rig's stated degree of polarization d_a for decoupling")
@@ -45,11 +49,11 @@ struct CalibrationSettings {
               return {};
             },
             "(0, 1)"));
-    app.add_option("--nc-threshold", nc_threshold,
+    nc_threshold_option = app.add_option("--nc-threshold", nc_threshold,
                    "noncontinuous rule: keep a voltage where |dV/dθ| ≥ this × its largest slope")
         ->check(finite_range(kNcThresholdMin, kNcThresholdMax))
         ->capture_default_str();
-    app.add_option("--nc-min-points", nc_min_points,
+    nc_min_points_option = app.add_option("--nc-min-points", nc_min_points,
                    "noncontinuous rule: keep at least this many points per voltage")
         ->check(CLI::Range(kNcMinPointsMin, kNcMinPointsMax))
         ->capture_default_str();
@@ -118,6 +122,11 @@ void run_calibrate_dofp(const std::string& input, const std::string& rig_path, c
   if (drift.mode != "none") throw DataError(fmt::format("--drift {}: --method dofp calibrates indoors (no sun drift)", drift.mode));
   if (!drift.site.empty()) throw DataError(fmt::format("--site {}: --method dofp calibrates indoors (no sun)", drift.site));
   if (settings.d_a) throw DataError(fmt::format("--d-a {}: --method dofp fits the source's DoP itself", *settings.d_a));
+  for (const auto& [name, option] : {std::pair{"--nc-threshold", settings.nc_threshold_option},
+                                     std::pair{"--nc-min-points", settings.nc_min_points_option}})
+    if (option && option->count() > 0)
+      throw DataError(fmt::format("{} {}: --method dofp has no noncontinuous rule (it applies to nc and cs-nc)",
+                                  name, option->as<std::string>()));
   const DofpCalibration c = calibrate_dofp_folder(input, {}, progress());
   OutputDir d = out.open();
   write_manifest(d.staging(), {command_line(), nullptr, report_dofp_calibration(d.staging(), c, out.plots()), {input}});

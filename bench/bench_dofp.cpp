@@ -13,7 +13,6 @@ namespace {
 Rig camera_rig(bool sky) {
   Rig rig;
   rig.device_kind = "dofp-camera";
-  rig.instrument = make_instrument("dofp-camera");
   rig.source.cos4.E_0 = 1.0;
   rig.camera.gain_spread = 0.02;
   rig.camera.offset_DN = 20;

@@ -29,7 +29,6 @@ namespace {
 Rig camera_rig() {
   Rig rig;
   rig.device_kind = "dofp-camera";
-  rig.instrument = make_instrument("dofp-camera");
   rig.source.cos4.E_0 = 1.0;
   rig.device.d = 0.9;
   rig.camera.noise = false;

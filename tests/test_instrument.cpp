@@ -89,7 +89,27 @@ TEST(InstrumentFactory, EveryFlagHasOneNameAndText) {
 TEST(InstrumentFactory, ADefaultRigIsTheSixPhotodiodeSensor) {
   const Rig rig;
   EXPECT_EQ(rig.device_kind, kDefaultDeviceKind);
-  EXPECT_EQ(rig.instrument->kind(), rig.device_kind);
+  EXPECT_EQ(rig.instrument().kind(), rig.device_kind);
+}
+
+TEST(InstrumentFactory, ARigBuiltInCodeHasItsKindsInstrument) {
+  // One source of truth: setting device_kind alone changes what the rig can do (no second field
+  // to forget), and an unknown kind is an error when the instrument is asked for.
+  Rig rig;
+  for (std::string_view kind : instrument_kinds()) {
+    rig.device_kind = std::string(kind);
+    EXPECT_EQ(rig.instrument().kind(), kind);
+    EXPECT_EQ(rig.instrument().flags(), make_instrument(kind)->flags());
+  }
+  rig.device_kind = "dofp-camera";
+  EXPECT_TRUE(rig.instrument().has(Instrument::kFrames));
+  EXPECT_FALSE(rig.instrument().has(Instrument::kPairVoltages));
+  EXPECT_EQ(instrument_problem(rig, Instrument::kFrames, "orient"), std::nullopt);
+  EXPECT_NE(instrument_problem(rig, Instrument::kPairVoltages, "study cs"), std::nullopt);
+  rig.device_kind = "six-photodiode";
+  EXPECT_EQ(instrument_problem(rig, Instrument::kPairVoltages, "study cs"), std::nullopt);
+  rig.device_kind = "spectrometer";
+  EXPECT_THROW((void)rig.instrument(), std::invalid_argument);
 }
 
 // ---- the keys ---------------------------------------------------------------------------
@@ -200,7 +220,7 @@ TEST(InstrumentKeys, NoKeyTextBreaksTheKeyTable) {
 TEST(InstrumentRigFiles, Han2017IndoorLoads) {
   const Rig r = camera_rig();
   EXPECT_EQ(r.device_kind, "dofp-camera");
-  EXPECT_TRUE(r.instrument->has(Instrument::kFrames));
+  EXPECT_TRUE(r.instrument().has(Instrument::kFrames));
   EXPECT_EQ(r.camera.width_px, 640);
   EXPECT_EQ(r.camera.height_px, 480);
   // f_c = focal/pitch = 405.4 px (spec §2.1).
@@ -273,11 +293,11 @@ TEST(InstrumentRigFiles, TheEffectiveRigLoadsBackAndLeavesTheDefaultKindOut) {
 TEST(InstrumentRigFiles, ACopyKeepsItsInstrument) {
   const Rig r = camera_rig();
   const Rig copy = r;
-  EXPECT_EQ(copy.instrument, r.instrument);
+  EXPECT_EQ(&copy.instrument(), &r.instrument());
   EXPECT_EQ(copy.device_kind, "dofp-camera");
   Rig assigned;
   assigned = r;
-  EXPECT_TRUE(assigned.instrument->has(Instrument::kFrames));
+  EXPECT_TRUE(assigned.instrument().has(Instrument::kFrames));
 }
 
 // ---- capabilities ---------------------------------------------------------------------

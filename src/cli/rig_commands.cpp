@@ -96,7 +96,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
-      if (r.rig.instrument->has(Instrument::kFrames)) {
+      if (r.rig.instrument().has(Instrument::kFrames)) {
         if (*samples) throw RigError(fmt::format("--samples: device.kind {} takes frames, not samples", r.rig.device_kind));
         DofpDatasetOptions o;
         o.storage = *frames == "mean" ? DofpFrameStorage::Sum : DofpFrameStorage::Every;

@@ -75,7 +75,7 @@ std::vector<std::pair<std::string, std::string>> manifest_fields(const Manifest&
   if (m.rig) {
     f.emplace_back("seed", fmt::format("{}", m.rig->rig.seed));
     f.emplace_back("rig_file", m.rig->origin);
-    f.emplace_back("instrument", std::string(m.rig->rig.instrument->kind()));
+    f.emplace_back("instrument", std::string(m.rig->rig.instrument().kind()));
     std::vector<std::string> overrides;
     for (const RigOverride& o : m.rig->overrides) overrides.push_back(o.path + "=" + o.value);
     f.emplace_back("overrides", lines(overrides));
@@ -108,7 +108,7 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
     resolved = rig_to_yaml(m.rig->rig);
     out << YAML::Key << "seed" << YAML::Value << m.rig->rig.seed;
     out << YAML::Key << "rig_file" << YAML::Value << m.rig->origin;
-    out << YAML::Key << "instrument" << YAML::Value << std::string(m.rig->rig.instrument->kind());
+    out << YAML::Key << "instrument" << YAML::Value << std::string(m.rig->rig.instrument().kind());
     out << YAML::Key << "overrides" << YAML::Value << YAML::BeginSeq;
     for (const RigOverride& o : m.rig->overrides) out << o.path + "=" + o.value;
     out << YAML::EndSeq;

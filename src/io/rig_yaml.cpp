@@ -256,15 +256,15 @@ class RigParser {
     rig.device.truth_from.clear();
   }
 
-  // The instrument: make_instrument builds the device.kind's; keys it does not read are refused
-  // (RigKey::instruments), as keys the source model does not read are.
+  // The instrument: device.kind must be a kind make_instrument knows (Rig::instrument() is its);
+  // keys it does not read are refused (RigKey::instruments), as keys the source model does not read are.
   void make_instrument_of(Rig& rig) const {
     for (const RigKey& k : rig_keys())
       if (present_.count(std::string(k.path)) && !k.read_by_instrument(rig.device_kind))
         fail(std::string(k.path), fmt::format("expected no value with device.kind {} (only device.kind {} "
                                               "reads it)", rig.device_kind, k.instruments));
     try {
-      rig.instrument = make_instrument(rig.device_kind);
+      (void)make_instrument(rig.device_kind);  // rig.instrument() is this kind's
     } catch (const std::invalid_argument& e) {
       fail("device.kind", e.what());
     }

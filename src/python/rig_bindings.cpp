@@ -190,20 +190,20 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
       .def("copy", [](const PyRig& r) { return r; }, "An independent copy.")
       .def("__copy__", [](const PyRig& r) { return r; })
       .def("__deepcopy__", [](const PyRig& r, py::dict) { return r; }, py::arg("memo"))
-      .def_property_readonly("instrument", [](const PyRig& r) { return std::string(r.rig().instrument->kind()); },
+      .def_property_readonly("instrument", [](const PyRig& r) { return std::string(r.rig().instrument().kind()); },
                              "The instrument's kind, as device.kind names it: \"six-photodiode\" "
                              "or \"dofp-camera\" (ask Rig.can what it measures, not the kind).")
       .def_property_readonly("capabilities", [](const PyRig& r) {
             std::vector<std::string> out;
             for (const InstrumentFlagInfo& f : instrument_flags())
-              if (r.rig().instrument->has(f.flag)) out.emplace_back(f.name);
+              if (r.rig().instrument().has(f.flag)) out.emplace_back(f.name);
             return out;
           }, "What the rig's instrument measures (its flags): \"pair_voltages\" (the "
              "six-photodiode sensor: simulate, the studies, calibrate's Eq. 15 methods) and/or "
              "\"frames\" (the DoFP camera).")
       .def("can", [](const PyRig& r, const std::string& capability) {
             for (const InstrumentFlagInfo& f : instrument_flags())
-              if (f.name == capability) return r.rig().instrument->has(f.flag);
+              if (f.name == capability) return r.rig().instrument().has(f.flag);
             std::string known;
             for (const InstrumentFlagInfo& f : instrument_flags())
               known += fmt::format("{}{}", known.empty() ? "" : ", ", f.name);

@@ -602,7 +602,7 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
                         fmt::format("expected at most 1e6 stops, got {:.0f}",
                                     std::floor((s.stop_deg - s.start_deg) / s.step_deg) + 1)};
   }
-  if (rig.instrument->has(Instrument::kFrames)) {
+  if (rig.instrument().has(Instrument::kFrames)) {
     // A camera's stops: every unpolarized level, then every table angle at each intensity.
     const double angles = s.angles_deg.empty() ? std::floor((s.stop_deg - s.start_deg) / s.step_deg + 1e-9) + 1
                                                : static_cast<double>(s.angles_deg.size());
@@ -613,7 +613,7 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
                         fmt::format("expected at most 1e6 camera stops (levels + angles × intensities), got {:.0f}",
                                     stops), "schedule.step_deg"};
   }
-  for (int m = 0; m < 6 && rig.instrument->has(Instrument::kPairVoltages); ++m) {
+  for (int m = 0; m < 6 && rig.instrument().has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.
     if ((1.0 + rig.device.truth.kd[m]) * rig.device.d >= 1.0)
       return RigProblem{"device.d", fmt::format("expected (1+kd_{})·d < 1, got {}", m + 1,

@@ -18,13 +18,13 @@ std::string no_sky_message(const Rig& rig, std::string_view origin) {
 
 std::optional<std::string> instrument_problem(const Rig& rig, Instrument::Flag needs,
                                               std::string_view what, std::string_view origin) {
-  if (rig.instrument->has(needs)) return std::nullopt;
+  if (rig.instrument().has(needs)) return std::nullopt;
   std::string_view text = "?";
   for (const InstrumentFlagInfo& f : instrument_flags())
     if (f.flag == needs) text = f.text;
   return fmt::format("{}{}{} needs {} (device.kind {}); device.kind {} has none", origin,
                      origin.empty() ? "" : ": ", what, text, kinds_with(needs),
-                     rig.instrument->kind());
+                     rig.instrument().kind());
 }
 
 void require_instrument(const Rig& rig, Instrument::Flag needs, std::string_view what,

@@ -31,7 +31,7 @@ std::vector<DofpStop> dofp_stops(const Schedule& schedule) {
 }
 
 DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig), analyzer_(analyzer) {
-  if (!rig.instrument || !rig.instrument->has(Instrument::kFrames))
+  if (!rig.instrument().has(Instrument::kFrames))
     throw std::invalid_argument(fmt::format("device.kind {} takes no frames (expected a camera, e.g. dofp-camera)",
                                             rig.device_kind));
   if (!rig.light || !rig.light->has(Source::kStokesAlongViews))

@@ -18,10 +18,10 @@
 namespace polrig {
 
 struct Rig {
-  // The instrument: device.kind names it; make_instrument builds `instrument` from it when the rig
-  // loads. Callers ask it what it can do (Instrument::flags), never which kind it is.
+  // The instrument: device.kind names it, and instrument() is make_instrument's of that kind, so
+  // the two cannot disagree (instruments hold no state; a rig built in code sets device_kind
+  // only). Callers ask it what it can do (Instrument::flags), never which kind it is.
   std::string device_kind = "six-photodiode";
-  std::shared_ptr<const Instrument> instrument = six_photodiode_instrument();
   // The six-photodiode sensor's settings (device.* keys), and device.d: the degree of linear
   // polarization of the light at the instrument, whichever it is.
   SensorSpec device;
@@ -35,6 +35,10 @@ struct Rig {
   Schedule schedule;
   Electronics electronics;
   std::uint64_t seed = 20190806;
+
+  // make_instrument(device_kind): throws std::invalid_argument for a kind it does not know (a
+  // loaded rig's kind was checked when it loaded).
+  const Instrument& instrument() const { return *make_instrument(device_kind); }
 
   // What the light reads of the rig at a pose.
   SourceView source_view() const { return {device, eccentricity, source}; }

@@ -177,6 +177,34 @@ TEST(DofpCamera, TruthSpreadsAndExtinction) {
   EXPECT_EQ(make_dofp_truth(cam, 7).K, t.K);
 }
 
+TEST(DofpCamera, MosaicGainScalesEachPositionsGain) {
+  DofpCameraSpec cam;
+  cam.width_px = 64, cam.height_px = 48;
+  const DofpTruth plain = make_dofp_truth(cam, 3);
+  cam.mosaic_gain = {1.0, 1.06, 0.95, 1.03};
+  const DofpTruth t = make_dofp_truth(cam, 3);
+  // Without a spread every pixel's K is exactly gain_DN·mosaic_gain[j] (the position's factor and
+  // nothing else); k, ε and b are untouched.
+  for (int row = 0; row < 48; ++row)
+    for (int col = 0; col < 64; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row * 64 + col);
+      const double g = cam.mosaic_gain[static_cast<std::size_t>((row % 2) * 2 + col % 2)];
+      ASSERT_EQ(t.K[i], 2000.0 * g) << col << "," << row;
+      ASSERT_EQ(t.k[i], plain.k[i]);
+      ASSERT_EQ(t.b[i], plain.b[i]);
+    }
+  // With a spread the factor multiplies the same draw: K / K_plain = the factor.
+  cam.gain_spread = 0.02;
+  DofpCameraSpec one = cam;
+  one.mosaic_gain = {1, 1, 1, 1};
+  const DofpTruth a = make_dofp_truth(cam, 3), b = make_dofp_truth(one, 3);
+  EXPECT_NEAR(a.K[65] / b.K[65], 1.03, 1e-15);  // row 1, column 1: BR
+  for (double bad : {0.0, -1.0, std::nan("")}) {
+    cam.mosaic_gain[2] = bad;
+    EXPECT_THROW(make_dofp_truth(cam, 3), std::invalid_argument) << bad;
+  }
+}
+
 TEST(DofpCamera, NormalQuantileInvertsTheNormalCdf) {
   for (double p : {1e-300, 1e-20, 1e-8, 0.001, 0.02425, 0.075, 0.3, 0.5, 0.6, 0.924, 0.99, 1 - 1e-12}) {
     const double x = normal_quantile(p);

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "polrig/calib/dofp.h"
 #include "polrig/device/dofp_camera.h"
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/exr.h"
@@ -305,6 +306,45 @@ TEST(DofpFrames, SphereRigAoPFollowsEqs6To9AndTheTable) {
         EXPECT_NEAR(raw[i], f, 0.5 + 1e-2);
       }
   }
+}
+
+// Step 2's view projection (calib/dofp.h, dofp_projected_aop_deg: a port polarizer's axis at β in
+// frame l seen along a view, φ = arg(M·(cos β, sin β))) against the camera's own frame simulation:
+// three ideal cameras whose four analyzers all sit at 0°, 45° and 90° give, per pixel, A·d·cos 2φ,
+// A·d·sin 2φ and A = (f0 + f90)/2 of Eq. 18 in double precision, so φ of every pixel without the
+// float truth layer. β = θ_R − ψ_P (the on-axis AoP, docs/physics.md §13).
+TEST(DofpFrames, ViewProjectionIsTheSimulatedAoPOfEveryPixel) {
+  Rig rig = camera_rig();
+  rig.source.polarizer_deg = 20;
+  rig.device.d = 1.0;
+  rig.schedule.angles_deg = {0, 30, 117.5};
+  std::vector<DofpSimulator::StopSignal> f[3];
+  const double axes[3] = {0, 45, 90};
+  for (int a = 0; a < 3; ++a) {
+    rig.camera.mosaic_deg = {axes[a], axes[a], axes[a], axes[a]};
+    const DofpSimulator sim(rig);
+    for (const DofpStop& stop : sim.stops()) f[a].push_back(sim.signal(stop));
+  }
+  double worst = 0, largest_departure = 0;
+  for (std::size_t s = 0; s < f[0].size(); ++s) {
+    const double beta = f[0][s].stop.theta_R_deg - 20.0;
+    for (int row = 0; row < 480; ++row)
+      for (int col = 0; col < 640; ++col) {
+        const std::size_t i = static_cast<std::size_t>(row * 640 + col);
+        const double A = 0.5 * (f[0][s].f[i] + f[2][s].f[i]);
+        const double phi_sim = rad2deg(0.5 * std::atan2(f[1][s].f[i] - A, 0.5 * (f[0][s].f[i] - f[2][s].f[i])));
+        const double phi = dofp_projected_aop_deg(pixel_view(rig.camera, col, row), beta);
+        worst = std::max(worst, std::abs(std::remainder(phi - phi_sim, 180.0)));
+        largest_departure = std::max(largest_departure, std::abs(std::remainder(phi - beta, 180.0)));
+      }
+  }
+  EXPECT_LT(worst, 1e-9);
+  // Not true by construction: the projection moves the AoP by degrees at the corners.
+  EXPECT_GT(largest_departure, 5.0);
+  // Along the azimuth 0 (a view in the x–z plane at zenith angle γ): tan φ = tan β / cos γ.
+  const double g = deg2rad(35.0);
+  EXPECT_NEAR(dofp_projected_aop_deg({std::sin(g), 0, std::cos(g)}, 30.0),
+              rad2deg(std::atan(std::tan(deg2rad(30.0)) / std::cos(g))), 1e-12);
 }
 
 TEST(DofpFrames, UnpolarizedStopsAndVignetting) {

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "polrig/calib/dofp.h"
 #include "polrig/device/dofp_camera.h"
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/exr.h"
@@ -176,6 +177,34 @@ TEST(DofpCamera, TruthSpreadsAndExtinction) {
   EXPECT_EQ(make_dofp_truth(cam, 7).K, t.K);
 }
 
+TEST(DofpCamera, MosaicGainScalesEachPositionsGain) {
+  DofpCameraSpec cam;
+  cam.width_px = 64, cam.height_px = 48;
+  const DofpTruth plain = make_dofp_truth(cam, 3);
+  cam.mosaic_gain = {1.0, 1.06, 0.95, 1.03};
+  const DofpTruth t = make_dofp_truth(cam, 3);
+  // Without a spread every pixel's K is exactly gain_DN·mosaic_gain[j] (the position's factor and
+  // nothing else); k, ε and b are untouched.
+  for (int row = 0; row < 48; ++row)
+    for (int col = 0; col < 64; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row * 64 + col);
+      const double g = cam.mosaic_gain[static_cast<std::size_t>((row % 2) * 2 + col % 2)];
+      ASSERT_EQ(t.K[i], 2000.0 * g) << col << "," << row;
+      ASSERT_EQ(t.k[i], plain.k[i]);
+      ASSERT_EQ(t.b[i], plain.b[i]);
+    }
+  // With a spread the factor multiplies the same draw: K / K_plain = the factor.
+  cam.gain_spread = 0.02;
+  DofpCameraSpec one = cam;
+  one.mosaic_gain = {1, 1, 1, 1};
+  const DofpTruth a = make_dofp_truth(cam, 3), b = make_dofp_truth(one, 3);
+  EXPECT_NEAR(a.K[65] / b.K[65], 1.03, 1e-15);  // row 1, column 1: BR
+  for (double bad : {0.0, -1.0, std::nan("")}) {
+    cam.mosaic_gain[2] = bad;
+    EXPECT_THROW(make_dofp_truth(cam, 3), std::invalid_argument) << bad;
+  }
+}
+
 TEST(DofpCamera, NormalQuantileInvertsTheNormalCdf) {
   for (double p : {1e-300, 1e-20, 1e-8, 0.001, 0.02425, 0.075, 0.3, 0.5, 0.6, 0.924, 0.99, 1 - 1e-12}) {
     const double x = normal_quantile(p);
@@ -276,6 +305,45 @@ TEST(DofpFrames, SphereRigAoPFollowsEqs6To9AndTheTable) {
         EXPECT_NEAR(raw[i], f, 0.5 + 1e-2);
       }
   }
+}
+
+// Step 2's view projection (calib/dofp.h, dofp_projected_aop_deg: a port polarizer's axis at β in
+// frame l seen along a view, φ = arg(M·(cos β, sin β))) against the camera's own frame simulation:
+// three ideal cameras whose four analyzers all sit at 0°, 45° and 90° give, per pixel, A·d·cos 2φ,
+// A·d·sin 2φ and A = (f0 + f90)/2 of Eq. 18 in double precision, so φ of every pixel without the
+// float truth layer. β = θ_R − ψ_P (the on-axis AoP, docs/physics.md §13).
+TEST(DofpFrames, ViewProjectionIsTheSimulatedAoPOfEveryPixel) {
+  Rig rig = camera_rig();
+  rig.source.polarizer_deg = 20;
+  rig.device.d = 1.0;
+  rig.schedule.angles_deg = {0, 30, 117.5};
+  std::vector<DofpSimulator::StopSignal> f[3];
+  const double axes[3] = {0, 45, 90};
+  for (int a = 0; a < 3; ++a) {
+    rig.camera.mosaic_deg = {axes[a], axes[a], axes[a], axes[a]};
+    const DofpSimulator sim(rig);
+    for (const DofpStop& stop : sim.stops()) f[a].push_back(sim.signal(stop));
+  }
+  double worst = 0, largest_departure = 0;
+  for (std::size_t s = 0; s < f[0].size(); ++s) {
+    const double beta = f[0][s].stop.theta_R_deg - 20.0;
+    for (int row = 0; row < 480; ++row)
+      for (int col = 0; col < 640; ++col) {
+        const std::size_t i = static_cast<std::size_t>(row * 640 + col);
+        const double A = 0.5 * (f[0][s].f[i] + f[2][s].f[i]);
+        const double phi_sim = rad2deg(0.5 * std::atan2(f[1][s].f[i] - A, 0.5 * (f[0][s].f[i] - f[2][s].f[i])));
+        const double phi = dofp_projected_aop_deg(pixel_view(rig.camera, col, row), beta);
+        worst = std::max(worst, std::abs(std::remainder(phi - phi_sim, 180.0)));
+        largest_departure = std::max(largest_departure, std::abs(std::remainder(phi - beta, 180.0)));
+      }
+  }
+  EXPECT_LT(worst, 1e-9);
+  // Not true by construction: the projection moves the AoP by degrees at the corners.
+  EXPECT_GT(largest_departure, 5.0);
+  // Along the azimuth 0 (a view in the x–z plane at zenith angle γ): tan φ = tan β / cos γ.
+  const double g = deg2rad(35.0);
+  EXPECT_NEAR(dofp_projected_aop_deg({std::sin(g), 0, std::cos(g)}, 30.0),
+              rad2deg(std::atan(std::tan(deg2rad(30.0)) / std::cos(g))), 1e-12);
 }
 
 TEST(DofpFrames, UnpolarizedStopsAndVignetting) {

@@ -237,6 +237,120 @@ TEST(DofpCalibration, JacobianMatchesCentralDifferences) {
   EXPECT_LT(r.cwiseAbs().maxCoeff(), kPi / 4);
 }
 
+// The same with the view's projection (the cell's view 40° off the axis at azimuth 30°): the AoP
+// residual's ψ_0 column is −dφ/dψ_0, no longer −1.
+TEST(DofpCalibration, ProjectedJacobianMatchesCentralDifferences) {
+  const Truth t = make_truth(2, 2, 3, 1.0);
+  const Vec3 view{std::sin(rad(40.0)) * std::cos(rad(30.0)), std::sin(rad(40.0)) * std::sin(rad(30.0)),
+                  std::cos(rad(40.0))};
+  std::vector<double> F, theta;
+  for (int m = 0; m < 79; ++m) {
+    theta.push_back(4.6036 * m);
+    const std::vector<double> f = frame(t, 0.7, 0.85, dofp_projected_aop_deg(view, 12.0 + theta.back()), 0.0, nullptr);
+    for (int j = 0; j < 4; ++j) F.push_back((f[j] - t.b[j]) / t.K[j]);
+  }
+  DofpStep2Options o;
+  o.view_projection = true;
+  o.focal_px = 405.4;
+  Eigen::Matrix<double, 8, 1> x;
+  x << rad(2.0), rad(-1.5), rad(0.3), 0.97, 0.91, 0.88, rad(13.0), 0.8;
+  const Eigen::MatrixXd J = dofp_cell_jacobian(F, theta, x, o, view);
+  const double h = 1e-6;
+  for (int p = 0; p < 8; ++p) {
+    Eigen::Matrix<double, 8, 1> xp = x, xm = x;
+    xp[p] += h;
+    xm[p] -= h;
+    const Eigen::VectorXd fd =
+        (dofp_cell_residuals(F, theta, xp, o, view) - dofp_cell_residuals(F, theta, xm, o, view)) / (2 * h);
+    for (int m = 0; m < 3 * 79; ++m)
+      EXPECT_NEAR(J(m, p), fd[m], 1e-8) << "unknown " << p << " row " << m;
+    EXPECT_GT(J.col(p).norm(), 1e-3) << p;
+  }
+  // dφ/dψ_0 varies over the turn (cos γ to 1/cos γ): the ψ_0 column is not constant.
+  double lo = 1e9, hi = -1e9;
+  for (int m = 0; m < 79; ++m) lo = std::min(lo, -J(3 * m, 6)), hi = std::max(hi, -J(3 * m, 6));
+  EXPECT_LT(lo, 0.9);
+  EXPECT_GT(hi, 1.1);
+  // The residuals at the truth's ψ_0 and (k, ε) are zero with the projection, not without it.
+  Eigen::Matrix<double, 8, 1> xt;
+  xt << rad(t.eps_deg[1]), rad(t.eps_deg[2]), rad(t.eps_deg[3]), t.k[1], t.k[2], t.k[3], rad(12.0), 0.85;
+  EXPECT_LT(dofp_cell_residuals(F, theta, xt, o, view).cwiseAbs().maxCoeff(), 1e-12);
+  DofpStep2Options off = o;
+  off.view_projection = false;
+  EXPECT_GT(dofp_cell_residuals(F, theta, xt, off, view).cwiseAbs().maxCoeff(), rad(1.0));
+}
+
+// Frames of a wide field (every cell's four pixels see the port polarizer along the cell's centre
+// view, as the model takes it): with the view's projection step 2 gives back the truth and Table
+// 1's step-2 row is exact; H17's model (off) leaves degrees.
+// Noise-free frames whose every pixel sees the port polarizer (at 23° + θ_R on the axis, DoP 0.8)
+// along its cell's centre view, as step 2's projected model takes it.
+Dataset projected_dataset(const Truth& t, const DofpStep2Options& o) {
+  Dataset ds;
+  for (int i = 0; i < 30; ++i) ds.level_frames.push_back(frame(t, i / 29.0, 0.0, 0.0, 0.0, nullptr));
+  std::vector<std::pair<double, double>> meta;
+  for (double I : {1.0, 0.5, 0.25})
+    for (int m = 0; m < 79; ++m) {
+      const double theta = 4.6036 * m;
+      std::vector<double> f(t.K.size());
+      for (std::size_t p = 0; p < f.size(); ++p) {
+        const int col = static_cast<int>(p % t.W), row = static_cast<int>(p / t.W);
+        const double phi = dofp_projected_aop_deg(dofp_cell_view(t.W, t.H, o, col / 2, row / 2), 23.0 + theta);
+        const double a = rad(t.alpha_deg[t.j(p)] - t.eps_deg[p]);
+        f[p] = 0.5 * t.K[p] * I * (1.0 + t.k[p] * 0.8 * std::cos(2.0 * rad(phi) - 2.0 * a)) + t.b[p];
+      }
+      ds.stop_frames.push_back(f);
+      meta.emplace_back(theta, I);
+    }
+  for (int i = 0; i < 30; ++i) ds.levels.push_back({i / 29.0, ds.level_frames[i]});
+  for (std::size_t s = 0; s < meta.size(); ++s) ds.stops.push_back({meta[s].first, meta[s].second, ds.stop_frames[s]});
+  return ds;
+}
+
+TEST(DofpCalibration, ViewProjectionCalibratesAWideFieldBackToTheTruth) {
+  const Truth t = make_truth(16, 12, 1, 1.0);
+  DofpStep2Options o;
+  o.view_projection = true;
+  o.focal_px = 6.0;  // a 106° × 90° field on 16 × 12 pixels
+  const Dataset ds = projected_dataset(t, o);
+  DofpCalibrationOptions co;
+  co.step2 = o;
+  const DofpCalibration c = calibrate_dofp(t.W, t.H, ds.levels, ds.stops, co);
+  ASSERT_EQ(c.step2.usable_cells, 8 * 6);
+  const DofpTruth p = dofp_parameter_maps(c);
+  for (std::size_t i = 0; i < t.K.size(); ++i) {
+    EXPECT_NEAR(p.k[i], t.k[i], 1e-6) << i;
+    EXPECT_NEAR(p.eps_deg[i], t.eps_deg[i], 1e-6) << i;
+  }
+  for (const DofpCellFit& f : c.step2.cells) EXPECT_NEAR(f.psi0_deg, 23.0, 1e-6);
+  EXPECT_LT(c.table1.rows[2].max_deg, 1e-8);
+  // H17's model on the same frames: the fit bends (k, ε) towards the projection, and Table 1's
+  // mean over the cells keeps the projection's error.
+  co.step2.view_projection = false;
+  const DofpCalibration h = calibrate_dofp(t.W, t.H, ds.levels, ds.stops, co);
+  EXPECT_GT(h.table1.rows[2].max_deg, 0.5);
+}
+
+TEST(DofpCalibration, ViewProjectionWithOneGlobalSet) {
+  const Truth t = make_truth(16, 12, 2, 0.0);  // no per-pixel spread of k, ε
+  DofpCalibrationOptions co;
+  co.step2.view_projection = true;
+  co.step2.focal_px = 6.0;
+  co.step2.scope = DofpStep2Scope::Global;
+  const Dataset ds = projected_dataset(t, co.step2);
+  const DofpCalibration c = calibrate_dofp(t.W, t.H, ds.levels, ds.stops, co);
+  ASSERT_TRUE(c.step2.cells[0].usable()) << c.step2.cells[0].message;
+  for (int j = 1; j < 4; ++j) {
+    const std::size_t p = static_cast<std::size_t>(j / 2) * t.W + j % 2;
+    EXPECT_NEAR(c.step2.cells[0].k[j], t.k[p], 1e-9);
+    EXPECT_NEAR(c.step2.cells[0].eps_deg[j], t.eps_deg[p], 1e-7);
+  }
+  EXPECT_LT(c.table1.rows[2].max_deg, 1e-8);
+  // A projection without a focal length is refused.
+  co.step2.focal_px = 0;
+  EXPECT_THROW(calibrate_dofp(t.W, t.H, ds.levels, ds.stops, co), std::invalid_argument);
+}
+
 // Step 2 sums each cell's normal equations in lanes of 8 (SSE2, or AVX2 where the CPU has it);
 // the scalar loop (the one the Jacobian test above checks) is the reference: the same sums up to
 // the order of the additions, and the two instruction sets give the same bits. 79 observations

@@ -167,6 +167,7 @@ TEST(InstrumentKeys, EveryCameraSettingHasAKey) {
   EXPECT_EQ(addr_of("device.mosaic_deg"), c.mosaic_deg.data());
   EXPECT_EQ(addr_of("device.gain_DN"), &c.gain_DN);
   EXPECT_EQ(addr_of("device.gain_spread"), &c.gain_spread);
+  EXPECT_EQ(addr_of("device.mosaic_gain"), c.mosaic_gain.data());
   EXPECT_EQ(addr_of("device.offset_DN"), &c.offset_DN);
   EXPECT_EQ(addr_of("device.offset_spread_DN"), &c.offset_spread_DN);
   EXPECT_EQ(addr_of("device.k"), c.k.data());
@@ -198,6 +199,8 @@ TEST(InstrumentKeys, CameraKeysCheckTheirValues) {
   EXPECT_HAS(bad("device.noise", "yes"), "key 'device.noise': expected true or false, got 'yes'");
   EXPECT_HAS(bad("device.vignetting", "1"), "expected true or false, got '1'");
   EXPECT_HAS(bad("device.k", "[1, 1, 1.5, 1]"), "key 'device.k': expected 4 efficiencies in [0, 1], got 1.5");
+  EXPECT_HAS(bad("device.mosaic_gain", "[1, 1.06, 0, 1]"), "key 'device.mosaic_gain': expected 4 gain factors in [0.5, 2], got 0");
+  EXPECT_HAS(bad("device.mosaic_gain", "[1, 1]"), "key 'device.mosaic_gain'");
   EXPECT_HAS(bad("device.adc_bits", "25"), "expected an integer in [1, 16], got 25");
   EXPECT_HAS(bad("schedule.intensities", "[1, 0]"), "key 'schedule.intensities'");
   EXPECT_HAS(bad("schedule.frames_per_stop", "0"), "expected an integer in [1, 999], got 0");

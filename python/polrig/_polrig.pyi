@@ -744,9 +744,11 @@ def calibrate_dofp(level_intensity: ArrayLike, level_frames: ArrayLike, theta_R_
                    table_sense: float = 1.0, scope: str = "per-cell", dop_weight: float = 0.5,
                    fit_weight: float = 1.0, weight_by_intensity: bool = True,
                    saturation_DN: float | None = None, table1_intensity: float = 0.0,
+                   view_projection: bool = False, focal_px: float = 0.0,
+                   principal_point: tuple[float, float] | None = None,
                    threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
-def calibrate_dofp_dataset(dir: str | os.PathLike[str], *, threads: int | None = None,
-                           progress: Progress = None) -> dict[str, Any]: ...
+def calibrate_dofp_dataset(dir: str | os.PathLike[str], *, view_projection: bool = False,
+                           threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
 def dofp_cell_polarization(frame: ArrayLike, *, mosaic_deg: Sequence[float] = (0.0, 90.0, 45.0, 135.0),
                            K: ArrayLike | None = None, b: ArrayLike | None = None,
                            k: ArrayLike | None = None, eps_deg: ArrayLike | None = None) -> dict[str, Any]: ...

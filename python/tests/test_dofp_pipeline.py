@@ -165,3 +165,20 @@ def test_aop_is_90_degrees_from_the_meridian_along_the_solar_meridian():
         phi = (layers["AoP"].astype(float)[rows, rows + 80] - 45.0) % 180.0
         # float32 layers: 180° · 2⁻²⁴ ≈ 1e-5° of rounding
         assert (np.abs(phi - 90.0).max() < 1e-4) == on_meridian
+
+
+def test_calibrate_dofp_view_projection_cli_equals_python(indoor, tmp_path):
+    # --view-projection (docs/physics.md §14): the same Table 1 from the CLI and Python, the
+    # dataset's pinhole in summary.csv; another method refuses the option and writes nothing.
+    run_cli("calibrate", indoor / "data", "--method", "dofp", "--view-projection", "-o", tmp_path / "cal", "--quiet")
+    table = {r["row"]: r for r in rows(tmp_path / "cal" / "table1.csv")}
+    py = polrig.calibrate_dofp_dataset(indoor / "data", view_projection=True, threads=1)
+    for name in ("raw", "step1", "step2"):
+        for col in ("max_deg", "mean_deg", "std_deg"):
+            assert float(table[name][col]) == py["table1"][name][col], (name, col)
+    summary = {r["quantity"]: r["value"] for r in rows(tmp_path / "cal" / "summary.csv")}
+    assert float(summary["view_projection_focal_px"]) == pytest.approx(3 / 7.4 * 1000, rel=1e-12)
+    assert "view_projection_focal_px" not in {r["quantity"] for r in rows(indoor / "cal" / "summary.csv")}
+    assert float(table["step2"]["std_deg"]) < 0.1 * float(table["step1"]["std_deg"])
+    r = run_cli("calibrate", indoor / "data", "--method", "cs", "--view-projection", "-o", tmp_path / "c", check=False)
+    assert r.returncode == 2 and "--view-projection" in r.stderr and not (tmp_path / "c").exists()

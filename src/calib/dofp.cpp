@@ -173,7 +173,8 @@ inline double dot4(const double* a, const double* f) {
 // With w = w_e = 0 only the AoP residual counts (H17's cost).
 template <bool kJacobian>
 void accumulate(const CellModel& m, const double* F, const double* rot, std::size_t n, Sums& out,
-                double* residuals = nullptr, double* jacobian_rows = nullptr) {
+                double* residuals = nullptr, double* jacobian_rows = nullptr,
+                const double* dphi_dpsi = nullptr) {
   // Row-major copies of P and dP for dot4.
   double P[3][4], dP[6][3][4];
   for (int a = 0; a < 3; ++a)
@@ -229,7 +230,7 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
         e[p] = fitres ? ww * m.we * (dot4(dnv[p], f) - nf * dq3 * i3) * i3 : 0.0;
       }
       // JᵀJ's upper triangle: rows g = [g, −ww, 0], h = [h, 0, −ww·w] and e = [e, 0, 0].
-      const double g6 = -ww, h7 = -ww * m.w;
+      const double g6 = dphi_dpsi ? -ww * dphi_dpsi[i] : -ww, h7 = -ww * m.w;
       for (int p = 0; p < 6; ++p) {
         for (int q = p; q < 6; ++q) jtj[p][q] += g[p] * g[q] + h[p] * h[q] + e[p] * e[q];
         j6[p] += g[p] * g6;
@@ -388,6 +389,49 @@ void start_sums(const CellModel& m, const double* F, const double* rot, std::siz
       ++dn;
     }
   }
+}
+
+// The view's projection (options.view_projection; docs/physics.md §14): the cell sees the port
+// polarizer's axis (cos β, sin β) as u = M·(cos β, sin β), M = I₂ − (v_x, v_y)(v_x, v_y)ᵀ/(1 + v_z)
+// (symmetric; det M = v_z), so φ = arg u and dφ/dβ = det M/|u|² (u × ∂u/∂β = det M).
+struct ViewProjection {
+  double m11 = 1, m12 = 0, m22 = 1, det = 1;
+};
+ViewProjection view_projection_of(const Vec3& v) {
+  const double g = 1.0 / (1.0 + v[2]);
+  ViewProjection p;
+  p.m11 = 1.0 - g * v[0] * v[0];
+  p.m12 = -g * v[0] * v[1];
+  p.m22 = 1.0 - g * v[1] * v[1];
+  p.det = p.m11 * p.m22 - p.m12 * p.m12;
+  return p;
+}
+
+// Per stop the model's rotation e^{−2iφ_m} (cos, sin, and the stop's weight, as table_rotations)
+// and dφ_m/dψ_0, with φ_m = arg(M·(cos β_m, sin β_m)), β_m = ψ_0 + s_R·θ_R,m (turn_rad holds
+// s_R·θ_R,m, weight the stops' weights).
+void projected_rotations(const ViewProjection& M, const std::vector<double>& turn_rad,
+                         const std::vector<double>& rot, double psi0, std::vector<double>& out,
+                         std::vector<double>& dphi_dpsi) {
+  const std::size_t n = turn_rad.size();
+  out.resize(3 * n);
+  dphi_dpsi.resize(n);
+  for (std::size_t m = 0; m < n; ++m) {
+    const double b = psi0 + turn_rad[m], cb = std::cos(b), sb = std::sin(b);
+    const double u1 = M.m11 * cb + M.m12 * sb, u2 = M.m12 * cb + M.m22 * sb;
+    const double uu = u1 * u1 + u2 * u2;
+    out[3 * m] = (u1 * u1 - u2 * u2) / uu;  // cos 2φ
+    out[3 * m + 1] = -2.0 * u1 * u2 / uu;   // sin(−2φ)
+    out[3 * m + 2] = rot[3 * m + 2];
+    dphi_dpsi[m] = M.det / uu;
+  }
+}
+
+// s_R·θ_R,m in radians per stop.
+std::vector<double> table_turns_rad(std::span<const DofpPolarizedStop> stops, double sense) {
+  std::vector<double> t(stops.size());
+  for (std::size_t m = 0; m < stops.size(); ++m) t[m] = sense * deg2rad(stops[m].theta_R_deg);
+  return t;
 }
 
 const char* const kUnknownNames[8] = {"eps2", "eps3", "eps4", "k2", "k3", "k4", "psi0", "d0"};
@@ -561,6 +605,12 @@ void check_step2_options(const DofpStep2Options& o) {
   for (double a : o.mosaic_deg)
     if (!std::isfinite(a))
       throw std::invalid_argument("DoFP step 2: the mosaic angles must be finite");
+  if (o.view_projection &&
+      (!(std::isfinite(o.focal_px) && o.focal_px > 0) || std::isinf(o.principal_x_px) || std::isinf(o.principal_y_px)))
+    throw std::invalid_argument(fmt::format(
+        "DoFP step 2: the view's projection needs a finite focal length > 0 px and a finite principal "
+        "point (or NaN: the image centre); got f_c = {} px, ({}, {}) px",
+        o.focal_px, o.principal_x_px, o.principal_y_px));
 }
 
 // Per stop: cos and sin of −2·s_R·θ_R,m, and the weight of its residuals (I_m/I_max, or 1).
@@ -728,6 +778,8 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
   const std::vector<double> rot = table_rotations(stops, o.table_sense, o.weight_by_intensity);
   const StopArrays st(rot);
   const std::size_t M = stops.size();
+  const std::vector<double> turns = table_turns_rad(stops, o.table_sense);
+  const bool projected = o.view_projection;
   DofpStep2 out;
   out.scope = o.scope;
   out.cells_x = s1.width / 2;
@@ -738,7 +790,7 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
     out.cells.resize(static_cast<std::size_t>(cells_x) * cells_y);
     progress.begin("calibrate dofp: step 2 cells", static_cast<long long>(out.cells.size()));
     tbb::parallel_for(tbb::blocked_range<int>(0, cells_y, 1), [&](const tbb::blocked_range<int>& r) {
-      std::vector<double> F;
+      std::vector<double> F, rotp, dphi;
       SoaScratch sc;
       for (int cy = r.begin(); cy < r.end(); ++cy) {
         gather_cell_row(s1, stops, cy, F);
@@ -753,8 +805,19 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
           }
           const double* Fc = &F[static_cast<std::size_t>(cx) * M * 4];
           CellModel model;
+          const ViewProjection proj =
+              projected ? view_projection_of(dofp_cell_view(s1.width, s1.height, o, cx, cy)) : ViewProjection{};
           const auto eval = [&](const Vec8& x, bool jac, Sums& sums) {
             if (!make_cell_model(x, alpha, o.dop_weight, o.fit_weight, jac, model)) return false;
+            if (projected) {  // the scalar loop with the model's rotation per stop
+              model.c2psi = 1.0, model.s2psi = 0.0;
+              projected_rotations(proj, turns, rot, x[6], rotp, dphi);
+              if (jac)
+                accumulate<true>(model, Fc, rotp.data(), M, sums, nullptr, nullptr, dphi.data());
+              else
+                accumulate<false>(model, Fc, rotp.data(), M, sums, nullptr, nullptr, dphi.data());
+              return true;
+            }
             if (jac)
               accumulate_soa<true>(model, Fc, st, rot.data(), sc, sums);
             else
@@ -789,9 +852,21 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
       std::vector<Sums> rows(cells_y);
       tbb::parallel_for(0, cells_y, [&](int cy) {
         SoaScratch sc;
+        std::vector<double> rotp, dphi;
         for (int cx = 0; cx < cells_x; ++cx) {
           if (!ok[static_cast<std::size_t>(cy) * cells_x + cx]) continue;
           const double* Fc = &F[cy][static_cast<std::size_t>(cx) * M * 4];
+          if (projected) {
+            CellModel cm = model;
+            cm.c2psi = 1.0, cm.s2psi = 0.0;
+            projected_rotations(view_projection_of(dofp_cell_view(s1.width, s1.height, o, cx, cy)), turns, rot,
+                                x[6], rotp, dphi);
+            if (jac)
+              accumulate<true>(cm, Fc, rotp.data(), M, rows[cy], nullptr, nullptr, dphi.data());
+            else
+              accumulate<false>(cm, Fc, rotp.data(), M, rows[cy], nullptr, nullptr, dphi.data());
+            continue;
+          }
           if (jac)
             accumulate_soa<true>(model, Fc, st, rot.data(), sc, rows[cy]);
           else
@@ -861,6 +936,15 @@ DofpTable1 dofp_table1(const DofpStep1& s1, const DofpStep2& s2,
     }
   if (cells.empty())
     throw CalibrationError("DoFP Table 1: no cell has a usable step 1 and step 2");
+  // With the view's projection, each cell's AoP goes back to the port plane before the mean:
+  // β̃ = arg(M⁻¹·(cos φ̃, sin φ̃)) (M⁻¹ = adj M / det M; only the direction counts, so adj M).
+  std::vector<ViewProjection> back;
+  if (o.view_projection)
+    for (std::size_t c : cells) {
+      const ViewProjection M = view_projection_of(
+          dofp_cell_view(s1.width, s1.height, o, static_cast<int>(c % cells_x), static_cast<int>(c / cells_x)));
+      back.push_back({M.m22, -M.m12, M.m11, 1.0});
+    }
 
   // Circular mean per stop and row: ½·arg Σ_cells (q̃1 + i q̃2)/|q̃|.
   std::vector<std::array<double, 3>> orient(used.size());
@@ -882,6 +966,14 @@ DofpTable1 dofp_table1(const DofpStep1& s1, const DofpStep2& s2,
       for (int k = 0; k < 3; ++k) {
         const double a = q[k].norm();
         if (!(a > 0)) continue;
+        if (!back.empty()) {
+          const double phi = 0.5 * std::atan2(q[k][1], q[k][0]), c = std::cos(phi), s = std::sin(phi);
+          const ViewProjection& B = back[i];
+          const double t1 = B.m11 * c + B.m12 * s, t2 = B.m12 * c + B.m22 * s, tt = t1 * t1 + t2 * t2;
+          re[k] += (t1 * t1 - t2 * t2) / tt;
+          im[k] += 2.0 * t1 * t2 / tt;
+          continue;
+        }
         re[k] += q[k][0] / a;
         im[k] += q[k][1] / a;
       }
@@ -964,35 +1056,68 @@ std::vector<double> rotations_of(const std::vector<double>& theta, double sense)
   for (std::size_t m = 0; m < theta.size(); ++m) stops[m].theta_R_deg = theta[m];
   return table_rotations(stops, sense, false);
 }
+
+// The rotations the scalar loop takes for one cell at x: table_rotations', or with the view's
+// projection the model's per stop and dφ/dψ_0.
+std::vector<double> cell_rotations(const std::vector<double>& theta, const Eigen::Matrix<double, 8, 1>& x,
+                                   const DofpStep2Options& o, const Vec3& view, std::vector<double>& dphi) {
+  std::vector<double> rot = rotations_of(theta, o.table_sense);
+  if (!o.view_projection) return rot;
+  std::vector<double> turns(theta.size()), out;
+  for (std::size_t m = 0; m < theta.size(); ++m) turns[m] = o.table_sense * deg2rad(theta[m]);
+  projected_rotations(view_projection_of(view), turns, rot, x[6], out, dphi);
+  return out;
+}
+
 }  // namespace
+
+double dofp_projected_aop_deg(const Vec3& view, double psi_deg) {
+  const ViewProjection M = view_projection_of(view);
+  const double b = deg2rad(psi_deg), cb = std::cos(b), sb = std::sin(b);
+  return rad2deg(std::atan2(M.m12 * cb + M.m22 * sb, M.m11 * cb + M.m12 * sb));
+}
+
+Vec3 dofp_cell_view(int width, int height, const DofpStep2Options& o, int cx, int cy) {
+  if (!(std::isfinite(o.focal_px) && o.focal_px > 0))
+    throw std::invalid_argument(fmt::format("DoFP: a cell's view needs a focal length > 0 px, got {}", o.focal_px));
+  const double xc = std::isnan(o.principal_x_px) ? 0.5 * width : o.principal_x_px;
+  const double yc = std::isnan(o.principal_y_px) ? 0.5 * height : o.principal_y_px;
+  return vec3::unit({2.0 * cx + 1.0 - xc, 2.0 * cy + 1.0 - yc, o.focal_px});
+}
 
 Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F, const std::vector<double>& theta,
                                     const Eigen::Matrix<double, 8, 1>& x,
-                                    const DofpStep2Options& o) {
+                                    const DofpStep2Options& o, const Vec3& view) {
   if (F.size() != 4 * theta.size())
     throw std::invalid_argument("dofp_cell_residuals: F needs 4 values per table angle");
-  const std::vector<double> rot = rotations_of(theta, o.table_sense);
+  std::vector<double> dphi;
+  const std::vector<double> rot = cell_rotations(theta, x, o, view, dphi);
   CellModel model;
   if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, false, model))
     throw std::invalid_argument("dofp_cell_residuals: the model is singular at x");
   Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * theta.size()));
   Sums sums;
-  accumulate<false>(model, F.data(), rot.data(), theta.size(), sums, r.data());
+  if (o.view_projection) model.c2psi = 1.0, model.s2psi = 0.0;
+  accumulate<false>(model, F.data(), rot.data(), theta.size(), sums, r.data(), nullptr,
+                    dphi.empty() ? nullptr : dphi.data());
   return r;
 }
 
 Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F, const std::vector<double>& theta,
                                    const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& o) {
+                                   const DofpStep2Options& o, const Vec3& view) {
   if (F.size() != 4 * theta.size())
     throw std::invalid_argument("dofp_cell_jacobian: F needs 4 values per table angle");
-  const std::vector<double> rot = rotations_of(theta, o.table_sense);
+  std::vector<double> dphi;
+  const std::vector<double> rot = cell_rotations(theta, x, o, view, dphi);
   CellModel model;
   if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
     throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
   std::vector<double> rows(24 * theta.size(), 0.0);
   Sums sums;
-  accumulate<true>(model, F.data(), rot.data(), theta.size(), sums, nullptr, rows.data());
+  if (o.view_projection) model.c2psi = 1.0, model.s2psi = 0.0;
+  accumulate<true>(model, F.data(), rot.data(), theta.size(), sums, nullptr, rows.data(),
+                   dphi.empty() ? nullptr : dphi.data());
   Eigen::MatrixXd J(static_cast<Eigen::Index>(3 * theta.size()), 8);
   for (std::size_t i = 0; i < 3 * theta.size(); ++i)
     for (int p = 0; p < 8; ++p) J(static_cast<Eigen::Index>(i), p) = rows[8 * i + p];

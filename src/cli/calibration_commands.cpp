@@ -117,7 +117,7 @@ StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSe
 // `calibrate DIR --method dofp`: H17's two-step calibration of a camera dataset (report/
 // dofp_calibration_report.h), whose rig.yaml must describe an instrument that takes frames.
 void run_calibrate_dofp(const std::string& input, const std::string& rig_path, const CalibrationSettings& settings,
-                        const DriftSettings& drift, const OutputOptions& out) {
+                        const DriftSettings& drift, bool view_projection, const OutputOptions& out) {
   if (!rig_path.empty()) throw DataError("--rig: --method dofp reads the camera from the dataset (its truth.exr and rig.yaml)");
   if (drift.mode != "none") throw DataError(fmt::format("--drift {}: --method dofp calibrates indoors (no sun drift)", drift.mode));
   if (!drift.site.empty()) throw DataError(fmt::format("--site {}: --method dofp calibrates indoors (no sun)", drift.site));
@@ -127,7 +127,9 @@ void run_calibrate_dofp(const std::string& input, const std::string& rig_path, c
     if (option && option->count() > 0)
       throw DataError(fmt::format("{} {}: --method dofp has no noncontinuous rule (it applies to nc and cs-nc)",
                                   name, option->as<std::string>()));
-  const DofpCalibration c = calibrate_dofp_folder(input, {}, progress());
+  DofpCalibrationOptions options;
+  options.step2.view_projection = view_projection;
+  const DofpCalibration c = calibrate_dofp_folder(input, options, progress());
   OutputDir d = out.open();
   write_manifest(d.staging(), {command_line(), nullptr, report_dofp_calibration(d.staging(), c, out.plots()), {input}});
   finish(d);
@@ -139,8 +141,11 @@ void run_calibrate_dofp(const std::string& input, const std::string& rig_path, c
 
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
-                   const DriftSettings& drift, const OutputOptions& out) {
-  if (method_text == "dofp") return run_calibrate_dofp(input, rig_path, settings, drift, out);
+                   const DriftSettings& drift, bool view_projection, const OutputOptions& out) {
+  if (method_text == "dofp") return run_calibrate_dofp(input, rig_path, settings, drift, view_projection, out);
+  if (view_projection)
+    throw DataError(fmt::format("--view-projection: a DoFP camera's step-2 model (--method dofp), not --method {}",
+                                method_text));
   std::vector<CalibrationMethod> methods;
   if (method_text == "all") {
     methods.assign(kAllMethods.begin(), kAllMethods.end());
@@ -300,10 +305,15 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
                                            "east positive)");
     app->add_option("--rig", *rig, "rig file describing the sensor (film axes, amplifier); "
                                    "default: the dataset's rig.yaml, else the default rig");
+    auto view_projection = std::make_shared<bool>(false);
+    app->add_flag("--view-projection", *view_projection,
+                  "--method dofp: step 2's cells see the port polarizer along their views (a plane "
+                  "polarizer's AoP off the axis) and Table 1 maps each cell's AoP back to the port "
+                  "plane; off: H17's model (docs/physics.md §14)");
     settings->add_to(*app);
     out->add_to(*app);
     add_threads_option(*app, threads);
-    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *drift, *out); }});
+    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *drift, *view_projection, *out); }});
   }
   {
     auto* app = root.add_subcommand("apply", "turn voltages into θ and d with calibrated parameters");

@@ -119,6 +119,10 @@ DofpTruth make_dofp_truth(const DofpCameraSpec& spec, std::uint64_t seed) {
   if (spec.width_px <= 0 || spec.height_px <= 0 || spec.width_px % 2 || spec.height_px % 2)
     throw std::invalid_argument(fmt::format("the camera's size {} × {} px must be positive and even",
                                             spec.width_px, spec.height_px));
+  for (std::size_t j = 0; j < 4; ++j)
+    if (!(std::isfinite(spec.mosaic_gain[j]) && spec.mosaic_gain[j] > 0))
+      throw std::invalid_argument(fmt::format("the mosaic gain of position {} is {}; it must be finite and > 0",
+                                              j, spec.mosaic_gain[j]));
   const bool misregistered = spec.misregistration_dx_px != 0 || spec.misregistration_dy_px != 0 ||
                              spec.misregistration_rotation_deg != 0;
   const double D = (spec.extinction_ratio - 1.0) / (spec.extinction_ratio + 1.0);
@@ -139,7 +143,8 @@ DofpTruth make_dofp_truth(const DofpCameraSpec& spec, std::uint64_t seed) {
       }
       if (spec.k_spread != 0) k += spec.k_spread * z(2);
       if (spec.eps_spread_deg != 0) eps += spec.eps_spread_deg * z(3);
-      const double K = spec.gain_DN * (1.0 + (spec.gain_spread != 0 ? spec.gain_spread * z(0) : 0.0));
+      const double K = spec.gain_DN * spec.mosaic_gain[j] *
+                       (1.0 + (spec.gain_spread != 0 ? spec.gain_spread * z(0) : 0.0));
       if (!(K > 0))
         throw std::invalid_argument(fmt::format(
             "the gain spread {} gives pixel ({}, {}) a gain K = {} DN ≤ 0", spec.gain_spread, col, row, K));

@@ -97,8 +97,9 @@ void bind_dofp_calibration(py::module_& m) {
          const ArrayLike& stop_intensity, const ArrayLike& stop_frames,
          const std::array<double, 4>& mosaic_deg, double table_sense, const std::string& scope,
          double dop_weight, double fit_weight, bool weight_by_intensity,
-         std::optional<double> saturation_DN, double table1_intensity, std::optional<int> threads,
-         const py::object& progress) {
+         std::optional<double> saturation_DN, double table1_intensity, bool view_projection,
+         double focal_px, std::optional<std::pair<double, double>> principal_point,
+         std::optional<int> threads, const py::object& progress) {
         const DoubleArray li = as_array(level_intensity.obj, "level_intensity", 1);
         const DoubleArray lf = as_array(level_frames.obj, "level_frames", 3);
         const DoubleArray th = as_array(theta_R_deg.obj, "theta_R_deg", 1);
@@ -130,6 +131,12 @@ void bind_dofp_calibration(py::module_& m) {
         o.step2.fit_weight = fit_weight;
         o.step2.weight_by_intensity = weight_by_intensity;
         o.table1_intensity = table1_intensity;
+        o.step2.view_projection = view_projection;
+        o.step2.focal_px = focal_px;
+        if (principal_point) {
+          o.step2.principal_x_px = principal_point->first;
+          o.step2.principal_y_px = principal_point->second;
+        }
         DofpCalibration c;
         const Progress p = progress_from(progress);
         ThreadLimit limit(threads);
@@ -148,8 +155,9 @@ void bind_dofp_calibration(py::module_& m) {
       py::arg("table_sense") = kDofpTableSense, py::arg("scope") = "per-cell",
       py::arg("dop_weight") = 0.5, py::arg("fit_weight") = 1.0,
       py::arg("weight_by_intensity") = true, py::arg("saturation_DN") = py::none(),
-      py::arg("table1_intensity") = 0.0, py::arg("threads") = py::none(),
-      py::arg("progress") = py::none(),
+      py::arg("table1_intensity") = 0.0, py::arg("view_projection") = false,
+      py::arg("focal_px") = 0.0, py::arg("principal_point") = py::none(),
+      py::arg("threads") = py::none(), py::arg("progress") = py::none(),
       (std::string(
            "H17's two-step calibration of a DoFP camera (docs/physics.md §14).\n\n"
            "level_intensity (L,), level_frames (L, H, W): step 1's unpolarized levels (relative "
@@ -159,7 +167,10 @@ void bind_dofp_calibration(py::module_& m) {
            "message, iterations, rank, observations, k and eps_deg (n, 4), psi0_deg, dop, "
            "initial_rms_deg, final_rms_deg; NaN where a quantity does not exist); 'table1' (raw, "
            "step1, step2: max_deg, mean_deg, std_deg, error_deg; theta_R_deg, intensity, "
-           "cells_used). scope: 'per-cell' or 'global'. ValueError for bad input.\n") +
+           "cells_used). scope: 'per-cell' or 'global'. view_projection: step 2's cells see the "
+           "port polarizer along their views and Table 1 maps each cell's AoP back to the port "
+           "plane (needs focal_px > 0; principal_point (x, y) in px, default the image centre); "
+           "off: H17's model. ValueError for bad input.\n") +
        kThreadsDoc + "\n" + kProgressDoc)
           .c_str());
 }
@@ -168,20 +179,25 @@ void bind_dofp_calibration(py::module_& m) {
 void bind_dofp_dataset_calibration(py::module_& m) {
   m.def(
       "calibrate_dofp_dataset",
-      [](const std::filesystem::path& dir, std::optional<int> threads, const py::object& progress) {
+      [](const std::filesystem::path& dir, bool view_projection, std::optional<int> threads,
+         const py::object& progress) {
         const Progress p = progress_from(progress);
         ThreadLimit limit(threads);
         DofpCalibration c;
+        DofpCalibrationOptions o;
+        o.step2.view_projection = view_projection;
         {
           py::gil_scoped_release release;
-          c = calibrate_dofp_folder(dir, {}, p);
+          c = calibrate_dofp_folder(dir, o, p);
         }
         return calibration_dict(c);
       },
-      py::arg("dir"), py::kw_only(), py::arg("threads") = py::none(), py::arg("progress") = py::none(),
+      py::arg("dir"), py::kw_only(), py::arg("view_projection") = false, py::arg("threads") = py::none(),
+      py::arg("progress") = py::none(),
       (std::string("`polrig calibrate DIR --method dofp`'s computation (report/dofp_calibration_report.h): "
                    "both steps and Table 1 on a DoFP camera dataset (its unpolarized stops for step 1, "
-                   "its polarized stops for step 2, the dataset's mosaic). Returns calibrate_dofp's dict. "
+                   "its polarized stops for step 2, the dataset's mosaic). view_projection: as "
+                   "`--view-projection` (the dataset's focal length and principal point). Returns calibrate_dofp's dict. "
                    "Raises RigError for a rig without frames, DataError for a file that cannot be read, "
                    "CalibrationError when Table 1 cannot be formed.\n") +
        kThreadsDoc + "\n" + kProgressDoc)

@@ -103,6 +103,8 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
   std::string summary = "quantity,value\n";
   summary += fmt::format("scope,{}\n", dofp_scope_name(c.step2.scope));
   summary += fmt::format("table_sense,{}\n", num(c.options.step2.table_sense));
+  if (c.options.step2.view_projection)  // only when on: the default's file is unchanged
+    summary += fmt::format("view_projection_focal_px,{}\n", num(c.options.step2.focal_px));
   summary += fmt::format("pixels,{}\n", static_cast<long long>(W) * H);
   summary += fmt::format("step1_rank_deficient_pixels,{}\n", c.step1.rank_deficient_pixels);
   summary += fmt::format("step2_fits,{}\n", c.step2.cells.size());
@@ -182,6 +184,12 @@ DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrati
   for (int j = 0; j < 4; ++j)  // the first cell's TL, TR, BL, BR
     options.step2.mosaic_deg[static_cast<std::size_t>(j)] =
         dataset.truth.alpha_deg[static_cast<std::size_t>((j / 2) * W + j % 2)];
+  // The view's projection takes the camera's pinhole from the dataset unless given.
+  if (options.step2.view_projection && !(options.step2.focal_px > 0)) {
+    options.step2.focal_px = dataset.f_c_px;
+    options.step2.principal_x_px = dataset.cx;
+    options.step2.principal_y_px = dataset.cy;
+  }
   // A mean frame at the ADC's top was clipped: step 1 leaves it out (Eq. 19 is linear below it).
   if (dataset.adc_bits > 0 && !std::isfinite(options.step1.saturation_DN))
     options.step1.saturation_DN = std::ldexp(1.0, dataset.adc_bits) - 1.0;

@@ -228,6 +228,14 @@ std::vector<RigKey> make_keys() {
       "device.gain_spread", "", "a relative spread", "relative SD of the gain K over the pixels",
       "beyond 30 % a Gaussian draw gives non-positive gains (3.3 σ) in a VGA frame",
       [](Rig& r) -> double& { return r.camera.gain_spread; }), kCamera), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{0.5, 2.0}>(
+      "device.mosaic_gain", "", "4 gain factors",
+      "gain factor of each mosaic position (top-left, top-right, bottom-left, bottom-right): "
+      "K = gain_DN·mosaic_gain·(1 + gain_spread·z); a systematic difference between the four "
+      "analyzers, which step 1 removes (H17 Table 1)",
+      "a relative gain: the four analyzers of one sensor differ by percents; a factor of 2 either "
+      "way is no longer one camera's mosaic",
+      [](Rig& r) { return std::span<double>(r.camera.mosaic_gain); }), kCamera), kSimulate, ""));
   keys.push_back(reads(only(real<RealRange{-16777216.0, 16777216.0}>(
       "device.offset_DN", "DN", "an offset", "mean offset b",
       "an offset beyond the largest ADC's range (24 bits) clips every pixel",

@@ -104,7 +104,27 @@ struct DofpStep2Options {
   // DoP's noise grow as 1/I, so this is the weighted least squares; it keeps the dim stops'
   // nonlinear (Rician) biases out of (k, ε). false: H17's equal weights.
   bool weight_by_intensity = true;
+  // The view's projection [C, not in H17] (docs/physics.md §14). Off: H17's model, every cell
+  // sees the port polarizer at β_m = ψ_0 + s_R·θ_R,m. On: the cell, seen along the view v through
+  // its centre (pinhole: focal_px and the principal point; the analyzer in the image plane),
+  // sees φ_m = arg(M·(cos β_m, sin β_m)), M = I₂ − (v_x, v_y)(v_x, v_y)ᵀ/(1 + v_z): a plane
+  // polarizer's AoP off the axis (tan φ = tan β / cos γ along the azimuth 0). Table 1 then maps
+  // each cell's AoP back to the port plane, β̃ = arg(M⁻¹·(cos φ̃, sin φ̃)), before the mean (all
+  // three rows). Needs focal_px > 0; NaN principal point: the image centre (width/2, height/2).
+  bool view_projection = false;
+  double focal_px = 0;
+  double principal_x_px = std::numeric_limits<double>::quiet_NaN();
+  double principal_y_px = std::numeric_limits<double>::quiet_NaN();
 };
+
+// The AoP (degrees, image frame from X_l towards Y_l) that an analyzer in the image plane sees of
+// a plane polarizer whose axis lies ⊥ Z_l at psi_deg from X_l, along the unit view v (frame l,
+// v_z > 0): arg(M·(cos ψ, sin ψ)), M = I₂ − (v_x, v_y)(v_x, v_y)ᵀ/(1 + v_z) (docs/physics.md §14).
+double dofp_projected_aop_deg(const Vec3& view, double psi_deg);
+// The view through the centre of cell (cx, cy) (the corner its four pixels share): the unit vector
+// (2cx + 1 − x_c, 2cy + 1 − y_c, f_c) in frame l, with the options' focal length and principal
+// point (NaN: the image centre). Throws std::invalid_argument when focal_px is not positive.
+Vec3 dofp_cell_view(int width, int height, const DofpStep2Options& options, int cx, int cy);
 
 // One cell's (or the global) fit: the parameters of its four pixels and how the fit ended,
 // after calib/fit.h's FitSummary. Only usable() cells have parameters to use; the others hold
@@ -195,16 +215,17 @@ DofpTruth dofp_parameter_maps(const DofpCalibration& c, std::vector<std::uint8_t
 // BL, BR), theta_R_deg one per observation. Residuals: per observation the AoP residual (rad)
 // , the weighted DoP residual and the weighted fit residual (0 when their weight is 0),
 // interleaved.
+// `view` (frame l) is the cell's view, used with options.view_projection only.
 Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F_tilde,
                                     const std::vector<double>& theta_R_deg,
                                     const Eigen::Matrix<double, 8, 1>& x,
-                                    const DofpStep2Options& options);
+                                    const DofpStep2Options& options, const Vec3& view = {0, 0, 1});
 // The analytic Jacobian (Appendix A's chain ∂φ̃/∂Q̃ · ∂Q̃/∂x in matrix form: ∂(R⁻¹Ãᵀ) =
 // R⁻¹(∂Ãᵀ − ∂R·R⁻¹Ãᵀ)), rows as dofp_cell_residuals; columns: x.
 Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F_tilde,
                                    const std::vector<double>& theta_R_deg,
                                    const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& options);
+                                   const DofpStep2Options& options, const Vec3& view = {0, 0, 1});
 
 // One cell's sums at x by each code path of step 2, for tests: the scalar loop (the one
 // dofp_cell_residuals and dofp_cell_jacobian use), and the pass in lanes of 8 that step 2 runs

@@ -40,6 +40,11 @@ struct DofpCameraSpec {
   // Gain and offset per pixel: a mean and a relative (K) or absolute (b) Gaussian spread.
   double gain_DN = 2000.0;        // K: DN per unit intensity I
   double gain_spread = 0.0;       // relative SD of K over the pixels
+  // A gain factor per mosaic position (TL, TR, BL, BR) [C, not in H17]: K of a pixel at position
+  // j is gain_DN·mosaic_gain[j]·(1 + gain_spread·z). A systematic difference between the four
+  // analyzers' transmittances (each wire grid passes a different share of unpolarized light),
+  // which the circular mean of Table 1 does not average out, unlike the random spread.
+  std::array<double, 4> mosaic_gain = {1, 1, 1, 1};
   double offset_DN = 0.0;         // b
   double offset_spread_DN = 0.0;  // SD of b over the pixels
 
@@ -100,11 +105,12 @@ double overlap_eps_deg(double alpha_deg, const Overlap& o);
 // Exact polygon clipping of the pixel square against the mosaic's cells.
 Overlap misregistered_overlap(const DofpCameraSpec& spec, int col, int row);
 
-// The per-pixel truth: K = gain·(1 + gain_spread·z), b = offset + offset_spread·z, k and ε the
+// The per-pixel truth: K = gain·mosaic_gain[j]·(1 + gain_spread·z) (j the pixel's mosaic position), b = offset + offset_spread·z, k and ε the
 // position's means (or the mis-registration's overlap, when any of dx, dy, rotation is non-zero)
 // plus their spreads·z, k clamped to [0, 1] and then multiplied by (ER − 1)/(ER + 1); z are
 // independent standard normals from (seed, pixel, parameter). Throws std::invalid_argument for a
-// spec whose sizes are not positive and even, or whose K would not be positive.
+// spec whose sizes are not positive and even, whose mosaic_gain is not finite and positive, or
+// whose K would not be positive.
 DofpTruth make_dofp_truth(const DofpCameraSpec& spec, std::uint64_t seed);
 
 // Eq. 18 without noise: (K/2)·I·[1 + k·d·cos(2φ − 2(α − ε))] + b, angles in degrees.

@@ -188,6 +188,37 @@ TEST(DofpCalibration, NoiseFreeFramesCalibrateBackToTheTruth) {
   EXPECT_EQ(c.table1.theta_R_deg.size(), 78u);
 }
 
+// Step 2's closed-form start (docs/physics.md §14 "Solver") is exact on noise-free frames of
+// Eq. 18: every cell starts at the truth (AoP residual at rounding level) and LM takes no step
+// that is not below the tolerance, for the wrong analyzer order as well as the right one.
+TEST(DofpCalibration, TheClosedFormStartIsExactOnNoiseFreeFrames) {
+  const Truth t = make_truth(8, 6, 5, 1.0);
+  const Dataset ds = make_dataset(t, -61.0, 0.7, 0.0);
+  const DofpStep1 s1 = calibrate_dofp_step1(t.W, t.H, ds.levels);
+  for (const double sense : {1.0, -1.0}) {
+    DofpStep2Options o;
+    o.table_sense = sense;
+    std::vector<DofpPolarizedStop> stops = ds.stops;
+    for (DofpPolarizedStop& s : stops) s.theta_R_deg *= sense;  // the same light either way
+    const DofpStep2 s2 = calibrate_dofp_step2(s1, stops, o);
+    ASSERT_EQ(s2.cells.size(), 12u);
+    for (std::size_t c = 0; c < s2.cells.size(); ++c) {
+      const DofpCellFit& f = s2.cells[c];
+      ASSERT_TRUE(f.usable()) << f.message;
+      EXPECT_LT(f.initial_rms_deg, 1e-9) << c;
+      EXPECT_LE(f.iterations, 1) << c;
+      EXPECT_NEAR(f.psi0_deg, -61.0, 1e-9) << c;
+      EXPECT_NEAR(f.dop, 0.7, 1e-11) << c;
+      const std::size_t p0 = (c / 4) * 2 * t.W + (c % 4) * 2;
+      const std::size_t px[4] = {p0, p0 + 1, p0 + t.W, p0 + t.W + 1};
+      for (int j = 1; j < 4; ++j) {
+        EXPECT_NEAR(f.k[j], t.k[px[j]], 1e-11) << c << " " << j;
+        EXPECT_NEAR(f.eps_deg[j], t.eps_deg[px[j]], 1e-9) << c << " " << j;
+      }
+    }
+  }
+}
+
 TEST(DofpCalibration, OneGlobalSetRecoversAGlobalTruth) {
   Truth t = make_truth(8, 6, 2, 0.0);  // no per-pixel spread of k, ε
   const Dataset ds = make_dataset(t, -41.0, 0.6, 0.0, 40);

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <cstring>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include <Eigen/Dense>
@@ -434,6 +436,74 @@ std::vector<double> table_turns_rad(std::span<const DofpPolarizedStop> stops, do
   return t;
 }
 
+// ---- The closed-form start of step 2 [C] ----
+// With a uniform source of DoP d at AoP φ_m = ψ0 + s_R·θ_R,m and intensity c·I_m (c unknown,
+// common to the four pixels), Eqs. 20–21 give per pixel j
+//   F̃_j,m = c·I_m·(1 + k_j·d·cos(A_j − 2β_m)),   A_j = 2(α_j − ε_j − ψ0),   β_m = s_R·θ_R,m,
+// linear in [c, c·k_j·d·cos A_j, c·k_j·d·sin A_j] on the rows I_m·[1, cos 2β_m, sin 2β_m]. Per
+// pixel a linear least squares gives z_j = k_j·d·e^{iA_j} (coefficients 2 + i3 over 1), and with
+// the gauge k_1 = 1, ε_1 = 0 (Eq. 25):
+//   d0 = |z_1|,  k_j = |z_j|/|z_1|,  ψ0 = ½·arg(z̄_1·e^{2iα_1}),  ε_j = −½·arg(z_j·z̄_1·e^{−2i(α_j − α_1)}),
+// exact on noise-free data of the model, so that LM needs about two passes instead of about six.
+// The normal matrix depends on the stops only: its inverse is made once.
+struct ClosedFormStart {
+  bool ok = false;                   // false: the rows do not determine the three coefficients
+  Eigen::Matrix3d Ninv;              // (ΣDᵀD)⁻¹ over the rows D_m = I_m·[1, cos 2β_m, sin 2β_m]
+  std::vector<double> row;           // per stop: I_m·[1, cos 2β_m, sin 2β_m]
+  ClosedFormStart(std::span<const DofpPolarizedStop> stops, const std::vector<double>& rot) {
+    double top = 0;
+    for (const DofpPolarizedStop& s : stops) top = std::max(top, s.intensity);
+    if (!(top > 0) || !std::isfinite(top)) return;
+    row.resize(3 * stops.size());
+    Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+    for (std::size_t m = 0; m < stops.size(); ++m) {
+      const double I = std::max(stops[m].intensity, 0.0) / top;
+      const Eigen::Vector3d d(I, I * rot[3 * m], -I * rot[3 * m + 1]);  // rot: cos, sin of −2β
+      for (int a = 0; a < 3; ++a) row[3 * m + a] = d[a];
+      N += d * d.transpose();
+    }
+    // Well-conditioned when the stops' angles spread over the half turn: the scaled normal
+    // matrix's smallest eigenvalue is then a fair fraction of its largest (1/2 for even spread).
+    const Eigen::Vector3d sc = N.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+    const Eigen::Matrix3d S = sc.asDiagonal() * N * sc.asDiagonal();
+    const Eigen::Vector3d ev = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(S).eigenvalues();
+    if (!(ev[0] > 1e-6 * ev[2])) return;
+    Ninv = N.inverse();
+    ok = Ninv.allFinite();
+  }
+  // Adds one cell's right-hand sides Σ_m D_m·F̃_j,m (g[j], pixel j) over its n observations.
+  void add(const double* F, std::size_t n, Eigen::Matrix<double, 3, 4>& g) const {
+    for (std::size_t m = 0; m < n; ++m)
+      for (int j = 0; j < 4; ++j)
+        for (int a = 0; a < 3; ++a) g(a, j) += row[3 * m + a] * F[4 * m + j];
+  }
+  // The start from the summed right-hand sides; false (use the nominal start) when a pixel's
+  // modulation or intensity is not positive, or an ε is 22.5° or more: the pixel's axis would be
+  // nearer another of the mosaic's nominal axes than its own (a mislabelled mosaic or the wrong
+  // table sense, which a fit from the nominal start must report instead of fitting).
+  bool start(const Eigen::Matrix<double, 3, 4>& g, const std::array<double, 4>& alpha, Vec8& x) const {
+    if (!ok) return false;
+    const Eigen::Matrix<double, 3, 4> coef = Ninv * g;
+    std::array<std::complex<double>, 4> z;
+    for (int j = 0; j < 4; ++j) {
+      if (!(coef(0, j) > 0)) return false;
+      z[j] = std::complex<double>(coef(1, j), coef(2, j)) / coef(0, j);
+      if (!(std::abs(z[j]) > 0) || !std::isfinite(std::abs(z[j]))) return false;
+    }
+    const double d = std::abs(z[0]);
+    x[6] = 0.5 * std::arg(std::conj(z[0]) * std::polar(1.0, 2.0 * alpha[0]));
+    x[7] = d;
+    for (int j = 1; j < 4; ++j) {
+      const double eps =
+          -0.5 * std::arg(z[j] * std::conj(z[0]) * std::polar(1.0, -2.0 * (alpha[j] - alpha[0])));
+      if (!(std::abs(eps) < std::numbers::pi / 8)) return false;
+      x[j - 1] = eps;
+      x[j + 2] = std::abs(z[j]) / d;
+    }
+    return x.allFinite();
+  }
+};
+
 const char* const kUnknownNames[8] = {"eps2", "eps3", "eps4", "k2", "k3", "k4", "psi0", "d0"};
 
 // Rank of J from JᵀJ scaled to unit diagonal, over the first `n` unknowns; `weakest` names the
@@ -460,9 +530,11 @@ int jacobian_rank(const Mat8& JtJ_upper, int n, double min_ratio, int& weakest) 
 // lowers the cost, × 10 and retry after one that does not); stopping rule of spec §2.4 [C]:
 // |Δx| < step_tolerance on an accepted step, or max_iterations. `eval(x, jac, sums)` returns the
 // sums over every observation of the fit.
-template <class Eval>
-DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start, long long n,
-                                const DofpStep2Options& o) {
+// The start is `closed` (ClosedFormStart) when there is one and the model is defined there,
+// else `nominal()`: ε = 0, k = 1 and start_sums's ψ0, d0.
+template <class Eval, class Nominal>
+DofpCellFit levenberg_marquardt(Eval&& eval, const std::optional<Vec8>& closed, Nominal&& nominal,
+                                long long n, const DofpStep2Options& o) {
   DofpCellFit fit;
   fit.observations = static_cast<int>(n);
   const bool dop = o.dop_weight != 0.0;
@@ -474,9 +546,19 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
     return fit;
   }
   Vec8 x;
-  x << 0, 0, 0, 1, 1, 1, psi0_start, dop ? d0_start : 0.0;
   Sums acc;
-  if (!eval(x, true, acc) || acc.bad >= 0) {
+  bool started = false;
+  if (closed) {
+    x = *closed;
+    if (!dop) x[7] = 0.0;
+    started = eval(x, true, acc) && acc.bad < 0;
+  }
+  if (!started) {
+    x = nominal();
+    if (!dop) x[7] = 0.0;
+    acc = Sums{};
+  }
+  if (!started && (!eval(x, true, acc) || acc.bad >= 0)) {
     fit.termination = FitTermination::OutsideDomain;
     fit.message = acc.bad >= 0 ? fmt::format("the AoP or DoP is undefined at observation {} "
                                              "(no polarized signal)", acc.bad)
@@ -514,6 +596,8 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
     // ~10³ residuals), or, at an exact fit, the cost of residuals of a few ulps of 1 rad each
     // (3n·(4·2⁻⁵²)²) — is a stall, not the cost's floor.
     double predicted = std::numeric_limits<double>::infinity();
+    const double rounding = 1e-10 * cost + 3.0 * scale * std::pow(4.0 * std::numeric_limits<double>::epsilon(), 2);
+    bool at_floor = false;
     for (int h = 0; h <= o.max_halvings; ++h) {
       Mat8 Aug = JtJ;
       for (int p = 0; p < 8; ++p) Aug(p, p) += lambda * std::max(JtJ(p, p), 1e-12);
@@ -523,6 +607,13 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
         continue;
       }
       if (!std::isfinite(predicted)) predicted = -grad.dot(step) - 0.5 * step.dot(JtJ * step);
+      // A step below the tolerance that promises no more than rounding ends the fit whether or
+      // not it would lower the cost (both end as converged below): x moves by < step_tolerance
+      // if it is taken, so it is not evaluated, which saves each cell's last pass.
+      if (step.norm() < o.step_tolerance && predicted <= rounding) {
+        at_floor = true;
+        break;
+      }
       xn = x + step;
       trial = Sums{};
       // The trial pass sums the Jacobian too: an accepted step (the usual case) needs no
@@ -535,8 +626,7 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
       lambda *= 10;
     }
     if (!accepted) {
-      const double rounding = 1e-10 * cost + 3.0 * scale * std::pow(4.0 * std::numeric_limits<double>::epsilon(), 2);
-      if (step.allFinite() && step.norm() < o.step_tolerance && predicted <= rounding) {
+      if (at_floor || (step.allFinite() && step.norm() < o.step_tolerance && predicted <= rounding)) {
         converged = true;
         break;
       }
@@ -583,6 +673,12 @@ DofpCellFit levenberg_marquardt(Eval&& eval, double psi0_start, double d0_start,
 Vec8 ideal_x() {
   Vec8 x;
   x << 0, 0, 0, 1, 1, 1, 0, 0;
+  return x;
+}
+
+Vec8 nominal_start(double psi0, double d0) {
+  Vec8 x;
+  x << 0, 0, 0, 1, 1, 1, psi0, d0;
   return x;
 }
 
@@ -777,6 +873,7 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
   const std::array<double, 4> alpha = alpha_rad_of(o);
   const std::vector<double> rot = table_rotations(stops, o.table_sense, o.weight_by_intensity);
   const StopArrays st(rot);
+  const ClosedFormStart cf(stops, rot);
   const std::size_t M = stops.size();
   const std::vector<double> turns = table_turns_rad(stops, o.table_sense);
   const bool projected = o.view_projection;
@@ -824,12 +921,20 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
               accumulate_soa<false>(model, Fc, st, rot.data(), sc, sums);
             return true;
           };
-          double re = 0, im = 0, dsum = 0;
-          long long dn = 0;
-          if (make_cell_model(ideal_x(), alpha, o.dop_weight, o.fit_weight, false, model))
-            start_sums(model, Fc, rot.data(), M, re, im, dsum, dn);
-          fit = levenberg_marquardt(eval, 0.5 * std::atan2(im, re), dn > 0 ? dsum / dn : 0.0,
-                                    static_cast<long long>(M), o);
+          std::optional<Vec8> closed;
+          if (cf.ok) {
+            Eigen::Matrix<double, 3, 4> g = Eigen::Matrix<double, 3, 4>::Zero();
+            cf.add(Fc, M, g);
+            if (Vec8 x; cf.start(g, alpha, x)) closed = x;
+          }
+          const auto nominal = [&] {
+            double re = 0, im = 0, dsum = 0;
+            long long dn = 0;
+            if (make_cell_model(ideal_x(), alpha, o.dop_weight, o.fit_weight, false, model))
+              start_sums(model, Fc, rot.data(), M, re, im, dsum, dn);
+            return nominal_start(0.5 * std::atan2(im, re), dn > 0 ? dsum / dn : 0.0);
+          };
+          fit = levenberg_marquardt(eval, closed, nominal, static_cast<long long>(M), o);
         }
         progress.advance(cells_x);
       }
@@ -876,18 +981,29 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
       for (const Sums& s : rows) total.add(s);
       return true;
     };
-    double re = 0, im = 0, dsum = 0;
-    long long dn = 0;
-    CellModel model;
-    if (make_cell_model(ideal_x(), alpha, o.dop_weight, o.fit_weight, false, model))
+    std::optional<Vec8> closed;
+    if (cf.ok) {  // the pooled right-hand sides of every cell used, in row order
+      Eigen::Matrix<double, 3, 4> g = Eigen::Matrix<double, 3, 4>::Zero();
       for (int cy = 0; cy < cells_y; ++cy)
         for (int cx = 0; cx < cells_x; ++cx)
           if (ok[static_cast<std::size_t>(cy) * cells_x + cx])
-            start_sums(model, &F[cy][static_cast<std::size_t>(cx) * M * 4], rot.data(), M, re, im,
-                       dsum, dn);
-    out.cells.push_back(levenberg_marquardt(eval, 0.5 * std::atan2(im, re),
-                                            dn > 0 ? dsum / dn : 0.0,
-                                            used * static_cast<long long>(M), o));
+            cf.add(&F[cy][static_cast<std::size_t>(cx) * M * 4], M, g);
+      if (Vec8 x; cf.start(g, alpha, x)) closed = x;
+    }
+    const auto nominal = [&] {
+      double re = 0, im = 0, dsum = 0;
+      long long dn = 0;
+      CellModel model;
+      if (make_cell_model(ideal_x(), alpha, o.dop_weight, o.fit_weight, false, model))
+        for (int cy = 0; cy < cells_y; ++cy)
+          for (int cx = 0; cx < cells_x; ++cx)
+            if (ok[static_cast<std::size_t>(cy) * cells_x + cx])
+              start_sums(model, &F[cy][static_cast<std::size_t>(cx) * M * 4], rot.data(), M, re,
+                         im, dsum, dn);
+      return nominal_start(0.5 * std::atan2(im, re), dn > 0 ? dsum / dn : 0.0);
+    };
+    out.cells.push_back(
+        levenberg_marquardt(eval, closed, nominal, used * static_cast<long long>(M), o));
     if (used == 0) out.cells.back().message = "step 1 left every cell undetermined";
   }
   for (const DofpCellFit& c : out.cells) out.usable_cells += c.usable();

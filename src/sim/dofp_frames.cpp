@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -49,13 +50,25 @@ DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig),
   const int W = truth_.width, H = truth_.height;
   const std::size_t n = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
   pixels_.resize(n);
+  // pixel_view's a = (col + ½ − W/2, row + ½ − H/2, f_c), by column, by row and per pixel 1/|a|.
+  const DofpCameraSpec& spec = rig.camera;
+  view_x_.resize(static_cast<std::size_t>(W));
+  view_y_.resize(static_cast<std::size_t>(H));
+  for (int col = 0; col < W; ++col) view_x_[static_cast<std::size_t>(col)] = col + 0.5 - 0.5 * spec.width_px;
+  for (int row = 0; row < H; ++row) view_y_[static_cast<std::size_t>(row)] = row + 0.5 - 0.5 * spec.height_px;
+  view_f_ = focal_px(spec);
   for (int row = 0; row < H; ++row)
     for (int col = 0; col < W; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * static_cast<std::size_t>(W) + static_cast<std::size_t>(col);
-      const Vec3 v = pixel_view(rig.camera, col, row);
+      const Vec3 a{view_x_[static_cast<std::size_t>(col)], view_y_[static_cast<std::size_t>(row)], view_f_};
+      const double inv = 1.0 / vec3::norm(a);
+      const Vec3 v = pixel_view(spec, col, row);
+      if (vec3::mul(a, inv) != v)
+        throw std::logic_error(fmt::format("DofpSimulator: pixel ({}, {})'s view is not pixel_view's a/|a| "
+                                           "(the simulator's view factors must follow pixel_view)", col, row));
       const double beta = 2.0 * deg2rad(truth_.alpha_deg[i] - truth_.eps_deg[i]);
       const double A = 0.5 * truth_.K[i], Ak = A * truth_.k[i];
-      pixels_[i] = {v[0], v[1], v[2], 1.0 / (1.0 + v[2]), A, Ak * std::cos(beta), Ak * std::sin(beta), truth_.b[i]};
+      pixels_[i] = {inv, A, Ak * std::cos(beta), Ak * std::sin(beta)};
     }
 }
 
@@ -110,36 +123,48 @@ void DofpSimulator::signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
     // Per row, loops without branches over plain arrays (the compiler vectorises them); the
     // analyzer's choice and the truth layers outside them.
     const std::size_t w_px = static_cast<std::size_t>(W);
-    std::vector<Vec3> views(w_px);
+    // Work space not zeroed (every entry is written before it is read): zeroing it cost 6 % of a frame.
+    const std::unique_ptr<Vec3[]> view_buf = std::make_unique_for_overwrite<Vec3[]>(w_px);
+    const std::unique_ptr<double[]> buf = std::make_unique_for_overwrite<double[]>(7 * w_px);
+    const std::span<Vec3> views(view_buf.get(), w_px);
     std::vector<ViewLight> lights(w_px);
-    std::vector<double> u(w_px), w(w_px), c2(w_px), s2(w_px), I(w_px), d(w_px), f(w_px);
+    double *u = buf.get(), *w = u + w_px, *c2 = w + w_px, *s2 = c2 + w_px, *I = s2 + w_px, *d = I + w_px;
+    const std::span<const double> f(d + w_px, w_px);
+    double* fw = d + w_px;
+    const double* xs = view_x_.data();
+    const double fc = view_f_;
     for (int row = rows.begin(); row < rows.end(); ++row) {
       const std::size_t first = static_cast<std::size_t>(row) * w_px;
       const PixelConstants* px = pixels_.data() + first;
+      const double* b = truth_.b.data() + first;
+      const double y = view_y_[static_cast<std::size_t>(row)];
       for (std::size_t c = 0; c < w_px; ++c) {
-        const PixelConstants& p = px[c];
-        views[c] = {p.vx * A.x[0] + p.vy * A.y[0] + p.vz * A.z[0], p.vx * A.x[1] + p.vy * A.y[1] + p.vz * A.z[1],
-                    p.vx * A.x[2] + p.vy * A.y[2] + p.vz * A.z[2]};
+        const double inv = px[c].inv;
+        const double vx = xs[c] * inv, vy = y * inv, vz = fc * inv;  // pixel_view: a·(1/|a|)
+        views[c] = {vx * A.x[0] + vy * A.y[0] + vz * A.z[0], vx * A.x[1] + vy * A.y[1] + vz * A.z[1],
+                    vx * A.x[2] + vy * A.y[2] + vz * A.z[2]};
       }
       light->along(views, lights);
       for (std::size_t c = 0; c < w_px; ++c) {
-        const PixelConstants& p = px[c];
+        const double inv = px[c].inv;
+        const double vx = xs[c] * inv, vy = y * inv, vz = fc * inv;
         const ViewLight& L = lights[c];
         const double e0 = vec3::dot(L.e, A.x), e1 = vec3::dot(L.e, A.y), e2 = vec3::dot(L.e, A.z);  // frame l
         if (image_plane) {
           // Frame i's axes turned by α, P = cos α·X_i − sin α·Y_i and Q = sin α·X_i + cos α·Y_i, are
           // the rotation taking ẑ to v applied to x̂ and ŷ: with g = 1/(1 + v_z),
           // P = (1 − g·v_x², −g·v_x·v_y, −v_x), Q = (−g·v_x·v_y, 1 − g·v_y², −v_y); φ_pix = atan2(e·Q, e·P).
-          const double gxy = p.g * p.vx * p.vy;
-          u[c] = e0 * (1.0 - p.g * p.vx * p.vx) - e1 * gxy - e2 * p.vx;
-          w[c] = -e0 * gxy + e1 * (1.0 - p.g * p.vy * p.vy) - e2 * p.vy;
+          const double g = 1.0 / (1.0 + vz);
+          const double gxy = g * vx * vy;
+          u[c] = e0 * (1.0 - g * vx * vx) - e1 * gxy - e2 * vx;
+          w[c] = -e0 * gxy + e1 * (1.0 - g * vy * vy) - e2 * vy;
         } else {
           // m = v × e; the axis in the image is ⊥ (m_x, m_y): u = −m_y, w = m_x.
-          u[c] = -(p.vz * e0 - p.vx * e2);
-          w[c] = p.vy * e2 - p.vz * e1;
+          u[c] = -(vz * e0 - vx * e2);
+          w[c] = vy * e2 - vz * e1;
         }
         const double Ic = L.S0 * intensity;
-        I[c] = vignetting ? Ic * ((p.vz * p.vz) * (p.vz * p.vz)) : Ic;  // cos⁴γ
+        I[c] = vignetting ? Ic * ((vz * vz) * (vz * vz)) : Ic;  // cos⁴γ
         d[c] = polarized ? L.d : 0.0;
       }
       for (std::size_t c = 0; c < w_px; ++c) {
@@ -149,7 +174,7 @@ void DofpSimulator::signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
         c2[c] = some ? (u[c] * u[c] - w[c] * w[c]) * r : 1.0;
         s2[c] = some ? 2.0 * u[c] * w[c] * r : 0.0;
         const PixelConstants& p = px[c];
-        f[c] = I[c] * (p.A + d[c] * (c2[c] * p.B + s2[c] * p.C)) + p.b;
+        fw[c] = I[c] * (p.A + d[c] * (c2[c] * p.B + s2[c] * p.C)) + b[c];
       }
       row_done(first, f);
       if (layers)

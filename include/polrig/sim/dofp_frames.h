@@ -78,13 +78,15 @@ class DofpSimulator {
   DofpAnalyzer analyzer_;
   DofpTruth truth_;
   std::vector<DofpStop> stops_;
-  // Per pixel, what the hot loop reads (64 bytes: the loop is bound by memory traffic): its view
-  // v in frame l and g = 1/(1 + v_z), from which frame i's axes rotated by α follow
-  // (P = x̂ − g·v_x·(v_x, v_y, 1 + v_z)ᵀ… see frame()), and Eq. 18's factors A = K/2,
-  // B = (K/2)·k·cos 2(α − ε), C = (K/2)·k·sin 2(α − ε) and b: f = I·(A + d·(B·cos 2φ + C·sin 2φ)) + b.
+  // Per pixel, what the hot loop reads (32 bytes, half the former view + factors: memory traffic counts): 1/|a| of
+  // a = (x_col, y_row, f_c), the unnormalised view (pixel_view: v = a·(1/|a|), bit for bit; the
+  // constructor checks), and Eq. 18's factors A = K/2, B = (K/2)·k·cos 2(α − ε),
+  // C = (K/2)·k·sin 2(α − ε): f = I·(A + d·(B·cos 2φ + C·sin 2φ)) + b (b from truth_).
   struct PixelConstants {
-    double vx, vy, vz, g, A, B, C, b;
+    double inv, A, B, C;
   };
+  std::vector<double> view_x_, view_y_;  // x_col per column, y_row per row
+  double view_f_ = 0;                    // f_c
   std::vector<PixelConstants> pixels_;
   // Eq. 18 without noise, row by row (TBB over rows): row_done(first pixel, the row's f) per row.
   void signal_rows(const DofpStop& stop, DofpTruthLayers* layers,

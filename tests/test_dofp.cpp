@@ -17,6 +17,7 @@
 #include "polrig/device/dofp_camera.h"
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/exr.h"
+#include "polrig/io/rig_yaml.h"
 #include "polrig/report/dofp_dataset.h"
 #include "polrig/sim/dofp_frames.h"
 #include "polrig/sky/sun.h"
@@ -489,8 +490,9 @@ TEST(DofpDataset, WritesAndReadsBackEveryFrameAndTheSums) {
     EXPECT_EQ(d.stops[2].theta_R_deg, 0);
     EXPECT_EQ(d.stops[3].theta_R_deg, 30);
     EXPECT_FALSE(d.stops[3].heading_deg);
-    EXPECT_EQ(d.truth.K.size(), 32u * 24u);
-    for (std::size_t i = 0; i < d.truth.K.size(); ++i) EXPECT_EQ(d.truth.K[i], static_cast<float>(sim.truth().K[i]));
+    ASSERT_TRUE(d.truth);
+    EXPECT_EQ(d.truth->K.size(), 32u * 24u);
+    for (std::size_t i = 0; i < d.truth->K.size(); ++i) EXPECT_EQ(d.truth->K[i], static_cast<float>(sim.truth().K[i]));
     for (std::size_t s = 0; s < d.stops.size(); ++s) {
       std::vector<double> mean(32 * 24, 0.0);
       for (int f = 0; f < 3; ++f) {
@@ -531,25 +533,19 @@ TEST(DofpDataset, SkyStopsCarryUtcHeadingAndTheSun) {
 }
 
 // The han2017 indoor dataset (spec §2.4: 30 unpolarized levels, 79 positions at 4.6036° × six
-// intensities, 5 frames per stop) at the default camera: its size on disk, printed with the time
-// it took (docs/formats.md quotes them). Slow: ~2,500 frames.
+// intensities, 5 frames per stop) of the shipped rig file: its size on disk, printed with the time
+// it took (docs/formats.md §6.14 quotes them). The issue aims under 300 MB (10^6 bytes) for the
+// per-stop means. Slow: ~2,500 frames, ~1 GB written.
 TEST(SlowDofpDataset, Han2017IndoorSize) {
-  Rig rig = camera_rig();
-  rig.camera.noise = true, rig.camera.gain_DN = 2000, rig.camera.adc_bits = 12;
-  rig.camera.gain_spread = 0.02, rig.camera.offset_DN = 40, rig.camera.offset_spread_DN = 2;
-  rig.device.d = 1.0;
-  rig.schedule.angles_deg.clear();
-  rig.schedule.start_deg = 0, rig.schedule.step_deg = 4.6036, rig.schedule.stop_deg = 359.1;
-  for (int i = 0; i < 30; ++i) rig.schedule.unpolarized_levels.push_back(i / 29.0);
-  rig.schedule.intensities = {1, 0.5, 0.25, 0.1, 0.05, 0.025};
-  rig.schedule.frames_per_stop = 5;
-  ASSERT_EQ(dofp_stops(rig.schedule).size(), 30u + 79u * 6u);
+  const LoadedRig rig = load_rig(std::string(POLRIG_SOURCE_DIR) + "/rigs/han2017-indoor.yaml");
+  ASSERT_EQ(dofp_stops(rig.rig.schedule).size(), 30u + 79u * 6u);
+  ASSERT_EQ(rig.rig.schedule.frames_per_stop, 5);
   for (DofpFrameStorage storage : {DofpFrameStorage::Sum, DofpFrameStorage::Every}) {
     const auto dir = fresh_dir("han2017");
     DofpDatasetOptions o;
     o.storage = storage;
     const auto t0 = std::chrono::steady_clock::now();
-    write_dofp_dataset(LoadedRig{rig, "test", "", {}}, dir, o, "polrig simulate han2017-indoor", false);
+    write_dofp_dataset(rig, dir, o, "polrig simulate rigs/han2017-indoor.yaml", false);
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     std::uintmax_t bytes = 0;
     for (const auto& e : std::filesystem::recursive_directory_iterator(dir))

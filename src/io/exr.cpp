@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <span>
 #include <stdexcept>
 
 #include <ImfAttribute.h>
@@ -65,38 +66,6 @@ class CheckedOStream : public Imf::OStream {
 };
 }  // namespace
 
-void write_exr(const std::filesystem::path& path, int width, int height,
-               const std::vector<ExrChannel>& channels, ExrCompression compression) {
-  try {
-    Imf::Header header(width, height);
-    header.compression() = compression == ExrCompression::None  ? Imf::NO_COMPRESSION
-                           : compression == ExrCompression::Rle ? Imf::RLE_COMPRESSION
-                                                                : Imf::ZIP_COMPRESSION;
-    Imf::FrameBuffer fb;
-    for (const ExrChannel& c : channels) {
-      if (c.pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
-        throw std::logic_error(fmt::format("EXR channel {} has {} pixels for {}×{}", c.name,
-                                           c.pixels.size(), width, height));
-      header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
-      fb.insert(c.name, Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(c.pixels.data())),
-                                   sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
-    }
-    CheckedOStream stream(path);
-    {
-      // Compression runs per block of lines on the threads polrig may use (--threads); the
-      // file is the same for any count.
-      Imf::OutputFile file(stream, header, tbb::this_task_arena::max_concurrency());
-      file.setFrameBuffer(fb);
-      file.writePixels(height);
-    }
-    stream.close();
-  } catch (const std::logic_error&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot write the EXR image: {}", path.string(), e.what()));
-  }
-}
-
 std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, int& height) {
   try {
     Imf::InputFile file(path.string().c_str());
@@ -118,27 +87,31 @@ std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, 
   }
 }
 
-void write_exr_image(const std::filesystem::path& path, const ExrImage& image, ExrCompression compression) {
-  const int width = image.width, height = image.height;
+namespace {
+// The one writer of both entry points (the channels by reference: no copy of the pixels).
+void write_channels(const std::filesystem::path& path, int width, int height, std::span<const ExrChannel> floats,
+                    std::span<const ExrUintChannel> uints, const ExrAttributes& attributes,
+                    ExrCompression compression) {
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   try {
     Imf::Header header(width, height);
     header.compression() = compression == ExrCompression::None  ? Imf::NO_COMPRESSION
                            : compression == ExrCompression::Rle ? Imf::RLE_COMPRESSION
+                           : compression == ExrCompression::Piz ? Imf::PIZ_COMPRESSION
                                                                 : Imf::ZIP_COMPRESSION;
-    for (const auto& [name, value] : image.attributes.strings) header.insert(name, Imf::StringAttribute(value));
-    for (const auto& [name, value] : image.attributes.doubles) header.insert(name, Imf::DoubleAttribute(value));
-    for (const auto& [name, v] : image.attributes.vectors)
+    for (const auto& [name, value] : attributes.strings) header.insert(name, Imf::StringAttribute(value));
+    for (const auto& [name, value] : attributes.doubles) header.insert(name, Imf::DoubleAttribute(value));
+    for (const auto& [name, v] : attributes.vectors)
       header.insert(name, Imf::V3dAttribute(Imath::V3d(v[0], v[1], v[2])));
     Imf::FrameBuffer fb;
-    for (const ExrChannel& c : image.floats) {
+    for (const ExrChannel& c : floats) {
       if (c.pixels.size() != n)
         throw std::logic_error(fmt::format("EXR channel {} has {} pixels for {}×{}", c.name, c.pixels.size(), width, height));
       header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
       fb.insert(c.name, Imf::Slice(Imf::FLOAT, const_cast<char*>(reinterpret_cast<const char*>(c.pixels.data())),
                                    sizeof(float), sizeof(float) * static_cast<std::size_t>(width)));
     }
-    for (const ExrUintChannel& c : image.uints) {
+    for (const ExrUintChannel& c : uints) {
       if (c.pixels.size() != n)
         throw std::logic_error(fmt::format("EXR channel {} has {} pixels for {}×{}", c.name, c.pixels.size(), width, height));
       header.channels().insert(c.name, Imf::Channel(Imf::UINT));
@@ -147,6 +120,8 @@ void write_exr_image(const std::filesystem::path& path, const ExrImage& image, E
     }
     CheckedOStream stream(path);
     {
+      // Compression runs per block of lines on the threads polrig may use (--threads); the
+      // file is the same for any count.
       Imf::OutputFile file(stream, header, tbb::this_task_arena::max_concurrency());
       file.setFrameBuffer(fb);
       file.writePixels(height);
@@ -158,15 +133,32 @@ void write_exr_image(const std::filesystem::path& path, const ExrImage& image, E
     throw std::runtime_error(fmt::format("{}: cannot write the EXR image: {}", path.string(), e.what()));
   }
 }
+}  // namespace
 
-ExrImage read_exr_image(const std::filesystem::path& path) {
+void write_exr(const std::filesystem::path& path, int width, int height,
+               const std::vector<ExrChannel>& channels, ExrCompression compression) {
+  write_channels(path, width, height, channels, {}, {}, compression);
+}
+
+void write_exr_image(const std::filesystem::path& path, const ExrImage& image, ExrCompression compression) {
+  write_channels(path, image.width, image.height, image.floats, image.uints, image.attributes, compression);
+}
+
+namespace {
+// Rows [first_row, first_row + rows) of the image; rows < 0: to the bottom.
+ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height) {
   try {
     Imf::InputFile file(path.string().c_str());
     const Imf::Header& h = file.header();
     const Imath::Box2i dw = h.dataWindow();
+    const int height = dw.max.y - dw.min.y + 1;
+    if (image_height) *image_height = height;
+    if (rows < 0) rows = height - first_row;
+    if (first_row < 0 || rows < 1 || first_row > height - rows)
+      throw std::runtime_error(fmt::format("rows {} to {} of an image of {} rows", first_row, first_row + rows - 1, height));
     ExrImage image;
     image.width = dw.max.x - dw.min.x + 1;
-    image.height = dw.max.y - dw.min.y + 1;
+    image.height = rows;
     const std::size_t n = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
     const std::size_t row_floats = sizeof(float) * static_cast<std::size_t>(image.width);
     for (auto it = h.channels().begin(); it != h.channels().end(); ++it) {
@@ -176,16 +168,18 @@ ExrImage read_exr_image(const std::filesystem::path& path) {
         image.floats.push_back({it.name(), std::vector<float>(n)});
     }
     Imf::FrameBuffer fb;
-    // The data window may not start at (0, 0): the slices' base is shifted to its origin.
+    // The slices' base is shifted to the data window's origin (which may not be (0, 0)) and the
+    // first row read.
+    const int y0 = dw.min.y + first_row;
     const std::ptrdiff_t origin = static_cast<std::ptrdiff_t>(dw.min.x) +
-                                  static_cast<std::ptrdiff_t>(dw.min.y) * static_cast<std::ptrdiff_t>(image.width);
+                                  static_cast<std::ptrdiff_t>(y0) * static_cast<std::ptrdiff_t>(image.width);
     for (ExrChannel& c : image.floats)
       fb.insert(c.name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(c.pixels.data() - origin), sizeof(float), row_floats));
     for (ExrUintChannel& c : image.uints)
       fb.insert(c.name, Imf::Slice(Imf::UINT, reinterpret_cast<char*>(c.pixels.data() - origin), sizeof(std::uint32_t),
                                    sizeof(std::uint32_t) * static_cast<std::size_t>(image.width)));
     file.setFrameBuffer(fb);
-    file.readPixels(dw.min.y, dw.max.y);
+    file.readPixels(y0, y0 + rows - 1);
     for (auto it = h.begin(); it != h.end(); ++it) {
       const Imf::Attribute& a = it.attribute();
       if (const auto* s = dynamic_cast<const Imf::StringAttribute*>(&a))
@@ -203,6 +197,15 @@ ExrImage read_exr_image(const std::filesystem::path& path) {
   } catch (const std::exception& e) {
     throw std::runtime_error(fmt::format("{}: cannot read the EXR image: {}", path.string(), e.what()));
   }
+}
+}  // namespace
+
+ExrImage read_exr_image(const std::filesystem::path& path) { return read_rows(path, 0, -1, nullptr); }
+
+ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height) {
+  if (rows < 1)
+    throw std::runtime_error(fmt::format("{}: cannot read the EXR image: {} rows requested", path.string(), rows));
+  return read_rows(path, first_row, rows, image_height);
 }
 
 }  // namespace polrig

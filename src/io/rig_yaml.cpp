@@ -29,6 +29,8 @@ class RigParser {
   RigParser(std::string_view origin, const std::vector<RigOverride>& overrides)
       : file_(origin), overrides_(overrides) {}
 
+  const std::set<std::string>& given() const { return present_; }
+
   Rig parse(std::string_view text) {
     YAML::Node root = load_yaml(std::string(text), file_, "a rig file nests 3 levels");
     if (!root.IsMap() && !root.IsNull())
@@ -353,7 +355,8 @@ RigOverride RigOverride::parse(std::string_view arg) {
 LoadedRig parse_rig(std::string_view text, std::string_view origin,
                     const std::vector<RigOverride>& overrides) {
   RigParser parser(origin, overrides);
-  return {parser.parse(text), std::string(origin), std::string(text), overrides};
+  Rig rig = parser.parse(text);
+  return {std::move(rig), std::string(origin), std::string(text), overrides, parser.given()};
 }
 
 LoadedRig load_rig(const std::filesystem::path& file, const std::vector<RigOverride>& overrides) {

@@ -81,10 +81,12 @@ camera rig; docs/formats.md) and returns its path.
 )doc";
 
 constexpr const char* kReadDoc = R"doc(
-Reads a camera dataset (docs/formats.md): a dict with width, height, f_c_px, cx, cy, the truth
-(dict of (height, width) arrays K, b, k, eps_deg, alpha_deg) and the stops (dict of arrays as
-stops.csv's columns; heading_deg NaN where unknown). mean_frames=True adds 'mean_frames', an
-(N, height, width) float64 array of every stop's mean frame.
+Reads a camera dataset (docs/formats.md §6.14): a dict with width, height, f_c_px, cx, cy,
+mosaic_deg (TL, TR, BL, BR), adc_bits (0: not recorded), the truth (dict of (height, width)
+arrays K, b, k, eps_deg, alpha_deg; None for a measured dataset without truth.exr, whose camera
+comes from its rig.yaml) and the stops (dict of arrays as stops.csv's columns; heading_deg NaN
+where unknown). mean_frames=True adds 'mean_frames', an (N, height, width) float64 array of every
+stop's mean frame.
 )doc";
 
 }  // namespace
@@ -194,8 +196,13 @@ void bind_dofp(py::module_& m) {
     }
     py::dict out;
     out["width"] = d.width, out["height"] = d.height, out["f_c_px"] = d.f_c_px, out["cx"] = d.cx, out["cy"] = d.cy;
-    out["truth"] = image_dict(d.height, d.width, {{"K", &d.truth.K}, {"b", &d.truth.b}, {"k", &d.truth.k},
-                                                  {"eps_deg", &d.truth.eps_deg}, {"alpha_deg", &d.truth.alpha_deg}});
+    out["mosaic_deg"] = py::make_tuple(d.mosaic_deg[0], d.mosaic_deg[1], d.mosaic_deg[2], d.mosaic_deg[3]);
+    out["adc_bits"] = d.adc_bits;
+    if (d.truth)
+      out["truth"] = image_dict(d.height, d.width, {{"K", &d.truth->K}, {"b", &d.truth->b}, {"k", &d.truth->k},
+                                                    {"eps_deg", &d.truth->eps_deg}, {"alpha_deg", &d.truth->alpha_deg}});
+    else
+      out["truth"] = py::none();
     std::vector<double> stop, theta, t, intensity, heading, frames;
     std::vector<bool> polarized;
     py::list utc, file;

@@ -1,11 +1,14 @@
 #include "polrig/report/dofp_calibration_report.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
+#include <exception>
 #include <stdexcept>
 #include <string>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
@@ -177,28 +180,43 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
   return files;
 }
 
-DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrationOptions options,
-                                       const Progress& progress) {
-  const int W = dataset.width;
-  if (W < 2 || dataset.height < 2) throw std::invalid_argument(fmt::format("{}: no frame", dataset.dir.string()));
-  for (int j = 0; j < 4; ++j)  // the first cell's TL, TR, BL, BR
-    options.step2.mosaic_deg[static_cast<std::size_t>(j)] =
-        dataset.truth.alpha_deg[static_cast<std::size_t>((j / 2) * W + j % 2)];
-  // The view's projection takes the camera's pinhole from the dataset unless given.
-  if (options.step2.view_projection && !(options.step2.focal_px > 0)) {
-    options.step2.focal_px = dataset.f_c_px;
-    options.step2.principal_x_px = dataset.cx;
-    options.step2.principal_y_px = dataset.cy;
-  }
-  // A mean frame at the ADC's top was clipped: step 1 leaves it out (Eq. 19 is linear below it).
-  if (dataset.adc_bits > 0 && !std::isfinite(options.step1.saturation_DN))
-    options.step1.saturation_DN = std::ldexp(1.0, dataset.adc_bits) - 1.0;
-  std::vector<std::vector<double>> frames(dataset.stops.size());
-  progress.begin("dofp: reading frames", static_cast<long long>(frames.size()));
-  for (std::size_t s = 0; s < frames.size(); ++s) {
-    frames[s] = read_dofp_mean_frame(dataset, s);
-    progress.advance(1);
-  }
+namespace {
+
+// The mean frames of the stops `which` (rows [first_row, first_row + rows), or whole with rows < 0),
+// read in parallel; a failure is the first failing stop's, as a loop in order would throw it.
+std::vector<std::vector<double>> read_mean_rows(const DofpDataset& dataset, const std::vector<std::size_t>& which,
+                                                int first_row, int rows, const Progress& progress = {}) {
+  std::vector<std::vector<double>> out(which.size());
+  std::vector<std::exception_ptr> errors(which.size());
+  tbb::parallel_for(std::size_t{0}, which.size(), [&](std::size_t i) {
+    try {
+      out[i] = rows < 0 ? read_dofp_mean_frame(dataset, which[i]) : read_dofp_mean_rows(dataset, which[i], first_row, rows);
+      progress.advance(1);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& e : errors)
+    if (e) std::rethrow_exception(e);
+  return out;
+}
+
+// Rows per band: every stop's band of rows (as doubles) within kBandBytes, in whole 32-row blocks
+// (PIZ's, two of ZIP's: each band decompresses only its own blocks) when that fits, and even
+// (whole cells) in any case.
+constexpr double kBandBytes = 128e6;
+int band_rows_for(const DofpDataset& dataset) {
+  const double row_bytes = 8.0 * dataset.width * static_cast<double>(std::max<std::size_t>(dataset.stops.size(), 1));
+  const int fit = static_cast<int>(std::min(kBandBytes / row_bytes, 1e6));
+  return fit >= 32 ? fit / 32 * 32 : std::max(2, fit / 2 * 2);
+}
+
+DofpCalibration calibrate_whole(const DofpDataset& dataset, const DofpCalibrationOptions& options,
+                                const Progress& progress) {
+  std::vector<std::size_t> all(dataset.stops.size());
+  for (std::size_t s = 0; s < all.size(); ++s) all[s] = s;
+  progress.begin("dofp: reading frames", static_cast<long long>(all.size()));
+  const std::vector<std::vector<double>> frames = read_mean_rows(dataset, all, 0, -1, progress);
   progress.finish();
   std::vector<DofpUnpolarizedLevel> levels;
   std::vector<DofpPolarizedStop> stops;
@@ -209,7 +227,107 @@ DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrati
     else
       levels.push_back({st.intensity, frames[s]});
   }
-  return calibrate_dofp(W, dataset.height, levels, stops, options, progress);
+  return calibrate_dofp(dataset.width, dataset.height, levels, stops, options, progress);
+}
+
+}  // namespace
+
+DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrationOptions options,
+                                       const Progress& progress, int band_rows) {
+  const int W = dataset.width, H = dataset.height;
+  if (W < 2 || H < 2) throw std::invalid_argument(fmt::format("{}: no frame", dataset.dir.string()));
+  options.step2.mosaic_deg = dataset.mosaic_deg;
+  // The view's projection takes the camera's pinhole from the dataset unless given.
+  if (options.step2.view_projection && !(options.step2.focal_px > 0)) {
+    options.step2.focal_px = dataset.f_c_px;
+    options.step2.principal_x_px = dataset.cx;
+    options.step2.principal_y_px = dataset.cy;
+  }
+  // A mean frame at the ADC's top was clipped: step 1 leaves it out (Eq. 19 is linear below it).
+  if (dataset.adc_bits > 0 && !std::isfinite(options.step1.saturation_DN))
+    options.step1.saturation_DN = std::ldexp(1.0, dataset.adc_bits) - 1.0;
+  // The global fit sums over every cell at once; odd sizes are calibrate_dofp's error to report.
+  if (options.step2.scope == DofpStep2Scope::Global || W % 2 || H % 2) return calibrate_whole(dataset, options, progress);
+
+  // Step 1 fits each pixel and step 2 each cell from their own rows alone, so both run on bands
+  // of rows: only a band of every stop's frame is held at once (the whole frames as doubles were
+  // 1.2 GB for the han2017 indoor run), and the results are those of whole frames, bit for bit.
+  if (band_rows <= 0) band_rows = band_rows_for(dataset);
+  if (band_rows % 2) throw std::invalid_argument(fmt::format("bands of {} rows: not whole cells", band_rows));
+  std::vector<std::size_t> level_ix, stop_ix;
+  for (std::size_t s = 0; s < dataset.stops.size(); ++s) (dataset.stops[s].polarized ? stop_ix : level_ix).push_back(s);
+  const std::size_t N = static_cast<std::size_t>(W) * static_cast<std::size_t>(H);
+  const int cells_x = W / 2;
+  DofpCalibration c;
+  c.options = options;
+  DofpStep1& s1 = c.step1;
+  s1.width = W, s1.height = H;
+  s1.K.resize(N), s1.b.resize(N), s1.residual_rms_DN.resize(N), s1.rank.resize(N), s1.levels_used.resize(N);
+  DofpStep2& s2 = c.step2;
+  s2.scope = options.step2.scope;
+  s2.cells_x = cells_x, s2.cells_y = H / 2;
+  s2.cells.resize(static_cast<std::size_t>(s2.cells_x) * static_cast<std::size_t>(s2.cells_y));
+  progress.begin("calibrate dofp: steps 1 and 2 by bands of rows", H);
+  for (int row0 = 0; row0 < H; row0 += band_rows) {
+    const int rows = std::min(band_rows, H - row0);
+    const std::vector<std::vector<double>> level_rows = read_mean_rows(dataset, level_ix, row0, rows);
+    const std::vector<std::vector<double>> stop_rows = read_mean_rows(dataset, stop_ix, row0, rows);
+    std::vector<DofpUnpolarizedLevel> levels;
+    std::vector<DofpPolarizedStop> stops;
+    for (std::size_t i = 0; i < level_ix.size(); ++i) levels.push_back({dataset.stops[level_ix[i]].intensity, level_rows[i]});
+    for (std::size_t i = 0; i < stop_ix.size(); ++i) {
+      const DofpDatasetStop& st = dataset.stops[stop_ix[i]];
+      stops.push_back({st.theta_R_deg, st.intensity, stop_rows[i]});
+    }
+    const DofpStep1 b1 = calibrate_dofp_step1(W, rows, levels, options.step1);
+    // A band's cells see the views of their rows in the whole frame: the principal point in the
+    // band's own rows (NaN, the frame's centre, only matters with the view's projection on).
+    DofpStep2Options band_step2 = options.step2;
+    if (band_step2.view_projection)
+      band_step2.principal_y_px = (std::isfinite(band_step2.principal_y_px) ? band_step2.principal_y_px : 0.5 * H) - row0;
+    DofpStep2 b2 = calibrate_dofp_step2(b1, stops, band_step2);
+    const std::size_t p0 = static_cast<std::size_t>(row0) * static_cast<std::size_t>(W);
+    std::copy(b1.K.begin(), b1.K.end(), s1.K.begin() + static_cast<std::ptrdiff_t>(p0));
+    std::copy(b1.b.begin(), b1.b.end(), s1.b.begin() + static_cast<std::ptrdiff_t>(p0));
+    std::copy(b1.residual_rms_DN.begin(), b1.residual_rms_DN.end(), s1.residual_rms_DN.begin() + static_cast<std::ptrdiff_t>(p0));
+    std::copy(b1.rank.begin(), b1.rank.end(), s1.rank.begin() + static_cast<std::ptrdiff_t>(p0));
+    std::copy(b1.levels_used.begin(), b1.levels_used.end(), s1.levels_used.begin() + static_cast<std::ptrdiff_t>(p0));
+    s1.rank_deficient_pixels += b1.rank_deficient_pixels;
+    for (std::size_t i = 0; i < b2.cells.size(); ++i) {
+      DofpCellFit& fit = b2.cells[i];
+      // Step 2 names an undetermined pixel by its row in the band: the same message with the
+      // frame's row (calibrate_dofp_step2's, for the first such pixel of the cell).
+      const int cx = static_cast<int>(i % static_cast<std::size_t>(cells_x)), cy = static_cast<int>(i / static_cast<std::size_t>(cells_x));
+      for (int j = 0; j < 4; ++j) {
+        const std::size_t p = static_cast<std::size_t>(2 * cy + j / 2) * static_cast<std::size_t>(W) + static_cast<std::size_t>(2 * cx + j % 2);
+        if (b1.rank[p] < 2) {
+          fit.message = fmt::format("step 1 left pixel (column {}, row {}) undetermined (rank {})", 2 * cx + j % 2,
+                                    row0 + 2 * cy + j / 2, int{b1.rank[p]});
+          break;
+        }
+      }
+      s2.usable_cells += fit.usable();
+      s2.cells[static_cast<std::size_t>(row0 / 2) * static_cast<std::size_t>(cells_x) + i] = std::move(fit);
+    }
+    progress.advance(rows);
+  }
+  progress.finish();
+
+  // Table 1 from whole frames of its stops only (those of its intensity: the largest unless chosen).
+  double intensity = options.table1_intensity;
+  if (!(intensity > 0))
+    for (std::size_t s : stop_ix) intensity = std::max(intensity, dataset.stops[s].intensity);
+  std::vector<std::size_t> table_ix;
+  for (std::size_t s : stop_ix)
+    if (dataset.stops[s].intensity == intensity) table_ix.push_back(s);
+  const std::vector<std::vector<double>> table_frames = read_mean_rows(dataset, table_ix, 0, -1);
+  std::vector<DofpPolarizedStop> table_stops;
+  for (std::size_t i = 0; i < table_ix.size(); ++i) {
+    const DofpDatasetStop& st = dataset.stops[table_ix[i]];
+    table_stops.push_back({st.theta_R_deg, st.intensity, table_frames[i]});
+  }
+  c.table1 = dofp_table1(s1, s2, table_stops, options.step2, intensity);
+  return c;
 }
 
 DofpCalibration calibrate_dofp_folder(const std::filesystem::path& dir, const DofpCalibrationOptions& options,

@@ -80,10 +80,7 @@ std::vector<FrameOrientation> orient_dofp_dataset(const DofpDataset& dataset, co
   const int W = dataset.width, H = dataset.height;
   DofpTruth nominal;
   if (!parameters) {
-    std::array<double, 4> mosaic{};
-    for (int j = 0; j < 4; ++j)  // the first cell's TL, TR, BL, BR
-      mosaic[static_cast<std::size_t>(j)] = dataset.truth.alpha_deg[static_cast<std::size_t>((j / 2) * W + j % 2)];
-    nominal = nominal_dofp_parameters(W, H, mosaic);
+    nominal = nominal_dofp_parameters(W, H, dataset.mosaic_deg);
     parameters = &nominal;
   }
   if (parameters->width != W || parameters->height != H)

@@ -15,9 +15,11 @@ struct ExrChannel {
   std::vector<float> pixels;  // width × height
 };
 
-// Lossless either way: ZIP (zlib over blocks of 16 lines; the smallest, slowest), RLE (run
-// lengths of the byte planes; for a 1024² sky map 1.3× ZIP's size, 5× faster) or none.
-enum class ExrCompression { Zip, Rle, None };
+// Lossless every way: ZIP (zlib over blocks of 16 lines; the smallest for smooth images, slow),
+// PIZ (Haar wavelet and Huffman over blocks of 32 lines; the smallest for noisy camera frames:
+// 0.79× ZIP's bytes for the han2017 indoor frames, docs/formats.md §6.14), RLE (run lengths of
+// the byte planes; for a 1024² sky map 1.3× ZIP's size, 5× faster) or none.
+enum class ExrCompression { Zip, Piz, Rle, None };
 
 // Throws std::runtime_error naming the file when OpenEXR cannot write it.
 void write_exr(const std::filesystem::path& path, int width, int height,
@@ -54,5 +56,9 @@ void write_exr_image(const std::filesystem::path& path, const ExrImage& image,
 // Reads an image back: FLOAT and HALF channels as floats, UINT channels as uints, and the string,
 // double, float, int and V3d attributes (float and int as doubles). Throws naming the file.
 ExrImage read_exr_image(const std::filesystem::path& path);
+// Rows [first_row, first_row + rows) of an image (row 0: the data window's top), as read_exr_image
+// but with height `rows`; only the line blocks holding them are decompressed; *image_height (when
+// given) is the whole image's. Throws naming the file, also for rows outside the image.
+ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height = nullptr);
 
 }  // namespace polrig

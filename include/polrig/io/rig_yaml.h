@@ -2,6 +2,7 @@
 // Reading and writing rig files (YAML). Every key is described in polrig/rig/keys.h and in
 // docs/formats.md. Errors name the file, the line, the key and what was expected.
 #include <filesystem>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -25,6 +26,7 @@ struct LoadedRig {
   std::string origin;  // file path, as given
   std::string text;    // the file's full text, before overrides
   std::vector<RigOverride> overrides;
+  std::set<std::string> given;  // the key paths the file or an override sets (the rest: defaults)
 };
 
 // Parses rig text; `origin` names it in error messages.

@@ -133,5 +133,6 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
 std::vector<Command> add_spectral_commands(CLI::App& root);
 std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& threads);
 std::vector<Command> add_sky_commands(CLI::App& root, int& threads);
+std::vector<Command> add_position_commands(CLI::App& root, CLI::App& study, int& threads);
 
 }  // namespace polrig::cli

@@ -319,18 +319,48 @@ SunTrack::SunTrack(UtcTime begin, UtcTime end, const Site& site, const SunSettin
   nodes_ = std::move(nodes);
 }
 
+namespace {
+// A track's interpolated CIRS direction at t (4-point Lagrange over the nodes), not normalised.
+Vec3 interpolated_cirs(const std::vector<Vec3>& cirs, double t0, double spacing, double t) {
+  const double u = (t - t0) / spacing;
+  const std::size_t i = std::min(static_cast<std::size_t>(u), cirs.size() - 3);  // u ≥ 1
+  const double x = u - static_cast<double>(i);  // in [0, 1], nodes at −1, 0, 1, 2
+  const double w[4] = {-x * (x - 1) * (x - 2) / 6, (x + 1) * (x - 1) * (x - 2) / 2,
+                       -(x + 1) * x * (x - 2) / 2, (x + 1) * x * (x - 1) / 6};
+  Vec3 p{0, 0, 0};
+  for (int k = 0; k < 4; ++k) p = vec3::add(p, vec3::mul(cirs[i - 1 + static_cast<std::size_t>(k)], w[k]));
+  return p;
+}
+}  // namespace
+
+SunTrack::HourAngle SunTrack::hour_angle_at(UtcTime t) const {
+  if (!(t.unix_s >= begin_.unix_s && t.unix_s <= end_.unix_s))
+    throw std::out_of_range(fmt::format("sun track: {} is outside [{}, {}]", format_utc(t),
+                                        format_utc(begin_), format_utc(end_)));
+  const Nodes& n = *nodes_;
+  const Vec3 p = vec3::unit(interpolated_cirs(n.cirs, n.t0, n.spacing, t.unix_s));
+  double ut11, ut12;
+  two_part_jd(t.unix_s + n.ut1_minus_utc, ut11, ut12);
+  // δ = asin p_z; GHA = ERA − α with α = atan2(p_y, p_x): cos and sin by the addition theorem.
+  const double era = eraEra00(ut11, ut12), ce = std::cos(era), se = std::sin(era);
+  const double cd = std::hypot(p[0], p[1]);
+  HourAngle h;
+  h.sin_dec = p[2];
+  h.cos_dec = cd;
+  if (cd > 0) {
+    const double ca = p[0] / cd, sa = p[1] / cd;
+    h.cos_gha = ce * ca + se * sa;
+    h.sin_gha = se * ca - ce * sa;
+  }
+  return h;
+}
+
 SunPosition SunTrack::at(UtcTime t) const {
   if (!(t.unix_s >= begin_.unix_s && t.unix_s <= end_.unix_s))
     throw std::out_of_range(fmt::format("sun track: {} is outside [{}, {}]", format_utc(t),
                                         format_utc(begin_), format_utc(end_)));
   const Nodes& n = *nodes_;
-  const double u = (t.unix_s - n.t0) / n.spacing;
-  const std::size_t i = std::min(static_cast<std::size_t>(u), n.cirs.size() - 3);  // u ≥ 1
-  const double x = u - static_cast<double>(i);  // in [0, 1], nodes at −1, 0, 1, 2
-  const double w[4] = {-x * (x - 1) * (x - 2) / 6, (x + 1) * (x - 1) * (x - 2) / 2,
-                       -(x + 1) * x * (x - 2) / 2, (x + 1) * x * (x - 1) / 6};
-  Vec3 p{0, 0, 0};
-  for (int k = 0; k < 4; ++k) p = vec3::add(p, vec3::mul(n.cirs[i - 1 + static_cast<std::size_t>(k)], w[k]));
+  const Vec3 p = interpolated_cirs(n.cirs, n.t0, n.spacing, t.unix_s);
   double ut11, ut12;
   two_part_jd(t.unix_s + n.ut1_minus_utc, ut11, ut12);
   eraASTROM astrom = n.astrom;

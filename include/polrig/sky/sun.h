@@ -92,6 +92,15 @@ class SunTrack {
            double node_spacing_s = 1800);
   // Throws std::out_of_range naming the time when t is outside [begin, end].
   SunPosition at(UtcTime t) const;
+  // The sun's topocentric declination δ and Greenwich hour angle GHA at t, as at() gives them
+  // (declination_deg, gha_deg: the same interpolated direction and Earth rotation angle), as
+  // sines and cosines and without the horizon transformation: for a fit that evaluates
+  // cos θ_s = sin φ·sin δ + cos φ·cos δ·cos(GHA + λ) at many times (nav/positioning.h).
+  // Throws as at().
+  struct HourAngle {
+    double sin_dec = 0, cos_dec = 1, sin_gha = 0, cos_gha = 1;
+  };
+  HourAngle hour_angle_at(UtcTime t) const;
   UtcTime begin() const { return begin_; }
   UtcTime end() const { return end_; }
 

@@ -95,10 +95,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                          "lens (spec §2.5)")
                              ->check(CLI::IsMember({"image-plane", "in-front"}))->capture_default_str();
     // A camera array (four-camera): which layers each stop's EXR holds.
-    auto layers = std::make_shared<std::string>("all");
+    auto layers = std::make_shared<std::string>("fused");
     auto* array_layers_opt = app->add_option("--layers", *layers,
-                                       "a camera array: all (the raw frames and the fused layers), fused (S0, S1, "
-                                       "S2, AoP, DoP) or aop (AoP, DoP: what locate reads)")
+                                       "a camera array: fused (S0, S1, S2, AoP, DoP: the default), all (also the "
+                                       "four raw frames) or aop (AoP, DoP: what locate reads)")
                            ->check(CLI::IsMember({"all", "fused", "aop"}))->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {

@@ -278,7 +278,7 @@ FusedImage FourCameraFusion::fuse(const std::array<std::span<const T>, kFourCame
       out.S1[i] = static_cast<float>(x.S1);
       out.S2[i] = static_cast<float>(x.S2);
       out.AoP[i] = static_cast<float>(aop);
-      out.DoP[i] = static_cast<float>(std::hypot(x.S1, x.S2) / x.S0);
+      out.DoP[i] = static_cast<float>(std::sqrt(x.S1 * x.S1 + x.S2 * x.S2) / x.S0);
       out.valid[i] = 1;
     }
   });

@@ -39,4 +39,5 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_dofp_polarization(m);
   polrig::python::bind_dofp_dataset_calibration(m);
   polrig::python::bind_dofp(m);
+  polrig::python::bind_four_camera(m);
 }

@@ -1,6 +1,6 @@
 #pragma once
 // The four-camera polarization-vision sensor of Wang et al. 2016 (W16; spec sky-and-compasses.md
-// §3.1–3.2, docs/physics.md §15): four Smartek GC1031CP cameras (Sony ICX204, 1034 × 778 px,
+// §3.1–3.2, docs/physics.md §16): four Smartek GC1031CP cameras (Sony ICX204, 1034 × 778 px,
 // 4.65 µm pitch) with f = 3.5 mm lenses on the corners of a square, parallel axes, a linear
 // polarizer in front of each CCD at φ_j = 0°, 45°, 90°, 135° (W16's order) with a mounting error
 // ε_j, a gain K_j and an offset b_j (Eq. 1, with the offset [C]):
@@ -16,7 +16,7 @@
 // and azimuth α lands at radius r_d = θ_d in normalised units, θ_d = θ(1 + k1θ² + k2θ⁴ + k3θ⁶ +
 // k4θ⁸), pixel (u, v) = (f_x·θ_d·cos α + c_x, f_y·θ_d·sin α + c_y). With k = 0 it is the
 // equidistant projection r = f·θ that fits W16's stated field (77° × 57.7°) with f ≈ 770 px at both
-// the width and the height, which no pinhole does (spec §3.1; docs/physics.md §15). Pixel
+// the width and the height, which no pinhole does (spec §3.1; docs/physics.md §16). Pixel
 // (col, row)'s centre is at (col + ½, row + ½), as for the DoFP camera and nav/orientation.h.
 #include <array>
 #include <cstdint>
@@ -32,7 +32,7 @@ inline constexpr int kFourCameras = 4;
 using PerCamera = std::array<double, kFourCameras>;
 
 // The sensor's settings (the `device.*` keys of a rig with device.kind four-camera). Defaults:
-// W16's hardware where it says, our choices [C] where it does not (docs/physics.md §15).
+// W16's hardware where it says, our choices [C] where it does not (docs/physics.md §16).
 struct FourCameraSpec {
   int width_px = 1034;   // W16 §2.1: 1034 × 778
   int height_px = 778;

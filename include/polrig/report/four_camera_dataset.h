@@ -29,7 +29,9 @@ enum class FourCameraLayers {
 std::string_view four_camera_layers_name(FourCameraLayers layers);  // "all", "fused", "aop"
 
 struct FourCameraDatasetOptions {
-  FourCameraLayers layers = FourCameraLayers::All;
+  // The fused layers by default: a full-resolution stop with the raw frames is 21 MB (formats.md
+  // §6.14a); the calibration, which needs them, asks for All.
+  FourCameraLayers layers = FourCameraLayers::Fused;
 };
 
 // The truth as YAML text (truth.yaml).

@@ -1,6 +1,6 @@
 #pragma once
 // The four-camera sensor's frames over a rig's schedule (spec sky-and-compasses.md §3.1–3.2,
-// docs/physics.md §15): per camera and pixel its view through its lens and R_j1 into the rig
+// docs/physics.md §16): per camera and pixel its view through its lens and R_j1 into the rig
 // frame, the light along it (Source::light_along_views, as the DoFP camera), the E-vector's
 // image-plane angle φ in camera j's frame, Eq. 1 with the camera's K_j, b_j, φ_j + ε_j, then
 // Poisson–Gaussian noise and the ADC (DofpExposure). The fused image follows by

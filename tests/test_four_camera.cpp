@@ -256,6 +256,35 @@ TEST(FourCameraFrames, TheFusedAopGivesTheSunByTheEigenvectorMethod) {
   EXPECT_LT(miss, 1e-3) << miss;
 }
 
+TEST(FourCameraFrames, HeadingSignTestOfSpec0) {
+  // Spec §0: turn the device +10° anticlockwise seen from above (camera 1's X from azimuth 35° to
+  // 25°: sky.mount_deg is X's geographic azimuth, clockwise): the heading from the fused image
+  // (eigenvector sun, H = A_s + α_S, nav/orientation's camera_heading_deg) falls by 10°, and each
+  // equals the true heading of stops.csv (dofp_true_heading_deg: X's azimuth).
+  std::array<double, 2> heading{};
+  for (int k = 0; k < 2; ++k) {
+    const Rig rig = parse_rig(sky_rig_text(scaled(0.25, true), k == 0 ? 35.0 : 25.0), "h").rig;
+    const FourCameraSimulator sim(rig);
+    const DofpStop& stop = sim.stops().front();
+    const FusedImage fused = sim.fuse(sim.signal(stop));
+    std::vector<double> aop(fused.AoP.size());
+    for (std::size_t i = 0; i < aop.size(); ++i)
+      aop[i] = fused.valid[i] ? static_cast<double>(fused.AoP[i]) : std::numeric_limits<double>::quiet_NaN();
+    const SunVectorSolution s = sun_vector_eigen(grid_points(fused.grid.width, fused.grid.height, 1.0, aop),
+                                                 {fused.grid.f_c, fused.grid.cx, fused.grid.cy});
+    ASSERT_TRUE(has_sun(s.status));
+    const Sky sky = rig.source.sky.resolved_sky();
+    heading[static_cast<std::size_t>(k)] =
+        camera_heading_deg(sun_position(sky.first_stop, sky.site, sky.sun).azimuth_deg, s.sun_az_deg);
+    double miss = heading[static_cast<std::size_t>(k)] - *dofp_true_heading_deg(rig, stop);
+    miss -= 360.0 * std::round(miss / 360.0);
+    EXPECT_NEAR(miss, 0.0, 1e-3);
+  }
+  double d = heading[1] - heading[0];
+  d -= 360.0 * std::round(d / 360.0);
+  EXPECT_NEAR(d, -10.0, 1e-3);
+}
+
 TEST(FourCameraFrames, AopAntisymmetricAndDopSymmetricAboutTheSolarMeridian) {
   // Spec §3.6 item 7 [SIM]: camera 1's X turned to the sun's azimuth (sky.mount_deg = A_s), the
   // solar meridian is the image's row axis through c_y; identical aligned cameras symmetric about

@@ -67,3 +67,15 @@ def test_truth_and_refusals():
         polrig.Rig.load(str(ROOT / "rigs" / "han2017-outdoor.yaml")).four_camera_fused(0)
     with pytest.raises(ValueError, match="no polarizer mosaic"):
         rig.dofp_frame(0)
+
+
+def test_dofp_only_commands_refuse_a_four_camera_dataset(tmp_path):
+    run_cli("simulate", str(STATIC), *cli_sets(dict(SETS, **{"schedule.count": 1})), "--layers", "aop",
+            "-o", tmp_path / "d", "--quiet")
+    for command in (["orient"], ["calibrate", "--method", "dofp"]):
+        r = run_cli(*command, tmp_path / "d", "-o", tmp_path / "o", check=False)
+        assert r.returncode == 2
+        assert "needs a polarizer mosaic (device.kind dofp-camera); device.kind four-camera has none" in r.stderr
+        assert not (tmp_path / "o").exists()
+    r = run_cli("simulate", str(STATIC), "--frames", "mean", "-o", tmp_path / "x", check=False)
+    assert r.returncode == 2 and "no polarizer mosaic" in r.stderr and not (tmp_path / "x").exists()

@@ -272,12 +272,16 @@ FusedImage FourCameraFusion::fuse(const std::array<std::span<const T>, kFourCame
         out.valid[i] = 0;
         continue;
       }
-      double aop = rad2deg(0.5 * std::atan2(x.S2, x.S1));
-      if (aop < 0) aop += 180.0;
+      // The layers are float: the AoP from the float S1, S2 it is stored beside (atan2f: a few ulp,
+      // ~1e-5° at 180°, the layer's own rounding).
+      const float S1 = static_cast<float>(x.S1), S2 = static_cast<float>(x.S2);
+      float aop = (90.0f / std::numbers::pi_v<float>)*std::atan2(S2, S1);
+      if (aop < 0) aop += 180.0f;
+      if (aop >= 180.0f) aop = 0.0f;
       out.S0[i] = static_cast<float>(x.S0);
-      out.S1[i] = static_cast<float>(x.S1);
-      out.S2[i] = static_cast<float>(x.S2);
-      out.AoP[i] = static_cast<float>(aop);
+      out.S1[i] = S1;
+      out.S2[i] = S2;
+      out.AoP[i] = aop;
       out.DoP[i] = static_cast<float>(std::sqrt(x.S1 * x.S1 + x.S2 * x.S2) / x.S0);
       out.valid[i] = 1;
     }

@@ -345,6 +345,31 @@ TEST(FourCameraFrames, RawFramesFollowEq1AndTheNoiseIsDeterministic) {
   EXPECT_NE(fa[0], fa[1]);  // each camera its own stream
 }
 
+TEST(FourCameraFrames, APolarizedPortFollowsMalusOnTheAxis) {
+  // The sphere rig's polarized port (cos4, device.d, the port polarizer at ψ_P = source.polarizer_deg):
+  // on the optical axis it is seen at θ_R − ψ_P from X towards Y (docs/physics.md §1, §13), so the
+  // axial pixel of each aligned camera reads Eq. 1 written out by hand:
+  // K_j·E_0·[1 + d·cos(2(θ_R − ψ_P) − 2(φ_j + ε_j))] + b_j.
+  const std::string text =
+      "device:\n  kind: four-camera\n  d: 0.8\n  cameras:\n    width_px: 41\n    height_px: 31\n    noise: false\n"
+      "    fx_px: [30, 30, 30, 30]\n    fy_px: [30, 30, 30, 30]\n    cx_px: [20.5, 20.5, 20.5, 20.5]\n"
+      "    cy_px: [15.5, 15.5, 15.5, 15.5]\n"
+      "    rot_x_deg: [0, 0, 0, 0]\n    rot_y_deg: [0, 0, 0, 0]\n    rot_z_deg: [0, 0, 0, 0]\n"
+      "source:\n  model: cos4\n  E_0: 1.5\n  polarizer_deg: 12\nschedule:\n  angles_deg: [0, 70]\n";
+  const Rig rig = parse_rig(text, "p").rig;
+  const FourCameraSimulator sim(rig);
+  const std::size_t axial = 15 * 41 + 20;
+  for (const DofpStop& stop : sim.stops()) {
+    const FourCameraSignal s = sim.signal(stop);
+    for (std::size_t j = 0; j < 4; ++j) {
+      const FourCameraSpec& c = rig.four_camera;
+      const double a = deg2rad(2 * (stop.theta_R_deg - 12.0) - 2 * (c.polarizer_deg[j] + c.eps_deg[j]));
+      EXPECT_NEAR(s.f[j][axial], c.gain_DN[j] * 1.5 * (1 + 0.8 * std::cos(a)) + c.offset_DN[j], 1e-9)
+          << stop.theta_R_deg << " " << j;
+    }
+  }
+}
+
 // ---- The schedule and the keys ------------------------------------------------------------
 
 TEST(FourCameraSchedule, CountGivesAStaticTimeSeries) {

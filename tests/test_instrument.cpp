@@ -54,9 +54,10 @@ Rig camera_rig() { return load_rig(kIndoor).rig; }
 
 TEST(InstrumentFactory, KindsAndFlags) {
   const auto kinds = instrument_kinds();
-  ASSERT_EQ(kinds.size(), 2u);
+  ASSERT_EQ(kinds.size(), 3u);
   EXPECT_EQ(kinds[0], "six-photodiode");
   EXPECT_EQ(kinds[1], "dofp-camera");
+  EXPECT_EQ(kinds[2], "four-camera");
   for (std::string_view kind : kinds) EXPECT_EQ(make_instrument(kind)->kind(), kind);
 
   const auto six = make_instrument("six-photodiode");
@@ -70,7 +71,15 @@ TEST(InstrumentFactory, KindsAndFlags) {
   EXPECT_THROW(make_instrument("camera"), std::invalid_argument);
   EXPECT_THROW(make_instrument(""), std::invalid_argument);
   EXPECT_EQ(kinds_with(Instrument::kPairVoltages), "six-photodiode");
-  EXPECT_EQ(kinds_with(Instrument::kFrames), "dofp-camera");
+  EXPECT_EQ(kinds_with(Instrument::kFrames), "dofp-camera four-camera");
+  EXPECT_EQ(kinds_with(Instrument::kMosaic), "dofp-camera");
+  EXPECT_EQ(kinds_with(Instrument::kCameraArray), "four-camera");
+  // W16's four cameras take frames but have no mosaic: the DoFP-only commands refuse them.
+  const auto four = make_instrument("four-camera");
+  EXPECT_TRUE(four->has(Instrument::kFrames));
+  EXPECT_TRUE(four->has(Instrument::kCameraArray));
+  EXPECT_FALSE(four->has(Instrument::kMosaic));
+  EXPECT_FALSE(four->has(Instrument::kPairVoltages));
 }
 
 TEST(InstrumentFactory, EveryFlagHasOneNameAndText) {
@@ -134,12 +143,21 @@ TEST(InstrumentKeys, DeviceKeysBelongToOneInstrumentButKindAndD) {
   for (const RigKey& k : rig_keys()) {
     if (!k.path.starts_with("device.")) continue;
     SCOPED_TRACE(std::string(k.path));
-    const bool six = k.read_by_instrument("six-photodiode"), cam = k.read_by_instrument("dofp-camera");
-    if (k.path == "device.kind" || k.path == "device.d") EXPECT_TRUE(six && cam);
-    else EXPECT_NE(six, cam);
+    const bool six = k.read_by_instrument("six-photodiode"), cam = k.read_by_instrument("dofp-camera"),
+               four = k.read_by_instrument("four-camera");
+    if (k.path == "device.kind" || k.path == "device.d") {
+      EXPECT_TRUE(six && cam && four);
+    } else {
+      EXPECT_EQ(int(six) + int(cam) + int(four), 1);
+      // The four cameras' keys are under device.cameras (device.width_px is the DoFP camera's).
+      if (four) {
+        EXPECT_TRUE(k.path.starts_with("device.cameras."));
+      }
+    }
   }
-  for (const char* p : {"schedule.unpolarized_levels", "schedule.intensities", "schedule.frames_per_stop"})
-    EXPECT_EQ(find_rig_key(p)->instruments, "dofp-camera") << p;
+  for (const char* p : {"schedule.unpolarized_levels", "schedule.intensities"})
+    EXPECT_EQ(find_rig_key(p)->instruments, "dofp-camera four-camera") << p;
+  EXPECT_EQ(find_rig_key("schedule.frames_per_stop")->instruments, "dofp-camera");
   EXPECT_EQ(find_rig_key("schedule.samples_per_stop")->instruments, "six-photodiode");
   EXPECT_EQ(find_rig_key("electronics.adc_bits")->instruments, "six-photodiode");
 }
@@ -270,7 +288,7 @@ TEST(InstrumentRigFiles, ASixPhotodiodeKeyInACameraRigIsRefused) {
             "six.yaml:3: key 'device.focal_mm': expected no value with device.kind six-photodiode (only "
             "device.kind dofp-camera reads it)");
   EXPECT_HAS(error_of([&] { parse_rig("device: {kind: camera}\n", "x.yaml"); }),
-             "x.yaml:1: key 'device.kind': expected \"six-photodiode\" or \"dofp-camera\", got 'camera'");
+             "x.yaml:1: key 'device.kind': expected \"six-photodiode\", \"dofp-camera\" or \"four-camera\", got 'camera'");
 }
 
 TEST(InstrumentRigFiles, TheEffectiveRigLoadsBackAndLeavesTheDefaultKindOut) {
@@ -313,8 +331,13 @@ TEST(InstrumentCapabilities, TheMessageNamesWhatIsNeededAndWhoHasIt) {
   EXPECT_EQ(instrument_problem(cam, Instrument::kPairVoltages, "study cs"),
             "study cs needs pair voltages (device.kind six-photodiode); device.kind dofp-camera has none");
   EXPECT_FALSE(instrument_problem(cam, Instrument::kFrames, "orient").has_value());
-  EXPECT_EQ(instrument_problem(Rig{}, Instrument::kFrames, "orient", "r.yaml"),
-            "r.yaml: orient needs frames (device.kind dofp-camera); device.kind six-photodiode has none");
+  EXPECT_EQ(instrument_problem(Rig{}, Instrument::kMosaic, "orient", "r.yaml"),
+            "r.yaml: orient needs a polarizer mosaic (device.kind dofp-camera); device.kind six-photodiode has none");
+  Rig four;
+  four.device_kind = "four-camera";
+  EXPECT_EQ(instrument_problem(four, Instrument::kMosaic, "calibrate --method dofp", "r.yaml"),
+            "r.yaml: calibrate --method dofp needs a polarizer mosaic (device.kind dofp-camera); device.kind "
+            "four-camera has none");
   EXPECT_FALSE(instrument_problem(Rig{}, Instrument::kPairVoltages, "study cs").has_value());
   EXPECT_THROW(require_instrument(cam, Instrument::kPairVoltages, "x"), RigError);
   EXPECT_NO_THROW(require_instrument(cam, Instrument::kFrames, "x"));

@@ -442,10 +442,11 @@ TEST(RigYamlError, NonPositiveGain) {
 }
 
 TEST(RigYamlError, NonPositiveStep) {
+  // Step 0 is a static time series, given with schedule.count only.
   expect_file_error("schedule:\n  step_deg: 0\n", 2, "schedule.step_deg",
-                    "expected a step in (0, 360] deg, got 0");
+                    "expected a step > 0 without schedule.count, got 0");
   expect_file_error("schedule:\n  step_deg: -10\n", 2, "schedule.step_deg",
-                    "expected a step in (0, 360] deg, got -10");
+                    "expected a step in [0, 360] deg, got -10");
 }
 
 TEST(RigYamlError, ElectronicsOutOfRange) {
@@ -770,7 +771,8 @@ TEST(RigToYaml, EveryKeyIsWritten) {
   for (const polrig::RigKey& k : polrig::rig_keys()) {
     SCOPED_TRACE(std::string(k.path));
     const YAML::Node n = find_path(root, k.path);
-    if (k.path == "schedule.angles_deg" || k.path == "device.truth_from" || k.path == "source.scene") {
+    if (k.path == "schedule.angles_deg" || k.path == "device.truth_from" || k.path == "source.scene" ||
+        k.path == "schedule.count") {  // schedule.count 0: unset
       EXPECT_FALSE(n.IsDefined()) << "an empty list or path is omitted";
       continue;
     }
@@ -817,6 +819,6 @@ TEST(RigToYaml, OnlyKnownKeysAreWritten) {
   for (const polrig::RigKey& k : polrig::rig_keys())
     cos4_keys += k.read_by_source("cos4") && k.read_by_instrument("six-photodiode") ? 1 : 0;
   // All the default (cos4, six-photodiode) rig's keys but the empty list and paths (source.scene is
-  // traced's) and device.kind (the default instrument is not written).
-  EXPECT_EQ(leaves.size(), cos4_keys - 3);
+  // traced's), schedule.count (0: unset) and device.kind (the default instrument is not written).
+  EXPECT_EQ(leaves.size(), cos4_keys - 4);
 }

@@ -842,7 +842,7 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
       else for (double& x : k.array(rig)) x = v;
       if (k.path == "schedule.start_deg" || k.path == "schedule.stop_deg")
         rig.schedule.start_deg = rig.schedule.stop_deg = v;  // one stop there
-      if (k.path == "schedule.step_deg" && !upper) rig.schedule.stop_deg = 0;
+      if (k.path == "schedule.step_deg" && !upper) rig.schedule.count = 3;  // step 0: a static series (schedule.count)
       ASSERT_FALSE(check_rig(rig).has_value()) << k.path << " = " << v << ": " << check_rig(rig)->message;
       EXPECT_EQ(first_non_finite(rig), "") << k.path << " = " << v;
       ++checked;

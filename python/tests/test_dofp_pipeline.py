@@ -127,9 +127,9 @@ def test_the_eigenvector_headings_noise_is_the_cameras(tmp_path):
 def test_orient_and_calibrate_dofp_refuse_what_they_cannot_read(tmp_path, indoor):
     run_cli("simulate", str(ROOT / "rigs" / "wang2019-indoor.yaml"), "-o", tmp_path / "six", "--quiet", "--no-plots")
     r = run_cli("orient", tmp_path / "six", "-o", tmp_path / "o", check=False)
-    assert r.returncode == 2 and "orient needs frames (device.kind dofp-camera)" in r.stderr
+    assert r.returncode == 2 and "orient needs a polarizer mosaic (device.kind dofp-camera)" in r.stderr
     r = run_cli("calibrate", tmp_path / "six", "--method", "dofp", "-o", tmp_path / "c", check=False)
-    assert r.returncode == 2 and "calibrate --method dofp needs frames" in r.stderr
+    assert r.returncode == 2 and "calibrate --method dofp needs a polarizer mosaic" in r.stderr
     # Options that do not apply to --method dofp are refused by name, not ignored.
     for option, value, reason in (("--rig", INDOOR, "reads the camera from the dataset"),
                                   ("--drift", "angle", "calibrates indoors"),
@@ -142,7 +142,7 @@ def test_orient_and_calibrate_dofp_refuse_what_they_cannot_read(tmp_path, indoor
     r = run_cli("orient", indoor / "data", "--heading-prior", "10", "-o", tmp_path / "o", check=False)
     assert r.returncode == 2 and "has no sky rig" in r.stderr
     assert not (tmp_path / "o").exists() and not (tmp_path / "c").exists()
-    with pytest.raises(polrig.RigError, match="orient needs frames"):
+    with pytest.raises(polrig.RigError, match="orient needs a polarizer mosaic"):
         polrig.orient_dofp_dataset(tmp_path / "six")
 
 

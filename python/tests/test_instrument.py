@@ -27,7 +27,7 @@ def test_the_camera_rigs_load_with_their_instrument():
     for path, stops in ((CAMERA, 79), (CAMERA_OUTDOOR, 40)):
         r = polrig.Rig.load(path)
         assert r.instrument == "dofp-camera"
-        assert r.capabilities == ["frames"] and r.can("frames") and not r.can("pair_voltages")
+        assert r.capabilities == ["frames", "mosaic"] and r.can("frames") and not r.can("pair_voltages")
         assert r["device.kind"] == "dofp-camera"
         assert r["device.width_px"] == 640 and r["device.noise"] is True
         assert "device.focal_mm" in r and "device.L_photo" not in r

@@ -20,6 +20,7 @@
 #include "polrig/report/calibration_reports.h"
 #include "polrig/study/cs.h"
 #include "polrig/report/dofp_dataset.h"
+#include "polrig/report/four_camera_dataset.h"
 #include "polrig/report/reports.h"
 #include "polrig/report/sweep_report.h"
 #include "polrig/io/plot.h"
@@ -93,10 +94,39 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                          "a camera rig: the micro-polarizers in the image plane or in front of the "
                                          "lens (spec §2.5)")
                              ->check(CLI::IsMember({"image-plane", "in-front"}))->capture_default_str();
+    // A camera array (four-camera): which layers each stop's EXR holds.
+    auto layers = std::make_shared<std::string>("fused");
+    auto* array_layers_opt = app->add_option("--layers", *layers,
+                                       "a camera array: fused (S0, S1, S2, AoP, DoP: the default), all (also the "
+                                       "four raw frames) or aop (AoP, DoP: what locate reads)")
+                           ->check(CLI::IsMember({"all", "fused", "aop"}))->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
-      if (r.rig.instrument().has(Instrument::kFrames)) {
+      if (r.rig.instrument().has(Instrument::kCameraArray)) {
+        if (*samples) throw RigError(fmt::format("--samples: device.kind {} takes frames, not samples", r.rig.device_kind));
+        for (const CLI::Option* o : {frames_opt, analyzer_opt})
+          if (o->count() > 0)
+            throw RigError(fmt::format("{}: device.kind {} has no polarizer mosaic (a dofp-camera option)",
+                                       o->get_name(), r.rig.device_kind));
+        if (*truth_layers)
+          throw RigError(fmt::format("--truth-layers: device.kind {} writes its truth in truth.yaml", r.rig.device_kind));
+        FourCameraDatasetOptions o;
+        o.layers = *layers == "fused" ? FourCameraLayers::Fused : *layers == "aop" ? FourCameraLayers::Aop
+                                                                                     : FourCameraLayers::All;
+        try {
+          const FourCameraSimulator check(r.rig);  // refused before the folder is opened
+        } catch (const std::invalid_argument& e) {
+          throw RigError(fmt::format("{}: {}", r.origin, e.what()));
+        }
+        OutputDir dir = out->open();
+        write_manifest(dir.staging(), {command_line(), &r, report_four_camera_dataset(dir.staging(), r.rig, o, progress())});
+        finish(dir);
+        return;
+      }
+      if (array_layers_opt->count() > 0)
+        throw RigError(fmt::format("--layers: device.kind {} is not a camera array", r.rig.device_kind));
+      if (r.rig.instrument().has(Instrument::kMosaic)) {
         if (*samples) throw RigError(fmt::format("--samples: device.kind {} takes frames, not samples", r.rig.device_kind));
         DofpDatasetOptions o;
         o.storage = *frames == "mean" ? DofpFrameStorage::Sum : DofpFrameStorage::Every;

@@ -6,6 +6,11 @@ namespace polrig {
 
 std::vector<double> Schedule::table_angles_deg() const {
   if (!angles_deg.empty()) return angles_deg;
+  if (count > 0) {
+    std::vector<double> out(static_cast<std::size_t>(count));
+    for (int k = 0; k < count; ++k) out[static_cast<std::size_t>(k)] = start_deg + static_cast<double>(k) * step_deg;
+    return out;
+  }
   // Count first, then compute each angle from its index: no accumulated rounding, and the end
   // point is included when (stop − start)/step is an integer up to rounding.
   const long n = static_cast<long>(std::floor((stop_deg - start_deg) / step_deg + 1e-9)) + 1;

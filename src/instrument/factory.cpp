@@ -21,14 +21,23 @@ class SixPhotodiode final : public Instrument {
 class DofpCamera final : public Instrument {
  public:
   std::string_view kind() const override { return "dofp-camera"; }
-  unsigned flags() const override { return kFrames; }
+  unsigned flags() const override { return kFrames | kMosaic; }
 };
 
-constexpr std::array<std::string_view, 2> kKinds = {"six-photodiode", "dofp-camera"};
+// W16's four-camera sensor: device/four_camera.h, sim/four_camera_frames.h.
+class FourCamera final : public Instrument {
+ public:
+  std::string_view kind() const override { return "four-camera"; }
+  unsigned flags() const override { return kFrames | kCameraArray; }
+};
 
-constexpr std::array<InstrumentFlagInfo, 2> kFlags = {{
+constexpr std::array<std::string_view, 3> kKinds = {"six-photodiode", "dofp-camera", "four-camera"};
+
+constexpr std::array<InstrumentFlagInfo, 4> kFlags = {{
     {Instrument::kPairVoltages, "pair_voltages", "pair voltages"},
     {Instrument::kFrames, "frames", "frames"},
+    {Instrument::kMosaic, "mosaic", "a polarizer mosaic"},
+    {Instrument::kCameraArray, "camera_array", "a camera array"},
 }};
 
 }  // namespace
@@ -57,6 +66,10 @@ std::shared_ptr<const Instrument> make_instrument(std::string_view kind) {
   if (kind == "dofp-camera") {
     static const auto camera = std::make_shared<const DofpCamera>();
     return camera;
+  }
+  if (kind == "four-camera") {
+    static const auto cameras = std::make_shared<const FourCamera>();
+    return cameras;
   }
   throw std::invalid_argument("unknown instrument '" + std::string(kind) + "'");
 }

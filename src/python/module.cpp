@@ -40,4 +40,5 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_dofp_dataset_calibration(m);
   polrig::python::bind_dofp(m);
   polrig::python::bind_position(m);
+  polrig::python::bind_four_camera(m);
 }

@@ -334,7 +334,7 @@ DofpCalibration calibrate_dofp_folder(const std::filesystem::path& dir, const Do
                                       const Progress& progress) {
   if (std::filesystem::exists(dir / "rig.yaml")) {
     const LoadedRig r = load_rig(dir / "rig.yaml");
-    require_instrument(r.rig, Instrument::kFrames, "calibrate --method dofp", r.origin);
+    require_instrument(r.rig, Instrument::kMosaic, "calibrate --method dofp", r.origin);
   }
   DofpDataset dataset;
   try {

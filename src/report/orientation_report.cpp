@@ -119,7 +119,7 @@ std::vector<FrameOrientation> orient_dofp_folder(const std::filesystem::path& di
   std::optional<Sky> sky;
   if (std::filesystem::exists(dir / "rig.yaml")) {
     const LoadedRig r = load_rig(dir / "rig.yaml");
-    require_instrument(r.rig, Instrument::kFrames, "orient", r.origin);
+    require_instrument(r.rig, Instrument::kMosaic, "orient", r.origin);
     sky = rig_sky(r.rig);
   }
   if (heading_prior_deg && !sky)

@@ -91,6 +91,7 @@ RigKey only(RigKey k, std::string_view instruments) {
   return k;
 }
 constexpr std::string_view kSix = "six-photodiode", kCamera = "dofp-camera";
+constexpr std::string_view kFour = "four-camera", kCameras = "dofp-camera four-camera";
 
 // An integer key in [lo, hi]; `even`: whole 2 × 2 mosaic cells.
 template <long long lo, long long hi, bool even = false>
@@ -128,7 +129,8 @@ std::vector<RigKey> make_keys() {
   {
     RigKey k{"device.kind", K::Text, "", instrument_kinds_text(),
              "the instrument: six-photodiode is W19's sensor (pair voltages), dofp-camera H17's "
-             "pixelated polarization camera (frames); it decides which device.* keys the rig reads"};
+             "pixelated polarization camera (frames), four-camera W16's four cameras with one "
+             "polarizer each (frames, a fused Stokes image); it decides which device.* keys the rig reads"};
     k.text = [](Rig& r) -> std::string& { return r.device_kind; };
     k.valid_text = [](std::string_view v) {
       for (std::string_view kind : instrument_kinds())
@@ -298,6 +300,119 @@ std::vector<RigKey> make_keys() {
       "cameras digitise to 8–16 bits; a raw frame holds 16-bit values",
       [](Rig& r) -> int& { return r.camera.adc_bits; }, &integer_within<1, 16>), kCamera),
       kSimulate, ""));
+  // --- device.kind four-camera (device/four_camera.h; spec sky-and-compasses.md §3.1–3.2): the
+  // cameras' settings under device.cameras (the DoFP camera's device.width_px etc. are its own).
+  keys.push_back(reads(only(integer(
+      "device.cameras.width_px", "an integer in [2, 16384]", "image columns of each camera (W16: 1034)",
+      "16384 columns is beyond any machine-vision camera of the kind",
+      [](Rig& r) -> int& { return r.four_camera.width_px; }, &integer_within<2, 16384>), kFour), kSimulate, ""));
+  keys.push_back(reads(only(integer(
+      "device.cameras.height_px", "an integer in [2, 16384]", "image rows of each camera (W16: 778)",
+      "16384 rows is beyond any machine-vision camera of the kind",
+      [](Rig& r) -> int& { return r.four_camera.height_px; }, &integer_within<2, 16384>), kFour), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.5, 100.0}>(
+      "device.cameras.pixel_um", "um", "a pixel pitch",
+      "pixel pitch (the GC1031CP's Sony ICX204: 4.65 µm); converts f_x to mm in the truth",
+      "image sensors' pixels span about 1 µm (phones) to tens of µm (scientific CCDs)",
+      [](Rig& r) -> double& { return r.four_camera.pixel_um; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(array<kTurn>(
+      "device.cameras.polarizer_deg", "deg", "4 angles",
+      "polarizer axes φ_j of cameras 1–4, each camera's frame from X towards Y (W16: 0, 45, 90, 135)",
+      kTurnWhy, [](Rig& r) { return std::span<double>(r.four_camera.polarizer_deg); }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{-90.0, 90.0}>(
+      "device.cameras.eps_deg", "deg", "4 angles",
+      "mounting errors ε_j of the four polarizers: the true axis is φ_j + ε_j [C: 0, 0.4, −0.3, 0.6]",
+      "an axial angle: ±90° is every orientation of a polarizer",
+      [](Rig& r) { return std::span<double>(r.four_camera.eps_deg); }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{0.0, 1e9, true, false}>(
+      "device.cameras.gain_DN", "DN", "4 gains",
+      "gains K_j of cameras 1–4: DN per unit of the source's intensity, Malus's ½ absorbed (spec §3.2) "
+      "[C: 1200 ± 3 %]",
+      "positive; 1e9 DN per unit saturates any ADC at any useful light",
+      [](Rig& r) { return std::span<double>(r.four_camera.gain_DN); }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{-65536.0, 65536.0}>(
+      "device.cameras.offset_DN", "DN", "4 offsets", "offsets b_j of cameras 1–4, the dark level [C: about 20 DN]",
+      "beyond a 16-bit ADC's range every pixel clips",
+      [](Rig& r) { return std::span<double>(r.four_camera.offset_DN); }), kFour), kSimulate, ""));
+  {
+    constexpr RealRange kFocal{10.0, 100000.0};
+    constexpr std::string_view why = "from a 10 px toy image to a long telephoto on a large sensor";
+    keys.push_back(reads(only(array<kFocal>(
+        "device.cameras.fx_px", "px", "4 focal lengths",
+        "focal lengths f_x of cameras 1–4 in px [C: about 770 px, the equidistant lens's fit to W16's 77° × "
+        "57.7° field; 3.5 mm / 4.65 µm = 752.7 px]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.fx_px); }), kFour), kSimulate, ""));
+    keys.push_back(reads(only(array<kFocal>(
+        "device.cameras.fy_px", "px", "4 focal lengths", "focal lengths f_y of cameras 1–4 in px [C: as f_x, square pixels]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.fy_px); }), kFour), kSimulate, ""));
+  }
+  {
+    constexpr RealRange kCentre{-16384.0, 32768.0};
+    constexpr std::string_view why = "a principal point lies near the image; beyond twice its largest size it is no lens";
+    keys.push_back(reads(only(array<kCentre>(
+        "device.cameras.cx_px", "px", "4 positions",
+        "principal points c_x of cameras 1–4, pixel (col, row)'s centre at (col + ½, row + ½) [C: 517 ± 1.5]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.cx_px); }), kFour), kSimulate, ""));
+    keys.push_back(reads(only(array<kCentre>(
+        "device.cameras.cy_px", "px", "4 positions", "principal points c_y of cameras 1–4 [C: 389 ± 1.5]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.cy_px); }), kFour), kSimulate, ""));
+  }
+  {
+    constexpr RealRange kKb{-1.0, 1.0};
+    constexpr std::string_view why =
+        "fisheye lenses' Kannala–Brandt coefficients are of order 0.01–0.1; a lens that folds its image is refused";
+    keys.push_back(reads(only(array<kKb>(
+        "device.cameras.k1", "", "4 coefficients",
+        "Kannala–Brandt k1 of cameras 1–4: θ_d = θ(1 + k1θ² + k2θ⁴ + k3θ⁶ + k4θ⁸), OpenCV's fisheye [C: 0, equidistant]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.k1); }), kFour), kSimulate, ""));
+    keys.push_back(reads(only(array<kKb>(
+        "device.cameras.k2", "", "4 coefficients", "Kannala–Brandt k2 of cameras 1–4 [C: 0]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.k2); }), kFour), kSimulate, ""));
+    keys.push_back(reads(only(array<kKb>(
+        "device.cameras.k3", "", "4 coefficients", "Kannala–Brandt k3 of cameras 1–4 [C: 0]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.k3); }), kFour), kSimulate, ""));
+    keys.push_back(reads(only(array<kKb>(
+        "device.cameras.k4", "", "4 coefficients", "Kannala–Brandt k4 of cameras 1–4 [C: 0]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.k4); }), kFour), kSimulate, ""));
+  }
+  {
+    constexpr RealRange kMisalign{-10.0, 10.0};
+    constexpr std::string_view why =
+        "cameras mounted with parallel axes (W16): misalignments of a few degrees at most; camera 1's must be 0";
+    keys.push_back(reads(only(array<kMisalign>(
+        "device.cameras.rot_x_deg", "deg", "4 angles",
+        "x components of the rotation vectors of R_j1 (v_j = R_j1·v_1: camera 1's coordinates to camera j's, as "
+        "OpenCV's stereo R) [C: 0, 0.3, −0.2, 0.15]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.rot_x_deg); }), kFour), kSimulate, ""));
+    keys.push_back(reads(only(array<kMisalign>(
+        "device.cameras.rot_y_deg", "deg", "4 angles", "y components of R_j1's rotation vectors [C: 0, −0.15, 0.25, 0.2]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.rot_y_deg); }), kFour), kSimulate, ""));
+    keys.push_back(reads(only(array<kMisalign>(
+        "device.cameras.rot_z_deg", "deg", "4 angles",
+        "z components of R_j1's rotation vectors, a roll about the optical axis [C: 0, 0.5, −0.4, 0.3]",
+        why, [](Rig& r) { return std::span<double>(r.four_camera.rot_z_deg); }), kFour), kSimulate, ""));
+  }
+  keys.push_back(reads(only(real<RealRange{0.0, 10000.0}>(
+      "device.cameras.baseline_mm", "mm", "a length",
+      "side of the square the cameras sit on (cameras 1–4 at (0,0), (a,0), (a,a), (0,a) in camera 1's X, Y); "
+      "truth only: the sky is at infinity (spec §3.2) [C: 60 mm]",
+      "0 (coincident) to 10 m", [](Rig& r) -> double& { return r.four_camera.baseline_mm; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(boolean(
+      "device.cameras.noise", "Poisson–Gaussian noise (shot and read noise) on every frame of every camera",
+      [](Rig& r) -> bool& { return r.four_camera.noise; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 1e6, true, false}>(
+      "device.cameras.electrons_per_DN", "e/DN", "a conversion gain",
+      "shot noise: a signal of s DN holds s·electrons_per_DN electrons [C: 10]",
+      "image sensors' conversion gains lie around 0.1–100 e⁻/DN; 1e6 is noise-free in practice",
+      [](Rig& r) -> double& { return r.four_camera.electrons_per_DN; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 1e4}>(
+      "device.cameras.read_noise_DN", "DN", "a standard deviation", "Gaussian read noise per pixel and frame [C: 1]",
+      "more than 1e4 DN buries a 12-bit camera's whole range",
+      [](Rig& r) -> double& { return r.four_camera.read_noise_DN; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(integer(
+      "device.cameras.adc_bits", "an integer in [1, 16]", "the cameras' ADC depth: raw values 0 … 2^bits − 1 (GC1031CP: 8 or 12)",
+      "cameras digitise to 8–16 bits; a raw frame holds 16-bit values",
+      [](Rig& r) -> int& { return r.four_camera.adc_bits; }, &integer_within<1, 16>), kFour), kSimulate, ""));
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
@@ -458,13 +573,19 @@ std::vector<RigKey> make_keys() {
   keys.push_back(reads(real<kTableAngle>("schedule.start_deg", "deg", "an angle", "first table stop",
                                    kTableWhy,
                                    [](Rig& r) -> double& { return r.schedule.start_deg; }), kSimulate, ""));
-  keys.push_back(reads(real<RealRange{0.0, 360.0, true, false}>(
-      "schedule.step_deg", "deg", "a step", "table step between stops",
+  keys.push_back(reads(real<RealRange{0.0, 360.0}>(
+      "schedule.step_deg", "deg", "a step", "table step between stops (0 only with schedule.count)",
       "at most one turn; the stops between start and stop may number at most 1e6",
       [](Rig& r) -> double& { return r.schedule.step_deg; }), kSimulate, ""));
   keys.push_back(reads(real<kTableAngle>("schedule.stop_deg", "deg", "an angle ≥ schedule.start_deg",
                                    "last table stop (included when reached by whole steps)",
                                    kTableWhy, [](Rig& r) -> double& { return r.schedule.stop_deg; }), kSimulate, ""));
+  keys.push_back(reads(integer(
+      "schedule.count", "an integer in [0, 1000000]",
+      "number of stops start + k·step, k < count (replaces schedule.stop_deg; step may be 0: a static time "
+      "series at one table angle, W16's 1 Hz hour); 0: unset, the stops run up to schedule.stop_deg",
+      "at most 1e6 stops, as for start/step/stop",
+      [](Rig& r) -> int& { return r.schedule.count; }, &integer_within<0, 1000000>), kSimulate, ""));
   {
     RigKey k{"schedule.angles_deg", K::RealList, "deg",
              expects_text("a list of 1 to 1e6 angles", kTableAngle, "deg"),
@@ -514,7 +635,7 @@ std::vector<RigKey> make_keys() {
     k.range = levels ? kLevel : kIntensity;
     k.max_items = 10000;
     k.valid_real = levels ? &within<kLevel> : &within<kIntensity>;
-    keys.push_back(reads(only(k, kCamera), kSimulate, ""));
+    keys.push_back(reads(only(k, kCameras), kSimulate, ""));
   }
   keys.push_back(reads(only(integer(
       "schedule.frames_per_stop", "an integer in [1, 999]",
@@ -599,7 +720,10 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
   if (s.angles_deg.size() > kMaxStops)
     return RigProblem{"schedule.angles_deg",
                       fmt::format("expected at most 1e6 stops, got {}", s.angles_deg.size())};
-  if (s.angles_deg.empty()) {
+  if (s.angles_deg.empty() && s.count == 0 && !(s.step_deg > 0))
+    return RigProblem{"schedule.step_deg",
+                      fmt::format("expected a step > 0 without schedule.count, got {}", s.step_deg), "schedule.count"};
+  if (s.angles_deg.empty() && s.count == 0) {
     if (s.stop_deg < s.start_deg)
       return RigProblem{"schedule.stop_deg",
                         fmt::format("expected an angle ≥ schedule.start_deg ({}), got {}",
@@ -612,14 +736,23 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
   }
   if (rig.instrument().has(Instrument::kFrames)) {
     // A camera's stops: every unpolarized level, then every table angle at each intensity.
-    const double angles = s.angles_deg.empty() ? std::floor((s.stop_deg - s.start_deg) / s.step_deg + 1e-9) + 1
-                                               : static_cast<double>(s.angles_deg.size());
+    const double angles = !s.angles_deg.empty() ? static_cast<double>(s.angles_deg.size())
+                          : s.count > 0       ? static_cast<double>(s.count)
+                                              : std::floor((s.stop_deg - s.start_deg) / s.step_deg + 1e-9) + 1;
     const double stops = static_cast<double>(s.unpolarized_levels.size()) +
                          angles * static_cast<double>(s.intensities.size());
     if (stops > static_cast<double>(kMaxStops))
       return RigProblem{"schedule.intensities",
                         fmt::format("expected at most 1e6 camera stops (levels + angles × intensities), got {:.0f}",
                                     stops), "schedule.step_deg"};
+  }
+  if (rig.instrument().has(Instrument::kCameraArray)) {
+    const FourCameraSpec& c = rig.four_camera;
+    for (const auto& [path, v] : {std::pair{"device.cameras.rot_x_deg", c.rot_x_deg[0]},
+                                  {"device.cameras.rot_y_deg", c.rot_y_deg[0]}, {"device.cameras.rot_z_deg", c.rot_z_deg[0]}})
+      if (v != 0.0)
+        return RigProblem{path, fmt::format("expected 0 for camera 1 (R_11 is the identity: camera 1 defines the "
+                                            "frame), got {}", v)};
   }
   for (int m = 0; m < 6 && rig.instrument().has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.
@@ -639,6 +772,8 @@ bool written_for(const RigKey& key, const Rig& rig_in) {
   if (key.kind == K::Text && key.text(rig).empty()) return false;
   if (key.kind == K::RealList && key.list(rig).empty()) return false;
   const bool explicit_stops = !rig.schedule.angles_deg.empty();
+  if (key.path == "schedule.count" && (explicit_stops || rig.schedule.count == 0)) return false;
+  if (key.path == "schedule.stop_deg" && rig.schedule.count > 0) return false;
   return !(explicit_stops && (key.path == "schedule.start_deg" || key.path == "schedule.step_deg" ||
                               key.path == "schedule.stop_deg"));
 }

@@ -32,8 +32,8 @@ std::vector<DofpStop> dofp_stops(const Schedule& schedule) {
 }
 
 DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig), analyzer_(analyzer) {
-  if (!rig.instrument().has(Instrument::kFrames))
-    throw std::invalid_argument(fmt::format("device.kind {} takes no frames (expected a camera, e.g. dofp-camera)",
+  if (!rig.instrument().has(Instrument::kMosaic))
+    throw std::invalid_argument(fmt::format("device.kind {} has no polarizer mosaic (expected dofp-camera)",
                                             rig.device_kind));
   if (!rig.light || !rig.light->has(Source::kStokesAlongViews))
     throw std::invalid_argument(fmt::format(

@@ -11,6 +11,9 @@ struct Schedule {
   double step_deg = 10.0;
   double stop_deg = 360.0;
   std::vector<double> angles_deg;  // explicit stops; when non-empty it replaces start/step/stop
+  // When > 0 (and no explicit list): `count` stops start + k·step, k < count, replacing stop_deg;
+  // step may be 0 (a static time series at one table angle).
+  int count = 0;
   int samples_per_stop = 40;
   // The table's timing, for sources that change during a run (the sky): it turns at speed_deg_s
   // between stops and dwells dwell_s at each (spec sky-and-compasses.md §1.4: the paper's 10°

@@ -21,6 +21,12 @@ class Instrument {
     // A pixel array: frames of raw DN per stop (H17's DoFP camera): simulate writes frames,
     // calibrate --method dofp, orient.
     kFrames = 1u << 1,
+    // A polarizer mosaic on one sensor (H17's DoFP camera): the 2 × 2 cells that calibrate
+    // --method dofp and orient read. A camera array has frames but no mosaic.
+    kMosaic = 1u << 2,
+    // Several cameras, one polarizer each, co-registered into one Stokes image (W16's four-camera
+    // sensor, device/four_camera.h).
+    kCameraArray = 1u << 3,
   };
 
   virtual ~Instrument() = default;
@@ -30,7 +36,8 @@ class Instrument {
   bool has(Flag f) const { return (flags() & f) != 0; }
 };
 
-// The instrument of `kind` (device.kind): "six-photodiode" (the default) or "dofp-camera".
+// The instrument of `kind` (device.kind): "six-photodiode" (the default), "dofp-camera" or
+// "four-camera".
 // Throws std::invalid_argument for another kind.
 std::shared_ptr<const Instrument> make_instrument(std::string_view kind);
 // The kinds make_instrument knows, for the device.kind key's check and its documentation.

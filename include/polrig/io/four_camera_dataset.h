@@ -1,0 +1,51 @@
+#pragma once
+// Reads a four-camera dataset (report/four_camera_dataset.h writes it; docs/formats.md): the stops,
+// the virtual camera 1 (the fused image's CameraIntrinsics) and, per stop, the fused AoP and DoP,
+// and the raw frames when the dataset holds them. For the lead's `locate` glue and Python.
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "polrig/nav/orientation.h"
+#include "polrig/vec3.h"
+
+namespace polrig {
+
+struct FourCameraDatasetStop {
+  int stop = 0;
+  std::string utc;                    // empty for a source without a clock (the sphere rig)
+  double t_s = 0;
+  double theta_R_deg = 0;
+  double intensity = 1;
+  bool polarized = true;
+  std::optional<double> heading_deg;  // true geographic azimuth of camera 1's X (sky rigs)
+  std::optional<Vec3> sun_camera1;    // the true sun in camera 1's frame (sky rigs)
+  std::string file;                   // relative to the dataset folder
+};
+
+struct FourCameraDataset {
+  std::filesystem::path dir;
+  int width = 0, height = 0;  // the virtual grid's (= each camera's) size
+  CameraIntrinsics camera;    // the virtual camera 1: f_c and the principal point, px
+  std::vector<FourCameraDatasetStop> stops;
+};
+
+// Throws std::runtime_error naming the file (and the line and column of stops.csv) for a missing
+// or malformed file.
+FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir);
+
+// A stop's fused AoP (degrees, camera 1's image frame, [0°, 180°)) and DoP on the virtual grid,
+// row-major, top row first; NaN where no camera array pixel covers it (valid = 0), as
+// nav/orientation.h's SkyPoints leave points out.
+struct FusedAopDop {
+  std::vector<double> aop_deg, dop;
+};
+FusedAopDop read_four_camera_fused(const FourCameraDataset& dataset, std::size_t stop_index);
+// A stop's four raw frames (DN); throws for a dataset written without them (--layers fused/aop).
+std::array<std::vector<std::uint16_t>, 4> read_four_camera_raw(const FourCameraDataset& dataset,
+                                                               std::size_t stop_index);
+
+}  // namespace polrig

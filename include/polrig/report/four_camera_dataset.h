@@ -1,0 +1,54 @@
+#pragma once
+// The four-camera sensor's dataset (docs/formats.md "Four-camera dataset"): what `polrig simulate`
+// writes for a rig whose instrument is a camera array (Instrument::kCameraArray), and Python's
+// Rig.simulate_four_camera.
+//   DIR/frames/stop_NNNN.exr  per stop: each camera's raw DN (UINT channels cam1 … cam4, ZIP:
+//                             lossless), the fused S0, S1, S2, AoP, DoP (float) on the virtual
+//                             camera 1 grid and `valid` (UINT 0/1); header attributes
+//   DIR/truth.yaml            the cameras' truth (gains, offsets, polarizer axes and errors,
+//                             intrinsics, distortion, R_j1, positions) and the virtual camera
+//   DIR/stops.csv             one row per stop: time, table angle, true heading, the sun in camera 1
+//   DIR/manifest.yaml, DIR/rig.yaml
+#include <filesystem>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "polrig/io/manifest.h"
+#include "polrig/progress.h"
+#include "polrig/sim/four_camera_frames.h"
+
+namespace polrig {
+
+// Which layers each stop's EXR holds.
+enum class FourCameraLayers {
+  All,    // the four raw frames and the fused layers
+  Fused,  // the fused S0, S1, S2, AoP, DoP and valid
+  Aop,    // the fused AoP, DoP and valid (what `locate` reads)
+};
+std::string_view four_camera_layers_name(FourCameraLayers layers);  // "all", "fused", "aop"
+
+struct FourCameraDatasetOptions {
+  // The fused layers by default: a full-resolution stop with the raw frames is 21 MB (formats.md
+  // §6.14a); the calibration, which needs them, asks for All.
+  FourCameraLayers layers = FourCameraLayers::Fused;
+};
+
+// The truth as YAML text (truth.yaml).
+std::string four_camera_truth_yaml(const FourCameraSpec& spec, const FourCameraModel& truth,
+                                   const VirtualCamera& grid);
+
+// Writes the dataset's files but the manifest into `dir` (an existing, empty staging folder),
+// reporting "simulate: stops" to `progress`; returns the files for the manifest. Throws
+// std::invalid_argument for a rig FourCameraSimulator refuses (before anything is written).
+std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path& dir, const Rig& rig,
+                                                    const FourCameraDatasetOptions& options,
+                                                    const Progress& progress = {});
+
+// The whole dataset in a new folder `destination` (whole or not at all; an existing folder is
+// replaced only with `replace`), with its manifest naming `command`.
+void write_four_camera_dataset(const LoadedRig& rig, const std::filesystem::path& destination,
+                               const FourCameraDatasetOptions& options, const std::string& command, bool replace,
+                               const Progress& progress = {});
+
+}  // namespace polrig

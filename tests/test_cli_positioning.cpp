@@ -74,3 +74,64 @@ TEST_F(CliPositioning, BadInputWritesNothing) {
   EXPECT_NE(r.status, 0);
   EXPECT_HAS(r.err, "--force");
 }
+
+// `polrig locate` on a small noise-free four-camera dataset (W16's static hour, 13 stops 5 min
+// apart, the quarter-resolution sensor of docs/cli.md). The chain is simulate → fused AoP →
+// eigenvector sun → Eq. 17 fix → ψ = β − α_S. Its only error is the fused image's interpolation:
+// each stop's sun must be within that of the true sun of stops.csv, and the fix within Eq. 15's
+// two-sighting error for the largest zenith-angle error seen, ε√2/sin Δβ (the first and last stop
+// span Δβ ≈ 14.5°; the least-squares fix over 13 stops is no worse than its two ends alone).
+TEST_F(CliPositioning, LocateFromAFourCameraDatasetFindsTheSiteAndHeading) {
+  const std::string quarter =
+      " --set schedule.step_deg=0 --set schedule.count=13 --set schedule.dwell_s=300"
+      " --set device.cameras.noise=false --set device.cameras.width_px=258 --set device.cameras.height_px=194"
+      " --set 'device.cameras.fx_px=[192.5, 192.8, 192.225, 192.65]'"
+      " --set 'device.cameras.fy_px=[192.5, 192.8, 192.225, 192.65]'"
+      " --set 'device.cameras.cx_px=[129, 129.6, 128.925, 129.475]'"
+      " --set 'device.cameras.cy_px=[97, 96.95, 97.575, 97.15]'";
+  const fs::path data = tmp / "w16", out = tmp / "loc";
+  ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml")) + " --layers aop" + quarter +
+     " -o " + shell_quote(data));
+  ok("locate " + shell_quote(data) + " --prior 29,113.5 -o " + shell_quote(out));
+  const Csv stops = read_csv(data / "stops.csv"), sun = read_csv(out / "sun.csv");
+  const Csv fix = read_csv(out / "fix.csv"), heading = read_csv(out / "heading.csv");
+  ASSERT_EQ(sun.rows.size(), 13u);
+  ASSERT_EQ(heading.rows.size(), 13u);
+  const double deg = 180.0 / std::acos(-1.0);
+  double worst_zenith = 0;
+  for (std::size_t i = 0; i < 13; ++i) {
+    const auto st = [&](const char* c) { return std::stod(stops.rows[i][stops.col(c)]); };
+    const auto sn = [&](const char* c) { return std::stod(sun.rows[i][sun.col(c)]); };
+    EXPECT_EQ(sun.rows[i][sun.col("status")], "ok");
+    const double az = std::atan2(st("sun_y_cam1"), st("sun_x_cam1")) * deg;
+    const double el = std::asin(st("sun_z_cam1")) * deg;
+    // The fused image's AoP is within 5.4e-4° of the sky's at this resolution (test_four_camera).
+    EXPECT_NEAR(std::remainder(sn("sun_az_deg") - az, 360.0), 0.0, 2e-3) << i;
+    EXPECT_NEAR(sn("sun_el_deg"), el, 2e-3) << i;
+    worst_zenith = std::max(worst_zenith, std::abs(sn("sun_el_deg") - el));
+    EXPECT_NEAR(std::remainder(std::stod(heading.rows[i][heading.col("heading_error_deg")]), 360.0), 0.0, 2e-3) << i;
+  }
+  ASSERT_EQ(fix.rows[0][fix.col("root")], "chosen");
+  EXPECT_EQ(fix.rows[0][fix.col("termination")], "converged");
+  const double eq15_km = worst_zenith * std::sqrt(2.0) / std::sin(14.5 / deg) * 111.32;
+  EXPECT_LT(std::stod(fix.rows[0][fix.col("error_km")]), eq15_km);
+  EXPECT_LT(eq15_km, 1.0);  // the bound itself is tight: the fix is good to better than a km
+  // The mirror root lies in the southern hemisphere, far from the prior.
+  ASSERT_EQ(fix.rows.size(), 2u);
+  EXPECT_LT(std::stod(fix.rows[1][fix.col("lat_deg")]), -40.0);
+  EXPECT_HAS(read_file(out / "manifest.yaml"), "sun.csv");
+}
+
+TEST_F(CliPositioning, LocateRefusesWhatItCannotUse) {
+  Result r = polrig("locate " + shell_quote(tmp / "none") + " -o " + shell_quote(tmp / "x"));
+  EXPECT_EQ(r.status, 106);  // CLI11's "required" (docs/cli.md exit codes)
+  EXPECT_HAS(r.err, "--prior");
+  // A DoFP camera's dataset has no camera array.
+  const fs::path dofp = tmp / "dofp";
+  ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/han2017-outdoor.yaml")) +
+     " --set device.width_px=32 --set device.height_px=24 --set schedule.step_deg=180 -o " + shell_quote(dofp));
+  r = polrig("locate " + shell_quote(dofp) + " --prior 28,113 -o " + shell_quote(tmp / "y"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "locate needs");
+  EXPECT_FALSE(fs::exists(tmp / "y"));
+}

@@ -934,5 +934,6 @@ def fix_position(utc: Any, zenith_deg: ArrayLike, prior: Sequence[float], *, wei
 def locate(utc: Any, sun_camera: ArrayLike, prior: Sequence[float], *, weight: ArrayLike | None = None,
            refraction: bool = False, ut1_minus_utc_s: float = 0.0, second_root: bool = True,
            truth: Sequence[float] | None = None, true_heading_deg: ArrayLike | None = None) -> Location: ...
+def locate_dataset(dir: str, prior: Sequence[float], *, dop_weighting: bool = False) -> Location: ...
 
 # ---- end of position

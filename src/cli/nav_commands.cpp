@@ -17,6 +17,7 @@
 #include "polrig/sky/sun.h"
 #include "polrig/sky/sun_rows.h"
 #include "polrig/report/heading_reports.h"
+#include "polrig/report/locate_report.h"
 #include "polrig/report/orientation_report.h"
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/rig_yaml.h"
@@ -165,6 +166,30 @@ void run_orient(const std::string& input, const std::string& params, const std::
   std::cout << fmt::format("{} frames, {} solved by the eigenvector method\n", frames.size(), solved);
 }
 
+// `locate DIR`: W16's fix and heading from a four-camera dataset's fused sky images
+// (report/locate_report.h): per stop the eigenvector sun vector, then the Eq. 17 fix over the stops
+// (both roots, the one nearest --prior chosen) and ψ = β − α_S per stop.
+void run_locate(const std::string& input, const std::string& prior_text, bool dop_weighting,
+                const OutputOptions& out) {
+  const Site prior = parse_site(prior_text, "--prior");
+  OrientationSettings orientation;
+  orientation.dop_weighting = dop_weighting;
+  const DatasetLocation run = locate_four_camera_folder(input, prior, orientation, {}, progress());
+  OutputDir d = out.open();
+  write_manifest(d.staging(), {command_line(), nullptr, report_dataset_location(d.staging(), run), {input}});
+  finish(d);
+  const PositionFix& fix = run.location.fix;
+  const PositionRoot& r = fix.chosen;
+  std::cout << fmt::format("{} of {} stops with a sun; fix {}: {:.4f}°N {:.4f}°E ({})", run.location.samples.size(),
+                           run.suns.size(), position_termination_name(r.summary.termination), r.lat_deg, r.lon_deg,
+                           r.summary.brief_report());
+  if (run.truth) std::cout << fmt::format(", {:.3f} km from the rig's site", great_circle_km(r.lat_deg, r.lon_deg,
+                                                                                        run.truth->lat_deg,
+                                                                                        run.truth->lon_deg));
+  std::cout << fmt::format("\nheading: mean {:.4f}°, SD {:.4f}°\n", run.location.heading_mean_deg,
+                           run.location.heading_sd_deg);
+}
+
 }  // namespace
 
 std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& threads) {
@@ -208,6 +233,21 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     out->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] { run_orient(*input, *params, *conversion, *dop_weighting, *heading_prior, *out); }});
+  }
+  {
+    auto* app = root.add_subcommand(
+        "locate", "position and heading from a four-camera dataset's fused sky images (W16 Eqs. 6-18)");
+    auto input = std::make_shared<std::string>();
+    auto prior = std::make_shared<std::string>();
+    auto dop_weighting = std::make_shared<bool>(false);
+    auto out = std::make_shared<OutputOptions>();
+    app->add_option("DIR", *input, "a folder written by polrig simulate for a four-camera rig")->required();
+    app->add_option("--prior", *prior, "LAT,LON in degrees (north, east positive): an approximate position; of "
+                                       "Eq. 17's two roots the one nearer it is chosen")->required();
+    app->add_flag("--dop-weighting", *dop_weighting, "weight the eigenvector method's EEᵀ by DoP");
+    out->add_to(*app);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] { run_locate(*input, *prior, *dop_weighting, *out); }});
   }
   {
     auto* app = study.add_subcommand(

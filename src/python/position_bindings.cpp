@@ -14,6 +14,7 @@
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/nav/positioning.h"
+#include "polrig/report/locate_report.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/rig.h"
 #include "polrig/study/positioning.h"
@@ -127,6 +128,37 @@ std::vector<ZenithSighting> zenith_sightings(const py::object& utc, const Double
   std::vector<ZenithSighting> out(t.size());
   for (std::size_t k = 0; k < t.size(); ++k) out[k] = {t[k], z[k], w[k]};
   return out;
+}
+
+// heading.csv's columns and .fix as a polrig.Location (the locate core's and locate_dataset's).
+RecordOf<LocationTag> location_record(const Location& loc, const std::optional<Site>& tr,
+                                      const std::vector<double>& truth_h) {
+  const std::size_t n = loc.samples.size();
+  const auto column = [&](auto get) {
+    std::vector<double> v(n);
+    for (std::size_t k = 0; k < n; ++k) v[k] = get(loc.samples[k], k);
+    return take(std::move(v));
+  };
+  std::vector<std::int64_t> ns(n);
+  for (std::size_t k = 0; k < n; ++k) ns[k] = std::llround(loc.samples[k].utc.unix_s * 1e9);
+  const py::module_ np = py::module_::import("numpy");
+  Record r;
+  r.add("fix", py::cast(fix_record(loc.fix, tr)));
+  r.add("utc", take(std::move(ns)).attr("astype")("datetime64[ns]"));
+  r.add("weight", column([](const LocateSample& s, std::size_t) { return s.weight; }));
+  r.add("zenith_deg", column([](const LocateSample& s, std::size_t) { return s.zenith_deg; }));
+  r.add("zenith_fix_deg", column([](const LocateSample& s, std::size_t) { return s.zenith_fix_deg; }));
+  r.add("residual_deg", column([](const LocateSample& s, std::size_t) { return s.residual_deg; }));
+  r.add("alpha_s_deg", column([](const LocateSample& s, std::size_t) { return s.alpha_s_deg; }));
+  r.add("beta_deg", column([](const LocateSample& s, std::size_t) { return s.beta_deg; }));
+  r.add("heading_deg", column([](const LocateSample& s, std::size_t) { return s.heading_deg; }));
+  r.add("heading_true_deg", column([&](const LocateSample&, std::size_t k) { return truth_h[k]; }));
+  r.add("heading_error_deg", column([&](const LocateSample& s, std::size_t k) {
+    return std::isnan(truth_h[k]) || std::isnan(s.heading_deg) ? NAN : std::remainder(s.heading_deg - truth_h[k], 360.0);
+  }));
+  r.add("heading_mean_deg", py::float_(loc.heading_mean_deg));
+  r.add("heading_sd_deg", py::float_(loc.heading_sd_deg));
+  return RecordOf<LocationTag>(std::move(r));
 }
 
 }  // namespace
@@ -255,32 +287,7 @@ void bind_position(py::module_& m) {
           py::gil_scoped_release release;
           loc = locate(in, p, o);
         }
-        const std::size_t n = loc.samples.size();
-        const auto column = [&](auto get) {
-          std::vector<double> v(n);
-          for (std::size_t k = 0; k < n; ++k) v[k] = get(loc.samples[k], k);
-          return take(std::move(v));
-        };
-        std::vector<std::int64_t> ns(n);
-        for (std::size_t k = 0; k < n; ++k) ns[k] = std::llround(loc.samples[k].utc.unix_s * 1e9);
-        const py::module_ np = py::module_::import("numpy");
-        Record r;
-        r.add("fix", py::cast(fix_record(loc.fix, tr)));
-        r.add("utc", take(std::move(ns)).attr("astype")("datetime64[ns]"));
-        r.add("weight", column([](const LocateSample& s, std::size_t) { return s.weight; }));
-        r.add("zenith_deg", column([](const LocateSample& s, std::size_t) { return s.zenith_deg; }));
-        r.add("zenith_fix_deg", column([](const LocateSample& s, std::size_t) { return s.zenith_fix_deg; }));
-        r.add("residual_deg", column([](const LocateSample& s, std::size_t) { return s.residual_deg; }));
-        r.add("alpha_s_deg", column([](const LocateSample& s, std::size_t) { return s.alpha_s_deg; }));
-        r.add("beta_deg", column([](const LocateSample& s, std::size_t) { return s.beta_deg; }));
-        r.add("heading_deg", column([](const LocateSample& s, std::size_t) { return s.heading_deg; }));
-        r.add("heading_true_deg", column([&](const LocateSample&, std::size_t k) { return truth_h[k]; }));
-        r.add("heading_error_deg", column([&](const LocateSample& s, std::size_t k) {
-          return std::isnan(truth_h[k]) || std::isnan(s.heading_deg) ? NAN : std::remainder(s.heading_deg - truth_h[k], 360.0);
-        }));
-        r.add("heading_mean_deg", py::float_(loc.heading_mean_deg));
-        r.add("heading_sd_deg", py::float_(loc.heading_sd_deg));
-        return RecordOf<LocationTag>(std::move(r));
+        return location_record(loc, tr, truth_h);
       }, "utc"_a, "sun_camera"_a, "prior"_a, py::kw_only(), "weight"_a = py::none(), "refraction"_a = false,
       "ut1_minus_utc_s"_a = 0.0, "second_root"_a = true, "truth"_a = py::none(),
       "true_heading_deg"_a = py::none(),
@@ -289,6 +296,22 @@ void bind_position(py::module_& m) {
       "the Eq. 17 fix (fix_position), and at the fix the sun's azimuth β and the heading ψ = β − α_S "
       "with W16's clockwise α_S = −atan2(s_y, s_x) (Eq. 18). truth, true_heading_deg: optional, for "
       "the error columns. Returns polrig.Location (heading.csv's columns and .fix).");
+
+  m.def("locate_dataset", [](const std::string& dir, const py::object& prior, bool dop_weighting) {
+        const Site p = site_of(prior, "prior");
+        OrientationSettings orientation;
+        orientation.dop_weighting = dop_weighting;
+        DatasetLocation run;
+        {
+          py::gil_scoped_release release;
+          run = locate_four_camera_folder(dir, p, orientation, {});
+        }
+        return location_record(run.location, run.truth, run.true_heading_deg);
+      }, "dir"_a, "prior"_a, py::kw_only(), "dop_weighting"_a = false,
+      "`polrig locate DIR --prior LAT,LON`: per stop of a four-camera dataset the sun vector by the "
+      "eigenvector method over the fused AoP (dop_weighting: EEᵀ weighted by DoP), then locate() over "
+      "the stops with a sun; the truth and the true headings from the dataset (a simulated one). "
+      "Returns polrig.Location, whose columns are the CLI's heading.csv and .fix its fix.csv.");
 
   rig_class(m).def("study_positioning", [](const PyRig& rig, const py::object& windows_s,
                                            std::vector<double> noise_sd_deg, std::vector<double> tilt_deg,

@@ -1,0 +1,47 @@
+#pragma once
+// `polrig locate DIR` (issue 13 §3): W16's position and heading from a four-camera dataset's fused
+// sky images. Per stop the sun vector by the eigenvector method over the fused AoP on the virtual
+// camera 1 (nav/orientation.h, W16 Eqs. 6–14), then the Eq. 17 fix over all stops and the heading
+// ψ = β − α_S per stop (nav/positioning.h: locate). Only glue: the physics is in nav/.
+#include <filesystem>
+#include <optional>
+#include <vector>
+
+#include "polrig/io/four_camera_dataset.h"
+#include "polrig/io/manifest.h"
+#include "polrig/nav/orientation.h"
+#include "polrig/nav/positioning.h"
+#include "polrig/progress.h"
+#include "polrig/sky/sun.h"
+
+namespace polrig {
+
+struct StopSun {
+  int stop = 0;
+  std::string utc;
+  SunVectorSolution sun;  // its status says whether the stop became a sighting
+};
+
+struct DatasetLocation {
+  std::vector<StopSun> suns;           // every polarized stop with a UTC, in order
+  Location location;                   // over the stops whose sun was solved
+  std::optional<Site> truth;           // the site of the dataset's sky rig (a simulated dataset)
+  std::vector<double> true_heading_deg;  // per sighting (NaN where stops.csv has none)
+};
+
+// Throws std::invalid_argument for a dataset with no stop to locate from, and as locate.
+DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, const Site& prior,
+                                           const std::optional<Site>& truth,
+                                           const OrientationSettings& orientation,
+                                           const PositionOptions& options, const Progress& progress = {});
+// Reads DIR (rig.yaml, when present, must describe a camera array; its sky gives the truth and the
+// ephemeris' settings) and locates; DataError naming the folder for what is wrong with it.
+DatasetLocation locate_four_camera_folder(const std::filesystem::path& dir, const Site& prior,
+                                          const OrientationSettings& orientation, PositionOptions options,
+                                          const Progress& progress = {});
+
+// fix.csv and heading.csv (report_location) and sun.csv: per stop, the eigenvector method's
+// status, root, the sun in camera 1's frame (azimuth from X towards Y, elevation) and its fit.
+std::vector<DatasetFile> report_dataset_location(const std::filesystem::path& dir, const DatasetLocation& run);
+
+}  // namespace polrig

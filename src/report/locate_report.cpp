@@ -1,0 +1,93 @@
+#include "polrig/report/locate_report.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "polrig/io/rig_yaml.h"
+#include "polrig/report/positioning_reports.h"
+#include "polrig/rig/rig.h"
+
+namespace polrig {
+
+DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, const Site& prior,
+                                           const std::optional<Site>& truth,
+                                           const OrientationSettings& orientation,
+                                           const PositionOptions& options, const Progress& progress) {
+  check_intrinsics(dataset.camera);
+  check_orientation_settings(orientation);
+  DatasetLocation run;
+  run.truth = truth;
+  std::vector<SunSighting> sightings;
+  progress.begin("locate: sun vectors", static_cast<long long>(dataset.stops.size()));
+  for (std::size_t s = 0; s < dataset.stops.size(); ++s) {
+    const FourCameraDatasetStop& st = dataset.stops[s];
+    if (st.polarized && !st.utc.empty()) {
+      FusedAopDop fused = read_four_camera_fused(dataset, s);
+      const SkyPoints points =
+          grid_points(dataset.width, dataset.height, 1.0, std::move(fused.aop_deg), std::move(fused.dop));
+      StopSun sun{st.stop, st.utc, sun_vector_eigen(points, dataset.camera, orientation)};
+      if (has_sun(sun.sun.status)) {
+        sightings.push_back({parse_utc(st.utc), sun.sun.sun, 1.0});
+        run.true_heading_deg.push_back(st.heading_deg.value_or(std::nan("")));
+      }
+      run.suns.push_back(std::move(sun));
+    }
+    progress.advance(1);
+  }
+  progress.finish();
+  if (run.suns.empty())
+    throw std::invalid_argument("no polarized stop with a UTC time: nothing to locate from (a sky dataset's stops.csv "
+                                "gives utc)");
+  run.location = locate(sightings, prior, options);
+  return run;
+}
+
+DatasetLocation locate_four_camera_folder(const std::filesystem::path& dir, const Site& prior,
+                                          const OrientationSettings& orientation, PositionOptions options,
+                                          const Progress& progress) {
+  std::optional<Site> truth;
+  if (std::filesystem::exists(dir / "rig.yaml")) {
+    const LoadedRig r = load_rig(dir / "rig.yaml");
+    require_instrument(r.rig, Instrument::kCameraArray, "locate", r.origin);
+    if (const std::optional<Sky> sky = rig_sky(r.rig)) {
+      truth = sky->site;
+      options.sun = sky->sun;  // the ephemeris the data were made with (refraction, UT1 − UTC)
+    }
+  }
+  FourCameraDataset dataset;
+  try {
+    dataset = read_four_camera_dataset(dir);
+  } catch (const std::runtime_error& e) {
+    throw DataError(e.what());
+  }
+  try {
+    return locate_four_camera_dataset(dataset, prior, truth, orientation, options, progress);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("{}: {}", dir.string(), e.what()));
+  }
+}
+
+std::vector<DatasetFile> report_dataset_location(const std::filesystem::path& dir, const DatasetLocation& run) {
+  std::vector<DatasetFile> files = report_location(dir, run.location, run.truth, run.true_heading_deg);
+  std::string csv = "stop,utc,status,root,sun_az_deg,sun_el_deg,vectors_used,rms_residual\n";
+  for (const StopSun& s : run.suns) {
+    const bool solved = has_sun(s.sun.status);
+    const auto value = [&](double v) { return solved ? fmt::format("{}", v) : std::string("nan"); };
+    if (solved && !(std::isfinite(s.sun.sun_az_deg) && std::isfinite(s.sun.sun_el_deg)))
+      throw std::runtime_error(fmt::format("stop {}: the sun vector is not finite; nothing was written", s.stop));
+    csv += fmt::format("{},{},{},{},{},{},{},{}\n", s.stop, s.utc, sun_vector_status_name(s.sun.status),
+                       sun_root_name(s.sun.root), value(s.sun.sun_az_deg), value(s.sun.sun_el_deg),
+                       s.sun.vectors_used, value(s.sun.rms_residual));
+  }
+  write_text_file(dir / "sun.csv", csv);
+  files.push_back({"sun.csv", 1, "per polarized stop: the eigenvector method's status and root (sun or antisun), "
+                                 "the sun in camera 1's frame (azimuth from X towards Y, elevation above the "
+                                 "image plane), the points used and the RMS of e·s"});
+  return files;
+}
+
+}  // namespace polrig

@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include <fmt/format.h>
@@ -23,6 +24,7 @@
 #include "polrig/sky/sun.h"
 #include "polrig/source/source.h"
 #include "polrig/units.h"
+#include "polrig/vector_log.h"
 
 using namespace polrig;
 
@@ -313,6 +315,33 @@ TEST(DofpFrames, SphereRigAoPFollowsEqs6To9AndTheTable) {
 // three ideal cameras whose four analyzers all sit at 0°, 45° and 90° give, per pixel, A·d·cos 2φ,
 // A·d·sin 2φ and A = (f0 + f90)/2 of Eq. 18 in double precision, so φ of every pixel without the
 // float truth layer. β = θ_R − ψ_P (the on-axis AoP, docs/physics.md §13).
+// The row kernels (and the cos4 source's along) run once per instruction set: AVX2 where the CPU
+// has it, else the baseline; both give the same frames and truth layers, bit for bit, for both
+// analyzers, with noise, under the port and under the sky.
+TEST(DofpFrames, BaselineAndAvx2PathsGiveTheSameBits) {
+  for (const bool sky : {false, true})
+    for (const DofpAnalyzer analyzer : {DofpAnalyzer::ImagePlane, DofpAnalyzer::InFront}) {
+      Rig rig = sky ? sky_camera_rig() : camera_rig();
+      rig.camera.noise = true;
+      rig.camera.vignetting = !sky;
+      const DofpSimulator sim(rig, analyzer);
+      for (const DofpStop& stop : sim.stops()) {
+        DofpTruthLayers best_layers, baseline_layers;
+        const std::vector<std::uint16_t> best = sim.frame(stop, 1, &best_layers);
+        set_baseline_paths_only(true);
+        const std::vector<std::uint16_t> baseline = sim.frame(stop, 1, &baseline_layers);
+        set_baseline_paths_only(false);
+        EXPECT_EQ(best, baseline) << "sky " << sky << ", stop " << stop.index;
+        for (auto m : {&DofpTruthLayers::S0, &DofpTruthLayers::S1, &DofpTruthLayers::S2, &DofpTruthLayers::AoP,
+                       &DofpTruthLayers::DoP}) {
+          const std::vector<float>&a = best_layers.*m, &b = baseline_layers.*m;
+          ASSERT_EQ(a.size(), b.size());
+          EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(float)), 0) << "sky " << sky;
+        }
+      }
+    }
+}
+
 TEST(DofpFrames, ViewProjectionIsTheSimulatedAoPOfEveryPixel) {
   Rig rig = camera_rig();
   rig.source.polarizer_deg = 20;

@@ -11,6 +11,7 @@
 
 #include "polrig/random.h"
 #include "polrig/units.h"
+#include "polrig/vector_log.h"
 
 namespace polrig {
 
@@ -105,6 +106,92 @@ DofpSimulator::StopSignal DofpSimulator::signal(const DofpStop& stop, DofpTruthL
   return out;
 }
 
+namespace {
+// One row's work before and after the light along its views, in loops without branches over plain
+// arrays (the compiler vectorises them), compiled once per instruction set: the same operations in
+// the same order in each (no contraction: this file is compiled with -ffp-contract=off and AVX2
+// without FMA), so the same bits from both.
+template <class Px>
+inline __attribute__((always_inline)) void views_row(const double* xs, double y, double fc, const Px* px,
+                                                     const InstrumentAxes& A, Vec3* views, std::size_t n) {
+  for (std::size_t c = 0; c < n; ++c) {
+    const double inv = px[c].inv;
+    const double vx = xs[c] * inv, vy = y * inv, vz = fc * inv;  // pixel_view: a·(1/|a|)
+    views[c] = {vx * A.x[0] + vy * A.y[0] + vz * A.z[0], vx * A.x[1] + vy * A.y[1] + vz * A.z[1],
+                vx * A.x[2] + vy * A.y[2] + vz * A.z[2]};
+  }
+}
+template <class Px>
+__attribute__((target("avx2"))) void views_row_avx2(const double* xs, double y, double fc, const Px* px,
+                                                     const InstrumentAxes& A, Vec3* views, std::size_t n) {
+  views_row(xs, y, fc, px, A, views, n);
+}
+template <class Px>
+void views_row_baseline(const double* xs, double y, double fc, const Px* px, const InstrumentAxes& A, Vec3* views,
+                        std::size_t n) {
+  views_row(xs, y, fc, px, A, views, n);
+}
+
+struct RowOut {
+  double *u, *w, *c2, *s2, *I, *d, *f;
+};
+template <bool image_plane, class Px>
+inline __attribute__((always_inline)) void signal_row(const double* xs, double y, double fc, const Px* px,
+                                                      const double* b, const InstrumentAxes& A,
+                                                      const ViewLight* lights, std::size_t n, bool vignetting,
+                                                      double intensity, bool polarized, const RowOut& o) {
+  double *u = o.u, *w = o.w, *c2 = o.c2, *s2 = o.s2, *I = o.I, *d = o.d, *fw = o.f;
+  for (std::size_t c = 0; c < n; ++c) {
+    const double inv = px[c].inv;
+    const double vx = xs[c] * inv, vy = y * inv, vz = fc * inv;
+    const ViewLight& L = lights[c];
+    const double e0 = vec3::dot(L.e, A.x), e1 = vec3::dot(L.e, A.y), e2 = vec3::dot(L.e, A.z);  // frame l
+    if constexpr (image_plane) {
+      // Frame i's axes turned by α, P = cos α·X_i − sin α·Y_i and Q = sin α·X_i + cos α·Y_i, are
+      // the rotation taking ẑ to v applied to x̂ and ŷ: with g = 1/(1 + v_z),
+      // P = (1 − g·v_x², −g·v_x·v_y, −v_x), Q = (−g·v_x·v_y, 1 − g·v_y², −v_y); φ_pix = atan2(e·Q, e·P).
+      const double g = 1.0 / (1.0 + vz);
+      const double gxy = g * vx * vy;
+      u[c] = e0 * (1.0 - g * vx * vx) - e1 * gxy - e2 * vx;
+      w[c] = -e0 * gxy + e1 * (1.0 - g * vy * vy) - e2 * vy;
+    } else {
+      // m = v × e; the axis in the image is ⊥ (m_x, m_y): u = −m_y, w = m_x.
+      u[c] = -(vz * e0 - vx * e2);
+      w[c] = vy * e2 - vz * e1;
+    }
+    const double Ic = L.S0 * intensity;
+    I[c] = vignetting ? Ic * ((vz * vz) * (vz * vz)) : Ic;  // cos⁴γ
+    d[c] = polarized ? L.d : 0.0;
+  }
+  for (std::size_t c = 0; c < n; ++c) {
+    const double n2 = u[c] * u[c] + w[c] * w[c];
+    const bool some = n2 > 0;
+    const double r = 1.0 / (some ? n2 : 1.0);
+    c2[c] = some ? (u[c] * u[c] - w[c] * w[c]) * r : 1.0;
+    s2[c] = some ? 2.0 * u[c] * w[c] * r : 0.0;
+    const Px& p = px[c];
+    fw[c] = I[c] * (p.A + d[c] * (c2[c] * p.B + s2[c] * p.C)) + b[c];
+  }
+}
+#define POLRIG_SIGNAL_ROW_ARGS                                                                                \
+  const double *xs, double y, double fc, const Px *px, const double *b, const InstrumentAxes &A,             \
+      const ViewLight *lights, std::size_t n, bool image_plane, bool vignetting, double intensity, bool polarized, \
+      const RowOut &o
+#define POLRIG_SIGNAL_ROW_CALL                                                                              \
+  image_plane ? signal_row<true>(xs, y, fc, px, b, A, lights, n, vignetting, intensity, polarized, o)      \
+              : signal_row<false>(xs, y, fc, px, b, A, lights, n, vignetting, intensity, polarized, o)
+template <class Px>
+__attribute__((target("avx2"))) void signal_row_avx2(POLRIG_SIGNAL_ROW_ARGS) {
+  POLRIG_SIGNAL_ROW_CALL;
+}
+template <class Px>
+void signal_row_baseline(POLRIG_SIGNAL_ROW_ARGS) {
+  POLRIG_SIGNAL_ROW_CALL;
+}
+#undef POLRIG_SIGNAL_ROW_ARGS
+#undef POLRIG_SIGNAL_ROW_CALL
+}  // namespace
+
 void DofpSimulator::signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
                                 const std::function<void(std::size_t, std::span<const double>)>& row_done) const {
   const int W = truth_.width, H = truth_.height;
@@ -119,6 +206,7 @@ void DofpSimulator::signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
   const bool image_plane = analyzer_ == DofpAnalyzer::ImagePlane, vignetting = spec.vignetting;
   const double intensity = stop.intensity;
   const bool polarized = stop.polarized;
+  const bool avx2 = avx2_paths();
   tbb::parallel_for(tbb::blocked_range<int>(0, H, 4), [&](const tbb::blocked_range<int>& rows) {
     // Per row, loops without branches over plain arrays (the compiler vectorises them); the
     // analyzer's choice and the truth layers outside them.
@@ -138,44 +226,12 @@ void DofpSimulator::signal_rows(const DofpStop& stop, DofpTruthLayers* layers,
       const PixelConstants* px = pixels_.data() + first;
       const double* b = truth_.b.data() + first;
       const double y = view_y_[static_cast<std::size_t>(row)];
-      for (std::size_t c = 0; c < w_px; ++c) {
-        const double inv = px[c].inv;
-        const double vx = xs[c] * inv, vy = y * inv, vz = fc * inv;  // pixel_view: a·(1/|a|)
-        views[c] = {vx * A.x[0] + vy * A.y[0] + vz * A.z[0], vx * A.x[1] + vy * A.y[1] + vz * A.z[1],
-                    vx * A.x[2] + vy * A.y[2] + vz * A.z[2]};
-      }
+      (avx2 ? views_row_avx2<PixelConstants> : views_row_baseline<PixelConstants>)(xs, y, fc, px, A, views.data(),
+                                                                                   w_px);
       light->along(views, lights);
-      for (std::size_t c = 0; c < w_px; ++c) {
-        const double inv = px[c].inv;
-        const double vx = xs[c] * inv, vy = y * inv, vz = fc * inv;
-        const ViewLight& L = lights[c];
-        const double e0 = vec3::dot(L.e, A.x), e1 = vec3::dot(L.e, A.y), e2 = vec3::dot(L.e, A.z);  // frame l
-        if (image_plane) {
-          // Frame i's axes turned by α, P = cos α·X_i − sin α·Y_i and Q = sin α·X_i + cos α·Y_i, are
-          // the rotation taking ẑ to v applied to x̂ and ŷ: with g = 1/(1 + v_z),
-          // P = (1 − g·v_x², −g·v_x·v_y, −v_x), Q = (−g·v_x·v_y, 1 − g·v_y², −v_y); φ_pix = atan2(e·Q, e·P).
-          const double g = 1.0 / (1.0 + vz);
-          const double gxy = g * vx * vy;
-          u[c] = e0 * (1.0 - g * vx * vx) - e1 * gxy - e2 * vx;
-          w[c] = -e0 * gxy + e1 * (1.0 - g * vy * vy) - e2 * vy;
-        } else {
-          // m = v × e; the axis in the image is ⊥ (m_x, m_y): u = −m_y, w = m_x.
-          u[c] = -(vz * e0 - vx * e2);
-          w[c] = vy * e2 - vz * e1;
-        }
-        const double Ic = L.S0 * intensity;
-        I[c] = vignetting ? Ic * ((vz * vz) * (vz * vz)) : Ic;  // cos⁴γ
-        d[c] = polarized ? L.d : 0.0;
-      }
-      for (std::size_t c = 0; c < w_px; ++c) {
-        const double n2 = u[c] * u[c] + w[c] * w[c];
-        const bool some = n2 > 0;
-        const double r = 1.0 / (some ? n2 : 1.0);
-        c2[c] = some ? (u[c] * u[c] - w[c] * w[c]) * r : 1.0;
-        s2[c] = some ? 2.0 * u[c] * w[c] * r : 0.0;
-        const PixelConstants& p = px[c];
-        fw[c] = I[c] * (p.A + d[c] * (c2[c] * p.B + s2[c] * p.C)) + b[c];
-      }
+      const RowOut o{u, w, c2, s2, I, d, fw};
+      (avx2 ? signal_row_avx2<PixelConstants> : signal_row_baseline<PixelConstants>)(
+          xs, y, fc, px, b, A, lights.data(), w_px, image_plane, vignetting, intensity, polarized, o);
       row_done(first, f);
       if (layers)
         for (std::size_t c = 0; c < w_px; ++c) {

@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -115,6 +117,24 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
   TextFileWriter out(path);
   out.write(text);
   out.close();
+}
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) out.push_back(cell);
+  if (!line.empty() && line.back() == ',') out.emplace_back();
+  return out;
+}
+
+double csv_number(const std::string& text, const std::filesystem::path& file, int line, const char* column) {
+  double v = 0;
+  const char* end = text.data() + text.size();
+  const auto r = std::from_chars(text.data(), end, v);
+  if (r.ec != std::errc() || r.ptr != end || !std::isfinite(v))
+    throw std::runtime_error(fmt::format("{}:{}: column {}: '{}' is not a finite number", file.string(), line, column, text));
+  return v;
 }
 
 }  // namespace polrig

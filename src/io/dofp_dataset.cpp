@@ -8,6 +8,7 @@
 
 #include <fmt/format.h>
 
+#include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
@@ -15,24 +16,6 @@
 namespace polrig {
 
 namespace {
-
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, ',')) out.push_back(cell);
-  if (!line.empty() && line.back() == ',') out.emplace_back();
-  return out;
-}
-
-double number(const std::string& text, const std::filesystem::path& file, int line, const char* column) {
-  double v = 0;
-  const char* end = text.data() + text.size();
-  const auto r = std::from_chars(text.data(), end, v);
-  if (r.ec != std::errc() || r.ptr != end || !std::isfinite(v))
-    throw std::runtime_error(fmt::format("{}:{}: column {}: '{}' is not a finite number", file.string(), line, column, text));
-  return v;
-}
 
 double attribute(const ExrImage& image, const std::string& name, const std::filesystem::path& file) {
   for (const auto& [n, v] : image.attributes.doubles)
@@ -127,21 +110,21 @@ DofpDataset read_dofp_dataset(const std::filesystem::path& dir) {
   while (std::getline(in, line)) {
     ++n;
     if (line.empty()) continue;
-    const std::vector<std::string> c = split(line);
+    const std::vector<std::string> c = split_csv_line(line);
     if (c.size() != 9)
       throw std::runtime_error(fmt::format("{}:{}: {} columns (expected 9)", csv.string(), n, c.size()));
     DofpDatasetStop s;
-    s.stop = static_cast<int>(number(c[0], csv, n, "stop"));
-    s.theta_R_deg = number(c[1], csv, n, "theta_R_deg");
-    s.t_s = number(c[2], csv, n, "t_s");
+    s.stop = static_cast<int>(csv_number(c[0], csv, n, "stop"));
+    s.theta_R_deg = csv_number(c[1], csv, n, "theta_R_deg");
+    s.t_s = csv_number(c[2], csv, n, "t_s");
     s.utc = c[3];
-    s.intensity = number(c[4], csv, n, "intensity");
-    const double polarized = number(c[5], csv, n, "polarized");
+    s.intensity = csv_number(c[4], csv, n, "intensity");
+    const double polarized = csv_number(c[5], csv, n, "polarized");
     if (polarized != 0 && polarized != 1)
       throw std::runtime_error(fmt::format("{}:{}: column polarized: {} (expected 0 or 1)", csv.string(), n, c[5]));
     s.polarized = polarized == 1;
-    if (!c[6].empty()) s.heading_deg = number(c[6], csv, n, "heading_deg");
-    const double frames = number(c[7], csv, n, "frames");
+    if (!c[6].empty()) s.heading_deg = csv_number(c[6], csv, n, "heading_deg");
+    const double frames = csv_number(c[7], csv, n, "frames");
     if (frames < 1 || frames != std::floor(frames))
       throw std::runtime_error(fmt::format("{}:{}: column frames: {} (expected a whole number ≥ 1)", csv.string(), n, c[7]));
     s.frames = static_cast<int>(frames);

@@ -10,29 +10,12 @@
 #include <fmt/format.h>
 #include <yaml-cpp/yaml.h>
 
+#include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 
 namespace polrig {
 
 namespace {
-
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cell;
-  std::istringstream in(line);
-  while (std::getline(in, cell, ',')) out.push_back(cell);
-  if (!line.empty() && line.back() == ',') out.emplace_back();
-  return out;
-}
-
-double number(const std::string& text, const std::filesystem::path& file, int line, const char* column) {
-  double v = 0;
-  const char* end = text.data() + text.size();
-  const auto r = std::from_chars(text.data(), end, v);
-  if (r.ec != std::errc() || r.ptr != end || !std::isfinite(v))
-    throw std::runtime_error(fmt::format("{}:{}: column {}: '{}' is not a finite number", file.string(), line, column, text));
-  return v;
-}
 
 double yaml_number(const YAML::Node& node, const char* key, const std::filesystem::path& file) {
   const YAML::Node v = node[key];
@@ -77,19 +60,19 @@ FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir) {
   if (line != header) throw std::runtime_error(fmt::format("{}:1: expected the header {}", csv.string(), header));
   for (int n = 2; std::getline(in, line); ++n) {
     if (line.empty()) continue;
-    const std::vector<std::string> c = split(line);
+    const std::vector<std::string> c = split_csv_line(line);
     if (c.size() != 13) throw std::runtime_error(fmt::format("{}:{}: expected 13 columns, got {}", csv.string(), n, c.size()));
     FourCameraDatasetStop s;
-    s.stop = static_cast<int>(number(c[0], csv, n, "stop"));
+    s.stop = static_cast<int>(csv_number(c[0], csv, n, "stop"));
     s.utc = c[1];
-    s.t_s = number(c[2], csv, n, "t_s");
-    s.theta_R_deg = number(c[3], csv, n, "theta_R_deg");
-    s.intensity = number(c[4], csv, n, "intensity");
-    s.polarized = number(c[5], csv, n, "polarized") != 0;
-    if (!c[6].empty()) s.heading_deg = number(c[6], csv, n, "heading_deg");
+    s.t_s = csv_number(c[2], csv, n, "t_s");
+    s.theta_R_deg = csv_number(c[3], csv, n, "theta_R_deg");
+    s.intensity = csv_number(c[4], csv, n, "intensity");
+    s.polarized = csv_number(c[5], csv, n, "polarized") != 0;
+    if (!c[6].empty()) s.heading_deg = csv_number(c[6], csv, n, "heading_deg");
     if (!c[7].empty())
-      s.sun_camera1 = Vec3{number(c[7], csv, n, "sun_x_cam1"), number(c[8], csv, n, "sun_y_cam1"),
-                           number(c[9], csv, n, "sun_z_cam1")};
+      s.sun_camera1 = Vec3{csv_number(c[7], csv, n, "sun_x_cam1"), csv_number(c[8], csv, n, "sun_y_cam1"),
+                           csv_number(c[9], csv, n, "sun_z_cam1")};
     s.file = c[12];
     d.stops.push_back(std::move(s));
   }

@@ -57,4 +57,10 @@ class TextFileWriter {
 // Writes a whole file or throws std::runtime_error naming the path and the reason.
 void write_text_file(const std::filesystem::path& path, const std::string& text);
 
+// CSV input of the datasets' plain tables (stops.csv): a line's comma-separated cells (no quoting;
+// a trailing comma is an empty last cell), and a cell as a finite number, else std::runtime_error
+// "FILE:LINE: column COLUMN: 'TEXT' is not a finite number".
+std::vector<std::string> split_csv_line(const std::string& line);
+double csv_number(const std::string& text, const std::filesystem::path& file, int line, const char* column);
+
 }  // namespace polrig

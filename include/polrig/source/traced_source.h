@@ -73,7 +73,8 @@ class TracedSource final : public Source {
   // its own cos⁴γ), e the film's transmitted E-vector and d its degree. Elsewhere (outside the
   // port, or not looking up) S0 = 0. No random sampling: one ray per view, the same bits for any
   // thread count. Solves the sphere first, if that has not been done. The camera's axes at θ_R
-  // are Cos4PortSource's: X = Rot(θ_R)·x̂, Y = −Rot(θ_R)·ŷ, Z = −ẑ.
+  // are Cos4PortSource's: X = Rot(θ_R)·x̂, Y = −Rot(θ_R)·ŷ, Z = −ẑ. The result reads this
+  // source's tracer and solution (const, thread-safe queries): use it while the source lives.
   std::unique_ptr<const LightAlongViews> light_along_views(const SourceView& rig,
                                                            const SourcePose& pose) const override;
 

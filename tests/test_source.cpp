@@ -13,6 +13,7 @@
 #include "polrig/calib/angles.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/io/scene_yaml.h"
+#include "polrig/sim/dofp_frames.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/cs.h"
 #include "polrig/quadrature.h"
@@ -1037,6 +1038,209 @@ TEST(TracedRig, TheCos4SettingsAreRefused) {
     FAIL();
   } catch (const RigError& e) {
     EXPECT_HAS(e.what(), "key 'device.d': expected the source's d = ");
+  }
+}
+
+// ---- The traced sphere along a camera's views (docs/physics.md §13) ----------------------
+
+// The small theory sphere (a point lamp at the centre, no baffle) with its port film at ψ = 30°
+// in the scene frame (−30° in the rig frame), as a file and as a spec.
+constexpr double kFilmSceneDeg = 30.0;
+const char* kCameraScene =
+    "port: {diameter: 100, polarizer: {axis_deg: 30, tau_M: 0.62, tau_m: 0.18}}\n"
+    "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\nbaffles: []\n"
+    "sensor: {L_o: 20}\n"
+    "trace: {photons: 20000, plane_samples: 64}\n";
+
+// What unpolarized light of radiance L along k leaves behind one O-type film lying in the
+// horizontal scene plane (axis at ψ from scene x towards y), written out from docs/physics.md §7
+// by Jones vectors in 3-D: √τ_M of the field along e_t = unit(k × m) (m = ẑ × axis, the absorbed
+// direction), √τ_m along k × e_t; unpolarized light is the mean of two orthogonal fields. Returns
+// S0, the E-vector (the coherency matrix's principal axis, scene frame) and d from its two
+// eigenvalues. No Mueller matrix, no polrig helper.
+struct FilmLight {
+  double S0, d;
+  Eigen::Vector3d e;
+};
+FilmLight through_port_film(const Eigen::Vector3d& k, double L, double psi_deg, double tM, double tm) {
+  const double psi = psi_deg * kPi / 180;
+  const Eigen::Vector3d m = Eigen::Vector3d::UnitZ().cross(Eigen::Vector3d(std::cos(psi), std::sin(psi), 0));
+  const Eigen::Vector3d et = k.cross(m).normalized(), ea = k.cross(et);
+  const Eigen::Vector3d u = k.cross(Eigen::Vector3d::UnitX()).normalized(), v = k.cross(u);
+  Eigen::Matrix3d J = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& E : {u, v}) {
+    const Eigen::Vector3d out = std::sqrt(tM) * E.dot(et) * et + std::sqrt(tm) * E.dot(ea) * ea;
+    J += 0.5 * L * out * out.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(J);  // ascending: 0 (along k), λ2, λ1
+  const double l1 = eig.eigenvalues()[2], l2 = eig.eigenvalues()[1];
+  return {l1 + l2, (l1 - l2) / (l1 + l2), eig.eigenvectors().col(2)};
+}
+
+// The rig frame's view at zenith angle γ (from −ẑ, up into the port) and azimuth α (from x
+// towards y), and the scene frame's vector of a rig vector: the half-turn about x (§7).
+Vec3 rig_view(double gamma_deg, double alpha_deg) {
+  const double g = gamma_deg * kPi / 180, a = alpha_deg * kPi / 180;
+  return {std::sin(g) * std::cos(a), std::sin(g) * std::sin(a), -std::cos(g)};
+}
+Eigen::Vector3d in_scene(const Vec3& rig) { return {rig[0], -rig[1], -rig[2]}; }
+
+struct CameraSceneFixture {
+  test::TempDir dir{"polrig_test_traced_camera_"};
+  std::string scene_path;
+  LoadedRig rig;
+  CameraSceneFixture() : scene_path((dir.path() / "camera.yaml").string()), rig(load()) {}
+  LoadedRig load() {
+    test::write_file(scene_path, kCameraScene);
+    return parse_rig("device: {kind: dofp-camera, width_px: 32, height_px: 24, gain_DN: 4}\n"
+                     "source: {model: traced, scene: " + scene_path + "}\n"
+                     "schedule: {angles_deg: [0, 40, 100]}\n",
+                     "inline");
+  }
+  const TracedSource& source() const { return dynamic_cast<const TracedSource&>(*rig.rig.light); }
+};
+
+TEST(TracedCamera, OnTheAxisItIsThePortFilmAtNormalIncidence) {
+  // Looking straight up: the film's closed form, d = (τ_M − τ_m)/(τ_M + τ_m) = 0.55 and e along
+  // the film's axis in the rig frame, −ψ (the scene's mirror); its angle from X towards Y is the
+  // θ the six-photodiode chain reports at the pose (θ_R − ψ_P, docs/physics.md §1).
+  const CameraSceneFixture f;
+  const TracedSource& src = f.source();
+  ASSERT_TRUE(src.has(Source::kStokesAlongViews));
+  EXPECT_DOUBLE_EQ(src.polarizer_axis_rig_deg(), -kFilmSceneDeg);
+  for (double theta_R : {0.0, 40.0, 100.0, 215.0}) {
+    const auto light = src.light_along_views(f.rig.rig.source_view(), {theta_R, 0});
+    const std::array<Vec3, 1> views{Vec3{0, 0, -1}};
+    std::array<ViewLight, 1> out{};
+    light->along(views, out);
+    EXPECT_NEAR(out[0].d, (0.62 - 0.18) / (0.62 + 0.18), 1e-12);
+    EXPECT_NEAR(out[0].d, src.degree_of_polarization(), 1e-12);
+    const double psi = -kFilmSceneDeg * kPi / 180;
+    EXPECT_NEAR(std::abs(vec3::dot(out[0].e, {std::cos(psi), std::sin(psi), 0})), 1.0, 1e-12);
+    const InstrumentAxes& A = light->axes;
+    const double aop = std::atan2(vec3::dot(out[0].e, A.y), vec3::dot(out[0].e, A.x)) * 180 / kPi;
+    const Polarization p = src.polarization(f.rig.rig.source_view(), {theta_R, 0});
+    EXPECT_NEAR(std::remainder(aop - p.theta_deg, 180.0), 0.0, 1e-9) << "θ_R=" << theta_R;
+    EXPECT_NEAR(std::remainder(aop - (theta_R + kFilmSceneDeg), 180.0), 0.0, 1e-9) << "θ_R=" << theta_R;
+  }
+}
+
+TEST(TracedCamera, OffTheAxisTheFilmActsAtItsOwnIncidenceAndOutsideThePortIsDark) {
+  // Each view crosses the port plane h = 20 mm above the pinhole (port radius 50 mm: views up to
+  // atan(50/20) = 68.2° off the axis see the port) and meets the wall at the sphere's far root;
+  // the reference is that wall point's radiance through the film by Jones vectors (above). Beyond
+  // the port's edge, looking sideways or down: no light.
+  const CameraSceneFixture f;
+  SceneSpec scene;
+  scene.lamps = {LampSpec{{0, 0, 0}, 0.0, 100.0, 0.0}};
+  scene.baffles.clear();
+  scene.port.polarizer = {kFilmSceneDeg, 0.62, 0.18};
+  scene.trace.photons = 20000;
+  scene.trace.plane_samples = 64;
+  const SphereTracer tracer(scene);
+  const SphereSolution sol = tracer.solve();
+  const double R = scene.sphere.radius(), zp = scene.port_plane_z(), h = 20.0;
+  const auto light = f.source().light_along_views(f.rig.rig.source_view(), {25.0, 0});
+  std::vector<Vec3> views;
+  for (double g : {5.0, 30.0, 50.0, 65.0})
+    for (double a : {0.0, 70.0, 135.0, 250.0, 320.0}) views.push_back(rig_view(g, a));
+  const std::size_t inside = views.size();
+  for (double a : {0.0, 100.0, 200.0}) {
+    views.push_back(rig_view(70.0, a));   // past the port's rim (68.2°)
+    views.push_back(rig_view(90.0, a));   // sideways
+    views.push_back(rig_view(120.0, a));  // down
+  }
+  std::vector<ViewLight> out(views.size());
+  light->along(views, out);
+  double largest_tilt = 0;
+  for (std::size_t i = 0; i < inside; ++i) {
+    const Eigen::Vector3d up = in_scene(views[i]);
+    const Eigen::Vector3d Q = Eigen::Vector3d(0, 0, zp - h) + (h / up.z()) * up;
+    const double b = Q.dot(up), c = Q.squaredNorm() - R * R;
+    SphereTracer::Hit wall;
+    wall.kind = SphereTracer::Hit::Wall;
+    const Eigen::Vector3d W = Q + (-b + std::sqrt(b * b - c)) * up;
+    wall.point = {W.x(), W.y(), W.z()};
+    const FilmLight ref = through_port_film(-up, tracer.radiance(sol, wall), kFilmSceneDeg, 0.62, 0.18);
+    const Eigen::Vector3d e_rig(ref.e.x(), -ref.e.y(), -ref.e.z());
+    const Eigen::Vector3d e(out[i].e[0], out[i].e[1], out[i].e[2]);
+    EXPECT_NEAR(out[i].S0, ref.S0, 1e-12 * ref.S0) << "view " << i;
+    EXPECT_NEAR(out[i].d, ref.d, 1e-12) << "view " << i;
+    EXPECT_NEAR(std::abs(e.dot(e_rig)), 1.0, 1e-12) << "view " << i;
+    EXPECT_NEAR(vec3::dot(out[i].e, views[i]), 0.0, 1e-12) << "view " << i;
+    // The oblique film turns the E-vector away from the ideal projection of its axis ⊥ the view.
+    const double psi = -kFilmSceneDeg * kPi / 180;
+    const Vec3 p{std::cos(psi), std::sin(psi), 0};
+    const Vec3 ideal = vec3::unit(vec3::sub(p, vec3::mul(views[i], vec3::dot(p, views[i]))));
+    largest_tilt = std::max(largest_tilt, std::acos(std::min(1.0, std::abs(vec3::dot(ideal, out[i].e)))));
+  }
+  EXPECT_GT(largest_tilt, 0.05);  // rad: the oblique film is not the ideal projection
+  for (std::size_t i = inside; i < views.size(); ++i) {
+    EXPECT_EQ(out[i].S0, 0.0) << "view " << i;
+    EXPECT_EQ(out[i].d, 0.0) << "view " << i;
+  }
+}
+
+TEST(TracedCamera, OnTheAxisS0IsTheWallRadianceAtTheHitTimesTheFilmsTransmission) {
+  // The same scene solved here by its own tracer (the solve does not depend on the thread count):
+  // straight up from the port's centre to the first hit, times (τ_M + τ_m)/2 at normal incidence.
+  const CameraSceneFixture f;
+  SceneSpec scene;
+  scene.lamps = {LampSpec{{0, 0, 0}, 0.0, 100.0, 0.0}};
+  scene.baffles.clear();
+  scene.port.polarizer = {kFilmSceneDeg, 0.62, 0.18};
+  scene.trace.photons = 20000;
+  scene.trace.plane_samples = 64;
+  const SphereTracer tracer(scene);
+  const SphereSolution sol = tracer.solve();
+  const double L = tracer.radiance(sol, tracer.first_hit({0, 0, scene.port_plane_z()}, {0, 0, 1}, 0.0));
+  ASSERT_GT(L, 0);
+  const auto light = f.source().light_along_views(f.rig.rig.source_view(), {0, 0});
+  const std::array<Vec3, 1> views{Vec3{0, 0, -1}};
+  std::array<ViewLight, 1> out{};
+  light->along(views, out);
+  EXPECT_NEAR(out[0].S0, L * 0.5 * (0.62 + 0.18), 1e-12 * L);
+}
+
+TEST(TracedCamera, ADofpCameraRigSimulatesDeterministicallyAndItsAoPTurnsWithTheTable) {
+  // A 32 × 24 camera under the traced sphere through DofpSimulator: the same raw frames for 1 and
+  // 2 threads; the centre pixels' AoP (0.5 px off the axis: < 1e-4° from the axis's) is
+  // θ_R − ψ_P with ψ_P = −30° the film's rig-frame axis, and equals the cos4 source's with its
+  // polarizer at that ψ_P: the traced light turns with the table in cos4's sense.
+  const CameraSceneFixture f;
+  const Rig& rig = f.rig.rig;
+  const DofpSimulator sim(rig);
+  Rig cos4 = rig;
+  cos4.source.model = "cos4";
+  cos4.source.polarizer_deg = -kFilmSceneDeg;
+  cos4.light = cos4_source();
+  const DofpSimulator sim_cos4(cos4);
+  ASSERT_EQ(sim.stops().size(), 3u);
+  for (const DofpStop& stop : sim.stops()) {
+    std::vector<std::uint16_t> one, two;
+    DofpTruthLayers L, C;
+    {
+      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+      one = sim.frame(stop, 0, &L);
+    }
+    {
+      tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+      two = sim.frame(stop, 0);
+    }
+    EXPECT_EQ(one, two) << "θ_R=" << stop.theta_R_deg;
+    sim_cos4.frame(stop, 0, &C);
+    for (std::size_t i : {std::size_t{11 * 32 + 15}, std::size_t{11 * 32 + 16}, std::size_t{12 * 32 + 15},
+                          std::size_t{12 * 32 + 16}}) {
+      EXPECT_NEAR(std::remainder(L.AoP[i] - (stop.theta_R_deg + kFilmSceneDeg), 180.0), 0.0, 1e-3)
+          << "θ_R=" << stop.theta_R_deg;
+      EXPECT_NEAR(std::remainder(L.AoP[i] - C.AoP[i], 180.0), 0.0, 1e-3) << "θ_R=" << stop.theta_R_deg;
+      EXPECT_NEAR(L.DoP[i], 0.55, 1e-6);
+      EXPECT_GT(L.S0[i], 0);
+    }
+    // Every pixel sees the port (the field of view, ±38°, lies inside its 68°); raw values well
+    // inside the 12-bit range.
+    for (std::size_t i = 0; i < L.S0.size(); ++i) EXPECT_GT(L.S0[i], 0) << i;
+    EXPECT_LT(*std::max_element(one.begin(), one.end()), 4095);
   }
 }
 

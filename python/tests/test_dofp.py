@@ -65,6 +65,32 @@ def test_thread_counts_give_the_same_frame_and_bad_arguments_are_refused():
         polrig.Rig.load(WANG).dofp_frame(0)  # the six-photodiode sensor takes no frames
 
 
+
+def test_traced_sphere_frames_equal_the_cli_bit_for_bit(tmp_path):
+    # A camera under the traced sphere (docs/physics.md §13): the small theory sphere, its port
+    # film at 30° in the scene; the same frames from Python (any thread count) as from the CLI.
+    (tmp_path / "scene.yaml").write_text(
+        "port: {diameter: 100, polarizer: {axis_deg: 30, tau_M: 0.62, tau_m: 0.18}}\n"
+        "lamps:\n  - {position: [0, 0, 0], radius: 0, power: 100}\nbaffles: []\n"
+        "trace: {photons: 20000, plane_samples: 64}\n")
+    path = tmp_path / "rig.yaml"
+    path.write_text("device: {kind: dofp-camera, width_px: 32, height_px: 24, gain_DN: 4}\n"
+                    "source: {model: traced, scene: scene.yaml}\n"
+                    "schedule: {angles_deg: [0, 40], frames_per_stop: 2}\n")
+    run_cli("simulate", path, "--truth-layers", "-o", tmp_path / "cli", "--quiet")
+    ds = polrig.read_dofp_dataset(tmp_path / "cli", mean_frames=True)
+    rig = polrig.Rig.load(str(path))
+    for i in range(len(rig.dofp_stops()["stop"])):
+        raw, layers = rig.dofp_frame(i, 0, truth_layers=True, threads=2)
+        raw1 = rig.dofp_frame(i, 1, threads=1)
+        assert np.array_equal((raw.astype(np.float64) + raw1) / 2, ds["mean_frames"][i])
+        exr = polrig.read_exr(str(tmp_path / "cli" / ds["stops"]["file"][i]))
+        assert np.array_equal(exr["AoP"], layers["AoP"])
+        assert np.all(layers["DoP"] == np.float32(0.55))
+        # On the axis the camera sees θ_R − ψ_P, ψ_P = −30° the film's axis in the rig frame.
+        theta_R = rig.dofp_stops()["theta_R_deg"][i]
+        assert abs((layers["AoP"][12, 16] - (theta_R + 30) + 90) % 180 - 90) < 1e-3
+
 def test_sky_rig_carries_the_true_heading(tmp_path):
     rig = camera_rig(OUTDOOR, {"schedule.angles_deg": [0, 10]})
     rig.simulate_frames(tmp_path / "sky", frames="mean")

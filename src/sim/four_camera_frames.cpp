@@ -37,7 +37,7 @@ FourCameraSimulator::FourCameraSimulator(const Rig& rig) : rig_(rig) {
         fmt::format("device.kind {} is not a camera array (expected four-camera)", rig.device_kind));
   if (!rig.light || !rig.light->has(Source::kStokesAlongViews))
     throw std::invalid_argument(fmt::format(
-        "source.model {} gives no light along a camera's views (cos4 and sky do; the traced source not yet)",
+        "source.model {} gives no light along a camera's views (it lacks kStokesAlongViews)",
         rig.source.model));
   if (rig_sky(rig) && !rig.schedule.unpolarized_levels.empty())
     throw std::invalid_argument(

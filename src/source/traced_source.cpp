@@ -1,5 +1,6 @@
 #include "polrig/source/traced_source.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -240,6 +241,68 @@ void TracedSource::irradiance_over_turn(const SourceView& rig, const CsTurn& tur
     }
     progress.advance(static_cast<long long>(members.size()));
   }); });
+}
+
+namespace {
+// The traced sphere along a camera's views. Frames: the rig frame (source.h: x, y in the
+// photosensitive plane, angles anticlockwise seen from below; z = x × y pointing down) and the
+// scene frame (scene.h: z up, seen from above) share the x-axis; y and z are reversed. The map
+// (x, y, z) → (x, −y, −z) is the half-turn about x (a rotation, its own inverse): a rig-plane
+// offset (x, y) is the scene's (x, −y) (to_scene), a view looking up (v_z < 0) looks up in the
+// scene (z > 0), and the port film's scene axis ψ lies at −ψ in the rig frame
+// (polarizer_axis_rig_deg).
+Vec3 rig_to_scene(const Vec3& v) { return {v[0], -v[1], -v[2]}; }
+Vec3 scene_to_rig(const Vec3& v) { return {v[0], -v[1], -v[2]}; }
+
+class TracedPortViews final : public LightAlongViews {
+ public:
+  TracedPortViews(const SphereTracer& tracer, const SphereSolution& solution, const SceneSpec& scene)
+      : tracer_(tracer), solution_(solution), film_(scene.port.polarizer), h_(scene.sensor.L_o),
+        zp_(scene.port_plane_z()), a_(scene.port.radius()) {
+    const double psi = deg2rad(film_.axis_deg);
+    axis_ = {std::cos(psi), std::sin(psi), 0};
+  }
+  void along(std::span<const Vec3> views, std::span<ViewLight> out) const override {
+    for (std::size_t i = 0; i < views.size(); ++i) out[i] = light(views[i]);
+  }
+
+ private:
+  ViewLight light(const Vec3& view) const {
+    const Vec3 up = rig_to_scene(view);  // from the pinhole towards the light, scene frame
+    if (!(up[2] > 0)) return {};         // not looking up into the port
+    // The pinhole P = (0, 0, z_p − h): the ray meets the port plane at P + (h/up_z)·up.
+    const double t = h_ / up[2];
+    const Vec3 Q{t * up[0], t * up[1], zp_};
+    if (Q[0] * Q[0] + Q[1] * Q[1] > a_ * a_) return {};  // the dark surround of the port
+    const double L = tracer_.radiance(solution_, tracer_.first_hit(Q, up, 0.0));
+    if (!(L > 0)) return {};
+    // Forwards, as the light goes: along k = −up through the horizontal port film.
+    PolarizedRay ray = unpolarized_ray(vec3::mul(up, -1.0), L);
+    pass_sheet_polarizer(ray, {0, 0, 1}, axis_, film_.tau_M, film_.tau_m);
+    const double S0 = ray.S[0], p = std::hypot(ray.S[1], ray.S[2]);
+    if (!(p > 0)) return {S0, {0, 0, 0}, 0.0};
+    // The E-vector at χ = ½·atan2(S2, S1) from x̂ towards ŷ = k × x̂ (the ray's frame).
+    const double chi = 0.5 * std::atan2(ray.S[2], ray.S[1]);
+    const Vec3 y_hat = vec3::cross(ray.k, ray.x_hat);
+    const Vec3 e = vec3::unit(vec3::add(vec3::mul(ray.x_hat, std::cos(chi)), vec3::mul(y_hat, std::sin(chi))));
+    return {S0, scene_to_rig(e), std::min(1.0, p / S0)};
+  }
+
+  const SphereTracer& tracer_;
+  const SphereSolution& solution_;
+  PolarizerFilm film_;
+  double h_, zp_, a_;
+  Vec3 axis_;
+};
+}  // namespace
+
+std::unique_ptr<const LightAlongViews> TracedSource::light_along_views(const SourceView&,
+                                                                       const SourcePose& pose) const {
+  // The solve here, once, before the camera's parallel loops ask along() for views.
+  auto light = std::make_unique<TracedPortViews>(*tracer_, solution(), scene_);
+  const double c = std::cos(deg2rad(pose.theta_R_deg)), s = std::sin(deg2rad(pose.theta_R_deg));
+  light->axes = {{c, s, 0}, {s, -c, 0}, {0, 0, -1}};
+  return light;
 }
 
 }  // namespace polrig

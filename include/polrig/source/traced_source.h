@@ -51,7 +51,7 @@ class TracedSource final : public Source {
 
   // --- Source: the port film sets θ and d; each channel's signal is traced (per shift).
   std::string_view kind() const override { return "traced"; }
-  unsigned flags() const override { return kStandardErrors; }
+  unsigned flags() const override { return kStandardErrors | kStokesAlongViews; }
   int shifts() const override { return shifts_; }
   std::optional<double> fixed_degree_of_polarization() const override { return degree_of_polarization(); }
   void prepare(const Progress& progress) const override { solve(progress); }
@@ -63,6 +63,20 @@ class TracedSource final : public Source {
   void irradiance_over_turn(const SourceView& rig, const CsTurn& turn, std::span<double> E,
                             const Progress& progress = {}) const override;
   TracedChannel channel(const SourceView& rig, double theta_R_deg, int m) const;
+
+  // A camera looking up into the port (docs/physics.md §13): its pinhole on the port's axis
+  // scene().sensor.L_o below the port plane (the scene's photosensitive plane). Each view is a ray
+  // from the pinhole; where it crosses the port plane inside the port it goes on to the sphere's
+  // first hit (SphereTracer::first_hit), whose radiance (SphereTracer::radiance) travels back
+  // along k = −view through the port film at its own incidence (pass_sheet_polarizer): S0 is the
+  // radiance after the film, W/m²/sr (the tracer's unit; no geometric factor: the camera applies
+  // its own cos⁴γ), e the film's transmitted E-vector and d its degree. Elsewhere (outside the
+  // port, or not looking up) S0 = 0. No random sampling: one ray per view, the same bits for any
+  // thread count. Solves the sphere first, if that has not been done. The camera's axes at θ_R
+  // are Cos4PortSource's: X = Rot(θ_R)·x̂, Y = −Rot(θ_R)·ŷ, Z = −ẑ. The result reads this
+  // source's tracer and solution (const, thread-safe queries): use it while the source lives.
+  std::unique_ptr<const LightAlongViews> light_along_views(const SourceView& rig,
+                                                           const SourcePose& pose) const override;
 
   // The signal of one channel, per shift (0 … shifts() − 1): the flux reaching its photodiode
   // through the port film, the channel's analyzer film and, lensed, the blue filter and the lens,

@@ -186,8 +186,17 @@ void run_locate(const std::string& input, const std::string& prior_text, bool do
   if (run.truth) std::cout << fmt::format(", {:.3f} km from the rig's site", great_circle_km(r.lat_deg, r.lon_deg,
                                                                                         run.truth->lat_deg,
                                                                                         run.truth->lon_deg));
-  std::cout << fmt::format("\nheading: mean {:.4f}°, SD {:.4f}°\n", run.location.heading_mean_deg,
+  std::cout << fmt::format("\nheading: mean {:.4f}°, SD {:.4f}°", run.location.heading_mean_deg,
                            run.location.heading_sd_deg);
+  // Against the dataset's true headings (a turning table's headings differ by design).
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  for (std::size_t k = 0; k < run.location.samples.size(); ++k) {
+    const double e = std::remainder(run.location.samples[k].heading_deg - run.true_heading_deg[k], 360.0);
+    if (std::isfinite(e)) sum += e, sum2 += e * e, ++n;
+  }
+  if (n > 0) std::cout << fmt::format("; error against the truth: mean {:.4f}°, RMS {:.4f}°", sum / n, std::sqrt(sum2 / n));
+  std::cout << "\n";
 }
 
 }  // namespace

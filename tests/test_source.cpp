@@ -1098,6 +1098,16 @@ struct CameraSceneFixture {
                      "inline");
   }
   const TracedSource& source() const { return dynamic_cast<const TracedSource&>(*rig.rig.light); }
+  // kCameraScene built in code, for a tracer of the tests' own (the reference side).
+  static SceneSpec reference_scene() {
+    SceneSpec scene;
+    scene.lamps = {LampSpec{{0, 0, 0}, 0.0, 100.0, 0.0}};
+    scene.baffles.clear();
+    scene.port.polarizer = {kFilmSceneDeg, 0.62, 0.18};
+    scene.trace.photons = 20000;
+    scene.trace.plane_samples = 64;
+    return scene;
+  }
 };
 
 TEST(TracedCamera, OnTheAxisItIsThePortFilmAtNormalIncidence) {
@@ -1131,12 +1141,7 @@ TEST(TracedCamera, OffTheAxisTheFilmActsAtItsOwnIncidenceAndOutsideThePortIsDark
   // the reference is that wall point's radiance through the film by Jones vectors (above). Beyond
   // the port's edge, looking sideways or down: no light.
   const CameraSceneFixture f;
-  SceneSpec scene;
-  scene.lamps = {LampSpec{{0, 0, 0}, 0.0, 100.0, 0.0}};
-  scene.baffles.clear();
-  scene.port.polarizer = {kFilmSceneDeg, 0.62, 0.18};
-  scene.trace.photons = 20000;
-  scene.trace.plane_samples = 64;
+  const SceneSpec scene = CameraSceneFixture::reference_scene();
   const SphereTracer tracer(scene);
   const SphereSolution sol = tracer.solve();
   const double R = scene.sphere.radius(), zp = scene.port_plane_z(), h = 20.0;
@@ -1185,12 +1190,7 @@ TEST(TracedCamera, OnTheAxisS0IsTheWallRadianceAtTheHitTimesTheFilmsTransmission
   // The same scene solved here by its own tracer (the solve does not depend on the thread count):
   // straight up from the port's centre to the first hit, times (τ_M + τ_m)/2 at normal incidence.
   const CameraSceneFixture f;
-  SceneSpec scene;
-  scene.lamps = {LampSpec{{0, 0, 0}, 0.0, 100.0, 0.0}};
-  scene.baffles.clear();
-  scene.port.polarizer = {kFilmSceneDeg, 0.62, 0.18};
-  scene.trace.photons = 20000;
-  scene.trace.plane_samples = 64;
+  const SceneSpec scene = CameraSceneFixture::reference_scene();
   const SphereTracer tracer(scene);
   const SphereSolution sol = tracer.solve();
   const double L = tracer.radiance(sol, tracer.first_hit({0, 0, scene.port_plane_z()}, {0, 0, 1}, 0.0));

@@ -3,6 +3,7 @@
 // limit, progress reports, and how a long call releases the GIL.
 #include <array>
 #include <cstddef>
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
@@ -104,6 +105,14 @@ inline constexpr const char* kThreadsDoc =
 inline constexpr const char* kProgressDoc =
     "progress: None/False (quiet), True (a line on stderr, as the CLI), or a callable "
     "f(stage: str, fraction: float, eta_s: float).";
+
+// A docstring with the marks {threads} and {progress} replaced by the two texts above.
+inline std::string with_shared(const char* text) {
+  std::string s = text;
+  for (const auto& [mark, what] : {std::pair{"{threads}", kThreadsDoc}, std::pair{"{progress}", kProgressDoc}})
+    if (const auto at = s.find(mark); at != std::string::npos) s.replace(at, std::strlen(mark), what);
+  return s;
+}
 
 // An array argument as the caller gave it (a list, an int array, ...), converted later by
 // as_array, whose errors name the argument; help() shows it as numpy.typing.ArrayLike instead of

@@ -35,13 +35,6 @@ DofpSimulator simulator(const LoadedRig& loaded, DofpAnalyzer analyzer) {
   }
 }
 
-std::string with_shared(const char* text) {
-  std::string s = text;
-  for (const auto& [mark, what] : {std::pair{"{threads}", kThreadsDoc}, std::pair{"{progress}", kProgressDoc}})
-    if (const auto at = s.find(mark); at != std::string::npos) s.replace(at, std::strlen(mark), what);
-  return s;
-}
-
 py::dict image_dict(int H, int W, std::initializer_list<std::pair<const char*, std::vector<double>*>> layers) {
   py::dict d;
   for (const auto& [name, v] : layers) d[name] = take(std::move(*v), {H, W});

@@ -29,13 +29,6 @@ FourCameraSimulator simulator(const LoadedRig& loaded) {
   }
 }
 
-std::string with_shared(const char* text) {
-  std::string s = text;
-  for (const auto& [mark, what] : {std::pair{"{threads}", kThreadsDoc}, std::pair{"{progress}", kProgressDoc}})
-    if (const auto at = s.find(mark); at != std::string::npos) s.replace(at, std::strlen(mark), what);
-  return s;
-}
-
 FourCameraLayers layers_of(const std::string& name) {
   if (name == "all") return FourCameraLayers::All;
   if (name == "fused") return FourCameraLayers::Fused;

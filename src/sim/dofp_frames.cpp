@@ -32,10 +32,7 @@ std::vector<DofpStop> dofp_stops(const Schedule& schedule) {
   return stops;
 }
 
-DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig), analyzer_(analyzer) {
-  if (!rig.instrument().has(Instrument::kMosaic))
-    throw std::invalid_argument(fmt::format("device.kind {} has no polarizer mosaic (expected dofp-camera)",
-                                            rig.device_kind));
+void check_camera_light(const Rig& rig) {
   if (!rig.light || !rig.light->has(Source::kStokesAlongViews))
     throw std::invalid_argument(fmt::format(
         "source.model {} gives no light along a camera's views (it lacks kStokesAlongViews)",
@@ -43,6 +40,13 @@ DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig),
   if (rig_sky(rig) && !rig.schedule.unpolarized_levels.empty())
     throw std::invalid_argument(
         "schedule.unpolarized_levels: the sky cannot be unpolarized (expected no unpolarized levels under the sky)");
+}
+
+DofpSimulator::DofpSimulator(const Rig& rig, DofpAnalyzer analyzer) : rig_(rig), analyzer_(analyzer) {
+  if (!rig.instrument().has(Instrument::kMosaic))
+    throw std::invalid_argument(fmt::format("device.kind {} has no polarizer mosaic (expected dofp-camera)",
+                                            rig.device_kind));
+  check_camera_light(rig);
   if (rig.schedule.frames_per_stop < 1)
     throw std::invalid_argument(fmt::format("schedule.frames_per_stop = {} (expected ≥ 1)", rig.schedule.frames_per_stop));
   truth_ = make_dofp_truth(rig.camera, derive_seed(rig.seed, 1));

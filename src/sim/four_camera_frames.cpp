@@ -35,13 +35,7 @@ FourCameraSimulator::FourCameraSimulator(const Rig& rig) : rig_(rig) {
   if (!rig.instrument().has(Instrument::kCameraArray))
     throw std::invalid_argument(
         fmt::format("device.kind {} is not a camera array (expected four-camera)", rig.device_kind));
-  if (!rig.light || !rig.light->has(Source::kStokesAlongViews))
-    throw std::invalid_argument(fmt::format(
-        "source.model {} gives no light along a camera's views (it lacks kStokesAlongViews)",
-        rig.source.model));
-  if (rig_sky(rig) && !rig.schedule.unpolarized_levels.empty())
-    throw std::invalid_argument(
-        "schedule.unpolarized_levels: the sky cannot be unpolarized (expected no unpolarized levels under the sky)");
+  check_camera_light(rig);
   truth_ = four_camera_truth(rig.four_camera);
   fusion_ = std::make_shared<const FourCameraFusion>(truth_);
   noise_seed_ = derive_seed(rig.seed, 2);

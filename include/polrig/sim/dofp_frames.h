@@ -29,6 +29,11 @@ struct DofpStop {
 };
 std::vector<DofpStop> dofp_stops(const Schedule& schedule);
 
+// What every camera simulator (DofpSimulator, FourCameraSimulator) needs of its rig's light: a
+// source with light along views (Source::kStokesAlongViews), and no unpolarized levels under the
+// sky. Throws std::invalid_argument naming the key.
+void check_camera_light(const Rig& rig);
+
 // How a pixel's AoP φ_pix (image frame, from X_l) follows from the E-vector e along its view v.
 enum class DofpAnalyzer {
   // Spec §2.5: the analyzer in the image plane, a lens that keeps the meridional frame:

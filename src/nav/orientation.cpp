@@ -71,7 +71,7 @@ bool usable(const SkyPoints& p, std::size_t k, const OrientationSettings& s) {
   if (!std::isfinite(p.aop_deg[k]) || !std::isfinite(p.x_px[k]) || !std::isfinite(p.y_px[k]))
     return false;
   if (p.dop.empty()) return true;
-  if ((s.dop_weighting || s.min_dop > 0) && !std::isfinite(p.dop[k])) return false;
+  if ((s.dop_weighting || s.correct_noise_bias || s.min_dop > 0) && !std::isfinite(p.dop[k])) return false;
   return !(s.min_dop > 0 && p.dop[k] < s.min_dop);
 }
 
@@ -216,17 +216,25 @@ SunVectorSolution sun_vector_eigen(const SkyPoints& points, const CameraIntrinsi
   check_lengths(points);
   check_intrinsics(camera);
   check_orientation_settings(settings);
+  if (settings.correct_noise_bias && points.dop.empty())
+    throw std::invalid_argument("orientation setting correct_noise_bias: needs the points' DoP (none given)");
+  const bool corrected = settings.correct_noise_bias;
   const bool weighted = settings.dop_weighting && !points.dop.empty();
-  // EEᵀ = Σ w·e·eᵀ, its six distinct entries (Eq. 12).
+  // EEᵀ = Σ w·e·eᵀ, its six distinct entries (Eq. 12); with the correction also Σ v·vᵀ (B).
   double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0, wsum = 0;
+  Eigen::Matrix3d vv = Eigen::Matrix3d::Zero();
   int used = 0;
   for (std::size_t k = 0; k < points.aop_deg.size(); ++k) {
     if (!usable(points, k, settings)) continue;
-    const double w = weighted ? points.dop[k] : 1.0;
+    const double w = corrected ? points.dop[k] * points.dop[k] : weighted ? points.dop[k] : 1.0;
     if (!(w > 0)) continue;
     const double phi = deg2rad(points.aop_deg[k]);
-    const Vec3 e = e_vector(std::cos(phi), std::sin(phi),
-                            view_trig(points.x_px[k], points.y_px[k], camera), settings.conversion);
+    const ViewTrig view = view_trig(points.x_px[k], points.y_px[k], camera);
+    const Vec3 e = e_vector(std::cos(phi), std::sin(phi), view, settings.conversion);
+    if (corrected) {
+      const Eigen::Vector3d v(view.sg * view.ca, view.sg * view.sa, view.cg);
+      vv.noalias() += v * v.transpose();
+    }
     xx += w * e[0] * e[0];
     xy += w * e[0] * e[1];
     xz += w * e[0] * e[2];
@@ -255,7 +263,19 @@ SunVectorSolution sun_vector_eigen(const SkyPoints& points, const CameraIntrinsi
     r.status = SunVectorStatus::Degenerate;
     return r;
   }
-  const Eigen::Vector3d v = solver.eigenvectors().col(0).normalized();
+  Eigen::Vector3d v = solver.eigenvectors().col(0).normalized();
+  if (corrected) {
+    // B = Σ (I − v·vᵀ) over the points used: positive definite unless every view is the same.
+    const Eigen::Matrix3d B = static_cast<double>(used) * Eigen::Matrix3d::Identity() - vv;
+    const Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::Matrix3d> general(m, B);
+    if (general.info() != Eigen::Success || !(B.determinant() > 0)) {
+      r.status = SunVectorStatus::Degenerate;
+      return r;
+    }
+    v = general.eigenvectors().col(0).normalized();
+    r.stokes_noise_sd = 2.0 * std::sqrt(std::max(general.eigenvalues()(0), 0.0));
+    r.rms_residual = std::sqrt(std::max(v.dot(m * v), 0.0) / wsum);
+  }
   Vec3 s{v(0), v(1), v(2)};
   // The solar/antisolar ambiguity (spec §2.5).
   const Vec3* prior = settings.prior_sun ? &*settings.prior_sun : nullptr;

@@ -84,6 +84,14 @@ struct OrientationSettings {
   // Points with a DoP below this are left out (0: none; needs dop). A sky at DoP ≈ 0 carries no
   // AoP (near the sun and the antisun).
   double min_dop = 0.0;
+  // [C] Remove the noise bias of EEᵀ (docs/physics.md §18, "The eigenvector method's noise
+  // bias"; needs dop; replaces dop_weighting). A noisy AoP rotates e about the view v, so
+  // E[e·eᵀ] = (1 − 2β)·e₀e₀ᵀ + β·(I − v·vᵀ) with β = E[sin² δ] the AoP error's: EEᵀ's null vector
+  // is pulled by Σ w·β·(I − v·vᵀ), a bias that does not fall with the number of points. With
+  // w = DoP² (∝ 1/var δ when the normalised Stokes noise σ is the same at every point) w·β ≈ σ²/4
+  // for every point, so E[EEᵀ] = Σ w(1 − 2β)e₀e₀ᵀ + c·B, B = Σ (I − v·vᵀ), c = σ²/4 unknown: s* is
+  // the generalized eigenvector EEᵀ·s = c·B·s for the smallest c (as Taubin's fit), and c gives σ.
+  bool correct_noise_bias = false;
   // The solar/antisolar ambiguity (spec §2.5): s and −s fit the same E-vectors. Without a prior
   // the root with s_z > 0 (above the camera's X–Y plane) is taken [C]; with one, the root nearer
   // it (s·prior > 0). Give a prior near the horizon (e.g. the ephemeris' sun in frame l for an
@@ -140,11 +148,16 @@ struct SunVectorSolution {
   double relative_gap = 0;      // (λ₂ − λ₁)/(λ₁ + λ₂ + λ₃)
   double rms_residual = 0;      // √(λ₁/Σw): RMS of e·s* (unweighted: over the points used)
   int vectors_used = 0;
+  // correct_noise_bias: the normalised Stokes noise the fit implies, σ = 2·√c (c the smallest
+  // generalized eigenvalue; 0 when the data are noise-free or the correction is off).
+  double stokes_noise_sd = 0;
 };
 
 // The eigenvector method (Eqs. 10–13): s* is the eigenvector of EEᵀ = Σ w·e·eᵀ for its smallest
-// eigenvalue (Eigen's SelfAdjointEigenSolver on the 3 × 3 matrix), w = 1 or the DoP. Points
-// whose AoP, position (or, with weighting or min_dop, DoP) is not finite are left out.
+// eigenvalue (Eigen's SelfAdjointEigenSolver on the 3 × 3 matrix), w = 1 or the DoP; with
+// correct_noise_bias, w = DoP² and s* solves EEᵀ·s = c·B·s (Eigen's
+// GeneralizedSelfAdjointEigenSolver). Points whose AoP, position (or, with weighting, the
+// correction or min_dop, DoP) is not finite are left out.
 // Throws std::invalid_argument for inconsistent array lengths, bad intrinsics or settings.
 SunVectorSolution sun_vector_eigen(const SkyPoints& points, const CameraIntrinsics& camera,
                                    const OrientationSettings& settings = {});

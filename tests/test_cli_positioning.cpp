@@ -1,4 +1,4 @@
-// polrig study positioning, run through the executable on tests/position-static.yaml (W16's
+// polrig study positioning, run through the executable on rigs/wang2016-static.yaml (W16's
 // static hour at 1 Hz, levelled).
 #include <cmath>
 #include <string>
@@ -15,7 +15,7 @@ class CliPositioning : public PolrigTest {
   CliPositioning() : PolrigTest("polrig_test_cli_positioning_", "") {}
 };
 
-const std::string kRig = POLRIG_SOURCE_DIR "/tests/position-static.yaml";
+const std::string kRig = POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml";  // the study reads its sky and times
 
 }  // namespace
 

@@ -10,7 +10,7 @@ import polrig
 from conftest import ROOT, read_csv
 
 SITE = (28.221, 112.992)  # W16's roof
-RIG = ROOT / "tests" / "position-static.yaml"
+RIG = ROOT / "rigs" / "wang2016-static.yaml"  # W16's static hour: the study reads its sky and times
 
 
 def hour(step_s=1):

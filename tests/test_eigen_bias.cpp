@@ -123,7 +123,12 @@ TEST(EigenvectorNoiseBias, TheUnweightedSunIsBiasedAndTheCorrectionRemovesIt) {
   // The correction: unbiased in zenith and azimuth within the Monte-Carlo error.
   EXPECT_TRUE(unbiased(e_corrected.zenith_deg));
   EXPECT_TRUE(unbiased(e_corrected.azimuth_deg));
-  // σ = 2√c against the noise model's (docs/validation.md: the normalised Stokes noise of the fused
-  // image, from the cameras' Poisson–Gaussian noise through co-registration and Eqs. 3–5).
-  std::printf("stokes_noise_sd %.5f (frame 0)\n", sigma.front());
+  // σ = 2√c against the noise model's 0.00439 (examples/w16_eigen_bias.py: √mean(4·d²·var δ) with
+  // var δ from the cameras' Poisson–Gaussian noise and ADC through the bilinear co-registration and
+  // Eqs. 3–5, in NumPy; its per-pixel var δ matches 400 noise realisations' to 0.4 %). The pixels'
+  // noise is not quite uniform (the bilinear weights), so 3 %.
+  double sigma_mean = 0;
+  for (double v : sigma) sigma_mean += v / static_cast<double>(sigma.size());
+  std::printf("stokes_noise_sd %.5f (mean over the frames)\n", sigma_mean);
+  EXPECT_NEAR(sigma_mean, 0.00439, 0.03 * 0.00439);
 }

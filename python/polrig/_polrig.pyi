@@ -725,6 +725,7 @@ class SunVector:
     relative_gap: float
     rms_residual: float
     vectors_used: int
+    stokes_noise_sd: float
 
 class OrientationEstimate:
     @property
@@ -740,14 +741,15 @@ class OrientationEstimate:
 def sun_vector(aop_deg: ArrayLike, dop: ArrayLike | None = None, *, f_c_px: float = 405.40540540540536,
                principal_point: tuple[float, float] | None = None, element_px: float = 2.0,
                conversion: str = "meridional", dop_weighting: bool = False, min_dop: float = 0.0,
-               prior_sun: Sequence[float] | None = None, horizon_margin_deg: float = 2.0) -> SunVector: ...
+               prior_sun: Sequence[float] | None = None, horizon_margin_deg: float = 2.0,
+               correct_noise_bias: bool = False) -> SunVector: ...
 def orient(aop_deg: ArrayLike, dop: ArrayLike | None = None, *, sun_azimuth_deg: float | None = None,
            f_c_px: float = 405.40540540540536, principal_point: tuple[float, float] | None = None,
            element_px: float = 2.0, conversion: str = "meridional", dop_weighting: bool = False,
            min_dop: float = 0.0, prior_sun: Sequence[float] | None = None,
            horizon_margin_deg: float = 2.0, zenith_radius_px: float = 2.0,
            line_aop_tolerance_deg: float = 1.0, line_min_radius_px: float = 10.0,
-           hough_bin_deg: float = 0.5) -> list[OrientationEstimate]: ...
+           hough_bin_deg: float = 0.5, correct_noise_bias: bool = False) -> list[OrientationEstimate]: ...
 def camera_heading(sun_azimuth_deg: float, sun_az_camera_deg: float) -> float: ...
 def orient_dofp_dataset(dir: str | os.PathLike[str], *, params: str | os.PathLike[str] | None = None, conversion: str = "meridional",
                         dop_weighting: bool = False, heading_prior_deg: float | None = None,
@@ -934,6 +936,7 @@ def fix_position(utc: Any, zenith_deg: ArrayLike, prior: Sequence[float], *, wei
 def locate(utc: Any, sun_camera: ArrayLike, prior: Sequence[float], *, weight: ArrayLike | None = None,
            refraction: bool = False, ut1_minus_utc_s: float = 0.0, second_root: bool = True,
            truth: Sequence[float] | None = None, true_heading_deg: ArrayLike | None = None) -> Location: ...
-def locate_dataset(dir: str, prior: Sequence[float], *, dop_weighting: bool = False) -> Location: ...
+def locate_dataset(dir: str, prior: Sequence[float], *, dop_weighting: bool = False,
+                   correct_noise_bias: bool = False) -> Location: ...
 
 # ---- end of position

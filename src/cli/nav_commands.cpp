@@ -170,10 +170,11 @@ void run_orient(const std::string& input, const std::string& params, const std::
 // (report/locate_report.h): per stop the eigenvector sun vector, then the Eq. 17 fix over the stops
 // (both roots, the one nearest --prior chosen) and ψ = β − α_S per stop.
 void run_locate(const std::string& input, const std::string& prior_text, bool dop_weighting,
-                const OutputOptions& out) {
+                const OutputOptions& out, bool correct_noise_bias = false) {
   const Site prior = parse_site(prior_text, "--prior");
   OrientationSettings orientation;
   orientation.dop_weighting = dop_weighting;
+  orientation.correct_noise_bias = correct_noise_bias;
   const DatasetLocation run = locate_four_camera_folder(input, prior, orientation, {}, progress());
   OutputDir d = out.open();
   write_manifest(d.staging(), {command_line(), nullptr, report_dataset_location(d.staging(), run), {input}});
@@ -254,9 +255,13 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     app->add_option("--prior", *prior, "LAT,LON in degrees (north, east positive): an approximate position; of "
                                        "Eq. 17's two roots the one nearer it is chosen")->required();
     app->add_flag("--dop-weighting", *dop_weighting, "weight the eigenvector method's EEᵀ by DoP");
+    auto correct_noise_bias = std::make_shared<bool>(false);
+    app->add_flag("--correct-noise-bias", *correct_noise_bias,
+                  "remove the eigenvector method's noise bias (DoP² weights, EEᵀ·s = c·Σ(I − v·vᵀ)·s; "
+                  "docs/physics.md §18); replaces --dop-weighting");
     out->add_to(*app);
     add_threads_option(*app, threads);
-    commands.push_back({app, [=] { run_locate(*input, *prior, *dop_weighting, *out); }});
+    commands.push_back({app, [=] { run_locate(*input, *prior, *dop_weighting, *out, *correct_noise_bias); }});
   }
   {
     auto* app = study.add_subcommand(

@@ -67,7 +67,7 @@ Image image_points(const py::object& aop_deg, const py::object& dop, double f_c_
 
 OrientationSettings settings_from(const std::string& conversion, bool dop_weighting, double min_dop,
                                   const std::optional<std::vector<double>>& prior_sun,
-                                  double horizon_margin_deg) {
+                                  double horizon_margin_deg, bool correct_noise_bias = false) {
   OrientationSettings s;
   const auto c = parse_aop_conversion(conversion);
   if (!c)
@@ -75,6 +75,7 @@ OrientationSettings settings_from(const std::string& conversion, bool dop_weight
         "conversion: expected 'meridional' or 'analyzer-in-front', got '{}'", conversion));
   s.conversion = *c;
   s.dop_weighting = dop_weighting;
+  s.correct_noise_bias = correct_noise_bias;
   s.min_dop = min_dop;
   if (prior_sun) {
     if (prior_sun->size() != 3)
@@ -95,7 +96,9 @@ constexpr const char* kCameraArgs =
     "default) or 'analyzer-in-front'; dop_weighting: weight EEᵀ by the DoP; min_dop: leave out "
     "elements below this DoP; prior_sun: None or a direction in frame l choosing between the sun "
     "and the antisun (else the root with s_z > 0); horizon_margin_deg: without a prior, a sun this "
-    "close to the camera's horizon has status 'near-horizon'.";
+    "close to the camera's horizon has status 'near-horizon'; correct_noise_bias: remove the noise "
+    "bias of EEᵀ (DoP² weights and the generalized eigenproblem EEᵀ·s = c·Σ(I − v·vᵀ)·s, "
+    "docs/physics.md §18; needs dop; replaces dop_weighting).";
 
 }  // namespace
 
@@ -122,6 +125,9 @@ void bind_orientation(py::module_& m) {
       .def_readonly("rms_residual", &SunVectorSolution::rms_residual,
                     "√(λ₁/Σw): the RMS of e·s* (its rounding floor is about 1e-8).")
       .def_readonly("vectors_used", &SunVectorSolution::vectors_used, "The number of E-vectors in EEᵀ.")
+      .def_readonly("stokes_noise_sd", &SunVectorSolution::stokes_noise_sd,
+                    "With correct_noise_bias: the normalised Stokes noise σ = 2√c the fit implies "
+                    "(c its smallest generalized eigenvalue); else 0.")
       .def("__repr__", [](const SunVectorSolution& s) {
         return fmt::format("<polrig.SunVector: status '{}', root '{}', sun_az_deg {}, sun_el_deg {}, "
                            "vectors_used {}, relative_gap {}>",
@@ -163,16 +169,18 @@ void bind_orientation(py::module_& m) {
   m.def("sun_vector", [](const py::object& aop_deg, const py::object& dop, double f_c_px,
                          std::optional<std::pair<double, double>> principal_point, double element_px,
                          const std::string& conversion, bool dop_weighting, double min_dop,
-                         std::optional<std::vector<double>> prior_sun, double horizon_margin_deg) {
+                         std::optional<std::vector<double>> prior_sun, double horizon_margin_deg,
+                         bool correct_noise_bias) {
         const Image im = image_points(aop_deg, dop, f_c_px, principal_point, element_px);
-        const OrientationSettings s =
-            settings_from(conversion, dop_weighting, min_dop, prior_sun, horizon_margin_deg);
+        if (correct_noise_bias && dop.is_none()) throw py::value_error("correct_noise_bias: needs dop (None given)");
+        const OrientationSettings s = settings_from(conversion, dop_weighting, min_dop, prior_sun,
+                                                    horizon_margin_deg, correct_noise_bias);
         py::gil_scoped_release release;
         return sun_vector_eigen(im.points, im.camera, s);
       }, "aop_deg"_a, "dop"_a = py::none(), py::kw_only(), "f_c_px"_a = default_fc,
       "principal_point"_a = py::none(), "element_px"_a = 2.0, "conversion"_a = "meridional",
       "dop_weighting"_a = false, "min_dop"_a = 0.0, "prior_sun"_a = py::none(),
-      "horizon_margin_deg"_a = defaults.horizon_margin_deg,
+      "horizon_margin_deg"_a = defaults.horizon_margin_deg, "correct_noise_bias"_a = false,
       (std::string("The sun vector of a sky image by H17's eigenvector method (Eqs. 6–13): the "
                    "eigenvector of EEᵀ for its smallest eigenvalue.\n\n") +
        kFrames + "\n\n" + kCameraArgs +
@@ -185,10 +193,11 @@ void bind_orientation(py::module_& m) {
                      const std::string& conversion, bool dop_weighting, double min_dop,
                      std::optional<std::vector<double>> prior_sun, double horizon_margin_deg,
                      double zenith_radius_px, double line_aop_tolerance_deg,
-                     double line_min_radius_px, double hough_bin_deg) {
+                     double line_min_radius_px, double hough_bin_deg, bool correct_noise_bias) {
         const Image im = image_points(aop_deg, dop, f_c_px, principal_point, element_px);
-        OrientationSettings s =
-            settings_from(conversion, dop_weighting, min_dop, prior_sun, horizon_margin_deg);
+        if (correct_noise_bias && dop.is_none()) throw py::value_error("correct_noise_bias: needs dop (None given)");
+        OrientationSettings s = settings_from(conversion, dop_weighting, min_dop, prior_sun,
+                                              horizon_margin_deg, correct_noise_bias);
         s.zenith_radius_px = zenith_radius_px;
         s.line_aop_tolerance_deg = line_aop_tolerance_deg;
         s.line_min_radius_px = line_min_radius_px;
@@ -206,6 +215,7 @@ void bind_orientation(py::module_& m) {
       "zenith_radius_px"_a = defaults.zenith_radius_px,
       "line_aop_tolerance_deg"_a = defaults.line_aop_tolerance_deg,
       "line_min_radius_px"_a = defaults.line_min_radius_px, "hough_bin_deg"_a = defaults.hough_bin_deg,
+      "correct_noise_bias"_a = false,
       (std::string("One sky frame through the three methods of H17 (§2.3, §4.2): the eigenvector "
                    "method, then the single-point (zenith) and line-detection (Hough) comparators "
                    "with the eigenvector's sun azimuth as their prior for the meridian's half.\n\n") +

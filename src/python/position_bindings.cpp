@@ -297,19 +297,22 @@ void bind_position(py::module_& m) {
       "with W16's clockwise α_S = −atan2(s_y, s_x) (Eq. 18). truth, true_heading_deg: optional, for "
       "the error columns. Returns polrig.Location (heading.csv's columns and .fix).");
 
-  m.def("locate_dataset", [](const std::string& dir, const py::object& prior, bool dop_weighting) {
+  m.def("locate_dataset", [](const std::string& dir, const py::object& prior, bool dop_weighting,
+                             bool correct_noise_bias) {
         const Site p = site_of(prior, "prior");
         OrientationSettings orientation;
         orientation.dop_weighting = dop_weighting;
+        orientation.correct_noise_bias = correct_noise_bias;
         DatasetLocation run;
         {
           py::gil_scoped_release release;
           run = locate_four_camera_folder(dir, p, orientation, {});
         }
         return location_record(run.location, run.truth, run.true_heading_deg);
-      }, "dir"_a, "prior"_a, py::kw_only(), "dop_weighting"_a = false,
+      }, "dir"_a, "prior"_a, py::kw_only(), "dop_weighting"_a = false, "correct_noise_bias"_a = false,
       "`polrig locate DIR --prior LAT,LON`: per stop of a four-camera dataset the sun vector by the "
-      "eigenvector method over the fused AoP (dop_weighting: EEᵀ weighted by DoP), then locate() over "
+      "eigenvector method over the fused AoP (dop_weighting: EEᵀ weighted by DoP; correct_noise_bias: "
+      "the noise-bias correction, docs/physics.md §18), then locate() over "
       "the stops with a sun; the truth and the true headings from the dataset (a simulated one). "
       "Returns polrig.Location, whose columns are the CLI's heading.csv and .fix its fix.csv.");
 

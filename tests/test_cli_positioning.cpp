@@ -24,7 +24,10 @@ const std::string kRig = POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml";  // the
 TEST_F(CliPositioning, StudyIsDeterministicAndScalesWithNoise) {
   const std::string common = "study positioning " + shell_quote(kRig) +
                              " --trials 12 --windows 600,3600 --noise 0,0.07,0.14 --tilts 0,0.1";
-  ok(common + " --threads 1 -o " + shell_quote(tmp / "a"));
+  const Result first = ok(common + " --threads 1 -o " + shell_quote(tmp / "a"));
+  // The stdout line names Eq. 15's azimuth span and W16's mirror root M′.
+  EXPECT_HAS(first.out, "Eq. 15 over Δβ = 14.54°: 87.8 km");
+  EXPECT_HAS(first.out, "fixes nearer it");
   ok(common + " --threads 2 --no-plots -o " + shell_quote(tmp / "b"));
   for (const char* f : {"summary.csv", "trials.csv"})
     EXPECT_EQ(read_file(tmp / "a" / f), read_file(tmp / "b" / f)) << f;
@@ -45,6 +48,10 @@ TEST_F(CliPositioning, StudyIsDeterministicAndScalesWithNoise) {
   // Eq. 15 over the hour's Δβ = 14.54°: 0.14·√2/sin Δβ·111.32 = 87.8 km.
   EXPECT_NEAR(at(4, "eq15_km"), 87.77, 0.01);
   EXPECT_NEAR(at(4, "delta_beta_deg"), 14.54, 0.01);
+  // M′ (the equal-altitude circles' other intersection) is far on the other side of the sun's track,
+  // and no trial's fix ended nearer it (tests/test_positioning.cpp checks M′ against the geometry).
+  EXPECT_GT(at(4, "mirror_km"), 5000);
+  for (std::size_t row = 0; row < s.rows.size(); ++row) EXPECT_EQ(at(row, "wrong_root"), 0) << row;
   // A shorter window: a larger error.
   EXPECT_GT(at(0, "rms_km"), 3 * at(1, "rms_km"));
   const Csv t = read_csv(tmp / "a" / "trials.csv");

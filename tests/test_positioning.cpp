@@ -297,6 +297,57 @@ TEST(PositioningStudy, MonteCarloMatchesTheLinearizedError) {
   EXPECT_THROW(positioning_study(s), std::invalid_argument);
 }
 
+// W16's M′ in every cell: with two sightings the equal-altitude circles are symmetric about the
+// great circle through their two sub-solar points (δ, −GHA), so M′ is the truth reflected in that
+// plane: written here with plain vectors on the sphere Eq. 17 uses. Then the hour at 0.1 Hz: M′ is
+// ~11 000 km away, no trial ends nearer it, and Eq. 15's span is the window's Δβ.
+TEST(PositioningStudy, EveryCellReportsTheMirrorRootAndEq15sSpan) {
+  PositioningStudySettings s;
+  s.times_s = {0, 3600};
+  s.windows_s = {3600};
+  s.noise_sd_deg = {0};
+  s.tilt_deg = {0};
+  s.baseline_noise_sd_deg = 0;
+  s.trials = 2;
+  const PositioningStudy two = positioning_study(s);
+  const auto unit = [](double lat_deg, double lon_deg) {
+    const double la = lat_deg * std::numbers::pi / 180, lo = lon_deg * std::numbers::pi / 180;
+    return Vec3{std::cos(la) * std::cos(lo), std::cos(la) * std::sin(lo), std::sin(la)};
+  };
+  Vec3 sub[2];
+  for (int k = 0; k < 2; ++k) {
+    const SunPosition p = sun_position(s.first.plus_seconds(s.times_s[static_cast<std::size_t>(k)]), s.site, s.sun);
+    sub[k] = unit(p.declination_deg, -p.gha_deg);
+  }
+  const Vec3 n = vec3::unit(vec3::cross(sub[0], sub[1]));
+  const Vec3 x = unit(s.site.lat_deg, s.site.lon_deg);
+  const Vec3 m = vec3::sub(x, vec3::mul(n, 2 * vec3::dot(n, x)));
+  const double lat = std::asin(m[2]) * 180 / std::numbers::pi, lon = std::atan2(m[1], m[0]) * 180 / std::numbers::pi;
+  for (const PositioningCell& c : two.cells) {
+    // The fit's δ and GHA are topocentric: at M′ the zenith angles differ from the site's by up to
+    // the solar parallax (8.8″ = 0.0024°), which Eq. 15 carries to M′ as 0.0024°·√2/sin 14.5° =
+    // 0.014° (1.5 km).
+    EXPECT_NEAR(c.mirror_lat_deg, lat, 0.015) << c.index;
+    EXPECT_NEAR(std::remainder(c.mirror_lon_deg - lon, 360.0), 0.0, 0.015) << c.index;
+    EXPECT_NEAR(c.mirror_km, great_circle_km(lat, lon, s.site.lat_deg, s.site.lon_deg), 1.7) << c.index;
+  }
+  s.times_s.clear();
+  for (int k = 0; k <= 360; ++k) s.times_s.push_back(10.0 * k);
+  s.windows_s = {600, 3600};
+  s.noise_sd_deg = {0.14};
+  s.trials = 20;
+  const PositioningStudy hour = positioning_study(s);
+  for (std::size_t c = 0; c < hour.cells.size(); ++c) {
+    EXPECT_GT(hour.cells[c].mirror_km, 5000) << c;
+    EXPECT_EQ(hour.stats[c].wrong_root, 0) << c;
+  }
+  const PositioningCell& full = hour.cells[2];  // cells: windows 600 s, 3600 s (σ = 0), then σ = 0.14°
+  ASSERT_EQ(full.factor, "noise");
+  EXPECT_NEAR(full.delta_beta_deg, 14.54, 0.01);  // W16: β 201.0° → 215.5°
+  // Eq. 15 over that span: 0.14°·√2/sin 14.54°·111.32 km/° = 87.8 km (spec §3.4 gives 85.2 km for 15°).
+  EXPECT_NEAR(full.eq15_km, 0.14 * std::sqrt(2.0) / std::sin(14.54 * std::numbers::pi / 180) * 111.32, 0.1);
+}
+
 // fix.csv and heading.csv from the locate core: every column, the chosen root first.
 TEST(Locate, WritesFixAndHeading) {
   std::vector<SunSighting> s;

@@ -84,7 +84,8 @@ std::vector<Command> add_position_commands(CLI::App& /*root*/, CLI::App& study, 
       ->check(finite_range(0, 2000, "km"))->capture_default_str();
   app->add_option("--trials", s->trials, "trials per cell")->check(CLI::Range(1, 1000000))->capture_default_str();
   app->add_option("--seed", *seed, "random seed (default: the rig's seed)");
-  app->add_flag("--second-root", s->second_root, "also search the mirror root in every fit (twice the work)");
+  app->add_flag("--second-root", s->second_root,
+                "also search the mirror root in every fit (twice the work); every cell reports M′ either way");
   add_threads_option(*app, threads);
   commands.push_back({app, [=] {
     PositioningStudySettings settings = *s;
@@ -113,9 +114,10 @@ std::vector<Command> add_position_commands(CLI::App& /*root*/, CLI::App& study, 
       if (c.factor != "noise") continue;
       const PositioningStats& st = result.stats[i];
       std::cout << fmt::format("window {} s, noise {}°, tilt {}°: RMS position error {:.3f} km "
-                               "({}/{} converged; Eq. 15: {:.1f} km, linearized: {:.3f} km)\n",
+                               "({}/{} converged; Eq. 15 over Δβ = {:.2f}°: {:.1f} km, linearized: {:.3f} km; "
+                               "mirror root {:.0f} km away, {} fixes nearer it)\n",
                                c.window_s, c.noise_sd_deg, c.tilt_deg, st.rms_km, st.converged, st.trials,
-                               c.eq15_km, c.linear_rms_km);
+                               c.delta_beta_deg, c.eq15_km, c.linear_rms_km, c.mirror_km, st.wrong_root);
     }
   }});
   return commands;

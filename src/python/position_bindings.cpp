@@ -223,6 +223,8 @@ void bind_position(py::module_& m) {
        {"mean_east_km", "mean east error (bias), km"},
        {"eq15_km", "Eq. 15 for the window's first and last sightings, ε = √(σ² + τ²), km"},
        {"linear_rms_km", "the linearized least-squares RMS error √trace(P·Σ·Pᵀ), km"},
+       {"mirror_km", "W16's M′: the window's noise-free mirror root's distance from the truth, km (NaN: none found)"},
+       {"wrong_root", "converged trials whose fix is nearer M′ than the truth"},
        {"trials", "polrig.PositioningTrials: trials.csv"}});
 
   m.def("two_sighting_error", [](double eps_a, double eps_b, double az_a, double az_b) {
@@ -405,6 +407,8 @@ void bind_position(py::module_& m) {
         r.add("mean_east_km", cells([](C, S st) { return st.mean_east_km; }));
         r.add("eq15_km", cells([](C c, S) { return c.eq15_km; }));
         r.add("linear_rms_km", cells([](C c, S) { return c.linear_rms_km; }));
+        r.add("mirror_km", cells([](C c, S) { return c.mirror_km; }));
+        r.add("wrong_root", cells([](C, S st) { return st.wrong_root; }));
         r.add("trials", py::cast(RecordOf<PositioningTrialsTag>(std::move(tr))));
         return RecordOf<PositioningStudyTag>(std::move(r));
       }, py::kw_only(), "windows_s"_a = py::none(),

@@ -43,7 +43,8 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
   const PositioningStudySettings& s = study.settings;
   std::string summary =
       "cell,factor,window_s,noise_sd_deg,tilt_deg,correlation_s,sightings,delta_beta_deg,trials,"
-      "converged,rms_km,mean_km,p50_km,p95_km,max_km,mean_north_km,mean_east_km,eq15_km,linear_rms_km\n";
+      "converged,rms_km,mean_km,p50_km,p95_km,max_km,mean_north_km,mean_east_km,eq15_km,linear_rms_km,"
+      "mirror_km,wrong_root\n";
   for (std::size_t i = 0; i < study.cells.size(); ++i) {
     const PositioningCell& c = study.cells[i];
     const PositioningStats& st = study.stats[i];
@@ -55,7 +56,8 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
                            {st.p95_km, "p95_km"}, {st.max_km, "max_km"}, {st.mean_north_km, "mean_north_km"},
                            {st.mean_east_km, "mean_east_km"}})
       (summary += ',') += num(v, name, i, true);
-    summary += fmt::format(",{},{}\n", num(c.eq15_km, "eq15_km", i), num(c.linear_rms_km, "linear_rms_km", i));
+    summary += fmt::format(",{},{},{},{}\n", num(c.eq15_km, "eq15_km", i), num(c.linear_rms_km, "linear_rms_km", i),
+                           num(c.mirror_km, "mirror_km", i, true), st.wrong_root);
   }
   write_text_file(dir / "summary.csv", summary);
 
@@ -79,7 +81,8 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
   std::vector<DatasetFile> files{
       {"summary.csv", 1, "per cell of the three sweeps (window, noise, tilt): the position error's RMS, "
                          "mean, median, 95 % and largest over the converged trials, its mean north and "
-                         "east, Eq. 15's two-sighting error and the linearized least-squares RMS"},
+                         "east, Eq. 15's two-sighting error over the window's Δβ, the linearized "
+                         "least-squares RMS, the mirror root M′'s distance and the trials nearer it"},
       {"trials.csv", 1, "per trial: the cell, the tilt azimuth, the prior, the fix, its error (km, "
                         "north, east), how the fit ended, its residual RMS and its own 1σ"}};
   if (!plots || study.trials.empty()) return files;
@@ -106,7 +109,8 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
               "window (min)", "position error (km)"};
   window.series = {{"summary.csv", "($3/60):" + on("window", 11), "Monte-Carlo RMS", rms},
                    {"summary.csv", "($3/60):" + on("window", 14), "Monte-Carlo 95 %", p95},
-                   {"summary.csv", "($3/60):" + on("window", 18), "Eq. 15 (first and last sighting)", eq15},
+                   {"summary.csv", "($3/60):" + on("window", 18),
+                    "Eq. 15 (each window's first and last sighting: its Δβ)", eq15},
                    {"summary.csv", "($3/60):" + on("window", 19), "linearized least squares", lin}};
   window.extra = "set logscale xy\nset format y '%g'\nset format x '%g'\nset key below horizontal";
   Plot noise{"error_vs_noise.png",
@@ -115,7 +119,8 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
              "zenith-angle noise σ (°)", "position error (km)"};
   noise.series = {{"summary.csv", "4:" + on("noise", 11), "Monte-Carlo RMS", rms},
                   {"summary.csv", "4:" + on("noise", 14), "Monte-Carlo 95 %", p95},
-                  {"summary.csv", "4:" + on("noise", 18), "Eq. 15 (first and last sighting)", eq15},
+                  {"summary.csv", "4:" + on("noise", 18),
+                   fmt::format("Eq. 15 (first and last sighting, Δβ = {:.2f}°)", b.delta_beta_deg), eq15},
                   {"summary.csv", "4:" + on("noise", 19), "linearized least squares", lin}};
   noise.extra = "set key below horizontal";
   Plot tilt{"error_vs_tilt.png",
@@ -124,7 +129,8 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
             "levelling error τ (°), towards a random azimuth", "position error (km)"};
   tilt.series = {{"summary.csv", "5:" + on("tilt", 11), "Monte-Carlo RMS", rms},
                  {"summary.csv", "5:" + on("tilt", 14), "Monte-Carlo 95 %", p95},
-                 {"summary.csv", "5:" + on("tilt", 18), "Eq. 15 with ε = √(σ² + τ²)", eq15},
+                 {"summary.csv", "5:" + on("tilt", 18),
+                  fmt::format("Eq. 15 with ε = √(σ² + τ²), Δβ = {:.2f}°", b.delta_beta_deg), eq15},
                  {"summary.csv", "5:" + on("tilt", 19), "linearized least squares", lin}};
   tilt.extra = "set key below horizontal";
   Plot fixes{"fixes.png",

@@ -162,6 +162,19 @@ PositioningStudy positioning_study(const PositioningStudySettings& settings, con
     c.eq15_km = two_sighting_error(std::hypot(sigma, tilt), std::hypot(sigma, tilt),
                                    rad2deg(beta_rad[0]), rad2deg(beta_rad[n - 1])).km;
     c.linear_rms_km = linear_rms_km(times, model, beta_rad, lat_rad, n, deg2rad(sigma), deg2rad(tilt), s.correlation_s);
+    // M′: the window's noise-free, level zenith angles fitted from the truth with the mirror search.
+    std::vector<ZenithSighting> clean(n);
+    for (std::size_t k = 0; k < n; ++k)
+      clean[k] = {s.first.plus_seconds(times[k]), rad2deg(std::acos(std::clamp(sun_enu[k][2], -1.0, 1.0))), 1.0};
+    PositionOptions mirror;
+    mirror.sun = s.sun;
+    mirror.second_root = true;
+    const PositionFix both = fix_position(clean, s.site, mirror);
+    if (both.alternative && both.alternative->summary.termination == PositionTermination::Converged) {
+      c.mirror_lat_deg = both.alternative->lat_deg;
+      c.mirror_lon_deg = both.alternative->lon_deg;
+      c.mirror_km = great_circle_km(c.mirror_lat_deg, c.mirror_lon_deg, s.site.lat_deg, s.site.lon_deg);
+    }
     study.cells.push_back(c);
   };
   for (const double w : s.windows_s) add_cell("window", w, s.baseline_noise_sd_deg, s.baseline_tilt_deg);
@@ -232,6 +245,9 @@ PositioningStudy positioning_study(const PositioningStudySettings& settings, con
       sum += r.error_km;
       north += r.north_km;
       east += r.east_km;
+      if (std::isfinite(c.mirror_km) &&
+          great_circle_km(r.lat_deg, r.lon_deg, c.mirror_lat_deg, c.mirror_lon_deg) < r.error_km)
+        ++st.wrong_root;
     }
     st.converged = static_cast<int>(err.size());
     if (!err.empty()) {

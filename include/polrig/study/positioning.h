@@ -37,7 +37,10 @@ struct PositioningStudySettings {
   double prior_offset_km = 100;  // the prior: the truth moved this far, in a direction drawn per trial
   int trials = 100;
   std::uint64_t seed = 20151216;
-  bool second_root = false;  // also search the mirror root in every fit (twice the work)
+  // Also search the mirror root in every trial's fit (twice the work) and keep the root nearer the
+  // prior. Off, each fit follows the prior's basin; either way every cell reports M′ (mirror_km,
+  // one noise-free fit) and how many trials ended nearer it (wrong_root).
+  bool second_root = false;
 };
 
 // The ranges (trials in [1, 1e6]; windows in (0, span] and at least two sightings; noise SDs in
@@ -63,6 +66,11 @@ struct PositioningCell {
   // zenith errors' covariance: Gauss–Markov noise plus the tilt's τ²/2·cos(β_k − β_l) over a
   // uniform tilt azimuth), km.
   double linear_rms_km = 0;
+  // W16's M′: Eq. 17's mirror root of the window's noise-free, level zenith angles (the other
+  // intersection of the equal-altitude circles, mirrored about the sun's ground track), found by
+  // one fit from the truth with the mirror search on; NaN where that search found none. Its
+  // distance from the truth is how far off a prior may be before it picks the wrong root.
+  double mirror_lat_deg = NAN, mirror_lon_deg = NAN, mirror_km = NAN;
 };
 
 struct PositioningTrial {
@@ -83,6 +91,7 @@ struct PositioningStats {
   int cell = 0, trials = 0, converged = 0;
   double rms_km = NAN, mean_km = NAN, p50_km = NAN, p95_km = NAN, max_km = NAN;
   double mean_north_km = NAN, mean_east_km = NAN;
+  int wrong_root = 0;  // converged trials whose fix is nearer the cell's M′ than the truth
 };
 
 struct PositioningStudy {

@@ -200,7 +200,7 @@ def frame_study():
         dzen = np.array([angles(s)[1] - zen_t for s in S])
         err = np.degrees(np.arccos(np.clip(S @ s_true, -1, 1)))
         if name == "correct_noise_bias":
-            pz = ph = 0.0  # zero to first order by construction (docs/physics.md §18)
+            pz = ph = 0.0  # zero to first order by construction (docs/physics.md §15)
         else:
             w = weights(name, d0, valid)
             sp = smallest(outer_sum(e0, w, e0) + outer_sum(t0, w * beta, t0) - outer_sum(e0, w * beta, e0), s_true)

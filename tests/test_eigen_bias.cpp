@@ -1,5 +1,5 @@
-// The eigenvector method's noise bias on W16's fused four-camera sky (docs/physics.md §18,
-// docs/validation.md "The eigenvector method's noise bias"): over independent noise frames of one
+// The eigenvector method's noise bias on W16's fused four-camera sky (docs/physics.md §15, "The
+// noise bias of the eigenvector method"; docs/validation.md): over independent noise frames of one
 // stop the unweighted sun's mean error is many standard errors from zero (a bias, not scatter),
 // and correct_noise_bias's is within the Monte-Carlo error of it. The truth is the ephemeris' sun
 // in camera 1 (FourCameraSimulator::sun_in_camera1, sky/sun.h), not the noise-free fit.

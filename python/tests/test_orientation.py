@@ -166,7 +166,7 @@ def test_bad_input_gives_a_status_or_a_value_error():
 def test_correct_noise_bias_removes_the_bias_and_measures_the_noise():
     """Gaussian noise of SD sigma on the normalised Stokes (q, u) of a rendered Rayleigh sky (NumPy,
     independent of polrig's cameras): the unweighted sun is biased by many standard errors, the
-    corrected one is not, and its stokes_noise_sd is the sigma put in (docs/physics.md §18)."""
+    corrected one is not, and its stokes_noise_sd is the sigma put in (docs/physics.md §15)."""
     sky = polrig.Sky(SITE, UTC, 0.65)
     aop, dop = render(30.0, sky, cols=160, rows=120, element=4.0)
     truth = sky.sun().elevation_deg

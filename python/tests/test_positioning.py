@@ -122,7 +122,7 @@ def test_locate_dataset_is_the_cli_bit_for_bit(tmp_path, cli):
         else:
             np.testing.assert_array_equal(np.asarray(got, dtype=float), column, err_msg=name)
     assert loc.fix.error_km[0] < 100  # four noisy sightings over an hour: tens of km at most
-    # The noise-bias correction (docs/physics.md §18): the CLI's flag and the keyword, bit for bit.
+    # The noise-bias correction (docs/physics.md §15): the CLI's flag and the keyword, bit for bit.
     cli("locate", data, "--prior", "29,113.5", "--correct-noise-bias", "-o", tmp_path / "cor", "--quiet")
     cor = polrig.locate_dataset(str(data), (29, 113.5), correct_noise_bias=True)
     np.testing.assert_array_equal(cor.heading_deg, read_csv(tmp_path / "cor" / "heading.csv")["heading_deg"])

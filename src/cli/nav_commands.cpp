@@ -258,7 +258,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     auto correct_noise_bias = std::make_shared<bool>(false);
     app->add_flag("--correct-noise-bias", *correct_noise_bias,
                   "remove the eigenvector method's noise bias (DoP² weights, EEᵀ·s = c·Σ(I − v·vᵀ)·s; "
-                  "docs/physics.md §18); replaces --dop-weighting");
+                  "docs/physics.md §15); replaces --dop-weighting");
     out->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] { run_locate(*input, *prior, *dop_weighting, *out, *correct_noise_bias); }});

@@ -98,7 +98,7 @@ constexpr const char* kCameraArgs =
     "and the antisun (else the root with s_z > 0); horizon_margin_deg: without a prior, a sun this "
     "close to the camera's horizon has status 'near-horizon'; correct_noise_bias: remove the noise "
     "bias of EEᵀ (DoP² weights and the generalized eigenproblem EEᵀ·s = c·Σ(I − v·vᵀ)·s, "
-    "docs/physics.md §18; needs dop; replaces dop_weighting).";
+    "docs/physics.md §15; needs dop; replaces dop_weighting).";
 
 }  // namespace
 

@@ -314,7 +314,7 @@ void bind_position(py::module_& m) {
       }, "dir"_a, "prior"_a, py::kw_only(), "dop_weighting"_a = false, "correct_noise_bias"_a = false,
       "`polrig locate DIR --prior LAT,LON`: per stop of a four-camera dataset the sun vector by the "
       "eigenvector method over the fused AoP (dop_weighting: EEᵀ weighted by DoP; correct_noise_bias: "
-      "the noise-bias correction, docs/physics.md §18), then locate() over "
+      "the noise-bias correction, docs/physics.md §15), then locate() over "
       "the stops with a sun; the truth and the true headings from the dataset (a simulated one). "
       "Returns polrig.Location, whose columns are the CLI's heading.csv and .fix its fix.csv.");
 

@@ -84,8 +84,8 @@ struct OrientationSettings {
   // Points with a DoP below this are left out (0: none; needs dop). A sky at DoP ≈ 0 carries no
   // AoP (near the sun and the antisun).
   double min_dop = 0.0;
-  // [C] Remove the noise bias of EEᵀ (docs/physics.md §18, "The eigenvector method's noise
-  // bias"; needs dop; replaces dop_weighting). A noisy AoP rotates e about the view v, so
+  // [C] Remove the noise bias of EEᵀ (docs/physics.md §15, "The noise bias of the eigenvector
+  // method"; needs dop; replaces dop_weighting). A noisy AoP rotates e about the view v, so
   // E[e·eᵀ] = (1 − 2β)·e₀e₀ᵀ + β·(I − v·vᵀ) with β = E[sin² δ] the AoP error's: EEᵀ's null vector
   // is pulled by Σ w·β·(I − v·vᵀ), a bias that does not fall with the number of points. With
   // w = DoP² (∝ 1/var δ when the normalised Stokes noise σ is the same at every point) w·β ≈ σ²/4

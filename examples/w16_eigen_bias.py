@@ -6,7 +6,7 @@ fused by polrig, then the sun vector (W16 Eqs. 9–14, spec §2.5) by each weigh
 SEEDS noise realisations: the mean sun-vector error, heading bias (α_S − α_S,true) and
 zenith-angle bias with their standard errors, against the noise-free image (whose own error is the
 fused image's resampling, ≈ 1e-3°) and against the first-order analytic expectation
-(docs/physics.md "The eigenvector method's noise bias"):
+(docs/physics.md §15, "The noise bias of the eigenvector method"):
 
     E[EEᵀ] = Σ w (e₀e₀ᵀ + β (t₀t₀ᵀ − e₀e₀ᵀ)),   β = E[sin² δ] ≈ var δ,   t₀ = v × e₀,
     s ≈ s₀ − (M₀)⁺ Σ w β (t₀·s₀) t₀,            M₀ = Σ w e₀e₀ᵀ,

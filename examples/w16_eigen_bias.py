@@ -128,9 +128,8 @@ def aop_variance(f, truth, rig_values):
         vj = v1 @ truth["R_j1"][j].T
         th = np.arccos(np.clip(vj[..., 2], -1, 1))
         al = np.arctan2(vj[..., 1], vj[..., 0])
-        # (four_camera_truth's cx_px, cy_px are the virtual camera's: the rig's values here)
-        u = truth["fx_px"][j] * th * np.cos(al) + QUARTER["device.cameras.cx_px"][j] - 0.5
-        w = truth["fy_px"][j] * th * np.sin(al) + QUARTER["device.cameras.cy_px"][j] - 0.5
+        u = truth["fx_px"][j] * th * np.cos(al) + truth["cx_px"][j] - 0.5
+        w = truth["fy_px"][j] * th * np.sin(al) + truth["cy_px"][j] - 0.5
         a, b = u - np.floor(u), w - np.floor(w)
         sw2 = ((1 - a) ** 2 + a ** 2) * ((1 - b) ** 2 + b ** 2)
         K = truth["K"][j]

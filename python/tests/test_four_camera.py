@@ -60,6 +60,10 @@ def test_truth_and_refusals():
     t = rig.four_camera_truth()
     assert np.array_equal(t["polarizer_deg"], [0, 45, 90, 135])
     assert t["R_j1"].shape == (4, 3, 3) and np.array_equal(t["R_j1"][0], np.eye(3))
+    # Each camera's principal point (the rig's), and the virtual camera 1's under its own names.
+    assert np.array_equal(t["cx_px"], SETS["device.cameras.cx_px"])
+    assert np.array_equal(t["cy_px"], SETS["device.cameras.cy_px"])
+    assert (t["f_c_px"], t["virtual_cx_px"], t["virtual_cy_px"]) == (t["fx_px"][0], t["cx_px"][0], t["cy_px"][0])
     assert rig.capabilities == ["frames", "camera_array"]
     with pytest.raises(IndexError):
         rig.four_camera_frames(3)

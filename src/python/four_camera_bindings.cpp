@@ -79,7 +79,7 @@ constexpr const char* kTruthDoc = R"doc(
 The four cameras' truth (truth.yaml of `polrig simulate`): a dict of length-4 float64 arrays K, b,
 polarizer_deg, eps_deg, axis_deg (φ_j + ε_j), fx_px, fy_px, cx_px, cy_px, a (4, 4) array k
 (Kannala–Brandt k1…k4 per camera), a (4, 3, 3) array R_j1 (v_j = R_j1·v_1), a (4, 3) array
-position_mm, and the virtual camera's f_c_px, cx_px, cy_px.
+position_mm, and the virtual camera's f_c_px, virtual_cx_px, virtual_cy_px.
 )doc";
 
 constexpr const char* kSimulateDoc = R"doc(
@@ -153,7 +153,8 @@ void bind_four_camera(py::module_& m) {
     d["cy_px"] = take(std::move(cy)), d["k"] = take(std::move(k), {4, 4}), d["R_j1"] = take(std::move(R), {4, 3, 3});
     d["position_mm"] = take(std::move(pos), {4, 3});
     const VirtualCamera g = sim.fusion().grid();
-    d["f_c_px"] = g.f_c, d["cx_px"] = g.cx, d["cy_px"] = g.cy;
+    // The virtual camera's principal point under its own names: cx_px, cy_px are the cameras'.
+    d["f_c_px"] = g.f_c, d["virtual_cx_px"] = g.cx, d["virtual_cy_px"] = g.cy;
     return d;
   }, kTruthDoc);
 

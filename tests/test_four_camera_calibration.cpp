@@ -9,12 +9,16 @@
 #include <gtest/gtest.h>
 
 #include "polrig/calib/four_camera.h"
+#include "polrig/io/four_camera_calibration.h"
 #include "polrig/io/rig_yaml.h"
+#include "polrig/nav/positioning.h"
+#include "polrig/report/locate_report.h"
 #include "polrig/sim/four_camera_frames.h"
 #include "polrig/units.h"
 #include "support.h"
 
 using namespace polrig;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -241,4 +245,174 @@ TEST(FourCameraCalibration, NoisyFramesWithinTheirNoise) {
   fmt::print("d0 {:.6f} ± {:.6f}; psi0 {:.5f} ± {:.5f}\n", c.polarizer.dop, c.polarizer.dop_se, c.polarizer.psi0_deg,
              c.polarizer.psi0_se_deg);
   EXPECT_NEAR(axis_difference_deg(c.polarizer.psi0_deg, 0.0), 0.0, 4 * c.polarizer.psi0_se_deg);
+}
+
+// ---- The command: calibrate --method four-camera, locate --calibration ----
+
+namespace {
+
+// W16's sensor at an eighth of its resolution (130 × 98 px, f = 96.25 px: the same field).
+const std::string kEighth =
+    "--set device.cameras.width_px=130 --set device.cameras.height_px=98 "
+    "--set device.cameras.cx_px=[65,65.2,64.8,65.1] --set device.cameras.cy_px=[49,48.9,49.2,48.8] "
+    "--set device.cameras.fx_px=[96.25,96.4,96.1,96.3] --set device.cameras.fy_px=[96.25,96.4,96.1,96.3]";
+
+class FourCameraCalibrationCli : public test::PolrigTest {
+ protected:
+  FourCameraCalibrationCli() : PolrigTest("polrig_fcal_", "logs") {}
+  std::string rig(const char* name) const { return test::shell_quote(fs::path(POLRIG_SOURCE_DIR) / "rigs" / name); }
+  std::string at(const std::string& name) const { return test::shell_quote(tmp / name); }
+};
+
+double field(const test::Csv& csv, const std::string& quantity, int camera, const std::string& column) {
+  const std::size_t q = csv.col("quantity"), c = csv.col("camera"), k = csv.col(column);
+  for (const auto& row : csv.rows)
+    if (row[q] == quantity && row[c] == std::to_string(camera)) return std::stod(row[k]);
+  ADD_FAILURE() << "no row " << quantity << " " << camera;
+  return std::nan("");
+}
+
+}  // namespace
+
+// simulate the calibration rig → calibrate → locate a sky dataset with the calibration: the fix and
+// the heading are the truth model's within the calibration's error, propagated to them by
+// re-locating with each parameter moved by its standard error.
+TEST_F(FourCameraCalibrationCli, EndToEndTheCalibratedFixIsTheTruthsWithinItsError) {
+  ok(fmt::format("simulate {} -o {} --layers all {}", rig("wang2016-calibration.yaml"), at("cal"), kEighth));
+  const Result c = ok(fmt::format("calibrate {} --method four-camera -o {}", at("cal"), at("out")));
+  EXPECT_HAS(c.out, "geometry from");
+  EXPECT_HAS(c.out, "the simulation's truth");
+  for (const char* f : {"calibration.yaml", "radiometric.csv", "polarizer.csv", "summary.csv", "errors.csv", "manifest.yaml"})
+    EXPECT_TRUE(fs::exists(tmp / "out" / f)) << f;
+  if (test::gnuplot_present()) EXPECT_TRUE(test::starts_with_png_signature(tmp / "out" / "polarizer.png"));
+  const test::Csv errors = test::read_csv(tmp / "out" / "errors.csv");
+  for (std::size_t r = 0; r < errors.rows.size(); ++r)
+    EXPECT_LT(std::abs(std::stod(errors.rows[r][errors.col("error_over_se")])), 4.0) << errors.rows[r][0];
+  const FourCameraCalibrationFile cal = read_four_camera_calibration(tmp / "out" / "calibration.yaml");
+  EXPECT_HAS(cal.geometry_from, "truth.yaml");
+
+  ok(fmt::format("simulate {} -o {} --layers all {} --set schedule.count=7 --set schedule.dwell_s=600",
+                 rig("wang2016-static.yaml"), at("sky"), kEighth));
+  const Result with_cal = ok(fmt::format("locate {} --prior 28,113 -o {} --calibration {}", at("sky"), at("loc_cal"),
+                                         at("out/calibration.yaml")));
+  EXPECT_HAS(with_cal.out, "fused with");
+  ok(fmt::format("locate {} --prior 28,113 -o {}", at("sky"), at("loc_truth")));
+
+  const FourCameraCalibrationFile truth = read_four_camera_calibration(tmp / "sky" / "truth.yaml");
+  const auto fix = [&](const FourCameraModel& m) {
+    return locate_four_camera_folder(tmp / "sky", {28, 113}, {}, {}, {}, m).location;
+  };
+  const Location t = fix(truth.model), k = fix(cal.model);
+  // The truth model re-fused gives the dataset's own fused layers' fix (the same fusion).
+  const test::Csv fix_truth = test::read_csv(tmp / "loc_truth" / "fix.csv");
+  EXPECT_NEAR(t.fix.chosen.lat_deg, std::stod(fix_truth.rows[0][fix_truth.col("lat_deg")]), 1e-9);
+  double var_km = 0, var_h = 0;
+  const auto moved = [&](FourCameraModel m) {
+    const Location l = fix(m);
+    const double d = great_circle_km(l.fix.chosen.lat_deg, l.fix.chosen.lon_deg, t.fix.chosen.lat_deg, t.fix.chosen.lon_deg);
+    const double h = std::remainder(l.heading_mean_deg - t.heading_mean_deg, 360.0);
+    var_km += d * d, var_h += h * h;
+  };
+  for (int j = 0; j < 4; ++j) {
+    FourCameraModel m = truth.model;
+    m.K[static_cast<std::size_t>(j)] += field(errors, "K_DN", j + 1, "standard_error");
+    moved(m);
+    m = truth.model;
+    m.b[static_cast<std::size_t>(j)] += field(errors, "b_DN", j + 1, "standard_error");
+    moved(m);
+    if (j > 0) {
+      m = truth.model;
+      m.axis_deg[static_cast<std::size_t>(j)] += field(errors, "eps_deg", j + 1, "standard_error");
+      moved(m);
+    }
+  }
+  const double d = great_circle_km(k.fix.chosen.lat_deg, k.fix.chosen.lon_deg, t.fix.chosen.lat_deg, t.fix.chosen.lon_deg);
+  const double h = std::remainder(k.heading_mean_deg - t.heading_mean_deg, 360.0);
+  fmt::print("calibrated against truth model: fix {:.3f} km (σ {:.3f} km), heading {:.4f}° (σ {:.4f}°)\n", d,
+             std::sqrt(var_km), h, std::sqrt(var_h));
+  EXPECT_LT(d, 4 * std::sqrt(var_km));
+  EXPECT_LT(std::abs(h), 4 * std::sqrt(var_h));
+}
+
+// Refusals, each before anything is written: a dataset without unpolarized levels, with one level,
+// without raw frames; options that do not apply; a geometry of another size; locate with a bad
+// calibration.yaml (file, line, key, value) or on a dataset without raw frames.
+TEST_F(FourCameraCalibrationCli, RefusesWhatItCannotCalibrate) {
+  const auto refused = [&](const std::string& args, const std::string& text) {
+    const Result r = polrig(args);
+    EXPECT_NE(r.status, 0) << args;
+    EXPECT_HAS(r.err, text) << args;
+    EXPECT_FALSE(fs::exists(tmp / "out")) << args;
+  };
+  const std::string base = fmt::format("simulate {} {} --set schedule.step_deg=90 --set schedule.stop_deg=270 ",
+                                       rig("wang2016-calibration.yaml"), kEighth);
+  ok(base + "--layers all --set schedule.unpolarized_levels=[1] -o " + at("one"));
+  refused(fmt::format("calibrate {} --method four-camera -o {}", at("one"), at("out")), "two distinct levels");
+  std::string no_levels = test::read_file(fs::path(POLRIG_SOURCE_DIR) / "rigs" / "wang2016-calibration.yaml");
+  no_levels.erase(no_levels.find("  unpolarized_levels:"));
+  test::write_file(tmp / "no_levels.yaml", no_levels);
+  ok(fmt::format("simulate {} {} --set schedule.step_deg=90 --set schedule.stop_deg=270 --layers all -o {}",
+                 at("no_levels.yaml"), kEighth, at("none")));
+  refused(fmt::format("calibrate {} --method four-camera -o {}", at("none"), at("out")), "no unpolarized stop");
+  ok(base + "--layers fused -o " + at("fused"));
+  refused(fmt::format("calibrate {} --method four-camera -o {}", at("fused"), at("out")), "--layers all");
+  ok(base + "--layers all -o " + at("all"));
+  refused(fmt::format("calibrate {} --method four-camera -o {} --drift angle", at("all"), at("out")), "--drift angle");
+  refused(fmt::format("calibrate {} --method four-camera -o {} --view-projection", at("all"), at("out")), "--view-projection");
+  refused(fmt::format("calibrate {} --method cs -o {} --geometry x.yaml", at("all"), at("out")), "--geometry x.yaml");
+  ok(fmt::format("simulate {} --set schedule.step_deg=90 --set schedule.stop_deg=270 --layers all -o {} "
+                 "--set device.cameras.width_px=120 --set device.cameras.height_px=90 "
+                 "--set device.cameras.cx_px=[60,60,60,60] --set device.cameras.cy_px=[45,45,45,45]",
+                 rig("wang2016-calibration.yaml"), at("other")));
+  refused(fmt::format("calibrate {} --method four-camera -o {} --geometry {}", at("all"), at("out"), at("other/truth.yaml")),
+          "120 × 90 px");
+  ok(fmt::format("calibrate {} --method four-camera -o {} --geometry {}", at("all"), at("geo"), at("all/truth.yaml")));
+  EXPECT_HAS(test::read_file(tmp / "geo" / "calibration.yaml"), "geometry: \"" + (tmp / "all" / "truth.yaml").string());
+
+  // A bad calibration.yaml: out-of-range, inconsistent, unknown key, camera 1 rotated.
+  const std::string good = test::read_file(tmp / "geo" / "calibration.yaml");
+  ok(fmt::format("simulate {} -o {} --layers all {} --set schedule.count=2", rig("wang2016-static.yaml"), at("sky"), kEighth));
+  const auto bad = [&](const std::string& from, const std::string& to, const std::string& text) {
+    std::string s = good;
+    ASSERT_NE(s.find(from), std::string::npos) << from;
+    s.replace(s.find(from), from.size(), to);
+    test::write_file(tmp / "bad.yaml", s);
+    refused(fmt::format("locate {} --prior 28,113 -o {} --calibration {}", at("sky"), at("out"), at("bad.yaml")), text);
+  };
+  bad("    K_DN: ", "    K_DN: -", "key 'cameras[0].K_DN': expected a gain in (0, 1e6] DN per unit intensity, got -");
+  bad("    eps_deg: 0\n", "    eps_deg: 0.5\n", "cameras[0].axis_deg': expected polarizer_deg + eps_deg = 0.5");
+  bad("    fx_px: ", "    fx_mm: ", "cameras[0].fx_mm': unknown key");
+  bad("    rvec_deg: [0, 0, 0]", "    rvec_deg: [0, 0, 1]", "camera 1 defines the frame");
+  bad("    cy_px: ", "    cy_px: nan #", "bad.yaml:");
+  const Result line = polrig(fmt::format("locate {} --prior 28,113 -o {} --calibration {}", at("sky"), at("out"), at("bad.yaml")));
+  EXPECT_HAS(line.err, "cameras[0].cy_px");
+  // locate --calibration needs the raw frames.
+  ok(fmt::format("simulate {} -o {} --layers aop {} --set schedule.count=2", rig("wang2016-static.yaml"), at("aop"), kEighth));
+  refused(fmt::format("locate {} --prior 28,113 -o {} --calibration {}", at("aop"), at("out"), at("geo/calibration.yaml")),
+          "--layers all");
+}
+
+// The library's refusals: no polarized stop, a single level, no level.
+TEST(FourCameraCalibration, RefusesMissingStops) {
+  const Rig rig = parse_rig(rig_text("", false), "cal").rig;
+  const FourCameraSimulator sim(rig);
+  const Stops s = stops_of(sim, false);
+  const FourCameraModel& t = sim.truth();
+  const FourCameraCalibrationOptions o = options_for(sim);
+  EXPECT_THROW(calibrate_four_camera<double>(t.camera, t.width, t.height, s.levels_d,
+                                             std::span<const FourCameraFrames<double>>{}, o),
+               CalibrationError);
+  EXPECT_THROW(calibrate_four_camera<double>(t.camera, t.width, t.height, std::span<const FourCameraFrames<double>>{},
+                                             s.polarized_d, o),
+               std::invalid_argument);
+  try {
+    calibrate_four_camera<double>(t.camera, t.width, t.height, std::span(s.levels_d).first(1), s.polarized_d, o);
+    ADD_FAILURE() << "one level calibrated";
+  } catch (const CalibrationError& e) {
+    EXPECT_HAS(std::string(e.what()), "two distinct levels");
+  }
+  // Three table angles is the least the fit takes; two are too few observations.
+  const FourCameraCalibration two =
+      calibrate_four_camera<double>(t.camera, t.width, t.height, s.levels_d, std::span(s.polarized_d).first(2), o);
+  EXPECT_EQ(two.polarizer.summary.termination, FitTermination::TooFewObservations);
 }

@@ -176,14 +176,7 @@ void run_locate(const std::string& input, const std::string& prior_text, bool do
   OrientationSettings orientation;
   orientation.dop_weighting = dop_weighting;
   std::optional<FourCameraModel> calibration;
-  if (!calibration_path.empty()) {
-    const FourCameraCalibrationFile f = read_four_camera_calibration(calibration_path);
-    if (!f.radiometric || !f.polarizer)
-      throw DataError(fmt::format("--calibration {}: holds no {} (a geometry-only file?): re-fusing needs every "
-                                  "camera's K_DN, b_DN and axis_deg",
-                                  calibration_path, !f.radiometric ? "K_DN, b_DN" : "polarizer_deg, eps_deg, axis_deg"));
-    calibration = f.model;
-  }
+  if (!calibration_path.empty()) calibration = read_four_camera_model(calibration_path);
   const DatasetLocation run = locate_four_camera_folder(input, prior, orientation, {}, progress(), calibration);
   OutputDir d = out.open();
   std::vector<std::string> inputs = {input};

@@ -224,4 +224,13 @@ FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::pa
   return f;
 }
 
+FourCameraModel read_four_camera_model(const std::filesystem::path& path) {
+  const FourCameraCalibrationFile f = read_four_camera_calibration(path);
+  if (!f.radiometric || !f.polarizer)
+    throw DataError(fmt::format("{}: holds no {} (a geometry-only file?): fusing needs every camera's K_DN, b_DN and "
+                                "axis_deg",
+                                path.string(), !f.radiometric ? "K_DN, b_DN" : "polarizer_deg, eps_deg, axis_deg"));
+  return f.model;
+}
+
 }  // namespace polrig

@@ -35,6 +35,11 @@ std::string four_camera_calibration_yaml(const FourCameraCalibrationFile& file);
 // polarizer_deg + eps_deg.
 FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::path& path);
 
+// The model of a full calibration.yaml (what `locate --calibration` fuses with): read_four_camera_
+// calibration, and DataError naming the file when it lacks the radiometric or polarizer part (a
+// geometry-only file).
+FourCameraModel read_four_camera_model(const std::filesystem::path& path);
+
 // The rotation vector (degrees) of a rotation matrix (row-major): the inverse of
 // rotation_from_vector, angle in [0°, 180°].
 Vec3 rotation_vector_deg(const std::array<double, 9>& R);

@@ -284,7 +284,9 @@ TEST_F(FourCameraCalibrationCli, EndToEndTheCalibratedFixIsTheTruthsWithinItsErr
   EXPECT_HAS(c.out, "the simulation's truth");
   for (const char* f : {"calibration.yaml", "radiometric.csv", "polarizer.csv", "summary.csv", "errors.csv", "manifest.yaml"})
     EXPECT_TRUE(fs::exists(tmp / "out" / f)) << f;
-  if (test::gnuplot_present()) EXPECT_TRUE(test::starts_with_png_signature(tmp / "out" / "polarizer.png"));
+  if (test::gnuplot_present()) {
+    EXPECT_TRUE(test::starts_with_png_signature(tmp / "out" / "polarizer.png"));
+  }
   const test::Csv errors = test::read_csv(tmp / "out" / "errors.csv");
   for (std::size_t r = 0; r < errors.rows.size(); ++r)
     EXPECT_LT(std::abs(std::stod(errors.rows[r][errors.col("error_over_se")])), 4.0) << errors.rows[r][0];

@@ -12,6 +12,7 @@
 #include "polrig/io/four_camera_calibration.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/nav/positioning.h"
+#include "polrig/report/four_camera_dataset.h"
 #include "polrig/report/locate_report.h"
 #include "polrig/sim/four_camera_frames.h"
 #include "polrig/units.h"
@@ -417,4 +418,39 @@ TEST(FourCameraCalibration, RefusesMissingStops) {
   const FourCameraCalibration two =
       calibrate_four_camera<double>(t.camera, t.width, t.height, s.levels_d, std::span(s.polarized_d).first(2), o);
   EXPECT_EQ(two.polarizer.summary.termination, FitTermination::TooFewObservations);
+}
+
+// calibration.yaml reads back to the numbers written (shortest round-trip text), R_j1 through its
+// rotation vector (Eigen's angle-axis against device/'s Rodrigues) to 1e-15, and truth.yaml reads
+// as a calibration with the same per-camera keys.
+TEST(FourCameraCalibrationFile, RoundTripAndTruthYaml) {
+  Rig rig = parse_rig(rig_text("", false), "cal").rig;
+  rig.four_camera.rot_z_deg = {0, 20, -25, 170};
+  const FourCameraModel t = four_camera_truth(rig.four_camera);
+  FourCameraCalibrationFile f;
+  f.model = t;
+  f.polarizer_deg = rig.four_camera.polarizer_deg;
+  f.eps_deg = rig.four_camera.eps_deg;
+  f.radiometric = f.polarizer = true;
+  f.radiometric_from = "a \"quoted\" source";
+  for (int j = 0; j < 4; ++j) f.position_mm[static_cast<std::size_t>(j)] = camera_position_mm(rig.four_camera, j);
+  test::TempDir dir("polrig_fcal_file_");
+  test::write_file(dir.path() / "c.yaml", four_camera_calibration_yaml(f));
+  const FourCameraCalibrationFile back = read_four_camera_calibration(dir.path() / "c.yaml");
+  EXPECT_EQ(back.radiometric_from, f.radiometric_from);
+  for (std::size_t j = 0; j < 4; ++j) {
+    EXPECT_EQ(back.model.K[j], t.K[j]);
+    EXPECT_EQ(back.model.b[j], t.b[j]);
+    EXPECT_EQ(back.model.axis_deg[j], t.axis_deg[j]);
+    EXPECT_EQ(back.model.camera[j].fx, t.camera[j].fx);
+    EXPECT_EQ(back.model.camera[j].cy, t.camera[j].cy);
+    for (std::size_t k = 0; k < 9; ++k) EXPECT_NEAR(back.model.camera[j].R[k], t.camera[j].R[k], 1e-15) << j << k;
+  }
+  const Vec3 r = rotation_vector_deg(t.camera[3].R);
+  EXPECT_NEAR(r[2], 170.0, 1e-12);
+  test::write_file(dir.path() / "truth.yaml", four_camera_truth_yaml(rig.four_camera, t, virtual_camera(t)));
+  const FourCameraCalibrationFile truth = read_four_camera_calibration(dir.path() / "truth.yaml");
+  EXPECT_TRUE(truth.radiometric && truth.polarizer);
+  EXPECT_EQ(truth.eps_deg[1], 0.4);
+  EXPECT_EQ(truth.position_mm[2][1], 60.0);
 }

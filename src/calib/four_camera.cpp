@@ -424,7 +424,7 @@ PolarizerFit fit_polarizer_angles(const PolarizerSamples& s, const PolarizerOpti
   fit.singular_ratio = sigma(sigma.size() - 1) / sigma(0);
   fit.rank = 0;
   for (Eigen::Index k = 0; k < sigma.size(); ++k) fit.rank += sigma(k) >= o.min_singular_ratio * sigma(0) ? 1 : 0;
-  const double dof = static_cast<double>(r.size()) - unknowns;  // AoP and DoP residuals both observe
+  const double dof = (with_dop ? 2.0 : 1.0) * N - unknowns;  // the AoP residuals, and the DoP's when weighted
   if (dof > 0 && fit.rank == unknowns) {
     const Eigen::MatrixXd V = svd.matrixV();
     const Eigen::VectorXd inv_s2 = sigma.cwiseAbs2().cwiseInverse();

@@ -231,7 +231,7 @@ TEST_F(Cli, RigShowAndRigKeys) {
   EXPECT_HAS(keys.out, "| key | unit | default | accepts | meaning | why this range | read by | sources | instruments |");
   EXPECT_HAS(keys.out, "| six-photodiode |\n");  // device.L_photo: the six-photodiode sensor's
   EXPECT_HAS(keys.out, "| `device.width_px` |");
-  EXPECT_HAS(keys.out, "| simulate | cos4 |");  // source.E_0: read by simulate, and by the cos4 model only
+  EXPECT_HAS(keys.out, "| simulate | cos4 |");  // source.polarizer_deg: read by simulate, and by the cos4 model only
   EXPECT_HAS(keys.out, "| `device.d` |");
   EXPECT_HAS(keys.out, "| `eccentricity.L_IS` | mm | 0.05 |");
   EXPECT_HAS(keys.out, "| `seed` |");

@@ -23,11 +23,7 @@ constexpr double kOutsideDomain_V = 1e3;
 // Every status Eigen's Levenberg–Marquardt can return, as a termination. MINPACK's statuses 6–8
 // (Ftol/Xtol/GtolTooSmall) say that no further improvement is possible in double precision:
 // the iteration has converged as far as it can.
-struct StatusOutcome {
-  const char* name;
-  FitTermination termination;
-  const char* message;
-};
+using StatusOutcome = SolverOutcome;
 StatusOutcome outcome_of(Eigen::LevenbergMarquardtSpace::Status s) {
   using S = Eigen::LevenbergMarquardtSpace::Status;
   using T = FitTermination;
@@ -97,6 +93,10 @@ struct Eq15Residuals : Eigen::DenseFunctor<double> {
 };
 
 }  // namespace
+
+SolverOutcome levenberg_marquardt_outcome(int eigen_status) {
+  return outcome_of(static_cast<Eigen::LevenbergMarquardtSpace::Status>(eigen_status));
+}
 
 Eigen::MatrixXd eq15_jacobian(const std::vector<Observation>& data, const FitParams& p,
                               double v_dec) {

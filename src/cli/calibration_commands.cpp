@@ -19,6 +19,7 @@
 #include "polrig/io/plot.h"
 #include "polrig/report/calibration_reports.h"
 #include "polrig/report/dofp_calibration_report.h"
+#include "polrig/report/four_camera_calibration_report.h"
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/sky/drift.h"
@@ -139,9 +140,71 @@ void run_calibrate_dofp(const std::string& input, const std::string& rig_path, c
     std::cout << fmt::format("  {:6s} {:.4f} / {:.4f} / {:.4f}\n", row.name, row.max_deg, row.mean_deg, row.std_deg);
 }
 
+// `calibrate DIR --method four-camera`: W16's radiometric and polarizer-angle calibration of a
+// four-camera dataset with raw frames (report/four_camera_calibration_report.h).
+void run_calibrate_four_camera(const std::string& input, const std::string& rig_path,
+                               const CalibrationSettings& settings, const DriftSettings& drift, bool view_projection,
+                               const std::string& geometry, const OutputOptions& out) {
+  const std::string m = "--method four-camera";
+  if (!rig_path.empty())
+    throw DataError(fmt::format("--rig {}: {} reads the sensor from the dataset (its rig.yaml and truth.yaml)", rig_path, m));
+  if (drift.mode != "none") throw DataError(fmt::format("--drift {}: {} calibrates indoors (no sun drift)", drift.mode, m));
+  if (!drift.site.empty()) throw DataError(fmt::format("--site {}: {} calibrates indoors (no sun)", drift.site, m));
+  if (settings.d_a) throw DataError(fmt::format("--d-a {}: {} fits the source's DoP itself", *settings.d_a, m));
+  for (const auto& [name, option] : {std::pair{"--nc-threshold", settings.nc_threshold_option},
+                                     std::pair{"--nc-min-points", settings.nc_min_points_option}})
+    if (option && option->count() > 0)
+      throw DataError(fmt::format("{} {}: {} has no noncontinuous rule (it applies to nc and cs-nc)", name,
+                                  option->as<std::string>(), m));
+  if (view_projection)
+    throw DataError(fmt::format("--view-projection: a DoFP camera's step-2 option; {} always projects the port "
+                                "polarizer along each view",
+                                m));
+  std::optional<fs::path> geometry_file;
+  if (!geometry.empty()) geometry_file = geometry;
+  OutputDir d = out.open();
+  const FourCameraCalibrationRun run = calibrate_four_camera_folder(input, geometry_file, {}, progress());
+  std::vector<std::string> inputs{input};
+  if (geometry_file) inputs.push_back(geometry);
+  write_manifest(d.staging(), {command_line(), nullptr, report_four_camera_calibration(d.staging(), run, out.plots()), inputs});
+  finish(d);
+  const FourCameraCalibration& c = run.calibration;
+  std::cout << fmt::format("four-camera: {} unpolarized levels, {} polarized stops; geometry from {}\n", run.levels,
+                           run.polarized, run.file.geometry_from);
+  for (std::size_t j = 0; j < 4; ++j) {
+    const CameraRadiometry& r = c.radiometry.camera[j];
+    std::cout << fmt::format("  camera {}: K = {:.3f} ± {:.3f} DN, b = {:.3f} ± {:.3f} DN ({} levels, rms {:.3g} DN); "
+                             "eps = {:.4f} ± {:.4f}°\n",
+                             j + 1, r.K, r.K_se, r.b, r.b_se, r.levels_used, r.residual_rms_DN, c.polarizer.eps_deg[j],
+                             c.polarizer.eps_se_deg[j]);
+  }
+  const PolarizerFit& p = c.polarizer;
+  std::cout << fmt::format("  polarizer fit: {}, {} iterations, rank {} of {}; AoP residual rms {:.4f}° (nominal axes "
+                           "{:.4f}°); psi_0 = {:.4f}°, source DoP {:.5f}\n",
+                           termination_name(p.summary.termination), p.summary.iterations, p.rank, p.unknowns,
+                           p.residual_rms_deg, p.residual_rms_before_deg, p.psi0_deg, p.dop);
+  if (run.truth && run.truth->radiometric && run.truth->polarizer) {
+    const FourCameraCalibrationFile& t = *run.truth;
+    double worst_K = 0, worst_b = 0, worst_eps = 0;
+    for (std::size_t j = 0; j < 4; ++j) {
+      worst_K = std::max(worst_K, std::abs(c.radiometry.camera[j].K / t.model.K[j] - 1));
+      worst_b = std::max(worst_b, std::abs(c.radiometry.camera[j].b - t.model.b[j]));
+      worst_eps = std::max(worst_eps, std::abs(p.eps_deg[j] - (t.eps_deg[j] - t.eps_deg[0])));
+    }
+    std::cout << fmt::format("  against truth.yaml: |ΔK/K| ≤ {:.2e}, |Δb| ≤ {:.3f} DN, |Δeps| ≤ {:.4f}° (errors.csv)\n",
+                             worst_K, worst_b, worst_eps);
+  }
+}
+
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
-                   const DriftSettings& drift, bool view_projection, const OutputOptions& out) {
+                   const DriftSettings& drift, bool view_projection, const std::string& geometry,
+                   const OutputOptions& out) {
+  if (method_text == "four-camera")
+    return run_calibrate_four_camera(input, rig_path, settings, drift, view_projection, geometry, out);
+  if (!geometry.empty())
+    throw DataError(fmt::format("--geometry {}: the four cameras' geometry (--method four-camera), not --method {}",
+                                geometry, method_text));
   if (method_text == "dofp") return run_calibrate_dofp(input, rig_path, settings, drift, view_projection, out);
   if (view_projection)
     throw DataError(fmt::format("--view-projection: a DoFP camera's step-2 model (--method dofp), not --method {}",
@@ -152,7 +215,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   } else if (auto m = parse_method(method_text)) {
     methods.push_back(*m);
   } else {
-    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc, all or dofp", method_text));
+    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc, all, dofp or four-camera", method_text));
   }
   if (drift.mode != "none")
     for (CalibrationMethod m : methods)
@@ -297,7 +360,8 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
                                      "theta_R_deg,V1,V2,V3 (volts) and optionally utc")->required();
     app->add_option("--method", *method, "section | cs | cs-nc | nc | all (nc: the raw stops, "
                                          "noncontinuous + section, as outdoors) | dofp (a DoFP camera "
-                                         "dataset: H17's two steps)")->capture_default_str();
+                                         "dataset: H17's two steps) | four-camera (a four-camera dataset "
+                                         "with raw frames: W16's gains, offsets and polarizer angles)")->capture_default_str();
     app->add_option("--drift", drift->mode, "sun-drift correction of an outdoor run: none | angle | "
                                             "per-stop | linear (needs the stops' times and the site: a utc column and --site, or a sky rig's simulate folder)")
         ->capture_default_str();
@@ -310,10 +374,15 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
                   "--method dofp: step 2's cells see the port polarizer along their views (a plane "
                   "polarizer's AoP off the axis) and Table 1 maps each cell's AoP back to the port "
                   "plane; off: H17's model (docs/physics.md §14)");
+    auto geometry = std::make_shared<std::string>();
+    app->add_option("--geometry", *geometry,
+                    "--method four-camera: each camera's geometry from this calibration.yaml (or truth.yaml); "
+                    "default: the dataset's truth.yaml");
     settings->add_to(*app);
     out->add_to(*app);
     add_threads_option(*app, threads);
-    commands.push_back({app, [=] { run_calibrate(*input, *method, *rig, *settings, *drift, *view_projection, *out); }});
+    commands.push_back(
+        {app, [=] { run_calibrate(*input, *method, *rig, *settings, *drift, *view_projection, *geometry, *out); }});
   }
   {
     auto* app = root.add_subcommand("apply", "turn voltages into θ and d with calibrated parameters");

@@ -20,6 +20,7 @@
 #include "polrig/report/locate_report.h"
 #include "polrig/report/orientation_report.h"
 #include "polrig/io/dofp_dataset.h"
+#include "polrig/io/four_camera_calibration.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
 #include "polrig/study/heading_trials.h"
@@ -170,15 +171,21 @@ void run_orient(const std::string& input, const std::string& params, const std::
 // (report/locate_report.h): per stop the eigenvector sun vector, then the Eq. 17 fix over the stops
 // (both roots, the one nearest --prior chosen) and ψ = β − α_S per stop.
 void run_locate(const std::string& input, const std::string& prior_text, bool dop_weighting,
-                const OutputOptions& out, bool correct_noise_bias = false) {
+                const std::string& calibration_path, const OutputOptions& out, bool correct_noise_bias) {
   const Site prior = parse_site(prior_text, "--prior");
   OrientationSettings orientation;
   orientation.dop_weighting = dop_weighting;
   orientation.correct_noise_bias = correct_noise_bias;
-  const DatasetLocation run = locate_four_camera_folder(input, prior, orientation, {}, progress());
+  std::optional<FourCameraModel> calibration;
+  if (!calibration_path.empty()) calibration = read_four_camera_model(calibration_path);
+  const DatasetLocation run = locate_four_camera_folder(input, prior, orientation, {}, progress(), calibration);
   OutputDir d = out.open();
-  write_manifest(d.staging(), {command_line(), nullptr, report_dataset_location(d.staging(), run), {input}});
+  std::vector<std::string> inputs = {input};
+  if (calibration) inputs.push_back(calibration_path);
+  write_manifest(d.staging(), {command_line(), nullptr, report_dataset_location(d.staging(), run), inputs});
   finish(d);
+  std::cout << (calibration ? fmt::format("fused with {} (each stop's raw frames)\n", calibration_path)
+                            : std::string("the dataset's fused layers\n"));
   const PositionFix& fix = run.location.fix;
   const PositionRoot& r = fix.chosen;
   std::cout << fmt::format("{} of {} stops with a sun; fix {}: {:.4f}°N {:.4f}°E ({})", run.location.samples.size(),
@@ -261,7 +268,12 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
                   "docs/physics.md §15); replaces --dop-weighting");
     out->add_to(*app);
     add_threads_option(*app, threads);
-    commands.push_back({app, [=] { run_locate(*input, *prior, *dop_weighting, *out, *correct_noise_bias); }});
+    auto calibration = std::make_shared<std::string>();
+    app->add_option("--calibration", *calibration,
+                    "a four-camera calibration.yaml (calibrate --method four-camera): re-fuse each stop's raw frames "
+                    "(a dataset written with --layers all) with it instead of the dataset's fused layers");
+    commands.push_back(
+        {app, [=] { run_locate(*input, *prior, *dop_weighting, *calibration, *out, *correct_noise_bias); }});
   }
   {
     auto* app = study.add_subcommand(

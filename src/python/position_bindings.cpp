@@ -14,6 +14,7 @@
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/nav/positioning.h"
+#include "polrig/io/four_camera_calibration.h"
 #include "polrig/report/locate_report.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/rig.h"
@@ -300,7 +301,7 @@ void bind_position(py::module_& m) {
       "the error columns. Returns polrig.Location (heading.csv's columns and .fix).");
 
   m.def("locate_dataset", [](const std::string& dir, const py::object& prior, bool dop_weighting,
-                             bool correct_noise_bias) {
+                             bool correct_noise_bias, const std::optional<std::string>& calibration) {
         const Site p = site_of(prior, "prior");
         OrientationSettings orientation;
         orientation.dop_weighting = dop_weighting;
@@ -308,15 +309,20 @@ void bind_position(py::module_& m) {
         DatasetLocation run;
         {
           py::gil_scoped_release release;
-          run = locate_four_camera_folder(dir, p, orientation, {});
+          std::optional<FourCameraModel> model;
+          if (calibration) model = read_four_camera_model(*calibration);
+          run = locate_four_camera_folder(dir, p, orientation, {}, {}, model);
         }
         return location_record(run.location, run.truth, run.true_heading_deg);
       }, "dir"_a, "prior"_a, py::kw_only(), "dop_weighting"_a = false, "correct_noise_bias"_a = false,
+      "calibration"_a = py::none(),
       "`polrig locate DIR --prior LAT,LON`: per stop of a four-camera dataset the sun vector by the "
       "eigenvector method over the fused AoP (dop_weighting: EEᵀ weighted by DoP; correct_noise_bias: "
       "the noise-bias correction, docs/physics.md §15), then locate() over "
-      "the stops with a sun; the truth and the true headings from the dataset (a simulated one). "
-      "Returns polrig.Location, whose columns are the CLI's heading.csv and .fix its fix.csv.");
+      "the stops with a sun; the truth and the true headings from the dataset (a simulated one). calibration: a "
+      "calibration.yaml (`--calibration`): each stop's raw frames (--layers all) re-fused with its model instead of "
+      "the dataset's fused layers. Returns polrig.Location, whose columns are the CLI's heading.csv and .fix its "
+      "fix.csv.");
 
   rig_class(m).def("study_positioning", [](const PyRig& rig, const py::object& windows_s,
                                            std::vector<double> noise_sd_deg, std::vector<double> tilt_deg,

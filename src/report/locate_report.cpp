@@ -1,6 +1,7 @@
 #include "polrig/report/locate_report.h"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -16,8 +17,36 @@ namespace polrig {
 DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, const Site& prior,
                                            const std::optional<Site>& truth,
                                            const OrientationSettings& orientation,
-                                           const PositionOptions& options, const Progress& progress) {
-  check_intrinsics(dataset.camera);
+                                           const PositionOptions& options, const Progress& progress,
+                                           const std::optional<FourCameraModel>& calibration) {
+  // With a calibration: its fusion and its virtual camera 1 (f_c and the principal point of its
+  // camera 1), each stop's raw frames re-fused (NaN where not valid, as read_four_camera_fused).
+  std::optional<FourCameraFusion> fusion;
+  CameraIntrinsics camera = dataset.camera;
+  if (calibration) {
+    if (calibration->width != dataset.width || calibration->height != dataset.height)
+      throw std::invalid_argument(fmt::format("the calibration is for {} × {} px cameras, the dataset's are {} × {} px",
+                                              calibration->width, calibration->height, dataset.width, dataset.height));
+    fusion.emplace(*calibration);
+    camera = {fusion->grid().f_c, fusion->grid().cx, fusion->grid().cy};
+  }
+  const auto aop_dop = [&](std::size_t s) {
+    if (!fusion) return read_four_camera_fused(dataset, s);
+    std::array<std::vector<std::uint16_t>, 4> raw;
+    try {
+      raw = read_four_camera_raw(dataset, s);
+    } catch (const std::runtime_error& e) {
+      throw std::invalid_argument(fmt::format("--calibration re-fuses each stop's raw frames, which this dataset does not "
+                                              "hold (write it with `polrig simulate --layers all`): {}",
+                                              e.what()));
+    }
+    const FusedImage f = fusion->fuse<std::uint16_t>({raw[0], raw[1], raw[2], raw[3]});
+    FusedAopDop out{std::vector<double>(f.AoP.begin(), f.AoP.end()), std::vector<double>(f.DoP.begin(), f.DoP.end())};
+    for (std::size_t i = 0; i < f.valid.size(); ++i)
+      if (!f.valid[i]) out.aop_deg[i] = out.dop[i] = std::numeric_limits<double>::quiet_NaN();
+    return out;
+  };
+  check_intrinsics(camera);
   check_orientation_settings(orientation);
   DatasetLocation run;
   run.truth = truth;
@@ -26,10 +55,10 @@ DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, con
   for (std::size_t s = 0; s < dataset.stops.size(); ++s) {
     const FourCameraDatasetStop& st = dataset.stops[s];
     if (st.polarized && !st.utc.empty()) {
-      FusedAopDop fused = read_four_camera_fused(dataset, s);
+      FusedAopDop fused = aop_dop(s);
       const SkyPoints points =
           grid_points(dataset.width, dataset.height, 1.0, std::move(fused.aop_deg), std::move(fused.dop));
-      StopSun sun{st.stop, st.utc, sun_vector_eigen(points, dataset.camera, orientation)};
+      StopSun sun{st.stop, st.utc, sun_vector_eigen(points, camera, orientation)};
       if (has_sun(sun.sun.status)) {
         sightings.push_back({parse_utc(st.utc), sun.sun.sun, 1.0});
         run.true_heading_deg.push_back(st.heading_deg.value_or(std::nan("")));
@@ -48,7 +77,8 @@ DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, con
 
 DatasetLocation locate_four_camera_folder(const std::filesystem::path& dir, const Site& prior,
                                           const OrientationSettings& orientation, PositionOptions options,
-                                          const Progress& progress) {
+                                          const Progress& progress,
+                                          const std::optional<FourCameraModel>& calibration) {
   std::optional<Site> truth;
   if (std::filesystem::exists(dir / "rig.yaml")) {
     const LoadedRig r = load_rig(dir / "rig.yaml");
@@ -65,7 +95,7 @@ DatasetLocation locate_four_camera_folder(const std::filesystem::path& dir, cons
     throw DataError(e.what());
   }
   try {
-    return locate_four_camera_dataset(dataset, prior, truth, orientation, options, progress);
+    return locate_four_camera_dataset(dataset, prior, truth, orientation, options, progress, calibration);
   } catch (const std::invalid_argument& e) {
     throw DataError(fmt::format("{}: {}", dir.string(), e.what()));
   }

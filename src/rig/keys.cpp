@@ -412,7 +412,7 @@ std::vector<RigKey> make_keys() {
   keys.push_back(reads(only(integer(
       "device.cameras.adc_bits", "an integer in [1, 16]", "the cameras' ADC depth: raw values 0 … 2^bits − 1 (GC1031CP: 8 or 12)",
       "cameras digitise to 8–16 bits; a raw frame holds 16-bit values",
-      [](Rig& r) -> int& { return r.four_camera.adc_bits; }, &integer_within<1, 16>), kFour), kSimulate, ""));
+      [](Rig& r) -> int& { return r.four_camera.adc_bits; }, &integer_within<1, 16>), kFour), kSimulate | kCalibrate, ""));
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
@@ -444,7 +444,7 @@ std::vector<RigKey> make_keys() {
       "source.E_0", "W/m^2", "an irradiance",
       "irradiance on the port axis at the photosensitive plane",
       "from dim laboratory light to a hundred suns",
-      [](Rig& r) -> double& { return r.source.cos4.E_0; }), kSimulate, "cos4"));
+      [](Rig& r) -> double& { return r.source.cos4.E_0; }), kSimulate | kCalibrate, "cos4"));
   keys.push_back(reads(real<kTurn>("source.polarizer_deg", "deg", "an angle",
                              "axis ψ_P of the port polarizer in the rig frame; θ = θ_R − ψ_P",
                              kTurnWhy, [](Rig& r) -> double& { return r.source.polarizer_deg; }), kSimulate, "cos4"));

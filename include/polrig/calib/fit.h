@@ -74,6 +74,16 @@ struct FitSummary {
   std::string brief_report() const;
 };
 
+// How Eigen's Levenberg–Marquardt ended, for every fit that runs it: its
+// LevenbergMarquardtSpace::Status (as an int), the status's name, the termination it means and a
+// message for the user.
+struct SolverOutcome {
+  const char* name;
+  FitTermination termination;
+  const char* message;
+};
+SolverOutcome levenberg_marquardt_outcome(int eigen_status);
+
 struct FitResult {
   FitParams params;          // where the fit ended (meaningful only when summary.usable())
   FitParams standard_error;  // √diag(s²·(JᵀJ)⁻¹), s² = RSS/(N − 18); NaN when N = 18 (no redundancy)

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "polrig/device/four_camera.h"
 #include "polrig/io/four_camera_dataset.h"
 #include "polrig/io/manifest.h"
 #include "polrig/nav/orientation.h"
@@ -30,15 +31,21 @@ struct DatasetLocation {
 };
 
 // Throws std::invalid_argument for a dataset with no stop to locate from, and as locate.
+// `calibration`: each stop's AoP and DoP re-fused from its raw frames with this model (a
+// calibration's, io/four_camera_calibration.h) on its own virtual camera 1, instead of the
+// dataset's fused layers (which the simulation fused with its truth); std::invalid_argument for a
+// model of another size or a stop without raw frames (a dataset written with --layers fused or aop).
 DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, const Site& prior,
                                            const std::optional<Site>& truth,
                                            const OrientationSettings& orientation,
-                                           const PositionOptions& options, const Progress& progress = {});
+                                           const PositionOptions& options, const Progress& progress = {},
+                                           const std::optional<FourCameraModel>& calibration = std::nullopt);
 // Reads DIR (rig.yaml, when present, must describe a camera array; its sky gives the truth and the
 // ephemeris' settings) and locates; DataError naming the folder for what is wrong with it.
 DatasetLocation locate_four_camera_folder(const std::filesystem::path& dir, const Site& prior,
                                           const OrientationSettings& orientation, PositionOptions options,
-                                          const Progress& progress = {});
+                                          const Progress& progress = {},
+                                          const std::optional<FourCameraModel>& calibration = std::nullopt);
 
 // fix.csv and heading.csv (report_location) and sun.csv: per stop, the eigenvector method's
 // status, root, the sun in camera 1's frame (azimuth from X towards Y, elevation) and its fit.

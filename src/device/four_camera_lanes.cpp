@@ -1,8 +1,8 @@
 // FourCameraFusion::fuse's kernel (four_camera_lanes.h): per chunk of kFusionChunk virtual pixels,
-// (1) the four bilinear samples F_j = (f_j − b_j)/K_j pixel by pixel (the taps are gathered from
-// four frames), then (2) in float SIMD lanes Eq. 4 with the chunk's W, x_r = Σ_{j<4}
-// W_rj·(F_j − F_4) (+ F_4 for S0), and Eq. 5: AoP = ½·atan2(S2, S1) by an atan2 on Highway's
-// float arctangent polynomial, DoP = √(S1² + S2²)/S0.
+// (1) the four bilinear samples F_j = (f_j − b_j)·(1/K_j) (16-bit frames: the taps gathered in
+// lanes; a double signal: pixel by pixel), then (2) in float SIMD lanes Eq. 4 with the chunk's W,
+// x_r = Σ_{j<4} W_rj·(F_j − F_4) (+ F_4 for S0), and Eq. 5: AoP = ½·atan2(S2, S1) by an atan2 on
+// Highway's float arctangent polynomial, DoP = √(S1² + S2²)/S0.
 //
 // Highway (libhwy-dev) with run-time dispatch, as src/vector_log.cpp and for the same reason: the
 // fused layers must not depend on the CPU, so every compiled path does the same IEEE operations
@@ -48,8 +48,8 @@ HWY_INLINE V AopDeg(D d, V y, V x) {
   const V ax = hn::Abs(x), ay = hn::Abs(y);
   const V big = hn::Max(ax, ay), small = hn::Min(ax, ay);
   const V t = hn::IfThenZeroElse(hn::Eq(big, zero), hn::Div(small, big));  // atan2(0, 0) = 0
-  hn::impl::AtanImpl<float> atan;
-  V r = atan.AtanPoly(d, t);
+  hn::impl::AtanImpl<float> arctan;
+  V r = arctan.AtanPoly(d, t);
   r = hn::IfThenElse(hn::Gt(ay, ax), hn::Sub(hn::Set(d, 1.57079632679489661923f), r), r);
   r = hn::IfThenElse(hn::Lt(x, zero), hn::Sub(hn::Set(d, 3.14159265358979323846f), r), r);
   V aop = hn::Mul(hn::CopySign(r, y), hn::Set(d, static_cast<float>(90.0 / 3.14159265358979323846)));
@@ -57,9 +57,9 @@ HWY_INLINE V AopDeg(D d, V y, V x) {
   return hn::IfThenZeroElse(hn::Ge(aop, hn::Set(d, 180.0f)), aop);
 }
 
-// Step (1): F_j of each pixel, and whether all four cameras see it (1 or 0). The bilinear sum in
-// float for 16-bit frames (their values and differences are exact in float), in double for a
-// double signal; then (f − b)·(1/K_j) in float.
+// Step (1) for a double signal (the noise-free frames), pixel by pixel: F_j of each pixel, and
+// whether all four cameras see it (1 or 0). The bilinear sum in double, then (f − b)·(1/K_j) in
+// float, the order of FuseChunksU16's float operations.
 template <class T>
 HWY_INLINE void Samples(const FusionChunk& c, const T* const frames[kFourCameras], const Constants& k,
                         float (&F)[kFourCameras][kFusionChunk], float (&seen)[kFusionChunk]) {

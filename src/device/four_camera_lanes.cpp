@@ -13,6 +13,7 @@
 // tests/test_four_camera.cpp checks the baseline and the best path give the same bits.
 #include "four_camera_lanes.h"
 
+#include <bit>
 #include <cstring>
 #include <type_traits>
 
@@ -134,6 +135,7 @@ void FuseChunksF64(const FusionChunk* chunks, std::size_t count, const double* c
 // float operations are step (1)'s.
 void FuseChunksU16(const FusionChunk* chunks, std::size_t count, const std::uint16_t* const* frames,
                    const Constants& k, const Layers& out) {
+  static_assert(std::endian::native == std::endian::little, "the taps' words assume little endian");
   const hn::ScalableTag<float> d;
   const hn::RebindToSigned<decltype(d)> di;
   const hn::RebindToUnsigned<decltype(d)> du;

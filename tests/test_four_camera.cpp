@@ -1,6 +1,7 @@
 // W16's four-camera sensor (spec sky-and-compasses.md §3.1–3.2, §3.6): the fusion's algebra, the
 // fisheye lens, R_j1, the frames from the sky, co-registration and the fused image against the
 // sky's own truth, the solar-meridian symmetry, the dataset and its reader, schedule.count.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -20,6 +21,7 @@
 #include "polrig/sim/four_camera_frames.h"
 #include "polrig/sky/sun.h"
 #include "polrig/units.h"
+#include "polrig/vector_log.h"
 #include "support.h"
 
 using namespace polrig;
@@ -368,6 +370,123 @@ TEST(FourCameraFrames, APolarizedPortFollowsMalusOnTheAxis) {
           << stop.theta_R_deg << " " << j;
     }
   }
+}
+
+// ---- fuse(): float SIMD lanes against fuse_at's double precision ---------------------------
+
+namespace {
+// Half W16's resolution (517 × 389: not a whole number of fuse()'s 64-pixel chunks), misaligned
+// cameras with their own intrinsics, noise on.
+Rig half_noisy_rig() {
+  std::string cams = scaled(0.5, true);
+  cams.replace(cams.find("noise: false"), 12, "noise: true");
+  return parse_rig(sky_rig_text(cams, 35.0), "half").rig;
+}
+
+bool same_layers(const FusedImage& a, const FusedImage& b) {
+  return a.S0 == b.S0 && a.S1 == b.S1 && a.S2 == b.S2 && a.AoP == b.AoP && a.DoP == b.DoP && a.valid == b.valid;
+}
+
+// The largest error of fuse()'s layers against fuse_at (double) over the pixels both call valid,
+// each over its bound from float rounding (docs/physics.md §16 "Fusion"): with u = 2⁻²⁴ and m the
+// largest |F_j| any tap can give (its DN plus the offset, over K_j), the float bilinear sum and
+// F_j = (f − b)·(1/K_j) are within 14·u·m, the differences F_j − F_4 within 30·u·m, W's entries
+// rounded to float within u·|W_rj|, three products and two sums: |ΔS_r| ≤ 40·u·m·(1 + Σ_j |W_rj|)
+// (W from fusion_matrix at the pixel's axes a_j + δ_j, an independent route to the same matrix).
+// AoP: (|ΔS1| + |ΔS2|)/(2·√(S1² + S2²)) plus the float atan2's own error (Highway's arctangent
+// polynomial within 4 ulp, the octant's and the degrees' roundings: ≤ 16·u·180°). DoP:
+// (|ΔS1| + |ΔS2| + d·|ΔS0|)/S0 + 6·u·d.
+struct LaneErrors {
+  double S = 0, aop = 0, dop = 0;  // worst error / bound
+  double S_abs = 0, aop_deg = 0, dop_abs = 0;
+  long compared = 0, disagree = 0;
+};
+template <class T>
+LaneErrors lane_errors(const FourCameraSimulator& sim, const std::array<std::span<const T>, 4>& f, const FusedImage& fast,
+                       double m) {
+  const double u = std::ldexp(1.0, -24);
+  const FourCameraFusion& fusion = sim.fusion();
+  LaneErrors e;
+  for (std::size_t i = 0; i < fast.S0.size(); ++i) {
+    FusedStokes x;
+    const bool seen = fusion.fuse_at(f, i, x);
+    PerCamera axes = sim.truth().axis_deg;
+    for (int j = 0; j < 4; ++j) axes[static_cast<std::size_t>(j)] += fusion.frame_offset_deg(j, i);
+    const std::array<double, 12> W = fusion_matrix(axes);
+    std::array<double, 3> dS{};
+    for (std::size_t r = 0; r < 3; ++r)
+      dS[r] = 40 * u * m * (1 + std::abs(W[4 * r]) + std::abs(W[4 * r + 1]) + std::abs(W[4 * r + 2]) + std::abs(W[4 * r + 3]));
+    const bool ref_valid = seen && x.S0 > 0;
+    if (ref_valid != (fast.valid[i] == 1)) {
+      // Only where S0 is within its rounding of 0.
+      if (!seen || std::abs(x.S0) > dS[2]) ++e.disagree;
+      continue;
+    }
+    if (!ref_valid) continue;
+    ++e.compared;
+    const double d1 = std::abs(fast.S1[i] - x.S1), d2 = std::abs(fast.S2[i] - x.S2), d0 = std::abs(fast.S0[i] - x.S0);
+    e.S = std::max({e.S, d1 / dS[0], d2 / dS[1], d0 / dS[2]});
+    e.S_abs = std::max({e.S_abs, d1, d2, d0});
+    const double rho = std::hypot(x.S1, x.S2), d = rho / x.S0;
+    const double aop = rad2deg(0.5 * std::atan2(x.S2, x.S1));
+    const double aop_err = std::abs(axial_diff(fast.AoP[i], aop < 0 ? aop + 180 : aop));
+    const double aop_bound = rad2deg((dS[0] + dS[1]) / (2 * rho)) + 16 * u * 180;
+    e.aop = std::max(e.aop, aop_err / aop_bound);
+    e.aop_deg = std::max(e.aop_deg, aop_err);
+    const double dop_err = std::abs(fast.DoP[i] - d);
+    e.dop = std::max(e.dop, dop_err / ((dS[0] + dS[1] + d * dS[2]) / x.S0 + 6 * u * d));
+    e.dop_abs = std::max(e.dop_abs, dop_err);
+    EXPECT_GE(fast.AoP[i], 0.0f);
+    EXPECT_LT(fast.AoP[i], 180.0f);
+  }
+  return e;
+}
+}  // namespace
+
+TEST(FourCameraFusion, FusedLayersAreFuseAtsDoubleWithinFloatRounding) {
+  const FourCameraSimulator sim(half_noisy_rig());
+  const FourCameraSignal signal = sim.signal(sim.stops().front());
+  const auto raw = sim.frames(signal);
+  const FourCameraModel& t = sim.truth();
+  // m: the largest |F| a tap can give, (max f + |b|)/K (the float path subtracts b from the sample).
+  double m_raw = 0, m_signal = 0;
+  for (std::size_t j = 0; j < 4; ++j) {
+    const double top_raw = *std::max_element(raw[j].begin(), raw[j].end());
+    const double top_signal = *std::max_element(signal.f[j].begin(), signal.f[j].end());
+    m_raw = std::max(m_raw, (top_raw + std::abs(t.b[j])) / t.K[j]);
+    m_signal = std::max(m_signal, (top_signal + std::abs(t.b[j])) / t.K[j]);
+  }
+  const LaneErrors r = lane_errors<std::uint16_t>(sim, {raw[0], raw[1], raw[2], raw[3]}, sim.fuse(raw), m_raw);
+  const LaneErrors s =
+      lane_errors<double>(sim, {signal.f[0], signal.f[1], signal.f[2], signal.f[3]}, sim.fuse(signal), m_signal);
+  std::printf("fuse() against fuse_at: raw worst |dS| %.3g (%.2f of its bound), AoP %.3g deg (%.2f), DoP %.3g (%.2f); "
+              "signal |dS| %.3g (%.2f), AoP %.3g deg (%.2f), DoP %.3g (%.2f); m %.3g\n",
+              r.S_abs, r.S, r.aop_deg, r.aop, r.dop_abs, r.dop, s.S_abs, s.S, s.aop_deg, s.aop, s.dop_abs, s.dop, m_raw);
+  for (const LaneErrors& e : {r, s}) {
+    EXPECT_GT(e.compared, 0.95 * 517 * 389);
+    EXPECT_EQ(e.disagree, 0);
+    EXPECT_LE(e.S, 1.0);
+    EXPECT_LE(e.aop, 1.0);
+    EXPECT_LE(e.dop, 1.0);
+  }
+}
+
+TEST(FourCameraFusion, FusedLayersAreTheSameBitsForAnyThreadCountAndCodePath) {
+  const FourCameraSimulator sim(half_noisy_rig());
+  const FourCameraSignal signal = sim.signal(sim.stops().front());
+  const auto raw = sim.frames(signal);
+  const FusedImage a = sim.fuse(raw), as = sim.fuse(signal);
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    EXPECT_TRUE(same_layers(a, sim.fuse(raw)));
+    EXPECT_TRUE(same_layers(as, sim.fuse(signal)));
+  }
+  if (!avx2_paths()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline path exists";
+  set_baseline_paths_only(true);
+  const FusedImage b = sim.fuse(raw), bs = sim.fuse(signal);
+  set_baseline_paths_only(false);
+  EXPECT_TRUE(same_layers(a, b));
+  EXPECT_TRUE(same_layers(as, bs));
 }
 
 // ---- The schedule and the keys ------------------------------------------------------------

@@ -1,5 +1,6 @@
 #include "polrig/device/four_camera.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -7,7 +8,9 @@
 #include <fmt/format.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
+#include "four_camera_lanes.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -166,14 +169,39 @@ std::array<double, 12> fusion_matrix(const PerCamera& axis_deg) {
 }
 
 double FourCameraFusion::frame_offset_deg(int j, std::size_t i) const {
-  const Sample& s = samples_.at(static_cast<std::size_t>(j)).at(i);
-  return rad2deg(0.5 * std::atan2(static_cast<double>(s.s2), static_cast<double>(s.c2)));
+  if (j < 0 || j >= kFourCameras) throw std::out_of_range(fmt::format("camera {} (expected 0 to 3)", j));
+  if (j == 0) {
+    (void)offsets_.at(i);
+    return 0.0;
+  }
+  const auto& o = offsets_.at(i);
+  const auto J = static_cast<std::size_t>(2 * (j - 1));
+  return rad2deg(0.5 * std::atan2(static_cast<double>(o[J + 1]), static_cast<double>(o[J])));
 }
 
 VirtualCamera virtual_camera(const FourCameraModel& m) {
   const CameraGeometry& c = m.camera[0];
   return {m.width, m.height, c.fx, c.cx, c.cy};
 }
+
+namespace {
+// Eq. 4's (DᵀD)⁻¹ for the rows D_j = [D0_j, D1_j, 1]: the symmetric cofactors c00 … c22 over the
+// determinant (fuse_at's and fusion_matrix's algebra).
+struct NormalInverse {
+  double c00, c01, c02, c11, c12, c22, inv;
+};
+NormalInverse normal_inverse(const std::array<double, 4>& D0, const std::array<double, 4>& D1) {
+  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0;
+  for (std::size_t j = 0; j < 4; ++j)
+    m00 += D0[j] * D0[j], m01 += D0[j] * D1[j], m02 += D0[j], m11 += D1[j] * D1[j], m12 += D1[j];
+  const double m22 = 4.0;
+  NormalInverse n;
+  n.c00 = m11 * m22 - m12 * m12, n.c01 = m12 * m02 - m01 * m22, n.c02 = m01 * m12 - m11 * m02;
+  n.c11 = m00 * m22 - m02 * m02, n.c12 = m02 * m01 - m00 * m12, n.c22 = m00 * m11 - m01 * m01;
+  n.inv = 1.0 / (m00 * n.c00 + m01 * n.c01 + m02 * n.c02);
+  return n;
+}
+}  // namespace
 
 FourCameraFusion::FourCameraFusion(const FourCameraModel& model) : model_(model), grid_(virtual_camera(model)) {
   (void)fusion_matrix(model.axis_deg);  // refuses axes that cannot be fused
@@ -183,13 +211,19 @@ FourCameraFusion::FourCameraFusion(const FourCameraModel& model) : model_(model)
   }
   const int Wd = grid_.width, H = grid_.height;
   const std::size_t n = static_cast<std::size_t>(Wd) * static_cast<std::size_t>(H);
-  for (std::size_t j = 0; j < 4; ++j) {
-    samples_[j].resize(n);
-    const CameraGeometry& c = model.camera[j];
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& rows) {
-      for (int row = rows.begin(); row < rows.end(); ++row)
-        for (int col = 0; col < Wd; ++col) {
-          const Vec3 p1 = {(col + 0.5 - grid_.cx) / grid_.f_c, (row + 0.5 - grid_.cy) / grid_.f_c, 1.0};
+  const std::size_t K = detail::kFusionChunk;
+  chunks_.resize((n + K - 1) / K);
+  offsets_.resize(n);
+  tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& rows) {
+    for (int row = rows.begin(); row < rows.end(); ++row)
+      for (int col = 0; col < Wd; ++col) {
+        const std::size_t i = static_cast<std::size_t>(row) * static_cast<std::size_t>(Wd) + static_cast<std::size_t>(col);
+        detail::FusionChunk& chunk = chunks_[i / K];
+        const std::size_t k = i % K;
+        const Vec3 p1 = {(col + 0.5 - grid_.cx) / grid_.f_c, (row + 0.5 - grid_.cy) / grid_.f_c, 1.0};
+        std::array<double, 4> D0{}, D1{};
+        for (std::size_t j = 0; j < 4; ++j) {
+          const CameraGeometry& c = model.camera[j];
           const auto& R = c.R;
           const Vec3 pj = {R[0] * p1[0] + R[1] * p1[1] + R[2], R[3] * p1[0] + R[4] * p1[1] + R[5],
                            R[6] * p1[0] + R[7] * p1[1] + R[8]};
@@ -206,48 +240,59 @@ FourCameraFusion::FourCameraFusion(const FourCameraModel& model) : model_(model)
           }
           // Sample coordinates over the pixel centres: centre (col, row) at (col + ½, row + ½).
           const double x = uv[0] - 0.5, y = uv[1] - 0.5;
-          Sample s{-1, 0, 0, 1, 0};
+          std::int32_t index = -1;
+          float wx = 0, wy = 0, c2 = 1, s2 = 0;
           if (x >= 0 && y >= 0 && x <= Wd - 1 && y <= H - 1) {
             const int x0 = std::min(static_cast<int>(x), Wd - 2), y0 = std::min(static_cast<int>(y), H - 2);
-            s = {y0 * Wd + x0, static_cast<float>(x - x0), static_cast<float>(y - y0),
-                 static_cast<float>(std::cos(2.0 * delta)), static_cast<float>(std::sin(2.0 * delta))};
+            index = y0 * Wd + x0, wx = static_cast<float>(x - x0), wy = static_cast<float>(y - y0);
+            c2 = static_cast<float>(std::cos(2.0 * delta)), s2 = static_cast<float>(std::sin(2.0 * delta));
           }
-          samples_[j][static_cast<std::size_t>(row) * static_cast<std::size_t>(Wd) + static_cast<std::size_t>(col)] = s;
+          chunk.index[j][k] = index, chunk.wx[j][k] = wx, chunk.wy[j][k] = wy;
+          if (j > 0) offsets_[i][2 * j - 2] = c2, offsets_[i][2 * j - 1] = s2;
+          // D_j = [cos 2(a_j + δ_j), sin 2(a_j + δ_j), 1] from the stored cos 2δ_j, sin 2δ_j (as fuse_at).
+          D0[j] = cos2a_[j] * c2 - sin2a_[j] * s2;
+          D1[j] = sin2a_[j] * c2 + cos2a_[j] * s2;
         }
-    });
-  }
+        // W = (DᵀD)⁻¹Dᵀ, columns 1–3 of each row (its rows sum to 0, 0, 1).
+        const NormalInverse m = normal_inverse(D0, D1);
+        for (std::size_t j = 0; j < 3; ++j) {
+          chunk.W[j][k] = static_cast<float>((m.c00 * D0[j] + m.c01 * D1[j] + m.c02) * m.inv);
+          chunk.W[3 + j][k] = static_cast<float>((m.c01 * D0[j] + m.c11 * D1[j] + m.c12) * m.inv);
+          chunk.W[6 + j][k] = static_cast<float>((m.c02 * D0[j] + m.c12 * D1[j] + m.c22) * m.inv);
+        }
+      }
+  });
+  // The last chunk's pixels beyond the image: not seen.
+  for (std::size_t i = n; i < chunks_.size() * K; ++i)
+    for (std::size_t j = 0; j < 4; ++j) chunks_[i / K].index[j][i % K] = -1;
 }
 
 template <class T>
 bool FourCameraFusion::fuse_at(const std::array<std::span<const T>, kFourCameras>& frames, std::size_t i,
                                FusedStokes& x) const {
   const std::size_t w = static_cast<std::size_t>(grid_.width);
+  const detail::FusionChunk& chunk = chunks_[i / detail::kFusionChunk];
+  const std::size_t k = i % detail::kFusionChunk;
   std::array<double, 4> F{}, D0{}, D1{};
   for (std::size_t j = 0; j < 4; ++j) {
-    const Sample s = samples_[j][i];
     // D_j = [cos 2(a_j + δ_j), sin 2(a_j + δ_j), 1].
-    D0[j] = cos2a_[j] * s.c2 - sin2a_[j] * s.s2;
-    D1[j] = sin2a_[j] * s.c2 + cos2a_[j] * s.s2;
-    if (s.index < 0) return false;
-    const T* p = frames[j].data() + s.index;
-    const double wx = s.wx, wy = s.wy;
+    const double c2 = j == 0 ? 1.0 : offsets_[i][2 * j - 2], s2 = j == 0 ? 0.0 : offsets_[i][2 * j - 1];
+    D0[j] = cos2a_[j] * c2 - sin2a_[j] * s2;
+    D1[j] = sin2a_[j] * c2 + cos2a_[j] * s2;
+    if (chunk.index[j][k] < 0) return false;
+    const T* p = frames[j].data() + chunk.index[j][k];
+    const double wx = chunk.wx[j][k], wy = chunk.wy[j][k];
     const double top = static_cast<double>(p[0]) + wx * (static_cast<double>(p[1]) - static_cast<double>(p[0]));
     const double bottom = static_cast<double>(p[w]) + wx * (static_cast<double>(p[w + 1]) - static_cast<double>(p[w]));
     F[j] = (top + wy * (bottom - top) - model_.b[j]) / model_.K[j];
   }
   // Eq. 4: (DᵀD)·x = Dᵀ·F, DᵀD symmetric 3 × 3, by cofactors (the same algebra as fusion_matrix).
-  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, r0 = 0, r1 = 0, r2 = 0;
-  for (std::size_t j = 0; j < 4; ++j) {
-    m00 += D0[j] * D0[j], m01 += D0[j] * D1[j], m02 += D0[j], m11 += D1[j] * D1[j], m12 += D1[j];
-    r0 += D0[j] * F[j], r1 += D1[j] * F[j], r2 += F[j];
-  }
-  const double m22 = 4.0;
-  const double c00 = m11 * m22 - m12 * m12, c01 = m12 * m02 - m01 * m22, c02 = m01 * m12 - m11 * m02;
-  const double c11 = m00 * m22 - m02 * m02, c12 = m02 * m01 - m00 * m12, c22 = m00 * m11 - m01 * m01;
-  const double inv = 1.0 / (m00 * c00 + m01 * c01 + m02 * c02);
-  x.S1 = (c00 * r0 + c01 * r1 + c02 * r2) * inv;
-  x.S2 = (c01 * r0 + c11 * r1 + c12 * r2) * inv;
-  x.S0 = (c02 * r0 + c12 * r1 + c22 * r2) * inv;
+  double r0 = 0, r1 = 0, r2 = 0;
+  for (std::size_t j = 0; j < 4; ++j) r0 += D0[j] * F[j], r1 += D1[j] * F[j], r2 += F[j];
+  const NormalInverse m = normal_inverse(D0, D1);
+  x.S1 = (m.c00 * r0 + m.c01 * r1 + m.c02 * r2) * m.inv;
+  x.S2 = (m.c01 * r0 + m.c11 * r1 + m.c12 * r2) * m.inv;
+  x.S0 = (m.c02 * r0 + m.c12 * r1 + m.c22 * r2) * m.inv;
   return true;
 }
 
@@ -261,31 +306,37 @@ FusedImage FourCameraFusion::fuse(const std::array<std::span<const T>, kFourCame
                                               frames[j].size(), Wd, H));
   FusedImage out;
   out.grid = grid_;
-  for (auto* v : {&out.S0, &out.S1, &out.S2, &out.AoP, &out.DoP}) v->resize(n);
-  out.valid.resize(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      FusedStokes x;
-      const bool seen = fuse_at(frames, i, x);
-      if (!seen || !(x.S0 > 0)) {
-        out.S0[i] = out.S1[i] = out.S2[i] = out.AoP[i] = out.DoP[i] = 0.0f;
-        out.valid[i] = 0;
-        continue;
-      }
-      // The layers are float: the AoP from the float S1, S2 it is stored beside (atan2f: a few ulp,
-      // ~1e-5° at 180°, the layer's own rounding).
-      const float S1 = static_cast<float>(x.S1), S2 = static_cast<float>(x.S2);
-      float aop = (90.0f / std::numbers::pi_v<float>)*std::atan2(S2, S1);
-      if (aop < 0) aop += 180.0f;
-      if (aop >= 180.0f) aop = 0.0f;
-      out.S0[i] = static_cast<float>(x.S0);
-      out.S1[i] = S1;
-      out.S2[i] = S2;
-      out.AoP[i] = aop;
-      out.DoP[i] = static_cast<float>(std::sqrt(x.S1 * x.S1 + x.S2 * x.S2) / x.S0);
-      out.valid[i] = 1;
-    }
+  // The layers' 17 MB (at W16's size) are zeroed and their pages faulted in as they are made: on
+  // every thread, not serially before the fusion.
+  tbb::parallel_invoke([&] { out.S0.resize(n); }, [&] { out.S1.resize(n); }, [&] { out.S2.resize(n); },
+                       [&] { out.AoP.resize(n); }, [&] { out.DoP.resize(n); }, [&] { out.valid.resize(n); });
+  four_camera_lanes::Constants k;
+  k.width = static_cast<std::size_t>(Wd);
+  for (std::size_t j = 0; j < 4; ++j) {
+    k.b[j] = static_cast<float>(model_.b[j]);
+    k.inv_K[j] = static_cast<float>(1.0 / model_.K[j]);
+  }
+  const T* const f[4] = {frames[0].data(), frames[1].data(), frames[2].data(), frames[3].data()};
+  const std::size_t K = detail::kFusionChunk, whole = n / K;
+  const auto layers_at = [&](std::size_t chunk) {
+    const std::size_t o = chunk * K;
+    return four_camera_lanes::Layers{out.S0.data() + o,  out.S1.data() + o,  out.S2.data() + o,
+                                     out.AoP.data() + o, out.DoP.data() + o, out.valid.data() + o};
+  };
+  // Each pixel's layers depend on that pixel alone: the same bits for any partition.
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, whole, 32), [&](const tbb::blocked_range<std::size_t>& r) {
+    four_camera_lanes::fuse_chunks(chunks_.data() + r.begin(), r.size(), f, k, layers_at(r.begin()));
   });
+  if (whole < chunks_.size()) {  // the last, partial chunk through a whole one
+    const std::size_t m = n - whole * K;
+    float S0[K], S1[K], S2[K], AoP[K], DoP[K];
+    std::uint8_t valid[K];
+    four_camera_lanes::fuse_chunks(chunks_.data() + whole, 1, f, k, {S0, S1, S2, AoP, DoP, valid});
+    const std::size_t o = whole * K;
+    std::copy_n(S0, m, out.S0.data() + o), std::copy_n(S1, m, out.S1.data() + o), std::copy_n(S2, m, out.S2.data() + o);
+    std::copy_n(AoP, m, out.AoP.data() + o), std::copy_n(DoP, m, out.DoP.data() + o);
+    std::copy_n(valid, m, out.valid.data() + o);
+  }
   return out;
 }
 

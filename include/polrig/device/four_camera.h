@@ -151,7 +151,26 @@ struct FusedImage {
 // both are frames of the plane ⊥ the ray; zero for aligned cameras, about the roll for a small
 // misalignment plus tilt terms that grow off axis: up to 0.05° in AoP for W16-sized default
 // misalignments if ignored, so it is not).
-// `frames[j]` holds camera j's signal (DN; raw or noise-free), width × height each. TBB over rows.
+// `frames[j]` holds camera j's signal (DN; raw or noise-free), width × height each. TBB over chunks of pixels.
+// fuse() runs in float and in SIMD lanes with the per-pixel (DᵀD)⁻¹Dᵀ precomputed (docs/physics.md
+// §16 "Fusion" gives its error against fuse_at's double precision); the same bits for any thread
+// count and on every x86-64 CPU (src/device/four_camera_lanes.cpp).
+namespace detail {
+// FourCameraFusion's per-pixel constants of kFusionChunk consecutive virtual pixels (row-major
+// i = chunk·kFusionChunk + k), stored by quantity so that fuse() streams one array and loads whole
+// SIMD vectors (a multiple of every target's lane count).
+inline constexpr std::size_t kFusionChunk = 64;
+struct alignas(64) FusionChunk {
+  // Camera j's top-left tap (−1: not seen; also beyond the last pixel) and its bilinear weights
+  // (float: an error ≤ 2⁻²⁴ of a pixel-to-pixel difference).
+  std::int32_t index[kFourCameras][kFusionChunk];
+  float wx[kFourCameras][kFusionChunk], wy[kFourCameras][kFusionChunk];
+  // Eq. 4's W = (DᵀD)⁻¹Dᵀ at the pixel (with its δ_j), rows S1, S2, S0, columns 1–3 (float): since
+  // W's rows sum to 0, 0, 1, x_r = Σ_{j<4} W_rj·(F_j − F_4) + [r = S0]·F_4.
+  float W[9][kFusionChunk];
+};
+}  // namespace detail
+
 class FourCameraFusion {
  public:
   explicit FourCameraFusion(const FourCameraModel& model);
@@ -165,17 +184,13 @@ class FourCameraFusion {
   bool fuse_at(const std::array<std::span<const T>, kFourCameras>& frames, std::size_t i, FusedStokes& x) const;
 
  private:
-  // Per virtual pixel and camera: the top-left sample's index, the bilinear weights (float: an
-  // error ≤ 2⁻²⁴ of a pixel-to-pixel difference) and cos 2δ_j, sin 2δ_j (exactly 1, 0 when δ = 0).
-  struct Sample {
-    std::int32_t index;  // −1: not seen
-    float wx, wy;
-    float c2, s2;
-  };
   FourCameraModel model_;
   VirtualCamera grid_;
   PerCamera cos2a_{}, sin2a_{};
-  std::array<std::vector<Sample>, kFourCameras> samples_;
+  // The taps, weights and W of every virtual pixel, by chunks.
+  std::vector<detail::FusionChunk> chunks_;
+  // cos 2δ_j, sin 2δ_j of cameras 2–4 per virtual pixel (float; camera 1's δ is 0), for fuse_at.
+  std::vector<std::array<float, 6>> offsets_;
 };
 
 extern template bool FourCameraFusion::fuse_at<std::uint16_t>(

@@ -83,8 +83,25 @@ BoardCorners detect_board_corners(std::span<const std::uint16_t> frame, int widt
     if (!cv::findChessboardCorners(image, cv::Size(cols, rows), found,
                                    cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE))
       return out;
-    cv::cornerSubPix(image, found, cv::Size(5, 5), cv::Size(-1, -1),
-                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-3));
+    // The refinement's window must hold the corner's own edges only: a neighbour's edges that do
+    // not pass through the corner bias it. They start one corner spacing d away, so the half
+    // window is d/2 (at least 2 px, at most 10 px).
+    double d = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < rows; ++k)
+      for (int i = 0; i < cols; ++i) {
+        const cv::Point2f& p = found[static_cast<std::size_t>(k * cols + i)];
+        if (i + 1 < cols) d = std::min(d, static_cast<double>(cv::norm(found[static_cast<std::size_t>(k * cols + i + 1)] - p)));
+        if (k + 1 < rows) d = std::min(d, static_cast<double>(cv::norm(found[static_cast<std::size_t>((k + 1) * cols + i)] - p)));
+      }
+    const int half = std::clamp(static_cast<int>(0.5 * d), 2, 10);
+    // Refined on the frame itself (float): the 8-bit copy's rounding would bias the gradients.
+    cv::Mat fine(height, width, CV_32FC1);
+    for (int r = 0; r < height; ++r) {
+      auto* row = fine.ptr<float>(r);
+      for (int c = 0; c < width; ++c) row[c] = static_cast<float>(frame[static_cast<std::size_t>(r * width + c)]);
+    }
+    cv::cornerSubPix(fine, found, cv::Size(half, half), cv::Size(-1, -1),
+                     cv::TermCriteria(cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 100, 1e-4));
   } catch (const cv::Exception&) {
     return out;  // not found: the caller counts the view as not detected
   }

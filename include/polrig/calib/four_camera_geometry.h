@@ -41,8 +41,8 @@ struct BoardCorners {
 
 // The inner corners of a cols × rows board in one raw frame (DN, row-major, width × height):
 // the frame scaled to 8 bits between its smallest and largest value, cv::findChessboardCorners
-// (adaptive threshold, normalised image), cv::cornerSubPix (an 11 × 11 window, to 1e-3 px or 100
-// iterations). The order is made the board's: the first corner is the one whose image x is
+// (adaptive threshold, normalised image), cv::cornerSubPix (a window half the corners' smallest
+// spacing wide, 2–10 px either side; to 1e-4 px or 100 iterations). The order is made the board's: the first corner is the one whose image x is
 // smaller than the last's (OpenCV may return the grid from either end). Never throws for an image
 // without the board (found = false); throws std::runtime_error without OpenCV.
 BoardCorners detect_board_corners(std::span<const std::uint16_t> frame, int width, int height, int cols, int rows);

@@ -542,6 +542,11 @@ def read_dofp_dataset(dir: str | os.PathLike[str], *, mean_frames: bool = False)
 def read_four_camera_dataset(dir: str | os.PathLike[str], *, stop: int | None = None,
                              raw: bool = False) -> dict[str, Any]: ...
 
+# ---- the four cameras' geometric calibration (four_camera_geometry_bindings.cpp)
+def fit_four_camera_geometry(dir: str | os.PathLike[str], *, out: str | os.PathLike[str] | None = None,
+                             force: bool = False, min_views: int = 4, threads: int | None = None,
+                             progress: Progress = None) -> dict[str, Any]: ...
+
 # ---- end of sky
 
 

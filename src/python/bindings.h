@@ -18,6 +18,7 @@ void bind_dofp_polarization(pybind11::module_& m);
 void bind_dofp_dataset_calibration(pybind11::module_& m);  // dofp_calibration_bindings.cpp: a camera dataset  // dofp_calibration_bindings.cpp: a frame's per-cell AoP, DoP  // dofp_calibration_bindings.cpp: the DoFP camera's calibration
 void bind_dofp(pybind11::module_& m);         // dofp_bindings.cpp: the DoFP camera's frames and dataset
 void bind_four_camera(pybind11::module_& m);  // four_camera_bindings.cpp: W16's four cameras, fused image, dataset
+void bind_four_camera_geometry(pybind11::module_& m);  // four_camera_geometry_bindings.cpp: the geometric calibration
 void bind_position(pybind11::module_& m);     // position_bindings.cpp: fix_position, locate, Eq. 15, study positioning
 
 }  // namespace polrig::python

@@ -146,8 +146,11 @@ CameraRun run_calibrate(const std::vector<Points3>& object, const std::vector<Po
   r.K = cv::Mat::eye(3, 3, CV_64F);
   r.D = cv::Mat::zeros(4, 1, CV_64F);
   std::vector<cv::Mat> rvecs, tvecs;
-  r.rms = cv::fisheye::calibrate(object, image, size, r.K, r.D, rvecs, tvecs,
-                                 cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW, criteria(o, extra));
+  int flags = cv::fisheye::CALIB_RECOMPUTE_EXTRINSIC | cv::fisheye::CALIB_FIX_SKEW;
+  static constexpr int kFix[4] = {cv::fisheye::CALIB_FIX_K1, cv::fisheye::CALIB_FIX_K2, cv::fisheye::CALIB_FIX_K3,
+                                  cv::fisheye::CALIB_FIX_K4};
+  for (int i = o.distortion_terms; i < 4; ++i) flags |= kFix[i];
+  r.rms = cv::fisheye::calibrate(object, image, size, r.K, r.D, rvecs, tvecs, flags, criteria(o, extra));
   return r;
 }
 
@@ -172,6 +175,8 @@ StereoRun run_stereo(const std::vector<Points3>& object, const std::vector<Point
 FourCameraGeometryFit fit_four_camera_geometry(const std::vector<std::array<BoardCorners, kFourCameras>>& corners,
                                                const CheckerboardSpec& board, int width, int height,
                                                const GeometryFitOptions& options) {
+  if (options.distortion_terms < 0 || options.distortion_terms > 4)
+    throw std::invalid_argument(fmt::format("distortion_terms = {} (expected 0 … 4)", options.distortion_terms));
   const std::size_t n_corners = static_cast<std::size_t>(board.inner_corners[0] * board.inner_corners[1]);
   for (std::size_t v = 0; v < corners.size(); ++v)
     for (std::size_t j = 0; j < 4; ++j)

@@ -97,6 +97,10 @@ struct GeometryFitOptions {
   int max_iterations = 200;
   double epsilon = 1e-14;  // OpenCV's relative parameter change
   int min_views = 4;       // fewer: TooFewViews (8 intrinsics + 6 per view; the lens needs varied tilts)
+  // Kannala–Brandt terms fitted, k1 … k_n (0–4); the rest are held at 0 (OpenCV's
+  // fisheye::CALIB_FIX_K1 … K4). Fewer terms extrapolate better beyond the views' corners
+  // (docs/physics.md §16.5); throws std::invalid_argument outside [0, 4].
+  int distortion_terms = 4;
 };
 
 // The fit from detected (or exact) corners: corners[v][j] is camera j's in view v. The board

@@ -9,6 +9,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include "polrig/calib/four_camera_geometry.h"
 #include "polrig/io/four_camera_dataset.h"
@@ -514,4 +515,21 @@ TEST(FourCameraGeometry, RotationVectorInvertsRodrigues) {
     const Vec3 back = rotation_vector(rotation_from_vector(r));
     for (std::size_t i = 0; i < 3; ++i) EXPECT_NEAR(back[i], r[i], 1e-15 + 1e-13 * std::abs(r[i]));
   }
+}
+
+// The views are the seed's: the same poses and frames for any thread count, others for another seed.
+TEST(FourCameraGeometry, ViewsAreDeterministicForAnyThreadCount) {
+  const Rig rig = make_rig(rig_text(1.0 / 4.0, true, 3));
+  const CheckerboardRenderer r(rig);
+  std::array<std::vector<std::uint16_t>, 4> one;
+  {
+    const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+    one = CheckerboardRenderer(rig).frames(2);
+  }
+  EXPECT_EQ(r.frames(2), one);
+  EXPECT_NE(r.frames(1)[0], r.frames(2)[0]);
+  Rig other = rig;
+  other.seed += 1;
+  EXPECT_NE(checkerboard_poses(other)[0].t, r.poses()[0].t);
+  EXPECT_EQ(checkerboard_poses(rig)[0].t, r.poses()[0].t);
 }

@@ -12,6 +12,9 @@ packages=(
   liberfa-dev                 # the sun's apparent position (IAU SOFA-derived ERFA, as astropy)
   libhdf5-dev hdf5-tools       # sweep.h5 (serial HDF5 + its high-level dimension scales; h5dump to inspect it)
   libhwy-dev                  # Highway: the CS study's vectorised logarithms (src/vector_log.cpp)
+  libopencv-dev               # the four cameras' geometric calibration (OpenCV's checkerboard corners and
+                              # fisheye calibration: src/calib/four_camera_geometry.cpp, -DPOLRIG_OPENCV=ON);
+                              # the only package with OpenCVConfig.cmake (calib3d-dev alone pulls nearly as much)
   libsleef-dev libxsimd-dev   # the other candidates in the vectorised-log benchmark (bench/ only)
   gnuplot-nox fonts-dejavu-core
   python3-dev pybind11-dev    # the Python module (docs/python.md)

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "polrig/calib/four_camera.h"
+#include "polrig/calib/four_camera_geometry.h"
 #include "polrig/io/four_camera_calibration.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/nav/positioning.h"
@@ -252,6 +253,11 @@ TEST(FourCameraCalibration, NoisyFramesWithinTheirNoise) {
 
 namespace {
 
+// The calibration rig's checkerboard left out: these tests take the geometry from the truth (a board
+// at an eighth of W16's resolution is too small for OpenCV's corner detector); the geometric part
+// has its own test below.
+const std::string kNoViews = " --set checkerboard.views=0";
+
 // W16's sensor at an eighth of its resolution (130 × 98 px, f = 96.25 px: the same field).
 const std::string kEighth =
     "--set device.cameras.width_px=130 --set device.cameras.height_px=98 "
@@ -279,7 +285,7 @@ double field(const test::Csv& csv, const std::string& quantity, int camera, cons
 // the heading are the truth model's within the calibration's error, propagated to them by
 // re-locating with each parameter moved by its standard error.
 TEST_F(FourCameraCalibrationCli, EndToEndTheCalibratedFixIsTheTruthsWithinItsError) {
-  ok(fmt::format("simulate {} -o {} --layers all {}", rig("wang2016-calibration.yaml"), at("cal"), kEighth));
+  ok(fmt::format("simulate {} -o {} --layers all {}", rig("wang2016-calibration.yaml"), at("cal"), kEighth + kNoViews));
   const Result c = ok(fmt::format("calibrate {} --method four-camera -o {}", at("cal"), at("out")));
   EXPECT_HAS(c.out, "geometry from");
   EXPECT_HAS(c.out, "the simulation's truth");
@@ -348,7 +354,7 @@ TEST_F(FourCameraCalibrationCli, RefusesWhatItCannotCalibrate) {
     EXPECT_FALSE(fs::exists(tmp / "out")) << args;
   };
   const std::string base = fmt::format("simulate {} {} --set schedule.step_deg=90 --set schedule.stop_deg=270 ",
-                                       rig("wang2016-calibration.yaml"), kEighth);
+                                       rig("wang2016-calibration.yaml"), kEighth + kNoViews);
   ok(base + "--layers all --set schedule.unpolarized_levels=[1] -o " + at("one"));
   refused(fmt::format("calibrate {} --method four-camera -o {}", at("one"), at("out")), "two distinct levels");
   std::string no_levels = test::read_file(fs::path(POLRIG_SOURCE_DIR) / "rigs" / "wang2016-calibration.yaml");
@@ -363,10 +369,15 @@ TEST_F(FourCameraCalibrationCli, RefusesWhatItCannotCalibrate) {
   refused(fmt::format("calibrate {} --method four-camera -o {} --drift angle", at("all"), at("out")), "--drift angle");
   refused(fmt::format("calibrate {} --method four-camera -o {} --view-projection", at("all"), at("out")), "--view-projection");
   refused(fmt::format("calibrate {} --method cs -o {} --geometry x.yaml", at("all"), at("out")), "--geometry x.yaml");
+  refused(fmt::format("calibrate {} --method cs -o {} --distortion-terms 2", at("all"), at("out")),
+          "--distortion-terms 2");
+  refused(fmt::format("calibrate {} --method four-camera -o {} --geometry {} --distortion-terms 2", at("all"), at("out"),
+                      at("all/truth.yaml")),
+          "--geometry");
   ok(fmt::format("simulate {} --set schedule.step_deg=90 --set schedule.stop_deg=270 --layers all -o {} "
                  "--set device.cameras.width_px=120 --set device.cameras.height_px=90 "
-                 "--set device.cameras.cx_px=[60,60,60,60] --set device.cameras.cy_px=[45,45,45,45]",
-                 rig("wang2016-calibration.yaml"), at("other")));
+                 "--set device.cameras.cx_px=[60,60,60,60] --set device.cameras.cy_px=[45,45,45,45]{}",
+                 rig("wang2016-calibration.yaml"), at("other"), kNoViews));
   refused(fmt::format("calibrate {} --method four-camera -o {} --geometry {}", at("all"), at("out"), at("other/truth.yaml")),
           "120 × 90 px");
   ok(fmt::format("calibrate {} --method four-camera -o {} --geometry {}", at("all"), at("geo"), at("all/truth.yaml")));
@@ -453,4 +464,46 @@ TEST(FourCameraCalibrationFile, RoundTripAndTruthYaml) {
   EXPECT_TRUE(truth.radiometric && truth.polarizer);
   EXPECT_EQ(truth.eps_deg[1], 0.4);
   EXPECT_EQ(truth.position_mm[2][1], 60.0);
+}
+
+// The three parts together: a dataset with checkerboard views gets its geometry from the geometric
+// calibration (OpenCV), which the polarizer-angle fit then co-registers with; calibration.yaml holds
+// geometry.csv's fit, and --distortion-terms reaches the fit. At a third of W16's resolution with
+// 45 mm squares, where OpenCV's detector finds the board (tests/test_four_camera_geometry.cpp).
+TEST_F(FourCameraCalibrationCli, WithCheckerboardViewsTheGeometryIsTheGeometricCalibrations) {
+  const std::string third =
+      "--set device.cameras.width_px=345 --set device.cameras.height_px=259 "
+      "--set device.cameras.cx_px=[172.5,172.9,172.1,172.8] --set device.cameras.cy_px=[129.8,129.4,130.2,129.6] "
+      "--set device.cameras.fx_px=[256.7,257.1,256.3,256.9] --set device.cameras.fy_px=[256.7,257.1,256.3,256.9] "
+      "--set checkerboard.square_mm=45 --set checkerboard.views=12 --set schedule.step_deg=60 --set schedule.stop_deg=300";
+  ok(fmt::format("simulate {} -o {} --layers all {}", rig("wang2016-calibration.yaml"), at("cal"), third));
+  if (!four_camera_geometry_available()) {
+    const Result r = polrig(fmt::format("calibrate {} --method four-camera -o {}", at("cal"), at("out")));
+    EXPECT_NE(r.status, 0);
+    EXPECT_HAS(r.err, "-DPOLRIG_OPENCV=ON");
+    EXPECT_HAS(r.err, "--geometry");
+    EXPECT_FALSE(fs::exists(tmp / "out"));
+    GTEST_SKIP() << "polrig built without OpenCV (-DPOLRIG_OPENCV=OFF): the refusal checked, not the fit";
+  }
+  for (const auto& [out, terms] : {std::pair{"out4", 4}, std::pair{"out2", 2}}) {
+    const Result c = ok(fmt::format("calibrate {} --method four-camera -o {} --distortion-terms {} --no-plots",
+                                    at("cal"), at(out), terms));
+    EXPECT_HAS(c.out, "the geometric calibration of its 12 checkerboard views");
+    EXPECT_HAS(c.out, "cameras 1-4: converged");
+    EXPECT_HAS(test::read_file(tmp / out / "manifest.yaml"), "geometry.csv");
+    const FourCameraCalibrationFile cal = read_four_camera_calibration(tmp / out / "calibration.yaml");
+    EXPECT_HAS(cal.geometry_from, "checkerboard");
+    const test::Csv g = test::read_csv(tmp / out / "geometry.csv");
+    ASSERT_EQ(g.rows.size(), 4u);
+    for (std::size_t j = 0; j < 4; ++j) {
+      const CameraGeometry& c = cal.model.camera[j];
+      const auto v = [&](const char* col) { return std::stod(g.rows[j][g.col(col)]); };
+      EXPECT_EQ(c.fx, v("fx_px")) << j;  // both written as shortest round trips of the same double
+      EXPECT_EQ(c.cy, v("cy_px")) << j;
+      EXPECT_EQ(c.k[0], v("k1")) << j;
+      if (terms == 2) {
+        EXPECT_EQ(v("k3"), 0.0) << j;
+      }
+    }
+  }
 }

@@ -542,6 +542,11 @@ def read_dofp_dataset(dir: str | os.PathLike[str], *, mean_frames: bool = False)
 def read_four_camera_dataset(dir: str | os.PathLike[str], *, stop: int | None = None,
                              raw: bool = False) -> dict[str, Any]: ...
 
+# ---- the four cameras' geometric calibration (four_camera_geometry_bindings.cpp)
+def fit_four_camera_geometry(dir: str | os.PathLike[str], *, out: str | os.PathLike[str] | None = None,
+                             force: bool = False, min_views: int = 4, distortion_terms: int = 4,
+                             threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
+
 # ---- end of sky
 
 
@@ -947,4 +952,5 @@ def locate_dataset(dir: str, prior: Sequence[float], *, dop_weighting: bool = Fa
 
 # ---- W16's radiometric and polarizer-angle calibration (four_camera_calibration_bindings.cpp)
 def calibrate_four_camera(dir: str | os.PathLike[str], geometry: str | os.PathLike[str] | None = None, *,
-                          threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
+                          distortion_terms: int = 4, threads: int | None = None,
+                          progress: Progress = None) -> dict[str, Any]: ...

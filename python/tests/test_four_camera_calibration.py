@@ -18,7 +18,8 @@ EIGHTH = ["--set", "device.cameras.width_px=130", "--set", "device.cameras.heigh
 @pytest.fixture(scope="module")
 def calibrated(tmp_path_factory):
     d = tmp_path_factory.mktemp("fcal")
-    run_cli("simulate", CALIBRATION, *EIGHTH, "--layers", "all", "-o", d / "cal", "--quiet")
+    run_cli("simulate", CALIBRATION, *EIGHTH, "--set", "checkerboard.views=0", "--layers", "all", "-o", d / "cal",
+            "--quiet")
     run_cli("calibrate", d / "cal", "--method", "four-camera", "-o", d / "out", "--quiet", "--no-plots")
     return d
 

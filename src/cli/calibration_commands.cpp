@@ -72,6 +72,14 @@ void check_adc_range(const StopVoltages& s) {
   if (!problem.empty()) throw DataError(fmt::format("{}: {}", s.label, problem));
 }
 
+// --method four-camera's geometry: a file, or the geometric calibration's option.
+struct FourCameraGeometrySettings {
+  std::string file;
+  int distortion_terms = GeometryFitOptions{}.distortion_terms;
+  CLI::Option* distortion_terms_option = nullptr;
+  static bool given(const CLI::Option* o) { return o && o->count() > 0; }
+};
+
 // The sun-drift settings of an outdoor calibration (spec sky-and-compasses.md §1.4).
 struct DriftSettings {
   std::string mode = "none";
@@ -144,7 +152,7 @@ void run_calibrate_dofp(const std::string& input, const std::string& rig_path, c
 // four-camera dataset with raw frames (report/four_camera_calibration_report.h).
 void run_calibrate_four_camera(const std::string& input, const std::string& rig_path,
                                const CalibrationSettings& settings, const DriftSettings& drift, bool view_projection,
-                               const std::string& geometry, const OutputOptions& out) {
+                               const FourCameraGeometrySettings& geometry, const OutputOptions& out) {
   const std::string m = "--method four-camera";
   if (!rig_path.empty())
     throw DataError(fmt::format("--rig {}: {} reads the sensor from the dataset (its rig.yaml and truth.yaml)", rig_path, m));
@@ -161,16 +169,24 @@ void run_calibrate_four_camera(const std::string& input, const std::string& rig_
                                 "polarizer along each view",
                                 m));
   std::optional<fs::path> geometry_file;
-  if (!geometry.empty()) geometry_file = geometry;
+  if (!geometry.file.empty()) geometry_file = geometry.file;
+  GeometryFitOptions geometry_options;
+  geometry_options.distortion_terms = geometry.distortion_terms;
+  if (geometry_file && geometry.given(geometry.distortion_terms_option))
+    throw DataError(fmt::format("--distortion-terms {}: the geometric calibration's option, but --geometry {} gives the "
+                                "geometry",
+                                geometry.distortion_terms, geometry.file));
   OutputDir d = out.open();
-  const FourCameraCalibrationRun run = calibrate_four_camera_folder(input, geometry_file, {}, progress());
+  const FourCameraCalibrationRun run =
+      calibrate_four_camera_folder(input, geometry_file, {}, progress(), geometry_options);
   std::vector<std::string> inputs{input};
-  if (geometry_file) inputs.push_back(geometry);
+  if (geometry_file) inputs.push_back(geometry.file);
   write_manifest(d.staging(), {command_line(), nullptr, report_four_camera_calibration(d.staging(), run, out.plots()), inputs});
   finish(d);
   const FourCameraCalibration& c = run.calibration;
   std::cout << fmt::format("four-camera: {} unpolarized levels, {} polarized stops; geometry from {}\n", run.levels,
                            run.polarized, run.file.geometry_from);
+  if (run.geometry) std::cout << run.geometry->fit.summary.brief_report();
   for (std::size_t j = 0; j < 4; ++j) {
     const CameraRadiometry& r = c.radiometry.camera[j];
     std::cout << fmt::format("  camera {}: K = {:.3f} ± {:.3f} DN, b = {:.3f} ± {:.3f} DN ({} levels, rms {:.3g} DN); "
@@ -198,13 +214,17 @@ void run_calibrate_four_camera(const std::string& input, const std::string& rig_
 
 void run_calibrate(const std::string& input, const std::string& method_text,
                    const std::string& rig_path, const CalibrationSettings& settings,
-                   const DriftSettings& drift, bool view_projection, const std::string& geometry,
+                   const DriftSettings& drift, bool view_projection, const FourCameraGeometrySettings& geometry,
                    const OutputOptions& out) {
   if (method_text == "four-camera")
     return run_calibrate_four_camera(input, rig_path, settings, drift, view_projection, geometry, out);
-  if (!geometry.empty())
+  if (!geometry.file.empty())
     throw DataError(fmt::format("--geometry {}: the four cameras' geometry (--method four-camera), not --method {}",
-                                geometry, method_text));
+                                geometry.file, method_text));
+  if (geometry.given(geometry.distortion_terms_option))
+    throw DataError(fmt::format("--distortion-terms {}: the four cameras' geometric calibration (--method four-camera), "
+                                "not --method {}",
+                                geometry.distortion_terms, method_text));
   if (method_text == "dofp") return run_calibrate_dofp(input, rig_path, settings, drift, view_projection, out);
   if (view_projection)
     throw DataError(fmt::format("--view-projection: a DoFP camera's step-2 model (--method dofp), not --method {}",
@@ -374,10 +394,17 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
                   "--method dofp: step 2's cells see the port polarizer along their views (a plane "
                   "polarizer's AoP off the axis) and Table 1 maps each cell's AoP back to the port "
                   "plane; off: H17's model (docs/physics.md §14)");
-    auto geometry = std::make_shared<std::string>();
-    app->add_option("--geometry", *geometry,
+    auto geometry = std::make_shared<FourCameraGeometrySettings>();
+    app->add_option("--geometry", geometry->file,
                     "--method four-camera: each camera's geometry from this calibration.yaml (or truth.yaml); "
-                    "default: the dataset's truth.yaml");
+                    "default: the geometric calibration of the dataset's checkerboard views, else (no views) "
+                    "its truth.yaml");
+    geometry->distortion_terms_option =
+        app->add_option("--distortion-terms", geometry->distortion_terms,
+                        "--method four-camera: the Kannala–Brandt terms k1 … kN the geometric calibration fits "
+                        "(0–4; the rest held at 0: fewer extrapolate better beyond the boards, docs/physics.md §16.2)")
+            ->check(CLI::Range(0, 4))
+            ->capture_default_str();
     settings->add_to(*app);
     out->add_to(*app);
     add_threads_option(*app, threads);

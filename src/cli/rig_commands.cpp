@@ -21,6 +21,7 @@
 #include "polrig/study/cs.h"
 #include "polrig/report/dofp_dataset.h"
 #include "polrig/report/four_camera_dataset.h"
+#include "polrig/sim/checkerboard.h"
 #include "polrig/report/reports.h"
 #include "polrig/report/sweep_report.h"
 #include "polrig/io/plot.h"
@@ -116,6 +117,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                                                                      : FourCameraLayers::All;
         try {
           const FourCameraSimulator check(r.rig);  // refused before the folder is opened
+          if (r.rig.checkerboard.views > 0) (void)checkerboard_poses(r.rig);  // the board placed, likewise
         } catch (const std::invalid_argument& e) {
           throw RigError(fmt::format("{}: {}", r.origin, e.what()));
         }

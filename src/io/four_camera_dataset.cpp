@@ -130,3 +130,133 @@ std::array<std::vector<std::uint16_t>, 4> read_four_camera_raw(const FourCameraD
 }
 
 }  // namespace polrig
+
+namespace polrig {
+
+namespace {
+double board_number(const YAML::Node& root, const char* key, const std::filesystem::path& file) {
+  const YAML::Node v = root[key];
+  double x = 0;
+  try {
+    if (!v || !v.IsScalar()) throw YAML::Exception(YAML::Mark::null_mark(), "missing");
+    x = v.as<double>();
+  } catch (const YAML::Exception&) {
+    throw std::runtime_error(fmt::format("{}: {}: expected a number", file.string(), key));
+  }
+  if (!std::isfinite(x)) throw std::runtime_error(fmt::format("{}: {}: not finite", file.string(), key));
+  return x;
+}
+int board_count(const YAML::Node& root, const char* key, const std::filesystem::path& file, int lo, int hi) {
+  const double x = board_number(root, key, file);
+  if (x != std::floor(x) || x < lo || x > hi)
+    throw std::runtime_error(fmt::format("{}: {}: expected an integer in [{}, {}], got {}", file.string(), key, lo, hi, x));
+  return static_cast<int>(x);
+}
+}  // namespace
+
+CheckerboardViews read_checkerboard_views(const std::filesystem::path& dir) {
+  CheckerboardViews out;
+  out.dir = dir;
+  const std::filesystem::path yaml = dir / "checkerboard" / "board.yaml";
+  if (!std::filesystem::exists(dir / "checkerboard")) return out;
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(yaml.string());
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot read: {}", yaml.string(), e.what()));
+  }
+  if (!root.IsMap()) throw std::runtime_error(fmt::format("{}: expected a mapping", yaml.string()));
+  out.board.views = board_count(root, "views", yaml, 0, 10000);
+  out.board.inner_corners = {board_count(root, "inner_cols", yaml, 3, 100), board_count(root, "inner_rows", yaml, 3, 100)};
+  out.board.square_mm = board_number(root, "square_mm", yaml);
+  out.board.margin_mm = board_number(root, "margin_mm", yaml);
+  out.width = board_count(root, "width_px", yaml, 2, 16384);
+  out.height = board_count(root, "height_px", yaml, 2, 16384);
+  if (!(out.board.square_mm > 0))
+    throw std::runtime_error(fmt::format("{}: square_mm: expected > 0, got {}", yaml.string(), out.board.square_mm));
+
+  const std::filesystem::path csv = dir / "checkerboard" / "poses.csv";
+  std::ifstream in(csv);
+  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", csv.string()));
+  std::string line;
+  std::getline(in, line);
+  const std::string header = "view,file,R_00,R_01,R_02,R_10,R_11,R_12,R_20,R_21,R_22,t_x_mm,t_y_mm,t_z_mm";
+  if (line != header) throw std::runtime_error(fmt::format("{}:1: expected the header {}", csv.string(), header));
+  static constexpr const char* kR[9] = {"R_00", "R_01", "R_02", "R_10", "R_11", "R_12", "R_20", "R_21", "R_22"};
+  for (int n = 2; std::getline(in, line); ++n) {
+    if (line.empty()) continue;
+    const std::vector<std::string> c = split_csv_line(line);
+    if (c.size() != 14) throw std::runtime_error(fmt::format("{}:{}: expected 14 columns, got {}", csv.string(), n, c.size()));
+    const double view = csv_number(c[0], csv, n, "view");
+    if (view != static_cast<double>(out.files.size() + 1))
+      throw std::runtime_error(fmt::format("{}:{}: view {} (expected {})", csv.string(), n, c[0], out.files.size() + 1));
+    out.files.push_back(c[1]);
+    if (c[2].empty()) {
+      out.poses.emplace_back();
+      continue;
+    }
+    BoardPose p;
+    for (std::size_t i = 0; i < 9; ++i) p.R[i] = csv_number(c[2 + i], csv, n, kR[i]);
+    p.t = {csv_number(c[11], csv, n, "t_x_mm"), csv_number(c[12], csv, n, "t_y_mm"), csv_number(c[13], csv, n, "t_z_mm")};
+    out.poses.emplace_back(p);
+  }
+  if (static_cast<int>(out.files.size()) != out.board.views)
+    throw std::runtime_error(fmt::format("{}: {} views (board.yaml says {})", csv.string(), out.files.size(), out.board.views));
+  return out;
+}
+
+std::array<std::vector<std::uint16_t>, 4> read_checkerboard_view(const CheckerboardViews& views, std::size_t v) {
+  if (v >= views.files.size())
+    throw std::runtime_error(fmt::format("{}: checkerboard view {} (the dataset has {})", views.dir.string(), v + 1,
+                                         views.files.size()));
+  const std::filesystem::path file = views.dir / views.files[v];
+  const ExrImage image = read_exr_image(file);
+  if (image.width != views.width || image.height != views.height)
+    throw std::runtime_error(fmt::format("{}: {} × {} px (expected {} × {})", file.string(), image.width, image.height,
+                                         views.width, views.height));
+  std::array<std::vector<std::uint16_t>, 4> raw;
+  for (std::size_t j = 0; j < 4; ++j) {
+    const ExrUintChannel& c = uint_channel(image, fmt::format("cam{}", j + 1), file);
+    raw[j].reserve(c.pixels.size());
+    for (std::uint32_t x : c.pixels) {
+      if (x > 65535) throw std::runtime_error(fmt::format("{}: cam{} holds {} (expected 16-bit DN)", file.string(), j + 1, x));
+      raw[j].push_back(static_cast<std::uint16_t>(x));
+    }
+  }
+  return raw;
+}
+
+std::optional<FourCameraGeometryTruth> read_four_camera_geometry_truth(const std::filesystem::path& dir) {
+  const std::filesystem::path file = dir / "truth.yaml";
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file.string());
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot read: {}", file.string(), e.what()));
+  }
+  const YAML::Node cams = root["cameras"];
+  if (!cams || !cams.IsSequence()) return std::nullopt;
+  if (cams.size() != 4) throw std::runtime_error(fmt::format("{}: cameras: expected 4, got {}", file.string(), cams.size()));
+  FourCameraGeometryTruth t;
+  try {
+    for (std::size_t j = 0; j < 4; ++j) {
+      const YAML::Node c = cams[j];
+      CameraGeometry& g = t.camera[j];
+      g.fx = c["fx_px"].as<double>(), g.fy = c["fy_px"].as<double>();
+      g.cx = c["cx_px"].as<double>(), g.cy = c["cy_px"].as<double>();
+      const auto k = c["k"].as<std::vector<double>>();
+      const auto R = c["R_j1"].as<std::vector<double>>();
+      const auto p = c["position_mm"].as<std::vector<double>>();
+      if (k.size() != 4 || R.size() != 9 || p.size() != 3) throw YAML::Exception(YAML::Mark::null_mark(), "sizes");
+      std::copy(k.begin(), k.end(), g.k.begin());
+      std::copy(R.begin(), R.end(), g.R.begin());
+      t.position_mm[j] = {p[0], p[1], p[2]};
+    }
+  } catch (const YAML::Exception&) {
+    throw std::runtime_error(fmt::format("{}: cameras: expected fx_px, fy_px, cx_px, cy_px, k (4), R_j1 (9) and "
+                                         "position_mm (3) numbers for each camera", file.string()));
+  }
+  return t;
+}
+
+}  // namespace polrig

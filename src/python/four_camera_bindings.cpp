@@ -14,6 +14,7 @@
 #include "convert.h"
 #include "polrig/io/four_camera_dataset.h"
 #include "polrig/report/four_camera_dataset.h"
+#include "polrig/sim/checkerboard.h"
 #include "polrig/sim/four_camera_frames.h"
 #include "rig_handle.h"
 
@@ -23,6 +24,7 @@ namespace {
 // FourCameraSimulator's refusals as the CLI words them (ValueError here).
 FourCameraSimulator simulator(const LoadedRig& loaded) {
   try {
+    if (loaded.rig.checkerboard.views > 0) (void)checkerboard_poses(loaded.rig);  // the board placed
     return FourCameraSimulator(loaded.rig);
   } catch (const std::invalid_argument& e) {
     throw py::value_error(fmt::format("{}: {}", loaded.origin, e.what()));

@@ -71,6 +71,7 @@ py::dict run_dict(const FourCameraCalibrationRun& run) {
   d["residual_before_deg"] = take(std::move(rb));
   d["residual_after_deg"] = take(std::move(ra));
   d["geometry_from"] = run.file.geometry_from;
+  d["geometry"] = run.geometry ? py::object(geometry_calibration_dict(*run.geometry)) : py::object(py::none());
   d["calibration_yaml"] = four_camera_calibration_yaml(run.file);
   return d;
 }
@@ -81,23 +82,29 @@ void bind_four_camera_calibration(py::module_& m) {
   m.def(
       "calibrate_four_camera",
       [](const std::filesystem::path& dir, const std::optional<std::filesystem::path>& geometry,
-         std::optional<int> threads, const py::object& progress) {
+         int distortion_terms, std::optional<int> threads, const py::object& progress) {
         const Progress p = progress_from(progress);
         ThreadLimit limit(threads);
+        GeometryFitOptions geometry_options;
+        geometry_options.distortion_terms = distortion_terms;
         FourCameraCalibrationRun run;
         {
           py::gil_scoped_release release;
-          run = calibrate_four_camera_folder(dir, geometry, {}, p);
+          run = calibrate_four_camera_folder(dir, geometry, {}, p, geometry_options);
         }
         return run_dict(run);
       },
-      py::arg("dir"), py::arg("geometry") = py::none(), py::kw_only(), py::arg("threads") = py::none(),
+      py::arg("dir"), py::arg("geometry") = py::none(), py::kw_only(),
+      py::arg("distortion_terms") = GeometryFitOptions{}.distortion_terms, py::arg("threads") = py::none(),
       py::arg("progress") = py::none(),
       (std::string("`polrig calibrate DIR --method four-camera [--geometry FILE]`'s computation (report/"
                    "four_camera_calibration_report.h): W16's radiometric calibration (K_j, b_j per camera from the "
                    "unpolarized stops) and polarizer-angle calibration (ε_j, gauge ε_1 = 0, from the polarized stops "
                    "turned by the table) of a four-camera dataset with raw frames (--layers all). geometry: a "
-                   "calibration.yaml or truth.yaml giving each camera's geometry (None: DIR/truth.yaml). Returns a "
+                   "calibration.yaml or truth.yaml giving each camera's geometry (None: the geometric calibration of "
+                   "DIR's checkerboard views with OpenCV, fitting k1 … k_distortion_terms, whose result is the dict's "
+                   "'geometry' (as fit_four_camera_geometry's; None when the geometry came from a file); a "
+                   "dataset without views: DIR/truth.yaml). Returns a "
                    "dict: K, K_se, b, b_se, eps_deg, eps_se_deg, axis_deg (arrays of 4), psi0_deg, dop, polarizer "
                    "(the fit's summary), radiometric (per camera: rank, levels_used, residual_rms_DN, usable, "
                    "message, level, mean_DN, sd_DN), polarizer.csv's columns (theta_R_deg, aop_before_deg, "

@@ -42,4 +42,5 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_position(m);
   polrig::python::bind_four_camera(m);
   polrig::python::bind_four_camera_calibration(m);
+  polrig::python::bind_four_camera_geometry(m);
 }

@@ -29,11 +29,21 @@ std::string quoted(const std::string& s) {
   return q + "\"";
 }
 
+// The number of checkerboard views DIR holds (0 without checkerboard/).
+std::size_t dataset_views(const std::filesystem::path& dir) {
+  try {
+    return read_checkerboard_views(dir).files.size();
+  } catch (const std::runtime_error& e) {
+    throw DataError(e.what());
+  }
+}
+
 }  // namespace
 
 FourCameraCalibrationRun calibrate_four_camera_folder(const std::filesystem::path& dir,
                                                       const std::optional<std::filesystem::path>& geometry_file,
-                                                      FourCameraCalibrationOptions options, const Progress& progress) {
+                                                      FourCameraCalibrationOptions options, const Progress& progress,
+                                                      const GeometryFitOptions& geometry_options) {
   FourCameraCalibrationRun run;
   std::string intensity_unit = "the level itself (no rig.yaml: intensity per level 1)";
   if (std::filesystem::exists(dir / "rig.yaml")) {
@@ -56,10 +66,38 @@ FourCameraCalibrationRun calibrate_four_camera_folder(const std::filesystem::pat
   if (std::filesystem::exists(dir / "truth.yaml")) run.truth = read_four_camera_calibration(dir / "truth.yaml");
   FourCameraCalibrationFile geometry;
   std::string geometry_from;
+  // The geometry: a file given, else the dataset's checkerboard views, else (a simulated dataset
+  // without views) its truth.
   if (geometry_file) {
     geometry = read_four_camera_calibration(*geometry_file);
     geometry_from = geometry_file->string();
     if (!geometry.geometry_from.empty()) geometry_from += fmt::format(" (its geometry from: {})", geometry.geometry_from);
+  } else if (const std::size_t views = dataset_views(dir); views > 0) {
+    if (!four_camera_geometry_available())
+      throw DataError(fmt::format("{}: {} checkerboard views, but this polrig was built without OpenCV, which the "
+                                  "geometric calibration needs (-DPOLRIG_OPENCV=ON, Debian's libopencv-dev); give the "
+                                  "geometry with --geometry FILE (e.g. {})",
+                                  dir.string(), views, (dir / "truth.yaml").string()));
+    try {
+      run.geometry = calibrate_four_camera_geometry_folder(dir, geometry_options, progress);
+    } catch (const std::invalid_argument& e) {
+      throw DataError(fmt::format("{}: {}", dir.string(), e.what()));
+    } catch (const DataError&) {
+      throw;
+    } catch (const std::runtime_error& e) {
+      throw DataError(e.what());
+    }
+    const FourCameraGeometryFit& g = run.geometry->fit;
+    if (!g.summary.usable())
+      throw CalibrationError(fmt::format("{}: the geometric calibration is not usable:\n{}", dir.string(),
+                                         g.summary.brief_report()));
+    geometry.model.width = run.geometry->views.width;
+    geometry.model.height = run.geometry->views.height;
+    geometry.model.camera = g.camera;
+    geometry.position_mm = g.position_mm;
+    geometry_from = fmt::format("{}: the geometric calibration of its {} checkerboard views (OpenCV's fisheye model, "
+                                "{} distortion terms; geometry.csv)",
+                                (dir / "checkerboard").string(), views, geometry_options.distortion_terms);
   } else if (run.truth) {
     geometry = *run.truth;
     geometry_from = fmt::format("{}: the simulation's truth (no geometric calibration given: --geometry)",
@@ -203,6 +241,10 @@ std::vector<DatasetFile> report_four_camera_calibration(const std::filesystem::p
     files.push_back({"errors.csv", 1, "against the dataset's truth.yaml: K_DN, b_DN per camera, eps_deg of cameras 2-4 "
                                       "(truth: eps_j - eps_1, the gauge), the source's DoP (rig.yaml's device.d): "
                                       "fitted, standard error, truth, error, error / standard error"});
+  }
+  if (run.geometry) {
+    const std::vector<DatasetFile> g = report_four_camera_geometry(dir, *run.geometry);
+    files.insert(files.end(), g.begin(), g.end());
   }
   if (!plots) return files;
   Plot r{"radiometric.png", "Radiometric calibration: window mean against the sphere's intensity",

@@ -5,6 +5,7 @@
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/report/four_camera_geometry.h"
 #include "polrig/sky/sensor_view.h"
 #include "polrig/sky/sun.h"
 #include "polrig/units.h"
@@ -56,6 +57,9 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
                                                     const FourCameraDatasetOptions& options,
                                                     const Progress& progress) {
   const FourCameraSimulator sim(rig);
+  // The checkerboard views (the geometric calibration's), placed before anything is written.
+  std::optional<CheckerboardRenderer> board;
+  if (rig.checkerboard.views > 0) board.emplace(rig);
   const std::optional<Sky> sky = rig_sky(rig);
   const SkyMount mount = rig.source.sky.resolved_mount();
   const VirtualCamera grid = sim.fusion().grid();
@@ -118,7 +122,9 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
   }
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
-  return {{"stops.csv", 1,
+  std::vector<DatasetFile> files;
+  if (board) files = report_checkerboard_views(dir, *board, progress);
+  std::vector<DatasetFile> own = {{"stops.csv", 1,
            "one row per stop: stop, utc (sky rigs), t_s, theta_R_deg, intensity, polarized (0/1), heading_deg (true "
            "geographic azimuth of camera 1's X), sun_x/y/z_cam1 (the true sun in camera 1's frame), sun_azimuth_deg, "
            "sun_zenith_deg, file"},
@@ -128,6 +134,8 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
           {"frames", 1,
            "frames/stop_NNNN.exr: raw DN of cameras 1-4 as UINT channels cam1..cam4 (layers all), the fused S0, S1, "
            "S2 (layers all, fused), AoP, DoP (float) and valid (UINT 0/1) on the virtual camera 1 grid"}};
+  own.insert(own.end(), files.begin(), files.end());
+  return own;
 }
 
 void write_four_camera_dataset(const LoadedRig& rig, const std::filesystem::path& destination,

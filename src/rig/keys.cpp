@@ -413,6 +413,56 @@ std::vector<RigKey> make_keys() {
       "device.cameras.adc_bits", "an integer in [1, 16]", "the cameras' ADC depth: raw values 0 … 2^bits − 1 (GC1031CP: 8 or 12)",
       "cameras digitise to 8–16 bits; a raw frame holds 16-bit values",
       [](Rig& r) -> int& { return r.four_camera.adc_bits; }, &integer_within<1, 16>), kFour), kSimulate | kCalibrate, ""));
+  // --- checkerboard (geometry/checkerboard.h, sim/checkerboard.h): the target of the four cameras'
+  // geometric calibration (spec §3.3 item 3), rendered by `polrig simulate` into DIR/checkerboard/.
+  keys.push_back(reads(only(integer(
+      "checkerboard.views", "an integer in [0, 10000]",
+      "checkerboard poses rendered for the geometric calibration (DIR/checkerboard/view_NNNN.exr; 0: none)",
+      "OpenCV's calibration wants some 10–50 views; 10000 bounds the dataset (one view is four frames)",
+      [](Rig& r) -> int& { return r.checkerboard.views; }, &integer_within<0, 10000>), kFour), kSimulate, ""));
+  keys.push_back(reads(only(integer(
+      "checkerboard.inner_cols", "an integer in [3, 100]",
+      "inner corners along a row of the board (OpenCV's pattern width) [C: 9]",
+      "cv::findChessboardCorners needs at least 3; 100 is beyond any printed target's use",
+      [](Rig& r) -> int& { return r.checkerboard.inner_corners[0]; }, &integer_within<3, 100>), kFour), kSimulate, ""));
+  keys.push_back(reads(only(integer(
+      "checkerboard.inner_rows", "an integer in [3, 100]",
+      "inner corners along a column of the board; must differ from inner_cols (a square grid's corner order "
+      "is ambiguous) [C: 6]",
+      "cv::findChessboardCorners needs at least 3; 100 is beyond any printed target's use",
+      [](Rig& r) -> int& { return r.checkerboard.inner_corners[1]; }, &integer_within<3, 100>), kFour), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.1, 1000.0}>(
+      "checkerboard.square_mm", "mm", "a length", "side of one square [C: 30]",
+      "from a millimetre-sized printed target to a metre-sized board",
+      [](Rig& r) -> double& { return r.checkerboard.square_mm; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 1000.0, true, false}>(
+      "checkerboard.margin_mm", "mm", "a length",
+      "the white border around the squares (cv::findChessboardCorners needs one) [C: 30]",
+      "positive: without a border the outer squares merge into the wall; beyond 1 m it is no border",
+      [](Rig& r) -> double& { return r.checkerboard.margin_mm; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{1.0, 100000.0}>(
+      "checkerboard.distance_mm", "mm", "2 depths",
+      "[near, far]: the board centre's depth along camera 1's axis, uniform between them [C: 450, 800]",
+      "in front of the cameras (1 mm) to 100 m, where no board of the kind resolves",
+      [](Rig& r) { return std::span<double>(r.checkerboard.distance_mm); }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 80.0}>(
+      "checkerboard.tilt_max_deg", "deg", "an angle",
+      "the largest angle of the board's normal from camera 1's axis, uniform in [0, max]: tilts make the focal "
+      "length and distortion observable [C: 35]",
+      "beyond 80° the board is seen nearly edge-on and its corners cannot be found",
+      [](Rig& r) -> double& { return r.checkerboard.tilt_max_deg; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(real<RealRange{0.0, 45.0}>(
+      "checkerboard.roll_max_deg", "deg", "an angle", "the largest turn of the board about its normal, uniform in "
+      "[−max, max] [C: 15]",
+      "beyond 45° a row of corners may run closer to the image's columns than to its rows, and the corner order "
+      "(first corner left of the last) becomes ambiguous",
+      [](Rig& r) -> double& { return r.checkerboard.roll_max_deg; }), kFour), kSimulate, ""));
+  keys.push_back(reads(only(array<RealRange{0.0, 1000.0}>(
+      "checkerboard.intensity", "", "3 intensities",
+      "[white, black, wall]: I of the white squares and margin, of the black squares and of the wall behind, in "
+      "the source's intensity units (unpolarized: f_j = K_j·I + b_j) [C: 2.5, 0.15, 0.6]",
+      "non-negative; 1000 units saturate any ADC at the cameras' gains",
+      [](Rig& r) { return std::span<double>(r.checkerboard.intensity); }), kFour), kSimulate, ""));
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
@@ -753,6 +803,18 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
       if (v != 0.0)
         return RigProblem{path, fmt::format("expected 0 for camera 1 (R_11 is the identity: camera 1 defines the "
                                             "frame), got {}", v)};
+    const CheckerboardSpec& b = rig.checkerboard;
+    if (b.inner_corners[0] == b.inner_corners[1])
+      return RigProblem{"checkerboard.inner_rows",
+                        fmt::format("expected a number of rows other than checkerboard.inner_cols ({}): a square "
+                                    "grid's corner order is ambiguous", b.inner_corners[0]), "checkerboard.inner_cols"};
+    if (b.distance_mm[0] > b.distance_mm[1])
+      return RigProblem{"checkerboard.distance_mm",
+                        fmt::format("expected [near, far] with near ≤ far, got [{}, {}]", b.distance_mm[0], b.distance_mm[1])};
+    if (!(b.intensity[0] > b.intensity[1]))
+      return RigProblem{"checkerboard.intensity",
+                        fmt::format("expected the white squares brighter than the black ones, got white {} and black {}",
+                                    b.intensity[0], b.intensity[1])};
   }
   for (int m = 0; m < 6 && rig.instrument().has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.
@@ -767,6 +829,8 @@ bool written_for(const RigKey& key, const Rig& rig_in) {
   if (!key.read_by_source(rig_in.source.model)) return false;
   if (!key.read_by_instrument(rig_in.device_kind)) return false;
   if (key.path == "device.kind" && rig_in.device_kind == kDefaultDeviceKind) return false;
+  // A rig without checkerboard views writes none of the board's keys.
+  if (key.path.starts_with("checkerboard.") && rig_in.checkerboard.views == 0) return false;
   Rig rig = rig_in;  // accessors hand out references into a mutable Rig
   using K = RigKey::Kind;
   if (key.kind == K::Text && key.text(rig).empty()) return false;

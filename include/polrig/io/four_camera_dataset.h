@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "polrig/device/four_camera.h"
+#include "polrig/geometry/checkerboard.h"
 #include "polrig/nav/orientation.h"
 #include "polrig/vec3.h"
 
@@ -47,5 +49,30 @@ FusedAopDop read_four_camera_fused(const FourCameraDataset& dataset, std::size_t
 // A stop's four raw frames (DN); throws for a dataset written without them (--layers fused/aop).
 std::array<std::vector<std::uint16_t>, 4> read_four_camera_raw(const FourCameraDataset& dataset,
                                                                std::size_t stop_index);
+
+// ---- Checkerboard views (the geometric calibration's; docs/formats.md "Four-camera dataset") ----
+// DIR/checkerboard/board.yaml (the target: what a calibration knows), DIR/checkerboard/poses.csv
+// (one row per view: its file and, for a simulated dataset, the true pose), view_NNNN.exr (cam1 …
+// cam4, raw DN).
+struct CheckerboardViews {
+  std::filesystem::path dir;   // the dataset folder
+  int width = 0, height = 0;   // each camera's frame
+  CheckerboardSpec board;      // views, inner corners, square and margin (the rest: defaults)
+  std::vector<std::string> files;                 // relative to the dataset folder
+  std::vector<std::optional<BoardPose>> poses;    // the truth, when the dataset holds it
+};
+// Throws std::runtime_error naming the file (and line) for a missing or malformed file; a dataset
+// without checkerboard/ gives zero views.
+CheckerboardViews read_checkerboard_views(const std::filesystem::path& dir);
+// View v's four raw frames (DN), width × height each.
+std::array<std::vector<std::uint16_t>, 4> read_checkerboard_view(const CheckerboardViews& views, std::size_t v);
+
+// The cameras' true geometry from truth.yaml (a simulated dataset), or nothing when truth.yaml
+// holds no cameras; throws std::runtime_error naming the file for a malformed one.
+struct FourCameraGeometryTruth {
+  std::array<CameraGeometry, 4> camera;
+  std::array<Vec3, 4> position_mm{};
+};
+std::optional<FourCameraGeometryTruth> read_four_camera_geometry_truth(const std::filesystem::path& dir);
 
 }  // namespace polrig

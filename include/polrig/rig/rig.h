@@ -11,6 +11,7 @@
 #include "polrig/device/electronics.h"
 #include "polrig/device/four_camera.h"
 #include "polrig/device/sensor.h"
+#include "polrig/geometry/checkerboard.h"
 #include "polrig/geometry/geometry.h"
 #include "polrig/geometry/schedule.h"
 #include "polrig/instrument/instrument.h"
@@ -28,6 +29,7 @@ struct Rig {
   SensorSpec device;
   DofpCameraSpec camera;  // the DoFP camera's settings (device.* keys of device.kind dofp-camera)
   FourCameraSpec four_camera;  // W16's four cameras (device.* keys of device.kind four-camera)
+  CheckerboardSpec checkerboard;  // the four cameras' calibration target (checkerboard.* keys)
   SourceSpec source;  // the source.* keys' settings
   // The light, made by make_source from `source` when the rig loads (cos⁴ by default) and shared
   // by copies of the rig (sweeps): a traced sphere is solved once. Callers ask it what it can do

@@ -135,6 +135,22 @@ bool same(const cv::Mat& a, const cv::Mat& b) {
 
 bool finite(const cv::Mat& m) { return cv::checkRange(m); }
 
+// How a fit ended (OpenCV does not say): non-finite values fail it; a re-run allowed one more
+// iteration that gives the same bits means it converged, else the iteration limit stopped it.
+template <class Summary>
+void set_ending(Summary& s, bool finite_values, bool unchanged, const GeometryFitOptions& options) {
+  if (!finite_values) {
+    s.termination = GeometryTermination::Failed;
+    s.message = "the fit gave non-finite values";
+  } else if (unchanged) {
+    s.termination = GeometryTermination::Converged;
+  } else {
+    s.termination = GeometryTermination::IterationLimit;
+    s.message = fmt::format("stopped after {} iterations (relative change still above {:g})", options.max_iterations,
+                            options.epsilon);
+  }
+}
+
 struct CameraRun {
   cv::Mat K, D;
   double rms = 0;
@@ -214,16 +230,8 @@ FourCameraGeometryFit fit_four_camera_geometry(const std::vector<std::array<Boar
       const CameraRun again = run_calibrate(obj, img, size, options, 1);
       s.views_used = s.views_detected;
       s.rms_px = runs[j].rms;
-      if (!finite(runs[j].K) || !finite(runs[j].D) || !std::isfinite(runs[j].rms)) {
-        s.termination = GeometryTermination::Failed;
-        s.message = "the fit gave non-finite values";
-      } else {
-        s.termination = same(runs[j].K, again.K) && same(runs[j].D, again.D) ? GeometryTermination::Converged
-                                                                              : GeometryTermination::IterationLimit;
-        if (s.termination == GeometryTermination::IterationLimit)
-          s.message = fmt::format("stopped after {} iterations (relative change still above {:g})", options.max_iterations,
-                                  options.epsilon);
-      }
+      set_ending(s, finite(runs[j].K) && finite(runs[j].D) && std::isfinite(runs[j].rms),
+                 same(runs[j].K, again.K) && same(runs[j].D, again.D), options);
     } catch (const cv::Exception& e) {
       s.termination = GeometryTermination::Failed;
       s.message = fmt::format("OpenCV: {}", e.what());
@@ -261,16 +269,9 @@ FourCameraGeometryFit fit_four_camera_geometry(const std::vector<std::array<Boar
       run = run_stereo(obj, img1, imgj, runs[0], runs[j], size, options, 0);
       const StereoRun again = run_stereo(obj, img1, imgj, runs[0], runs[j], size, options, 1);
       s.rms_px = run.rms;
-      if (!finite(run.R) || !std::isfinite(run.T[0] + run.T[1] + run.T[2]) || !std::isfinite(run.rms)) {
-        s.termination = GeometryTermination::Failed;
-        s.message = "the fit gave non-finite values";
-        continue;
-      }
-      s.termination = same(run.R, again.R) && run.T == again.T ? GeometryTermination::Converged
-                                                               : GeometryTermination::IterationLimit;
-      if (s.termination == GeometryTermination::IterationLimit)
-        s.message = fmt::format("stopped after {} iterations (relative change still above {:g})", options.max_iterations,
-                                options.epsilon);
+      set_ending(s, finite(run.R) && std::isfinite(run.T[0] + run.T[1] + run.T[2]) && std::isfinite(run.rms),
+                 same(run.R, again.R) && run.T == again.T, options);
+      if (s.termination == GeometryTermination::Failed) continue;
     } catch (const cv::Exception& e) {
       s.termination = GeometryTermination::Failed;
       s.message = fmt::format("OpenCV: {}", e.what());

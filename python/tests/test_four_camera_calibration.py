@@ -38,7 +38,7 @@ def test_calibrate_four_camera_equals_the_cli_bit_for_bit(calibrated):
     for col in ("theta_R_deg", "aop_before_deg", "aop_after_deg", "residual_before_deg", "residual_after_deg"):
         assert np.array_equal(pol[col], py[col]), col
     assert py["polarizer"]["termination"] == "converged" and py["polarizer"]["rank"] == 5
-    assert "truth.yaml" in py["geometry_from"]
+    assert "truth.yaml" in py["geometry_from"] and py["geometry"] is None  # no checkerboard views: no geometric fit
     # --geometry: the same calibration from the truth file given explicitly, which the file then names.
     g = polrig.calibrate_four_camera(d / "cal", d / "cal" / "truth.yaml")
     assert np.array_equal(g["eps_deg"], py["eps_deg"]) and str(d / "cal" / "truth.yaml") in g["geometry_from"]
@@ -70,3 +70,30 @@ def test_refusals(calibrated, tmp_path):
     bad.write_text((calibrated / "out" / "calibration.yaml").read_text().replace("K_DN: ", "K_DN: -", 1))
     with pytest.raises(polrig.DataError, match=r"bad.yaml:\d+: key 'cameras\[0\].K_DN'"):
         polrig.locate_dataset(str(tmp_path / "sky"), (28, 113), calibration=str(bad))
+
+
+def test_with_checkerboard_views_the_geometry_is_the_geometric_fit(tmp_path):
+    """A dataset with views: calibrate_four_camera's geometry is the geometric calibration's, the same
+    values as the CLI's geometry.csv and calibration.yaml (a third of W16's resolution, where OpenCV
+    finds the board)."""
+    third = ["--set", "device.cameras.width_px=345", "--set", "device.cameras.height_px=259",
+             "--set", "device.cameras.cx_px=[172.5,172.9,172.1,172.8]",
+             "--set", "device.cameras.cy_px=[129.8,129.4,130.2,129.6]",
+             "--set", "device.cameras.fx_px=[256.7,257.1,256.3,256.9]",
+             "--set", "device.cameras.fy_px=[256.7,257.1,256.3,256.9]",
+             "--set", "checkerboard.square_mm=45", "--set", "checkerboard.views=12",
+             "--set", "schedule.step_deg=60", "--set", "schedule.stop_deg=300"]
+    run_cli("simulate", CALIBRATION, *third, "--layers", "all", "-o", tmp_path / "cal", "--quiet")
+    try:
+        py = polrig.calibrate_four_camera(tmp_path / "cal", distortion_terms=2)
+    except RuntimeError as e:
+        assert "-DPOLRIG_OPENCV=ON" in str(e)
+        pytest.skip("polrig built without OpenCV")
+    run_cli("calibrate", tmp_path / "cal", "--method", "four-camera", "-o", tmp_path / "out", "--distortion-terms", "2",
+            "--quiet", "--no-plots")
+    assert "checkerboard" in py["geometry_from"] and py["geometry"]["usable"]
+    geo = read_csv(tmp_path / "out" / "geometry.csv")
+    for j, cam in enumerate(py["geometry"]["cameras"]):
+        assert cam["fx_px"] == geo["fx_px"][j] and cam["cy_px"] == geo["cy_px"][j]
+        assert cam["k"][2] == 0 and cam["k"][3] == 0
+    assert py["calibration_yaml"] == (tmp_path / "out" / "calibration.yaml").read_text()

@@ -373,7 +373,7 @@ TEST_F(FourCameraCalibrationCli, RefusesWhatItCannotCalibrate) {
           "--distortion-terms 2");
   refused(fmt::format("calibrate {} --method four-camera -o {} --geometry {} --distortion-terms 2", at("all"), at("out"),
                       at("all/truth.yaml")),
-          "--geometry");
+          "--distortion-terms 2: the geometric calibration's option");
   ok(fmt::format("simulate {} --set schedule.step_deg=90 --set schedule.stop_deg=270 --layers all -o {} "
                  "--set device.cameras.width_px=120 --set device.cameras.height_px=90 "
                  "--set device.cameras.cx_px=[60,60,60,60] --set device.cameras.cy_px=[45,45,45,45]{}",

@@ -70,6 +70,10 @@ def test_refusals(calibrated, tmp_path):
     bad.write_text((calibrated / "out" / "calibration.yaml").read_text().replace("K_DN: ", "K_DN: -", 1))
     with pytest.raises(polrig.DataError, match=r"bad.yaml:\d+: key 'cameras\[0\].K_DN'"):
         polrig.locate_dataset(str(tmp_path / "sky"), (28, 113), calibration=str(bad))
+    with pytest.raises(ValueError, match=r"distortion_terms=5 \(expected 0 … 4\)"):
+        polrig.calibrate_four_camera(calibrated / "cal", distortion_terms=5)
+    with pytest.raises(ValueError, match="distortion_terms=2: the geometric calibration's option"):
+        polrig.calibrate_four_camera(calibrated / "cal", calibrated / "cal" / "truth.yaml", distortion_terms=2)
 
 
 def test_with_checkerboard_views_the_geometry_is_the_geometric_fit(tmp_path):
@@ -86,7 +90,7 @@ def test_with_checkerboard_views_the_geometry_is_the_geometric_fit(tmp_path):
     run_cli("simulate", CALIBRATION, *third, "--layers", "all", "-o", tmp_path / "cal", "--quiet")
     try:
         py = polrig.calibrate_four_camera(tmp_path / "cal", distortion_terms=2)
-    except RuntimeError as e:
+    except polrig.DataError as e:  # views in a build without OpenCV: refused, naming the option
         assert "-DPOLRIG_OPENCV=ON" in str(e)
         pytest.skip("polrig built without OpenCV")
     run_cli("calibrate", tmp_path / "cal", "--method", "four-camera", "-o", tmp_path / "out", "--distortion-terms", "2",

@@ -5,6 +5,7 @@
 #include <optional>
 #include <string>
 
+#include <fmt/format.h>
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
@@ -83,6 +84,12 @@ void bind_four_camera_calibration(py::module_& m) {
       "calibrate_four_camera",
       [](const std::filesystem::path& dir, const std::optional<std::filesystem::path>& geometry,
          int distortion_terms, std::optional<int> threads, const py::object& progress) {
+        if (distortion_terms < 0 || distortion_terms > 4)
+          throw py::value_error(fmt::format("distortion_terms={} (expected 0 … 4)", distortion_terms));
+        if (geometry && distortion_terms != GeometryFitOptions{}.distortion_terms)
+          throw py::value_error(fmt::format("distortion_terms={}: the geometric calibration's option, but geometry={} "
+                                            "gives the geometry",
+                                            distortion_terms, geometry->string()));
         const Progress p = progress_from(progress);
         ThreadLimit limit(threads);
         GeometryFitOptions geometry_options;

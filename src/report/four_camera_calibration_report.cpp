@@ -108,7 +108,9 @@ FourCameraCalibrationRun calibrate_four_camera_folder(const std::filesystem::pat
   }
   if (geometry.model.width != ds.width || geometry.model.height != ds.height)
     throw DataError(fmt::format("{}: {} × {} px, but the dataset {} has {} × {} px",
-                                geometry_file ? geometry_file->string() : (dir / "truth.yaml").string(),
+                                geometry_file  ? geometry_file->string()
+                                : run.geometry ? (dir / "checkerboard" / "board.yaml").string()
+                                               : (dir / "truth.yaml").string(),
                                 geometry.model.width, geometry.model.height, dir.string(), ds.width, ds.height));
 
   // The raw frames, every stop's (a dataset without them is refused at its first stop).

@@ -1,7 +1,8 @@
 #pragma once
 // The radiometric and polarizer-angle calibration of W16's four cameras (spec sky-and-compasses.md
-// §3.3 items 1–2; docs/physics.md §16.1). The geometry (each camera's CameraGeometry) is an input:
-// the geometric calibration's, or a dataset's truth.
+// §3.3 items 1–2; docs/physics.md §16.1). The geometry (each camera's CameraGeometry) is an input,
+// found first (report/four_camera_calibration_report.h): a file given, else the geometric
+// calibration of the dataset's checkerboard views (calib/four_camera_geometry.h), else its truth.
 //   Radiometric (item 1): per camera j, f_j = K_j·I + b_j by linear least squares of the mean DN over
 //     a window about its principal point against the sphere's level I = level·intensity_per_level
 //     (unpolarized stops), leaving out a level whose window holds a clipped pixel.

@@ -258,6 +258,47 @@ TEST(FourCameraFrames, TheFusedAopGivesTheSunByTheEigenvectorMethod) {
   EXPECT_LT(miss, 1e-3) << miss;
 }
 
+TEST(FourCameraFrames, NoInterpolationLeftTheFusedImageGivesTheSunTo1e9) {
+  // The noise-free sun vector to 1e-9°, through the whole four-camera path: identical
+  // aligned cameras whose Kannala–Brandt k's are tan θ's series (θ + θ³/3 + 2θ⁵/15 + 17θ⁷/315 +
+  // 62θ⁹/2835), so each camera's lens is the virtual camera 1's pinhole to 1382/155925·θ¹¹·f ≈ 2e-10
+  // px at the corner (θ = 0.124 rad, f = 200 px): every virtual pixel samples a pixel centre (the
+  // bilinear weights are exactly 0 and 1) and no resampling error is left, unlike the test above.
+  // A 14° × 11° field is enough for the eigenvector method (W16 Eqs. 6–14) on exact data. The
+  // double-precision fusion (fuse_at) feeds it; the truth is the ephemeris' sun in camera 1's frame.
+  const std::string cams =
+      "    width_px: 40\n    height_px: 30\n    noise: false\n"
+      "    fx_px: [200, 200, 200, 200]\n    fy_px: [200, 200, 200, 200]\n"
+      "    cx_px: [20, 20, 20, 20]\n    cy_px: [15, 15, 15, 15]\n"
+      "    k1: [0.3333333333333333, 0.3333333333333333, 0.3333333333333333, 0.3333333333333333]\n"
+      "    k2: [0.13333333333333333, 0.13333333333333333, 0.13333333333333333, 0.13333333333333333]\n"
+      "    k3: [0.05396825396825397, 0.05396825396825397, 0.05396825396825397, 0.05396825396825397]\n"
+      "    k4: [0.021869488536155203, 0.021869488536155203, 0.021869488536155203, 0.021869488536155203]\n"
+      "    rot_x_deg: [0, 0, 0, 0]\n    rot_y_deg: [0, 0, 0, 0]\n    rot_z_deg: [0, 0, 0, 0]\n";
+  for (const double mount_deg : {35.0, 200.0}) {
+    const Rig rig = parse_rig(sky_rig_text(cams, mount_deg), "pinhole-like").rig;
+    const FourCameraSimulator sim(rig);
+    const DofpStop& stop = sim.stops().front();
+    const FourCameraSignal signal = sim.signal(stop);
+    const std::array<std::span<const double>, 4> f = {signal.f[0], signal.f[1], signal.f[2], signal.f[3]};
+    const VirtualCamera& grid = sim.fusion().grid();
+    std::vector<double> aop(static_cast<std::size_t>(grid.width) * static_cast<std::size_t>(grid.height));
+    for (std::size_t i = 0; i < aop.size(); ++i) {
+      FusedStokes x;
+      ASSERT_TRUE(sim.fusion().fuse_at(f, i, x)) << i;
+      aop[i] = rad2deg(0.5 * std::atan2(x.S2, x.S1));
+    }
+    const SunVectorSolution s = sun_vector_eigen(grid_points(grid.width, grid.height, 1.0, aop),
+                                                 {grid.f_c, grid.cx, grid.cy});
+    ASSERT_TRUE(has_sun(s.status));
+    const Vec3 truth = *sim.sun_in_camera1(stop);
+    // atan2(|a × b|, a·b): acos near 1 resolves no better than 1e-6°.
+    const double miss = rad2deg(std::atan2(vec3::norm(vec3::cross(s.sun, truth)), vec3::dot(s.sun, truth)));
+    std::printf("eigenvector sun, no interpolation left, camera 1's X at %g deg: %.3g deg off\n", mount_deg, miss);
+    EXPECT_LT(miss, 1e-9) << mount_deg;
+  }
+}
+
 TEST(FourCameraFrames, HeadingSignTestOfSpec0) {
   // Spec §0: turn the device +10° anticlockwise seen from above (camera 1's X from azimuth 35° to
   // 25°: sky.mount_deg is X's geographic azimuth, clockwise): the heading from the fused image

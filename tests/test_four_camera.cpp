@@ -569,7 +569,8 @@ TEST(FourCameraDataset, WrittenAndReadBack) {
   const FourCameraDataset d = read_four_camera_dataset(tmp.path() / "d");
   ASSERT_EQ(d.stops.size(), 2u);
   EXPECT_EQ(d.width, 129);
-  EXPECT_EQ(d.camera.f_c_px, 770 * 0.125);
+  ASSERT_TRUE(d.camera.has_value());
+  EXPECT_EQ(d.camera->f_c_px, 770 * 0.125);
   EXPECT_EQ(d.stops[1].utc, "2015-12-16T06:37:01Z");
   ASSERT_TRUE(d.stops[0].sun_camera1.has_value());
   const FourCameraSimulator sim(loaded.rig);

@@ -4,12 +4,15 @@
 // offsets δ_j with large rolls, the refusals.
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
 #include "polrig/calib/four_camera.h"
 #include "polrig/calib/four_camera_geometry.h"
+#include "polrig/io/exr.h"
 #include "polrig/io/four_camera_calibration.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/nav/positioning.h"
@@ -341,6 +344,91 @@ TEST_F(FourCameraCalibrationCli, EndToEndTheCalibratedFixIsTheTruthsWithinItsErr
              std::sqrt(var_km), h, std::sqrt(var_h));
   EXPECT_LT(d, 4 * std::sqrt(var_km));
   EXPECT_LT(std::abs(h), 4 * std::sqrt(var_h));
+}
+
+// A measured dataset as a user assembles it (formats.md §6.14a "A measured dataset"): no truth.yaml,
+// stops.csv's truth columns empty, each stop's EXR only the four cameras' raw UINT frames (no fused
+// layers, no attributes), and optionally no rig.yaml. It calibrates and locates exactly as the
+// simulated dataset it was made from, and locate without a calibration says what it needs.
+void make_measured(const fs::path& from, const fs::path& to, bool keep_rig) {
+  fs::copy(from, to, fs::copy_options::recursive);
+  fs::remove(to / "truth.yaml");
+  if (!keep_rig) fs::remove(to / "rig.yaml");
+  std::istringstream in(test::read_file(from / "stops.csv"));
+  std::string line, csv;
+  for (int n = 0; std::getline(in, line); ++n) {
+    std::vector<std::string> c;
+    std::stringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
+    ASSERT_EQ(c.size(), 13u) << line;
+    if (n > 0)
+      for (std::size_t k = 6; k < 12; ++k) c[k].clear();  // heading_deg … sun_zenith_deg: the truth
+    csv += fmt::format("{}\n", fmt::join(c, ","));
+  }
+  test::write_file(to / "stops.csv", csv);
+  for (const fs::directory_entry& e : fs::directory_iterator(to / "frames")) {
+    ExrImage image = read_exr_image(e.path());
+    ASSERT_EQ(image.uints.size(), 5u);  // cam1 … cam4 and valid
+    image.uints.pop_back();
+    ASSERT_EQ(image.uints.back().name, "cam4");
+    image.floats.clear();
+    image.attributes = {};
+    write_exr_image(e.path(), image);
+  }
+}
+
+TEST_F(FourCameraCalibrationCli, MeasuredDatasetsCalibrateAndLocateAsTheSimulatedOnes) {
+  ok(fmt::format("simulate {} -o {} --layers all {}", rig("wang2016-calibration.yaml"), at("cal"), kEighth + kNoViews));
+  ok(fmt::format("simulate {} -o {} --layers all {} --set schedule.count=3 --set schedule.dwell_s=1200",
+                 rig("wang2016-static.yaml"), at("sky"), kEighth));
+  make_measured(tmp / "cal", tmp / "mcal", true);
+  make_measured(tmp / "sky", tmp / "msky", true);
+  make_measured(tmp / "sky", tmp / "bare", false);
+
+  // The geometry must now be given (no truth.yaml, no checkerboard views).
+  const Result none = polrig(fmt::format("calibrate {} --method four-camera -o {}", at("mcal"), at("out")));
+  EXPECT_EQ(none.status, 2);
+  EXPECT_HAS(none.err, "no truth.yaml and no --geometry FILE");
+  EXPECT_FALSE(fs::exists(tmp / "out"));
+  const std::string geometry = at("cal/truth.yaml");
+  ok(fmt::format("calibrate {} --method four-camera -o {} --geometry {}", at("cal"), at("sim_cal"), geometry));
+  ok(fmt::format("calibrate {} --method four-camera -o {} --geometry {}", at("mcal"), at("meas_cal"), geometry));
+  for (const char* f : {"radiometric.csv", "polarizer.csv", "summary.csv"})
+    EXPECT_EQ(test::read_file(tmp / "meas_cal" / f), test::read_file(tmp / "sim_cal" / f)) << f;
+  EXPECT_FALSE(fs::exists(tmp / "meas_cal" / "errors.csv"));  // no truth to compare with
+
+  // locate: the same fix and headings from the raw frames with the calibration; no truth columns.
+  const std::string cal = at("sim_cal/calibration.yaml");
+  ok(fmt::format("locate {} --prior 28,113 -o {} --calibration {}", at("sky"), at("sim_loc"), cal));
+  ok(fmt::format("locate {} --prior 28,113 -o {} --calibration {}", at("msky"), at("meas_loc"), cal));
+  ok(fmt::format("locate {} --prior 28,113 -o {} --calibration {}", at("bare"), at("bare_loc"), cal));
+  const test::Csv sim_fix = test::read_csv(tmp / "sim_loc" / "fix.csv");
+  for (const char* dir : {"meas_loc", "bare_loc"}) {
+    const test::Csv fix = test::read_csv(tmp / dir / "fix.csv");
+    ASSERT_EQ(fix.rows.size(), sim_fix.rows.size()) << dir;
+    for (const char* column : {"lat_deg", "lon_deg"})
+      for (std::size_t r = 0; r < fix.rows.size(); ++r)
+        EXPECT_EQ(fix.rows[r][fix.col(column)], sim_fix.rows[r][sim_fix.col(column)]) << dir << " " << column;
+    const test::Csv heading = test::read_csv(tmp / dir / "heading.csv");
+    const test::Csv sim_heading = test::read_csv(tmp / "sim_loc" / "heading.csv");
+    ASSERT_EQ(heading.rows.size(), 3u) << dir;
+    for (std::size_t r = 0; r < 3; ++r) {
+      EXPECT_EQ(heading.rows[r][heading.col("heading_deg")], sim_heading.rows[r][sim_heading.col("heading_deg")]);
+      EXPECT_EQ(heading.rows[r][heading.col("heading_true_deg")], "nan") << dir;
+    }
+    EXPECT_EQ(test::read_file(tmp / dir / "sun.csv"), test::read_file(tmp / "sim_loc" / "sun.csv")) << dir;
+  }
+  // The site as the truth when a rig.yaml gives it; none without one.
+  const test::Csv with_rig = test::read_csv(tmp / "meas_loc" / "fix.csv");
+  const test::Csv bare = test::read_csv(tmp / "bare_loc" / "fix.csv");
+  EXPECT_EQ(with_rig.rows[0][with_rig.col("error_km")], sim_fix.rows[0][sim_fix.col("error_km")]);
+  EXPECT_EQ(bare.rows[0][bare.col("error_km")], "nan");
+
+  // Without a calibration there is nothing fused to locate from.
+  const Result raw_only = polrig(fmt::format("locate {} --prior 28,113 -o {}", at("msky"), at("out")));
+  EXPECT_EQ(raw_only.status, 2);
+  EXPECT_HAS(raw_only.err, "give --calibration CAL.yaml");
+  EXPECT_FALSE(fs::exists(tmp / "out"));
 }
 
 // Refusals, each before anything is written: a dataset without unpolarized levels, with one level,

@@ -61,6 +61,31 @@ def test_locate_dataset_with_a_calibration_equals_the_cli(calibrated, tmp_path):
         polrig.locate_dataset(str(tmp_path / "aop"), (28, 113), calibration=cal)
 
 
+def test_a_dataset_without_its_truth_locates_as_the_simulated_one(calibrated, tmp_path):
+    """A measured dataset keeps no truth.yaml and no truth columns: the virtual camera comes from the
+    frames' attributes, the fix is the simulated dataset's (C++: raw frames alone, no rig.yaml)."""
+    import shutil
+    d = calibrated
+    run_cli("simulate", STATIC, *EIGHTH, "--set", "schedule.count=3", "--set", "schedule.dwell_s=900", "--layers", "all",
+            "-o", tmp_path / "sky", "--quiet")
+    shutil.copytree(tmp_path / "sky", tmp_path / "measured")
+    (tmp_path / "measured" / "truth.yaml").unlink()
+    lines = (tmp_path / "sky" / "stops.csv").read_text().splitlines()
+    rows = [lines[0]] + [",".join(c[:6] + [""] * 6 + c[12:]) for c in (line.split(",") for line in lines[1:])]
+    (tmp_path / "measured" / "stops.csv").write_text("\n".join(rows) + "\n")
+    sim = polrig.read_four_camera_dataset(str(tmp_path / "sky"))
+    measured = polrig.read_four_camera_dataset(str(tmp_path / "measured"))
+    assert (measured["width"], measured["height"]) == (sim["width"], sim["height"])
+    assert (measured["f_c_px"], measured["cx_px"], measured["cy_px"]) == (sim["f_c_px"], sim["cx_px"], sim["cy_px"])
+    assert np.all(np.isnan(measured["stops"]["heading_deg"]))
+    cal = str(d / "out" / "calibration.yaml")
+    for calibration in (None, cal):
+        a = polrig.locate_dataset(str(tmp_path / "sky"), (28, 113), calibration=calibration)
+        b = polrig.locate_dataset(str(tmp_path / "measured"), (28, 113), calibration=calibration)
+        assert (b.fix.lat_deg[0], b.fix.lon_deg[0]) == (a.fix.lat_deg[0], a.fix.lon_deg[0])
+        assert np.array_equal(b.heading_deg, a.heading_deg)
+
+
 def test_refusals(calibrated, tmp_path):
     with pytest.raises(polrig.DataError, match="no unpolarized stop"):
         run_cli("simulate", STATIC, *EIGHTH, "--set", "schedule.count=2", "--layers", "all", "-o", tmp_path / "sky",

@@ -258,7 +258,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     auto prior = std::make_shared<std::string>();
     auto dop_weighting = std::make_shared<bool>(false);
     auto out = std::make_shared<OutputOptions>();
-    app->add_option("DIR", *input, "a folder written by polrig simulate for a four-camera rig")->required();
+    app->add_option("DIR", *input, "a four-camera dataset: written by polrig simulate, or measured frames in its layout (formats.md 6.14a)")->required();
     app->add_option("--prior", *prior, "LAT,LON in degrees (north, east positive): an approximate position; of "
                                        "Eq. 17's two roots the one nearer it is chosen")->required();
     app->add_flag("--dop-weighting", *dop_weighting, "weight the eigenvector method's EEᵀ by DoP");

@@ -30,24 +30,45 @@ double yaml_number(const YAML::Node& node, const char* key, const std::filesyste
   return x;
 }
 
+// A measured dataset: the size from the first stop's EXR (one line block read), the virtual camera
+// from its attributes when it holds fused layers.
+void measured_size_and_camera(FourCameraDataset& d) {
+  if (d.stops.empty())
+    throw std::runtime_error(fmt::format("{}: no stop, and no truth.yaml to give the cameras' size",
+                                         (d.dir / "stops.csv").string()));
+  const std::filesystem::path file = d.dir / d.stops.front().file;
+  const ExrImage first = read_exr_rows(file, 0, 1, &d.height);
+  d.width = first.width;
+  const auto attribute = [&](const char* name) -> std::optional<double> {
+    for (const auto& [key, value] : first.attributes.doubles)
+      if (key == name) return value;
+    return std::nullopt;
+  };
+  const std::optional<double> f_c = attribute("f_c_px"), cx = attribute("cx_px"), cy = attribute("cy_px");
+  if (f_c && cx && cy) d.camera = CameraIntrinsics{*f_c, *cx, *cy};
+}
+
 }  // namespace
 
 FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir) {
   FourCameraDataset d;
   d.dir = dir;
   const std::filesystem::path truth_file = dir / "truth.yaml";
-  YAML::Node truth;
-  try {
-    truth = YAML::LoadFile(truth_file.string());
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read: {}", truth_file.string(), e.what()));
+  const bool simulated = std::filesystem::exists(truth_file);
+  if (simulated) {
+    YAML::Node truth;
+    try {
+      truth = YAML::LoadFile(truth_file.string());
+    } catch (const YAML::Exception& e) {
+      throw std::runtime_error(fmt::format("{}: cannot read: {}", truth_file.string(), e.what()));
+    }
+    const YAML::Node v = truth["virtual_camera"];
+    if (!v || !v.IsMap()) throw std::runtime_error(fmt::format("{}: no virtual_camera section", truth_file.string()));
+    d.width = static_cast<int>(yaml_number(v, "width_px", truth_file));
+    d.height = static_cast<int>(yaml_number(v, "height_px", truth_file));
+    d.camera = CameraIntrinsics{yaml_number(v, "f_c_px", truth_file), yaml_number(v, "cx_px", truth_file),
+                                yaml_number(v, "cy_px", truth_file)};
   }
-  const YAML::Node v = truth["virtual_camera"];
-  if (!v || !v.IsMap()) throw std::runtime_error(fmt::format("{}: no virtual_camera section", truth_file.string()));
-  d.width = static_cast<int>(yaml_number(v, "width_px", truth_file));
-  d.height = static_cast<int>(yaml_number(v, "height_px", truth_file));
-  d.camera = {yaml_number(v, "f_c_px", truth_file), yaml_number(v, "cx_px", truth_file),
-              yaml_number(v, "cy_px", truth_file)};
 
   const std::filesystem::path csv = dir / "stops.csv";
   std::ifstream in(csv);
@@ -76,6 +97,7 @@ FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir) {
     s.file = c[12];
     d.stops.push_back(std::move(s));
   }
+  if (!simulated) measured_size_and_camera(d);
   return d;
 }
 

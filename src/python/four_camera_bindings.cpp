@@ -198,7 +198,11 @@ void bind_four_camera(py::module_& m) {
     }
     py::dict out;
     out["width"] = d.width, out["height"] = d.height;
-    out["f_c_px"] = d.camera.f_c_px, out["cx_px"] = d.camera.x_c_px, out["cy_px"] = d.camera.y_c_px;
+    if (d.camera) {
+      out["f_c_px"] = d.camera->f_c_px, out["cx_px"] = d.camera->x_c_px, out["cy_px"] = d.camera->y_c_px;
+    } else {
+      out["f_c_px"] = py::none(), out["cx_px"] = py::none(), out["cy_px"] = py::none();  // measured raw frames
+    }
     std::vector<double> index, t, theta, heading, sun;
     py::list utc;
     const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -22,13 +22,17 @@ DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, con
   // With a calibration: its fusion and its virtual camera 1 (f_c and the principal point of its
   // camera 1), each stop's raw frames re-fused (NaN where not valid, as read_four_camera_fused).
   std::optional<FourCameraFusion> fusion;
-  CameraIntrinsics camera = dataset.camera;
+  std::optional<CameraIntrinsics> camera = dataset.camera;
+  if (!calibration && !camera)
+    throw std::invalid_argument(
+        "no fused layers to locate from: the dataset has no truth.yaml and its frames no virtual camera (f_c_px, "
+        "cx_px, cy_px; a measured dataset of raw frames); give --calibration CAL.yaml to fuse its raw frames");
   if (calibration) {
     if (calibration->width != dataset.width || calibration->height != dataset.height)
       throw std::invalid_argument(fmt::format("the calibration is for {} × {} px cameras, the dataset's are {} × {} px",
                                               calibration->width, calibration->height, dataset.width, dataset.height));
     fusion.emplace(*calibration);
-    camera = {fusion->grid().f_c, fusion->grid().cx, fusion->grid().cy};
+    camera = CameraIntrinsics{fusion->grid().f_c, fusion->grid().cx, fusion->grid().cy};
   }
   const auto aop_dop = [&](std::size_t s) {
     if (!fusion) return read_four_camera_fused(dataset, s);
@@ -46,7 +50,7 @@ DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, con
       if (!f.valid[i]) out.aop_deg[i] = out.dop[i] = std::numeric_limits<double>::quiet_NaN();
     return out;
   };
-  check_intrinsics(camera);
+  check_intrinsics(*camera);
   check_orientation_settings(orientation);
   DatasetLocation run;
   run.truth = truth;
@@ -58,7 +62,7 @@ DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, con
       FusedAopDop fused = aop_dop(s);
       const SkyPoints points =
           grid_points(dataset.width, dataset.height, 1.0, std::move(fused.aop_deg), std::move(fused.dop));
-      StopSun sun{st.stop, st.utc, sun_vector_eigen(points, camera, orientation)};
+      StopSun sun{st.stop, st.utc, sun_vector_eigen(points, *camera, orientation)};
       if (has_sun(sun.sun.status)) {
         sightings.push_back({parse_utc(st.utc), sun.sun.sun, 1.0});
         run.true_heading_deg.push_back(st.heading_deg.value_or(std::nan("")));

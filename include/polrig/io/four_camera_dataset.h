@@ -1,7 +1,7 @@
 #pragma once
 // Reads a four-camera dataset (report/four_camera_dataset.h writes it; docs/formats.md): the stops,
 // the virtual camera 1 (the fused image's CameraIntrinsics) and, per stop, the fused AoP and DoP,
-// and the raw frames when the dataset holds them. For the lead's `locate` glue and Python.
+// and the raw frames when the dataset holds them. For `locate`, the calibration and Python.
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -31,12 +31,17 @@ struct FourCameraDatasetStop {
 struct FourCameraDataset {
   std::filesystem::path dir;
   int width = 0, height = 0;  // the virtual grid's (= each camera's) size
-  CameraIntrinsics camera;    // the virtual camera 1: f_c and the principal point, px
+  // The virtual camera 1 of the fused layers: f_c and the principal point, px. Nothing for a
+  // measured dataset of raw frames alone (no truth.yaml, no f_c_px attribute): a calibration's
+  // fusion brings its own.
+  std::optional<CameraIntrinsics> camera;
   std::vector<FourCameraDatasetStop> stops;
 };
 
-// Throws std::runtime_error naming the file (and the line and column of stops.csv) for a missing
-// or malformed file.
+// A simulated dataset's size and virtual camera come from truth.yaml; a measured one (no
+// truth.yaml) gives its size by its first stop's EXR and its virtual camera by that EXR's
+// f_c_px, cx_px, cy_px attributes when it has them. Throws std::runtime_error naming the file (and
+// the line and column of stops.csv) for a missing or malformed file.
 FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir);
 
 // A stop's fused AoP (degrees, camera 1's image frame, [0°, 180°)) and DoP on the virtual grid,

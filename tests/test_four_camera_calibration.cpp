@@ -366,6 +366,20 @@ void make_measured(const fs::path& from, const fs::path& to, bool keep_rig) {
     csv += fmt::format("{}\n", fmt::join(c, ","));
   }
   test::write_file(to / "stops.csv", csv);
+  if (fs::exists(to / "checkerboard" / "poses.csv")) {  // the boards' true poses: unknown
+    std::istringstream poses(test::read_file(to / "checkerboard" / "poses.csv"));
+    std::string unknown;
+    for (int n = 0; std::getline(poses, line); ++n) {
+      if (n == 0) {
+        unknown += line + "\n";
+        continue;
+      }
+      const std::size_t second_comma = line.find(',', line.find(',') + 1);
+      ASSERT_NE(second_comma, std::string::npos) << line;
+      unknown += line.substr(0, second_comma) + std::string(12, ',') + "\n";  // view, file, then 12 empty
+    }
+    test::write_file(to / "checkerboard" / "poses.csv", unknown);
+  }
   for (const fs::directory_entry& e : fs::directory_iterator(to / "frames")) {
     ExrImage image = read_exr_image(e.path());
     ASSERT_EQ(image.uints.size(), 5u);  // cam1 … cam4 and valid
@@ -594,4 +608,13 @@ TEST_F(FourCameraCalibrationCli, WithCheckerboardViewsTheGeometryIsTheGeometricC
       }
     }
   }
+  // Measured views (no truth.yaml, no board poses): the same geometric fit, the same calibration.
+  make_measured(tmp / "cal", tmp / "measured", true);
+  ok(fmt::format("calibrate {} --method four-camera -o {} --no-plots", at("measured"), at("mout")));
+  const test::Csv sim = test::read_csv(tmp / "out4" / "geometry.csv");
+  const test::Csv measured = test::read_csv(tmp / "mout" / "geometry.csv");
+  ASSERT_EQ(measured.rows.size(), 4u);
+  for (const char* col : {"fx_px", "fy_px", "cx_px", "cy_px", "k1", "k4", "rot_z_deg", "position_x_mm", "rms_px"})
+    for (std::size_t j = 0; j < 4; ++j) EXPECT_EQ(measured.rows[j][measured.col(col)], sim.rows[j][sim.col(col)]) << col;
+  EXPECT_EQ(test::read_file(tmp / "mout" / "polarizer.csv"), test::read_file(tmp / "out4" / "polarizer.csv"));
 }

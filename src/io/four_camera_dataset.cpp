@@ -250,6 +250,7 @@ std::array<std::vector<std::uint16_t>, 4> read_checkerboard_view(const Checkerbo
 
 std::optional<FourCameraGeometryTruth> read_four_camera_geometry_truth(const std::filesystem::path& dir) {
   const std::filesystem::path file = dir / "truth.yaml";
+  if (!std::filesystem::exists(file)) return std::nullopt;  // a measured dataset
   YAML::Node root;
   try {
     root = YAML::LoadFile(file.string());

@@ -76,8 +76,9 @@ FourCameraCalibrationRun calibrate_four_camera_folder(const std::filesystem::pat
     if (!four_camera_geometry_available())
       throw DataError(fmt::format("{}: {} checkerboard views, but this polrig was built without OpenCV, which the "
                                   "geometric calibration needs (-DPOLRIG_OPENCV=ON, Debian's libopencv-dev); give the "
-                                  "geometry with --geometry FILE (e.g. {})",
-                                  dir.string(), views, (dir / "truth.yaml").string()));
+                                  "geometry with --geometry FILE{}",
+                                  dir.string(), views,
+                                  run.truth ? fmt::format(" (e.g. {})", (dir / "truth.yaml").string()) : ""));
     try {
       run.geometry = calibrate_four_camera_geometry_folder(dir, geometry_options, progress);
     } catch (const std::invalid_argument& e) {

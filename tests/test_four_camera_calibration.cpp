@@ -96,6 +96,7 @@ TEST(FourCameraCalibration, NoiseFreeSignalsGiveTheTruth) {
   }
   ASSERT_TRUE(c.polarizer.usable()) << c.polarizer.summary.brief_report();
   EXPECT_EQ(c.polarizer.rank, 5);
+  EXPECT_HAS(c.polarizer.summary.brief_report(), "rad^2 (the AoP residuals in rad");  // not Eq. 15's V^2
   for (std::size_t j = 0; j < 4; ++j) {
     EXPECT_NEAR(c.polarizer.eps_deg[j], rig.four_camera.eps_deg[j] - rig.four_camera.eps_deg[0], 2e-6) << j;
     EXPECT_EQ(c.model.axis_deg[j], 45.0 * static_cast<double>(j) + c.polarizer.eps_deg[j]);

@@ -122,9 +122,9 @@ std::string FitSummary::brief_report() const {
   if (solver_status.empty())
     return fmt::format("{}: not fitted, {} observations; {}", termination_name(termination),
                        observations, message);
-  return fmt::format("{}: {} iterations, {} evaluations, {} observations, cost {:.6g} -> {:.6g} V^2; {}",
+  return fmt::format("{}: {} iterations, {} evaluations, {} observations, cost {:.6g} -> {:.6g} {}; {}",
                      termination_name(termination), iterations, evaluations, observations,
-                     initial_cost, final_cost, message);
+                     initial_cost, final_cost, cost_unit, message);
 }
 
 FitResult fit_eq15(const std::vector<Observation>& data, const FitParams& start, double v_dec,

@@ -393,6 +393,7 @@ PolarizerFit fit_polarizer_angles(const PolarizerSamples& s, const PolarizerOpti
   Eigen::VectorXd x = x0.head(unknowns);
   using S = Eigen::LevenbergMarquardtSpace::Status;
   S status = lm.minimizeInit(x);
+  fit.summary.cost_unit = "rad^2 (the AoP residuals in rad, the DoP residuals times dop_weight)";
   fit.summary.initial_cost = 0.5 * lm.fvec().squaredNorm();
   if (status == S::NotStarted) {
     status = S::Running;

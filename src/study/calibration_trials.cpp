@@ -160,7 +160,8 @@ std::string take_text(std::span<const std::byte> bytes, std::size_t& at) {
 
 // Every field is written below: a new field in FitSummary or Trial changes their size and stops
 // the build here until it is written too (x86-64 with libstdc++).
-static_assert(sizeof(FitSummary) == 8 + 2 * sizeof(std::string) + 2 * sizeof(double) + 16,
+// FitSummary's cost_unit is not sent: every trial's fit is Eq. 15's (V^2, its default).
+static_assert(sizeof(FitSummary) == 8 + 2 * sizeof(std::string) + 2 * sizeof(double) + sizeof(const char*) + 16,
               "FitSummary changed: write and read its new field below");
 static_assert(sizeof(Trial) == 8 + 8 + sizeof(Eccentricity) + 3 * sizeof(double) + 3 * sizeof(FitSummary),
               "Trial changed: write and read its new field below");

@@ -62,8 +62,9 @@ struct FitSummary {
   FitTermination termination = FitTermination::TooFewObservations;
   std::string message;         // why it stopped, for the user
   std::string solver_status;   // Eigen's LevenbergMarquardtSpace::Status, "" if LM did not run
-  double initial_cost = std::numeric_limits<double>::quiet_NaN();  // ½·Σr² (V²) at the start
-  double final_cost = std::numeric_limits<double>::quiet_NaN();    // ½·Σr² (V²) at the end
+  double initial_cost = std::numeric_limits<double>::quiet_NaN();  // ½·Σr² at the start, in cost_unit
+  double final_cost = std::numeric_limits<double>::quiet_NaN();    // ½·Σr² at the end
+  const char* cost_unit = "V^2";  // Eq. 15's voltages; each other fit names its residuals' unit
   int iterations = 0;   // Jacobian evaluations
   int evaluations = 0;  // residual evaluations
   int observations = 0;

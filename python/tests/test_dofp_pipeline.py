@@ -67,6 +67,15 @@ def test_orient_cli_equals_python_and_the_eigenvector_method_is_the_best(tmp_pat
     mean = {m: sum(v) / len(v) for m, v in errors.items()}
     # H17 Table 2's order: the eigenvector method below both comparators.
     assert mean["eigenvector"] < mean["single-point"] and mean["eigenvector"] < mean["line-detection"]
+    # --correct-noise-bias reaches the eigenvector method alone, the CLI and Python alike.
+    run_cli("orient", tmp_path / "sky", "--heading-prior", "20", "--correct-noise-bias", "-o", tmp_path / "cor",
+            "--quiet")
+    cor = rows(tmp_path / "cor" / "orientation.csv")
+    py_cor = polrig.orient_dofp_dataset(tmp_path / "sky", heading_prior_deg=20, correct_noise_bias=True)
+    for frame, r, before in zip((f for f in py_cor for _ in range(3)), cor, cli):
+        k = ["eigenvector", "single-point", "line-detection"].index(r["method"])
+        assert float(r["heading_deg"]) == frame["estimates"][k].heading_deg
+        assert (r["heading_deg"] == before["heading_deg"]) == (k != 0), r
 
 
 def eigenvector_heading_sd_deg(frame, f_c, cx, cy, sun_l, electrons_per_DN, read_DN):

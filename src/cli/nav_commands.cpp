@@ -29,6 +29,10 @@ namespace polrig::cli {
 
 namespace {
 
+constexpr const char* kCorrectNoiseBiasHelp =
+    "remove the eigenvector method's noise bias (DoP² weights, EEᵀ·s = c·Σ(I − v·vᵀ)·s; docs/physics.md §15); "
+    "replaces --dop-weighting";
+
 // The option of `polrig study heading` that sets a HeadingStudySettings field.
 std::string study_heading_option(std::string_view field) {
   static const std::pair<std::string_view, const char*> options[] = {
@@ -152,10 +156,12 @@ void run_heading(const std::string& input, const std::string& site_text, const S
 // the two comparators (report/orientation_report.h); the sun's geographic azimuth from the
 // dataset's sky rig (rig.yaml), the true heading from its stops.csv.
 void run_orient(const std::string& input, const std::string& params, const std::string& conversion,
-                bool dop_weighting, std::optional<double> heading_prior, const OutputOptions& out) {
+                bool dop_weighting, bool correct_noise_bias, std::optional<double> heading_prior,
+                const OutputOptions& out) {
   OrientationSettings settings;
   settings.conversion = *parse_aop_conversion(conversion);
   settings.dop_weighting = dop_weighting;
+  settings.correct_noise_bias = correct_noise_bias;
   const std::vector<FrameOrientation> frames = orient_dofp_folder(input, params, settings, heading_prior, progress());
   OutputDir d = out.open();
   std::vector<std::string> inputs = {input};
@@ -243,13 +249,18 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
                                                  "analyzer-in-front")
         ->check(CLI::IsMember({"meridional", "analyzer-in-front"}))->capture_default_str();
     app->add_flag("--dop-weighting", *dop_weighting, "weight the eigenvector method's EEᵀ by DoP");
+    auto correct_noise_bias = std::make_shared<bool>(false);
+    app->add_flag("--correct-noise-bias", *correct_noise_bias, kCorrectNoiseBiasHelp);
     app->add_option("--heading-prior", *heading_prior, "an approximate heading of the camera's X_l at table angle 0 "
                                                        "(deg, clockwise from north; each frame adds its table angle): "
                                                        "chooses between the sun and the antisun near the horizon")
         ->check(CLI::Range(-360.0, 360.0));
     out->add_to(*app);
     add_threads_option(*app, threads);
-    commands.push_back({app, [=] { run_orient(*input, *params, *conversion, *dop_weighting, *heading_prior, *out); }});
+    commands.push_back({app, [=] {
+                          run_orient(*input, *params, *conversion, *dop_weighting, *correct_noise_bias, *heading_prior,
+                                     *out);
+                        }});
   }
   {
     auto* app = root.add_subcommand(
@@ -263,9 +274,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
                                        "Eq. 17's two roots the one nearer it is chosen")->required();
     app->add_flag("--dop-weighting", *dop_weighting, "weight the eigenvector method's EEᵀ by DoP");
     auto correct_noise_bias = std::make_shared<bool>(false);
-    app->add_flag("--correct-noise-bias", *correct_noise_bias,
-                  "remove the eigenvector method's noise bias (DoP² weights, EEᵀ·s = c·Σ(I − v·vᵀ)·s; "
-                  "docs/physics.md §15); replaces --dop-weighting");
+    app->add_flag("--correct-noise-bias", *correct_noise_bias, kCorrectNoiseBiasHelp);
     out->add_to(*app);
     add_threads_option(*app, threads);
     auto calibration = std::make_shared<std::string>();

@@ -239,9 +239,10 @@ void bind_orientation(py::module_& m) {
 
   m.def("orient_dofp_dataset", [](const std::filesystem::path& dir, const std::optional<std::filesystem::path>& params,
                                   const std::string& conversion, bool dop_weighting,
-                                  std::optional<double> heading_prior_deg, const py::object& progress) {
+                                  std::optional<double> heading_prior_deg, const py::object& progress,
+                                  bool correct_noise_bias) {
         OrientationSettings s = settings_from(conversion, dop_weighting, 0.0, std::nullopt,
-                                              OrientationSettings{}.horizon_margin_deg);
+                                              OrientationSettings{}.horizon_margin_deg, correct_noise_bias);
         if (heading_prior_deg && !std::isfinite(*heading_prior_deg))
           throw py::value_error(fmt::format("heading_prior_deg: {} is not finite", *heading_prior_deg));
         const Progress p = progress_from(progress);
@@ -261,11 +262,13 @@ void bind_orientation(py::module_& m) {
         return out;
       }, "dir"_a, py::kw_only(), "params"_a = py::none(), "conversion"_a = "meridional",
       "dop_weighting"_a = false, "heading_prior_deg"_a = py::none(), "progress"_a = py::none(),
+      "correct_noise_bias"_a = false,
       (std::string("`polrig orient DIR`'s computation (report/orientation_report.h): every polarized "
                    "frame of a DoFP camera dataset through the three methods. params: a calibration's "
                    "params.exr (None: the nominal parameters); heading_prior_deg: an approximate heading "
                    "of X_l at table angle 0 (each frame adds its table angle), for the sun/antisun "
-                   "choice near the horizon. Returns a list of dicts (frame, true_heading_deg or None, "
+                   "choice near the horizon; correct_noise_bias: the eigenvector method without its "
+                   "noise bias (`--correct-noise-bias`, docs/physics.md §15). Returns a list of dicts (frame, true_heading_deg or None, "
                    "estimates: three polrig.OrientationEstimate). Raises RigError for a rig without "
                    "frames, DataError for a file that cannot be read.\n") + kProgressDoc).c_str());
 }

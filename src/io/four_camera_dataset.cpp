@@ -30,6 +30,14 @@ double yaml_number(const YAML::Node& node, const char* key, const std::filesyste
   return x;
 }
 
+YAML::Node load_yaml(const std::filesystem::path& file) {
+  try {
+    return YAML::LoadFile(file.string());
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(fmt::format("{}: cannot read: {}", file.string(), e.what()));
+  }
+}
+
 // A measured dataset: the size from the first stop's EXR (one line block read), the virtual camera
 // from its attributes when it holds fused layers.
 void measured_size_and_camera(FourCameraDataset& d) {
@@ -56,13 +64,7 @@ FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir) {
   const std::filesystem::path truth_file = dir / "truth.yaml";
   const bool simulated = std::filesystem::exists(truth_file);
   if (simulated) {
-    YAML::Node truth;
-    try {
-      truth = YAML::LoadFile(truth_file.string());
-    } catch (const YAML::Exception& e) {
-      throw std::runtime_error(fmt::format("{}: cannot read: {}", truth_file.string(), e.what()));
-    }
-    const YAML::Node v = truth["virtual_camera"];
+    const YAML::Node v = load_yaml(truth_file)["virtual_camera"];
     if (!v || !v.IsMap()) throw std::runtime_error(fmt::format("{}: no virtual_camera section", truth_file.string()));
     d.width = static_cast<int>(yaml_number(v, "width_px", truth_file));
     d.height = static_cast<int>(yaml_number(v, "height_px", truth_file));
@@ -251,13 +253,7 @@ std::array<std::vector<std::uint16_t>, 4> read_checkerboard_view(const Checkerbo
 std::optional<FourCameraGeometryTruth> read_four_camera_geometry_truth(const std::filesystem::path& dir) {
   const std::filesystem::path file = dir / "truth.yaml";
   if (!std::filesystem::exists(file)) return std::nullopt;  // a measured dataset
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read: {}", file.string(), e.what()));
-  }
-  const YAML::Node cams = root["cameras"];
+  const YAML::Node cams = load_yaml(file)["cameras"];
   if (!cams || !cams.IsSequence()) return std::nullopt;
   if (cams.size() != 4) throw std::runtime_error(fmt::format("{}: cameras: expected 4, got {}", file.string(), cams.size()));
   FourCameraGeometryTruth t;

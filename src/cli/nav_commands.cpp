@@ -30,8 +30,8 @@ namespace polrig::cli {
 namespace {
 
 constexpr const char* kCorrectNoiseBiasHelp =
-    "remove the eigenvector method's noise bias (DoP² weights, EEᵀ·s = c·Σ(I − v·vᵀ)·s; docs/physics.md §15); "
-    "replaces --dop-weighting";
+    "remove the eigenvector method's noise bias (DoP² weights, EEᵀ·s = c·Σ(I − v·vᵀ)·s; "
+    "docs/physics.md §15); replaces --dop-weighting";
 
 // The option of `polrig study heading` that sets a HeadingStudySettings field.
 std::string study_heading_option(std::string_view field) {
@@ -269,7 +269,8 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     auto prior = std::make_shared<std::string>();
     auto dop_weighting = std::make_shared<bool>(false);
     auto out = std::make_shared<OutputOptions>();
-    app->add_option("DIR", *input, "a four-camera dataset: written by polrig simulate, or measured frames in its layout (formats.md 6.14a)")->required();
+    app->add_option("DIR", *input, "a four-camera dataset: written by polrig simulate, or measured frames in "
+                                   "its layout (formats.md 6.14a)")->required();
     app->add_option("--prior", *prior, "LAT,LON in degrees (north, east positive): an approximate position; of "
                                        "Eq. 17's two roots the one nearer it is chosen")->required();
     app->add_flag("--dop-weighting", *dop_weighting, "weight the eigenvector method's EEᵀ by DoP");

@@ -73,7 +73,8 @@ CheckerboardViews read_checkerboard_views(const std::filesystem::path& dir);
 std::array<std::vector<std::uint16_t>, 4> read_checkerboard_view(const CheckerboardViews& views, std::size_t v);
 
 // The cameras' true geometry from truth.yaml (a simulated dataset), or nothing when there is no
-// truth.yaml (a measured dataset) or it holds no cameras; throws std::runtime_error naming the file for a malformed one.
+// truth.yaml (a measured dataset) or it holds no cameras; throws std::runtime_error naming the
+// file for a malformed one.
 struct FourCameraGeometryTruth {
   std::array<CameraGeometry, 4> camera;
   std::array<Vec3, 4> position_mm{};

@@ -4,7 +4,6 @@
 // offsets δ_j with large rolls, the refusals.
 #include <cmath>
 #include <numbers>
-#include <sstream>
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
@@ -355,32 +354,21 @@ void make_measured(const fs::path& from, const fs::path& to, bool keep_rig) {
   fs::copy(from, to, fs::copy_options::recursive);
   fs::remove(to / "truth.yaml");
   if (!keep_rig) fs::remove(to / "rig.yaml");
-  std::istringstream in(test::read_file(from / "stops.csv"));
-  std::string line, csv;
-  for (int n = 0; std::getline(in, line); ++n) {
-    std::vector<std::string> c;
-    std::stringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) c.push_back(cell);
-    ASSERT_EQ(c.size(), 13u) << line;
-    if (n > 0)
-      for (std::size_t k = 6; k < 12; ++k) c[k].clear();  // heading_deg … sun_zenith_deg: the truth
-    csv += fmt::format("{}\n", fmt::join(c, ","));
-  }
-  test::write_file(to / "stops.csv", csv);
-  if (fs::exists(to / "checkerboard" / "poses.csv")) {  // the boards' true poses: unknown
-    std::istringstream poses(test::read_file(to / "checkerboard" / "poses.csv"));
-    std::string unknown;
-    for (int n = 0; std::getline(poses, line); ++n) {
-      if (n == 0) {
-        unknown += line + "\n";
-        continue;
-      }
-      const std::size_t second_comma = line.find(',', line.find(',') + 1);
-      ASSERT_NE(second_comma, std::string::npos) << line;
-      unknown += line.substr(0, second_comma) + std::string(12, ',') + "\n";  // view, file, then 12 empty
+  // Empties the columns [first, last) of every data row of a CSV file.
+  const auto forget = [](const fs::path& file, std::size_t first, std::size_t last) {
+    const std::vector<std::string> lines = test::lines_of(test::read_file(file));
+    std::string csv = lines.at(0) + "\n";
+    for (std::size_t n = 1; n < lines.size(); ++n) {
+      std::vector<std::string> c = test::split(lines[n]);
+      ASSERT_GE(c.size(), last) << lines[n];
+      for (std::size_t k = first; k < last; ++k) c[k].clear();
+      csv += fmt::format("{}\n", fmt::join(c, ","));
     }
-    test::write_file(to / "checkerboard" / "poses.csv", unknown);
-  }
+    test::write_file(file, csv);
+  };
+  forget(to / "stops.csv", 6, 12);  // heading_deg … sun_zenith_deg: the truth
+  if (fs::exists(to / "checkerboard" / "poses.csv"))
+    forget(to / "checkerboard" / "poses.csv", 2, 14);  // R_00 … t_z_mm: the boards' true poses
   for (const fs::directory_entry& e : fs::directory_iterator(to / "frames")) {
     ExrImage image = read_exr_image(e.path());
     ASSERT_EQ(image.uints.size(), 5u);  // cam1 … cam4 and valid

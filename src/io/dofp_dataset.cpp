@@ -18,8 +18,7 @@ namespace polrig {
 namespace {
 
 double attribute(const ExrImage& image, const std::string& name, const std::filesystem::path& file) {
-  for (const auto& [n, v] : image.attributes.doubles)
-    if (n == name) return v;
+  if (const std::optional<double> v = image.attributes.number(name)) return *v;
   throw std::runtime_error(fmt::format("{}: the header has no attribute {}", file.string(), name));
 }
 

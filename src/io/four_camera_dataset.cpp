@@ -47,12 +47,8 @@ void measured_size_and_camera(FourCameraDataset& d) {
   const std::filesystem::path file = d.dir / d.stops.front().file;
   const ExrImage first = read_exr_rows(file, 0, 1, &d.height);
   d.width = first.width;
-  const auto attribute = [&](const char* name) -> std::optional<double> {
-    for (const auto& [key, value] : first.attributes.doubles)
-      if (key == name) return value;
-    return std::nullopt;
-  };
-  const std::optional<double> f_c = attribute("f_c_px"), cx = attribute("cx_px"), cy = attribute("cy_px");
+  const ExrAttributes& a = first.attributes;
+  const std::optional<double> f_c = a.number("f_c_px"), cx = a.number("cx_px"), cy = a.number("cy_px");
   if (f_c && cx && cy) d.camera = CameraIntrinsics{*f_c, *cx, *cy};
 }
 

@@ -269,8 +269,8 @@ void bind_orientation(py::module_& m) {
                    "of X_l at table angle 0 (each frame adds its table angle), for the sun/antisun "
                    "choice near the horizon; correct_noise_bias: the eigenvector method without its "
                    "noise bias (`--correct-noise-bias`, docs/physics.md §15). Returns a list of dicts "
-                   "(frame, true_heading_deg or None, estimates: three polrig.OrientationEstimate). Raises RigError for a rig without "
-                   "frames, DataError for a file that cannot be read.\n") + kProgressDoc).c_str());
+                   "(frame, true_heading_deg or None, estimates: three polrig.OrientationEstimate). Raises "
+                   "RigError for a rig without frames, DataError for a file that cannot be read.\n") + kProgressDoc).c_str());
 }
 
 }  // namespace polrig::python

@@ -4,7 +4,9 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -40,6 +42,13 @@ struct ExrAttributes {
   std::vector<std::pair<std::string, std::string>> strings;
   std::vector<std::pair<std::string, double>> doubles;
   std::vector<std::pair<std::string, std::array<double, 3>>> vectors;
+
+  // The double attribute `name`, or nothing when the header has none.
+  std::optional<double> number(std::string_view name) const {
+    for (const auto& [key, value] : doubles)
+      if (key == name) return value;
+    return std::nullopt;
+  }
 };
 
 // An image with both kinds of channel and its attributes.

@@ -355,7 +355,7 @@ void run_apply(const std::string& params_path, const std::string& voltages_path,
                                   "θ_sec − theta_R_deg when the input has theta_R_deg"}};
   if (have_reference && out.plots()) {
     Plot fig{"errors.png", "θ_sec − θ_R with the calibrated parameters", "θ_R (°)", "error (°)"};
-    fig.series = {{"angles.csv", "2:9", "θ_sec − θ_R", "linespoints lw 1.5 pt 7 ps 0.7"}};
+    fig.series = {{"angles.csv", "$theta_R_deg:$error_deg", "θ_sec − θ_R", "linespoints lw 1.5 pt 7 ps 0.7"}};
     render_plots(dir.staging(), "plots.gp", {fig});
     files.push_back({"errors.png", 1, "θ_sec − θ_R against θ_R"});
   }

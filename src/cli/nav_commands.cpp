@@ -200,16 +200,19 @@ void run_locate(const std::string& input, const std::string& prior_text, bool do
   if (run.truth) std::cout << fmt::format(", {:.3f} km from the rig's site", great_circle_km(r.lat_deg, r.lon_deg,
                                                                                         run.truth->lat_deg,
                                                                                         run.truth->lon_deg));
-  std::cout << fmt::format("\nheading: mean {:.4f}°, SD {:.4f}°", run.location.heading_mean_deg,
-                           run.location.heading_sd_deg);
-  // Against the dataset's true headings (a turning table's headings differ by design).
+  // Against the dataset's true headings when it has them (a turning table's headings differ by
+  // design, so their spread says nothing); else their mean and spread, which mean something only
+  // for a sensor that did not turn.
   double sum = 0, sum2 = 0;
   int n = 0;
   for (std::size_t k = 0; k < run.location.samples.size(); ++k) {
     const double e = std::remainder(run.location.samples[k].heading_deg - run.true_heading_deg[k], 360.0);
     if (std::isfinite(e)) sum += e, sum2 += e * e, ++n;
   }
-  if (n > 0) std::cout << fmt::format("; error against the truth: mean {:.4f}°, RMS {:.4f}°", sum / n, std::sqrt(sum2 / n));
+  if (n == 0)
+    std::cout << fmt::format("\nheading (no truth in the dataset): mean {:.4f}°, SD {:.4f}° (a spread only if the "
+                             "sensor did not turn)", run.location.heading_mean_deg, run.location.heading_sd_deg);
+  if (n > 0) std::cout << fmt::format("\nheading error against the truth ({} stops): mean {:.4f}°, RMS {:.4f}°", n, sum / n, std::sqrt(sum2 / n));
   std::cout << "\n";
 }
 
@@ -343,7 +346,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
       OutputDir dir = out->open();
       const std::vector<HeadingTrial> result = heading_trials(r.rig, settings, progress());
       write_manifest(dir.staging(), {command_line(), &r,
-                                     report_heading_trials(dir.staging(), result, settings, out->plots())});
+                                     report_heading_trials(dir.staging(), result, settings, out->plots(), progress())});
       finish(dir);
       double sum_sq = 0;
       int solved = 0;

@@ -83,12 +83,12 @@ void run_spectral_kd(const SpectralKdOptions& o, const OutputOptions& out) {
     fig.xlabel = "wavelength (nm)";
     fig.ylabel = "S·R, normalised to 1 at the peak";
     fig.y2label = "film (τM − τm)/(τM + τm)";
-    fig.series = {{"spectra.csv", "1:6", fmt::format("lamp, blackbody {} K", o.lamp_K)},
-                  {"spectra.csv", "1:7",
+    fig.series = {{"spectra.csv", "$wavelength_nm:$lamp_weight", fmt::format("lamp, blackbody {} K", o.lamp_K)},
+                  {"spectra.csv", "$wavelength_nm:$sky_weight",
                    o.sun.empty() ? fmt::format("sky: blackbody {} K × λ⁻⁴", o.sun_K)
                                  : fmt::format("sky: {} × λ⁻⁴", o.sun_column),
                    "lines lw 2 lc rgb '#1f77b4'"},
-                  {"spectra.csv", "1:4", "film degree (right axis)",
+                  {"spectra.csv", "$wavelength_nm:$film_d", "film degree (right axis)",
                    "lines lw 2 dt 2 lc rgb '#2ca02c'", true}};
     fig.series[0].style = "lines lw 2 lc rgb '#d62728'";
     fig.extra = "set yrange [0:1.05]\nset y2range [0:1.0]\nset key inside right bottom";

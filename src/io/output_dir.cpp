@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <mutex>
 #include <set>
@@ -119,7 +120,8 @@ OutputDir::OutputDir(fs::path destination, bool replace) : replace_(replace) {
   }
 }
 
-OutputDir::OutputDir(fs::path destination, bool replace, const Resumable& resumable) : replace_(replace) {
+OutputDir::OutputDir(fs::path destination, bool replace, const Resumable& resumable)
+    : continue_with_(resumable.continue_with), replace_(replace) {
   prepare(destination, ".resumable");
   const std::lock_guard lock(open_dirs_mutex());
   try {
@@ -287,6 +289,19 @@ void OutputDir::remove_staging_and_parents() noexcept {
     fs::remove(*it, ec);  // only removes a folder that is still empty
 }
 
+void OutputDir::say_what_is_kept() const noexcept {
+  if (!keep_ || committed_ || staging_.empty()) return;
+  std::error_code ec;
+  std::uintmax_t bytes = 0;
+  for (auto it = fs::recursive_directory_iterator(staging_, ec); !ec && it != fs::recursive_directory_iterator();
+       it.increment(ec))
+    if (it->is_regular_file(ec)) bytes += it->file_size(ec);
+  const std::string how = continue_with_.empty() ? "run the same command with --resume" : continue_with_;
+  std::fprintf(stderr, "%spolrig: interrupted; the work done so far is kept in %s (%.1f MB)\n"
+               "polrig: to continue it: %s\n",
+               ::isatty(2) ? "\r\033[K" : "", staging_.c_str(), static_cast<double>(bytes) / 1e6, how.c_str());
+}
+
 OutputDir::~OutputDir() {
   const std::lock_guard lock(open_dirs_mutex());
   open_dirs().erase(this);
@@ -310,7 +325,10 @@ void clean_up_outputs_on_signals() {
     if (sigwait(&signals, &sig) != 0) return;
     {
       const std::lock_guard lock(open_dirs_mutex());  // held until the process ends
-      for (OutputDir* d : open_dirs()) d->remove_staging_and_parents();
+      for (OutputDir* d : open_dirs()) {
+        d->say_what_is_kept();
+        d->remove_staging_and_parents();
+      }
       // Ends by the signal itself, so that a shell sees how the command stopped.
       ::signal(sig, SIG_DFL);
       sigset_t one;

@@ -1,11 +1,17 @@
 #include "polrig/io/plot.h"
 
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include "polrig/io/csv.h"
 
@@ -28,12 +34,78 @@ std::string shell_quoted(const std::string& s) {
   return q + "'";
 }
 
-std::string script_for(const Plot& p) {
+bool is_name_start(char c) { return std::isalpha(static_cast<unsigned char>(c)) || c == '_'; }
+// Rig key paths (eccentricity.L_IS) head a sweep's columns, so a name may hold dots.
+bool is_name_char(char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.'; }
+
+// A CSV's header names, read from its first line (the file is in the plot's folder).
+std::vector<std::string> header_of(const fs::path& csv) {
+  std::ifstream in(csv);
+  std::string line;
+  if (!in || !std::getline(in, line))
+    throw std::logic_error(fmt::format("plot: {} is missing or empty", csv.string()));
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  std::vector<std::string> names;
+  std::stringstream ss(line);
+  for (std::string name; std::getline(ss, name, ',');) names.push_back(name);
+  return names;
+}
+
+// One field of a using clause (between top-level colons): a lone $name is gnuplot's "name".
+std::string resolve_field(const std::string& field, const std::vector<std::string>& header,
+                          const std::string& file) {
+  std::string out;
+  for (std::size_t i = 0; i < field.size(); ++i) {
+    const char c = field[i];
+    if ((c != '$' && c != '@') || i + 1 >= field.size() || !is_name_start(field[i + 1])) {
+      if (c == '$' && i + 1 < field.size() && std::isdigit(static_cast<unsigned char>(field[i + 1])) &&
+          field[i + 1] != '0')
+        throw std::logic_error(fmt::format("plot of {}: '{}' names a column by number", file, field));
+      out += c;
+      continue;
+    }
+    std::size_t end = i + 1;
+    while (end < field.size() && is_name_char(field[end])) ++end;
+    while (field[end - 1] == '.') --end;
+    const std::string name = field.substr(i + 1, end - i - 1);
+    if (std::find(header.begin(), header.end(), name) == header.end())
+      throw std::logic_error(fmt::format("plot of {}: no column '{}'", file, name));
+    const bool whole = i == 0 && end == field.size() && c == '$';
+    out += whole ? quoted(name) : fmt::format("{}({})", c == '$' ? "column" : "strcol", quoted(name));
+    i = end - 1;
+  }
+  const bool number = !out.empty() && out.find_first_not_of("0123456789") == std::string::npos;
+  if (number && out != "0")
+    throw std::logic_error(fmt::format("plot of {}: '{}' names a column by number", file, field));
+  return out;
+}
+
+}  // namespace
+
+std::string resolve_columns(const std::string& using_, const std::vector<std::string>& header,
+                            const std::string& file) {
+  std::string out, field;
+  int depth = 0;
+  for (char c : using_) {
+    depth += (c == '(') - (c == ')');
+    if (c == ':' && depth == 0) {
+      out += resolve_field(field, header, file) + ':';
+      field.clear();
+    } else {
+      field += c;
+    }
+  }
+  return out + resolve_field(field, header, file);
+}
+
+namespace {
+
+std::string script_for(const fs::path& dir, const Plot& p) {
   std::string s;
   s += fmt::format("set terminal pngcairo size {},{} enhanced font 'DejaVu Sans,11'\n", p.width,
                    p.height);
   s += fmt::format("set output {}\n", quoted(p.png));
-  s += "set datafile separator ','\nset grid\nset key outside right top\n";
+  s += "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside right top\n";
   // Axis labels and legends may hold rig key paths (eccentricity.L_IS): no enhanced text there.
   s += fmt::format("set title {} noenhanced\nset xlabel {} noenhanced\nset ylabel {}\n", quoted(p.title),
                    quoted(p.xlabel), quoted(p.ylabel));
@@ -44,8 +116,9 @@ std::string script_for(const Plot& p) {
   s += "plot ";
   for (std::size_t i = 0; i < p.series.size(); ++i) {
     const PlotSeries& ps = p.series[i];
-    s += fmt::format("{}{} skip 1 using {} axes {} title {} noenhanced with {}", i ? ", \\\n     " : "",
-                     quoted(ps.file), ps.using_, ps.y2 ? "x1y2" : "x1y1", quoted(ps.title),
+    const std::string using_ = resolve_columns(ps.using_, header_of(dir / ps.file), ps.file);
+    s += fmt::format("{}{} using {} axes {} title {} noenhanced with {}", i ? ", \\\n     " : "",
+                     quoted(ps.file), using_, ps.y2 ? "x1y2" : "x1y1", quoted(ps.title),
                      ps.style);
   }
   return s + "\nunset output\n";
@@ -54,44 +127,72 @@ std::string script_for(const Plot& p) {
 
 bool gnuplot_available() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
 
-void render_plots(const fs::path& dir, const std::string& script_name,
-                  const std::vector<Plot>& plots) {
-  std::string script;
-  std::vector<std::string> pngs;
-  for (const Plot& p : plots) {
-    script += "reset session\n" + script_for(p) + "\n";
-    pngs.push_back(p.png);
-  }
-  run_gnuplot(dir, script_name, script, pngs);
-}
-
-void run_gnuplot(const fs::path& dir, const std::string& script_name, const std::string& script,
-                 const std::vector<std::string>& pngs) {
-  write_text_file(dir / script_name, script);
-  const fs::path log = dir / (script_name + ".log");
-  const std::string cmd = fmt::format("cd {} && gnuplot {} > {} 2>&1", shell_quoted(dir.string()),
-                                      shell_quoted(script_name), shell_quoted(log.string()));
-  const int rc = std::system(cmd.c_str());
+namespace {
+// Runs gnuplot in DIR on `script` (given on its standard input); its messages go to `log`, which is
+// read and removed. Returns what went wrong, or "" when it exited 0.
+std::string gnuplot_problem(const fs::path& dir, const std::string& script, const fs::path& log) {
+  const std::string cmd = fmt::format("cd {} && gnuplot > {} 2>&1", shell_quoted(dir.string()),
+                                      shell_quoted(log.string()));
+  FILE* pipe = ::popen(cmd.c_str(), "w");
+  if (pipe == nullptr) return fmt::format("cannot start gnuplot: {}", std::strerror(errno));
+  std::fwrite(script.data(), 1, script.size(), pipe);
+  const int rc = ::pclose(pipe);
   std::ifstream in(log);
   std::stringstream msg;
   msg << in.rdbuf();
   in.close();
   std::error_code ec;
   fs::remove(log, ec);
-  if (rc != 0) {
-    // gnuplot echoes the whole plot command; its last lines say what went wrong.
-    std::string text = msg.str();
-    if (text.size() > 400) text = "…" + text.substr(text.size() - 400);
-    if (text.empty()) text = fmt::format("it exited with status {} and left no message", rc);
-    throw std::runtime_error(fmt::format("gnuplot failed on {}: {}", script_name, text));
-  }
-  // gnuplot does not always notice a failed write (a full disk): every PNG must be there.
+  if (rc == 0) return {};
+  // gnuplot echoes the whole plot command; its last lines say what went wrong.
+  std::string text = msg.str();
+  if (text.size() > 400) text = "…" + text.substr(text.size() - 400);
+  return text.empty() ? fmt::format("it exited with status {} and left no message", rc) : text;
+}
+
+// gnuplot does not always notice a failed write (a full disk): every PNG must be there.
+void require_pngs(const fs::path& dir, const std::vector<std::string>& pngs) {
+  std::error_code ec;
   for (const std::string& name : pngs) {
     const fs::path png = dir / name;
     if (fs::file_size(png, ec) == 0 || ec)
       throw std::runtime_error(fmt::format("{}: gnuplot did not write the plot{}", png.string(),
                                            ec ? ": " + ec.message() : std::string(" (empty file)")));
   }
+}
+}  // namespace
+
+void render_plots(const fs::path& dir, const std::string& script_name,
+                  const std::vector<Plot>& plots, const Progress& progress) {
+  std::vector<std::string> scripts;
+  std::string script;
+  for (const Plot& p : plots) {
+    scripts.push_back("reset session\n" + script_for(dir, p) + "\n");
+    script += scripts.back();
+  }
+  write_text_file(dir / script_name, script);
+  // Each plot is its own gnuplot process, the plots drawn side by side; the PNGs do not depend on it.
+  std::vector<std::string> problems(plots.size());
+  progress.begin("plots", static_cast<long long>(plots.size()));
+  tbb::parallel_for(std::size_t{0}, plots.size(), [&](std::size_t i) {
+    problems[i] = gnuplot_problem(dir, scripts[i], dir / fmt::format("{}.{}.log", script_name, i));
+    progress.advance();
+  });
+  progress.finish();
+  for (std::size_t i = 0; i < plots.size(); ++i)
+    if (!problems[i].empty())
+      throw std::runtime_error(fmt::format("gnuplot failed on {} ({}): {}", script_name, plots[i].png, problems[i]));
+  std::vector<std::string> pngs;
+  for (const Plot& p : plots) pngs.push_back(p.png);
+  require_pngs(dir, pngs);
+}
+
+void run_gnuplot(const fs::path& dir, const std::string& script_name, const std::string& script,
+                 const std::vector<std::string>& pngs) {
+  write_text_file(dir / script_name, script);
+  if (const std::string problem = gnuplot_problem(dir, script, dir / (script_name + ".log")); !problem.empty())
+    throw std::runtime_error(fmt::format("gnuplot failed on {}: {}", script_name, problem));
+  require_pngs(dir, pngs);
 }
 
 }  // namespace polrig

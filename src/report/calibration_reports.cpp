@@ -73,21 +73,21 @@ std::vector<DatasetFile> report_calibration(const std::filesystem::path& dir,
   const std::string m(method_name(r.method));
   Plot err{"errors.png", fmt::format("Error curves after calibration ({})", m),
            "reference angle θ (°)", "error (°)"};
-  err.series = {{"errors.csv", "1:3", "θ12", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#1f77b4'"},
-                {"errors.csv", "1:4", "θ13", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#d62728'"},
-                {"errors.csv", "1:5", "θ23", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#2ca02c'"},
-                {"errors.csv", "1:6", "θ_sec", "linespoints lw 2.5 dt 2 pt 7 ps 0.9 lc rgb '#000000'"}};
+  err.series = {{"errors.csv", "$theta_ref_deg:$err12_deg", "θ12", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#1f77b4'"},
+                {"errors.csv", "$theta_ref_deg:$err13_deg", "θ13", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#d62728'"},
+                {"errors.csv", "$theta_ref_deg:$err23_deg", "θ23", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#2ca02c'"},
+                {"errors.csv", "$theta_ref_deg:$errsec_deg", "θ_sec", "linespoints lw 2.5 dt 2 pt 7 ps 0.9 lc rgb '#000000'"}};
   Plot fit{"fit.png", fmt::format("Calibration points and fitted Eq. 15 ({}): filled = fitted", m),
            "reference angle θ (°)", "V (mV)"};
   const char* colours[3] = {"#1f77b4", "#d62728", "#2ca02c"};
   for (int i = 0; i < 3; ++i) {
-    fit.series.push_back({"model_curve.csv", fmt::format("1:(${}*1e3)", 2 + i),
+    fit.series.push_back({"model_curve.csv", fmt::format("$theta_deg:($V{}_model*1e3)", i + 1),
                           fmt::format("V{} model", i + 1),
                           fmt::format("lines lw 1.5 lc rgb '{}'", colours[i])});
-    fit.series.push_back({"points.csv", fmt::format("(${}==1?$1:NaN):(${}*1e3)", 8 + i, 2 + i),
+    fit.series.push_back({"points.csv", fmt::format("($V{0}_fitted==1?$theta_ref_deg:NaN):($V{0}*1e3)", i + 1),
                           fmt::format("V{} fitted", i + 1),
                           fmt::format("points pt 9 ps 1.3 lc rgb '{}'", colours[i])});
-    fit.series.push_back({"points.csv", fmt::format("(${}==0?$1:NaN):(${}*1e3)", 8 + i, 2 + i),
+    fit.series.push_back({"points.csv", fmt::format("($V{0}_fitted==0?$theta_ref_deg:NaN):($V{0}*1e3)", i + 1),
                           fmt::format("V{} not fitted", i + 1),
                           fmt::format("points pt 8 ps 1.3 lc rgb '{}'", colours[i])});
   }
@@ -96,7 +96,7 @@ std::vector<DatasetFile> report_calibration(const std::filesystem::path& dir,
   fit.extra = fmt::format("set xrange [-5:{}]", hi + 5);
   Plot repl{"replacement.png", "θ_sec accuracy with parameters replaced by theory values (Fig. 21)",
             "parameters replaced", "accuracy (°)"};
-  repl.series = {{"replacement.csv", "2:xtic(1)", "accuracy", "boxes fill solid 0.6 lc rgb '#1f77b4'"}};
+  repl.series = {{"replacement.csv", "$accuracy_deg:xtic(@replaced)", "accuracy", "boxes fill solid 0.6 lc rgb '#1f77b4'"}};
   repl.extra = "set logscale y\nset boxwidth 0.7\nset xtics rotate by -45\nset style data boxes\nset key off";
   render_plots(dir, "plots.gp", {err, fit, repl});
   files.push_back({"errors.png", 1, "error curves (Figs. 16, 19)"});
@@ -119,10 +119,10 @@ std::vector<DatasetFile> report_calibration_comparison(const std::filesystem::pa
   if (!plots) return files;
   Plot fig{"comparison.png", "Accuracy of the three calibration types (Fig. 20)",
            "calibration type", "accuracy (°)"};
-  fig.series = {{"comparison.csv", "2:xtic(1)", "θ12", "histograms"},
-                {"comparison.csv", "3", "θ13", "histograms"},
-                {"comparison.csv", "4", "θ23", "histograms"},
-                {"comparison.csv", "5", "θ_sec", "histograms"}};
+  fig.series = {{"comparison.csv", "$theta12_deg:xtic(@method)", "θ12", "histograms"},
+                {"comparison.csv", "$theta13_deg", "θ13", "histograms"},
+                {"comparison.csv", "$theta23_deg", "θ23", "histograms"},
+                {"comparison.csv", "$theta_sec_deg", "θ_sec", "histograms"}};
   fig.extra = "set logscale y\nset style histogram clustered gap 1\nset style fill solid 0.7\n"
               "set yrange [1e-4:*]";
   render_plots(dir, "plots.gp", {fig});
@@ -195,9 +195,9 @@ std::vector<DatasetFile> report_calibration_trials(const std::filesystem::path& 
   Plot fig{"accuracy_cdf.png",
            fmt::format("Accuracy of θ_sec over {} Monte-Carlo calibrations", n),
            "accuracy, half range of the θ_sec error (°)", "fraction of trials"};
-  fig.series = {{"cdf.csv", "2:1", "type 1: section", "steps lw 2 lc rgb '#7f7f7f'"},
-                {"cdf.csv", "3:1", "type 2: CS + section", "steps lw 2 lc rgb '#1f77b4'"},
-                {"cdf.csv", "4:1", "type 3: CS + noncontinuous + section", "steps lw 2 lc rgb '#d62728'"}};
+  fig.series = {{"cdf.csv", "$section_deg:$fraction", "type 1: section", "steps lw 2 lc rgb '#7f7f7f'"},
+                {"cdf.csv", "$cs_deg:$fraction", "type 2: CS + section", "steps lw 2 lc rgb '#1f77b4'"},
+                {"cdf.csv", "$cs_nc_deg:$fraction", "type 3: CS + noncontinuous + section", "steps lw 2 lc rgb '#d62728'"}};
   fig.extra = "set logscale x\nset yrange [0:1]";
   render_plots(dir, "plots.gp", {fig});
   files.push_back({"accuracy_cdf.png", 1, "distribution of the accuracy of each type"});

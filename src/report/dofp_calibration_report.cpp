@@ -130,9 +130,9 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
 
   Plot e{"errors.png", "Indoor orientation error (Table 1)", "table angle θ_R (°)",
          "orientation error (°)"};
-  e.series = {{"errors.csv", "1:2", "raw", "linespoints lw 1.5 pt 6 ps 0.7 lc rgb '#d62728'"},
-              {"errors.csv", "1:3", "after step 1", "linespoints lw 1.5 pt 4 ps 0.7 lc rgb '#1f77b4'"},
-              {"errors.csv", "1:4", "after step 2", "linespoints lw 2 pt 7 ps 0.7 lc rgb '#000000'"}};
+  e.series = {{"errors.csv", "$theta_R_deg:$raw_deg", "raw", "linespoints lw 1.5 pt 6 ps 0.7 lc rgb '#d62728'"},
+              {"errors.csv", "$theta_R_deg:$step1_deg", "after step 1", "linespoints lw 1.5 pt 4 ps 0.7 lc rgb '#1f77b4'"},
+              {"errors.csv", "$theta_R_deg:$step2_deg", "after step 2", "linespoints lw 2 pt 7 ps 0.7 lc rgb '#000000'"}};
   e.extra = "set key top right opaque box\nset grid\nset xrange [0:360]\nset xtics 45";
   render_plots(dir, "plots.gp", {e});
   files.push_back({"errors.png", 1, "the orientation error curves of Table 1's three rows"});

@@ -254,18 +254,18 @@ std::vector<DatasetFile> report_four_camera_calibration(const std::filesystem::p
          "intensity I (source units)", "window mean (DN)", "residual (DN)"};
   const char* colours[4] = {"#1f77b4", "#d62728", "#2ca02c", "#9467bd"};
   for (int j = 1; j <= 4; ++j) {
-    r.series.push_back({"radiometric.csv", fmt::format("4:($1=={}?$5:NaN)", j), fmt::format("camera {} mean", j),
+    r.series.push_back({"radiometric.csv", fmt::format("$intensity:($camera=={}?$mean_DN:NaN)", j), fmt::format("camera {} mean", j),
                         fmt::format("points pt 7 ps 0.8 lc rgb '{}'", colours[j - 1])});
-    r.series.push_back({"radiometric.csv", fmt::format("4:($1=={}?$10:NaN)", j), fmt::format("K_{}·I + b_{}", j, j),
+    r.series.push_back({"radiometric.csv", fmt::format("$intensity:($camera=={}?$fit_DN:NaN)", j), fmt::format("K_{}·I + b_{}", j, j),
                         fmt::format("lines lw 1.5 lc rgb '{}'", colours[j - 1])});
-    r.series.push_back({"radiometric.csv", fmt::format("4:($1=={}?$11:NaN)", j), fmt::format("camera {} residual", j),
+    r.series.push_back({"radiometric.csv", fmt::format("$intensity:($camera=={}?$residual_DN:NaN)", j), fmt::format("camera {} residual", j),
                         fmt::format("linespoints lw 1 dt 2 pt 4 ps 0.8 lc rgb '{}'", colours[j - 1]), true});
   }
   r.extra = "set key inside top left opaque box\nset grid\nset ytics nomirror\nset y2tics";
   Plot a{"polarizer.png", "Polarizer-angle calibration: fused AoP residual over the table's turn", "table angle θ_R (°)",
          "mean AoP residual over the window (°)"};
-  a.series = {{"polarizer.csv", "2:5", "nominal axes (ψ_0 refitted)", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#d62728'"},
-              {"polarizer.csv", "2:6", "fitted ε_2..ε_4", "linespoints lw 2 pt 7 ps 0.8 lc rgb '#000000'"}};
+  a.series = {{"polarizer.csv", "$theta_R_deg:$residual_before_deg", "nominal axes (ψ_0 refitted)", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#d62728'"},
+              {"polarizer.csv", "$theta_R_deg:$residual_after_deg", "fitted ε_2..ε_4", "linespoints lw 2 pt 7 ps 0.8 lc rgb '#000000'"}};
   a.extra = "set key inside bottom right opaque box\nset grid\nset xtics 45";
   render_plots(dir, "plots.gp", {r, a});
   files.push_back({"radiometric.png", 1, "each camera's window means against the intensity, the fitted lines and the "

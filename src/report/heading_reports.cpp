@@ -36,7 +36,8 @@ std::string stats_row(const HeadingErrorStats& s) {
 
 std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
                                                const std::vector<HeadingTrial>& trials,
-                                               const HeadingStudySettings& settings, bool plots) {
+                                               const HeadingStudySettings& settings, bool plots,
+                                               const Progress& progress) {
   std::string text =
       "trial,seed,heading_deg,roll_deg,pitch_deg,sync_s,turn_rate_dps,sync_heading_deg,"
       "ins_roll_error_deg,ins_pitch_error_deg,mount_x_deg,mount_y_deg,mount_tilt_deg,mount_z_deg,"
@@ -107,41 +108,41 @@ std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
             fmt::format("Heading error against the sync error ω·Δt (|ω| ≤ {}°/s, |Δt| ≤ {} s; {})",
                         settings.turn_rate_max_dps, settings.sync_max_s, title_tail),
             "ω·Δt, turn rate × sensor-INS time offset (°)", "heading error (°)"};
-  sync.series = {{"trials.csv", "8:21", "all factors", pts},
-                 {"trials.csv", "8:22", "sync error alone", alone},
-                 {"trials.csv", "8:8", "ω·Δt", "lines lw 1 dt 2 lc rgb 'black'"}};
+  sync.series = {{"trials.csv", "$sync_heading_deg:$error_deg", "all factors", pts},
+                 {"trials.csv", "$sync_heading_deg:$error_sync_deg", "sync error alone", alone},
+                 {"trials.csv", "$sync_heading_deg:$sync_heading_deg", "ω·Δt", "lines lw 1 dt 2 lc rgb 'black'"}};
   Plot roll{"error_vs_roll.png", "Heading error against roll (" + title_tail + ")", "roll (°)",
             "heading error (°)"};
-  roll.series = {{"trials.csv", "4:21", "all factors", pts},
-                 {"trials.csv", "4:($21-$22)", "all factors minus the sync error alone", alone}};
+  roll.series = {{"trials.csv", "$roll_deg:$error_deg", "all factors", pts},
+                 {"trials.csv", "$roll_deg:($error_deg-$error_sync_deg)", "all factors minus the sync error alone", alone}};
   Plot pitch{"error_vs_pitch.png", "Heading error against pitch (" + title_tail + ")", "pitch (°)",
              "heading error (°)"};
-  pitch.series = {{"trials.csv", "5:21", "all factors", pts},
-                  {"trials.csv", "5:($21-$22)", "all factors minus the sync error alone", alone}};
+  pitch.series = {{"trials.csv", "$pitch_deg:$error_deg", "all factors", pts},
+                  {"trials.csv", "$pitch_deg:($error_deg-$error_sync_deg)", "all factors minus the sync error alone", alone}};
   Plot mount_z{"error_vs_mount_azimuth.png", "Heading error against the mount's azimuthal offset",
                "mount azimuth offset m_z (°)", "heading error from the mount alone (°)"};
-  mount_z.series = {{"trials.csv", "14:24", "mount alone", alone},
-                    {"trials.csv", "14:(-$14)", "−m_z", "lines lw 1 dt 2 lc rgb 'black'"}};
+  mount_z.series = {{"trials.csv", "$mount_z_deg:$error_mount_deg", "mount alone", alone},
+                    {"trials.csv", "$mount_z_deg:(-$mount_z_deg)", "−m_z", "lines lw 1 dt 2 lc rgb 'black'"}};
   Plot mount_t{"error_vs_mount_tilt.png", "Heading error against the mount's tilt",
                "mount tilt √(m_x² + m_y²) (°)", "heading error from the mount alone (°)"};
-  mount_t.series = {{"trials.csv", "13:($24+$14)", "mount alone, azimuth offset removed", alone}};
+  mount_t.series = {{"trials.csv", "$mount_tilt_deg:($error_mount_deg+$mount_z_deg)", "mount alone, azimuth offset removed", alone}};
   Plot ins{"error_vs_ins_tilt.png", "Heading error against the INS's tilt error",
-           "INS roll error (°)", "heading error from the INS tilt alone (°)"};
-  ins.series = {{"trials.csv", "9:23", "INS tilt error alone", alone}};
+           "INS tilt error √(δroll² + δpitch²) (°)", "heading error from the INS tilt alone (°)"};
+  ins.series = {{"trials.csv", "(sqrt($ins_roll_error_deg**2+$ins_pitch_error_deg**2)):$error_ins_tilt_deg", "INS tilt error alone", alone}};
   Plot pmax{"error_vs_pmax.png", "Heading error from sensor noise against the sky's P_max",
             "P_max", "heading error from sensor noise alone (°)"};
-  pmax.series = {{"trials.csv", "15:25", "sensor noise alone (device model)", alone}};
+  pmax.series = {{"trials.csv", "$p_max:$error_noise_deg", "sensor noise alone (device model)", alone}};
   Plot dist{"error_cdf.png", "Distribution of |heading error| (" + title_tail + ")",
             "|heading error| (°)", "fraction of trials"};
-  dist.series = {{"cdf.csv", "2:1", "all factors", "steps lw 2 lc rgb 'black'"},
-                 {"cdf.csv", "3:1", "sync error ω·Δt alone", "steps lw 2 lc rgb '#d62728'"},
-                 {"cdf.csv", "4:1", "INS tilt error alone", "steps lw 2 lc rgb '#2ca02c'"},
-                 {"cdf.csv", "5:1", "mount misalignment alone", "steps lw 2 lc rgb '#9467bd'"},
-                 {"cdf.csv", "6:1", "sensor noise alone", "steps lw 2 lc rgb '#1f77b4'"}};
+  dist.series = {{"cdf.csv", "$all_deg:$fraction", "all factors", "steps lw 2 lc rgb 'black'"},
+                 {"cdf.csv", "$sync_deg:$fraction", "sync error ω·Δt alone", "steps lw 2 lc rgb '#d62728'"},
+                 {"cdf.csv", "$ins_tilt_deg:$fraction", "INS tilt error alone", "steps lw 2 lc rgb '#2ca02c'"},
+                 {"cdf.csv", "$mount_deg:$fraction", "mount misalignment alone", "steps lw 2 lc rgb '#9467bd'"},
+                 {"cdf.csv", "$noise_deg:$fraction", "sensor noise alone", "steps lw 2 lc rgb '#1f77b4'"}};
   dist.extra = "set logscale x\nset yrange [0:1]\nset format x '%g'";
   for (Plot* p : {&sync, &roll, &pitch, &mount_z, &mount_t, &ins, &pmax})
     p->extra = "set key below horizontal";  // the scatter gets the whole width
-  render_plots(dir, "plots.gp", {sync, roll, pitch, mount_z, mount_t, ins, pmax, dist});
+  render_plots(dir, "plots.gp", {sync, roll, pitch, mount_z, mount_t, ins, pmax, dist}, progress);
   for (const char* png : {"error_vs_sync.png", "error_vs_roll.png", "error_vs_pitch.png",
                           "error_vs_mount_azimuth.png", "error_vs_mount_tilt.png",
                           "error_vs_ins_tilt.png", "error_vs_pmax.png", "error_cdf.png"})

@@ -58,7 +58,7 @@ std::vector<DatasetFile> report_orientation(const std::filesystem::path& dir,
   p.xlabel = "frame";
   p.ylabel = "heading error (°)";
   const auto only = [](const char* method) {
-    return fmt::format("1:(strcol(2) eq '{}' ? $6 : NaN)", method);
+    return fmt::format("$frame:(@method eq '{}' ? $heading_error_deg : NaN)", method);
   };
   p.series = {{"orientation.csv", only("single-point"), "single point (zenith cells)",
                "linespoints pt 7 ps 0.6 lw 1 lc rgb '#d62728'"},

@@ -98,8 +98,8 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
   const std::string noise_text =
       s.correlation_s > 0 ? fmt::format("Gauss–Markov noise, τ_c = {} s", s.correlation_s) : std::string("white noise");
   const std::string tail = fmt::format("{} trials per point, {}", s.trials, noise_text);
-  const auto on = [](const char* factor, int column) {
-    return fmt::format("(strcol(2) eq '{}' ? ${} : NaN)", factor, column);
+  const auto on = [](const char* factor, const char* column) {
+    return fmt::format("(@factor eq '{}' ? ${} : NaN)", factor, column);
   };
   const std::string rms = "linespoints lw 2 pt 7 lc rgb '#1f77b4'", p95 = "linespoints lw 1 pt 6 lc rgb '#1f77b4' dt 2";
   const std::string eq15 = "lines lw 2 lc rgb '#d62728'", lin = "lines lw 1 lc rgb 'black' dt 3";
@@ -107,37 +107,37 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
               fmt::format("Position error against the window (σ = {}°, tilt {}°; {})", s.baseline_noise_sd_deg,
                           s.baseline_tilt_deg, tail),
               "window (min)", "position error (km)"};
-  window.series = {{"summary.csv", "($3/60):" + on("window", 11), "Monte-Carlo RMS", rms},
-                   {"summary.csv", "($3/60):" + on("window", 14), "Monte-Carlo 95 %", p95},
-                   {"summary.csv", "($3/60):" + on("window", 18),
+  window.series = {{"summary.csv", "($window_s/60):" + on("window", "rms_km"), "Monte-Carlo RMS", rms},
+                   {"summary.csv", "($window_s/60):" + on("window", "p95_km"), "Monte-Carlo 95 %", p95},
+                   {"summary.csv", "($window_s/60):" + on("window", "eq15_km"),
                     "Eq. 15 (each window's first and last sighting: its Δβ)", eq15},
-                   {"summary.csv", "($3/60):" + on("window", 19), "linearized least squares", lin}};
+                   {"summary.csv", "($window_s/60):" + on("window", "linear_rms_km"), "linearized least squares", lin}};
   window.extra = "set logscale xy\nset format y '%g'\nset format x '%g'\nset key below horizontal";
   Plot noise{"error_vs_noise.png",
              fmt::format("Position error against the zenith-angle noise ({} s window, tilt {}°; {})",
                          b.window_s, s.baseline_tilt_deg, tail),
              "zenith-angle noise σ (°)", "position error (km)"};
-  noise.series = {{"summary.csv", "4:" + on("noise", 11), "Monte-Carlo RMS", rms},
-                  {"summary.csv", "4:" + on("noise", 14), "Monte-Carlo 95 %", p95},
-                  {"summary.csv", "4:" + on("noise", 18),
+  noise.series = {{"summary.csv", "$noise_sd_deg:" + on("noise", "rms_km"), "Monte-Carlo RMS", rms},
+                  {"summary.csv", "$noise_sd_deg:" + on("noise", "p95_km"), "Monte-Carlo 95 %", p95},
+                  {"summary.csv", "$noise_sd_deg:" + on("noise", "eq15_km"),
                    fmt::format("Eq. 15 (first and last sighting, Δβ = {:.2f}°)", b.delta_beta_deg), eq15},
-                  {"summary.csv", "4:" + on("noise", 19), "linearized least squares", lin}};
+                  {"summary.csv", "$noise_sd_deg:" + on("noise", "linear_rms_km"), "linearized least squares", lin}};
   noise.extra = "set key below horizontal";
   Plot tilt{"error_vs_tilt.png",
             fmt::format("Position error against the levelling error ({} s window, σ = {}°; {})", b.window_s,
                         s.baseline_noise_sd_deg, tail),
             "levelling error τ (°), towards a random azimuth", "position error (km)"};
-  tilt.series = {{"summary.csv", "5:" + on("tilt", 11), "Monte-Carlo RMS", rms},
-                 {"summary.csv", "5:" + on("tilt", 14), "Monte-Carlo 95 %", p95},
-                 {"summary.csv", "5:" + on("tilt", 18),
+  tilt.series = {{"summary.csv", "$tilt_deg:" + on("tilt", "rms_km"), "Monte-Carlo RMS", rms},
+                 {"summary.csv", "$tilt_deg:" + on("tilt", "p95_km"), "Monte-Carlo 95 %", p95},
+                 {"summary.csv", "$tilt_deg:" + on("tilt", "eq15_km"),
                   fmt::format("Eq. 15 with ε = √(σ² + τ²), Δβ = {:.2f}°", b.delta_beta_deg), eq15},
-                 {"summary.csv", "5:" + on("tilt", 19), "linearized least squares", lin}};
+                 {"summary.csv", "$tilt_deg:" + on("tilt", "linear_rms_km"), "linearized least squares", lin}};
   tilt.extra = "set key below horizontal";
   Plot fixes{"fixes.png",
              fmt::format("Fixes around the truth ({} s window, σ = {}°, tilt {}°; {})", b.window_s, b.noise_sd_deg,
                          b.tilt_deg, tail),
              "east (km)", "north (km)"};
-  fixes.series = {{"trials.csv", fmt::format("($1=={} ? $14 : NaN):13", baseline), "fixes",
+  fixes.series = {{"trials.csv", fmt::format("($cell=={} ? $east_km : NaN):$north_km", baseline), "fixes",
                    "points pt 7 ps 0.5 lc rgb '#1f77b4'"}};
   fixes.extra = "set size ratio -1\nset key below horizontal";
   fixes.width = 700;

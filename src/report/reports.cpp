@@ -24,23 +24,22 @@ std::vector<DatasetFile> report_simulation(const std::filesystem::path& dir,
                                            const Simulation& sim, bool plots) {
   std::vector<DatasetFile> files = write_simulation(dir, sim);
   if (!plots) return files;
-  // stops.csv columns: 2 theta_R, 11–13 V_ideal, 14–16 V_ecc, 17–19 V (measured).
   Plot volts{"voltages.png", "Pair voltages over the schedule", "table angle θ_R (°)",
              "V_i (mV)"};
   Plot dev{"deviations.png", "Eccentricity deviation V_i - V_i,ideal (Eq. 5)",
            "table angle θ_R (°)", "ΔV_i (mV)"};
-  for (int i = 0; i < 3; ++i) {
-    volts.series.push_back({"stops.csv", fmt::format("2:(${}*1e3)", 11 + i),
-                            fmt::format("V{} ideal", i + 1), line_style(i)});
-    volts.series.push_back({"stops.csv", fmt::format("2:(${}*1e3)", 17 + i),
-                            fmt::format("V{} measured", i + 1),
-                            fmt::format("points pt 7 ps 0.8 lc rgb '{}'", kPairColour[i])});
-    dev.series.push_back({"stops.csv", fmt::format("2:((${}-${})*1e3)", 14 + i, 11 + i),
-                          fmt::format("ΔV{} = V{},ecc - V{},ideal", i + 1, i + 1, i + 1),
-                          fmt::format("linespoints lw 2 pt 7 ps 0.6 lc rgb '{}'", kPairColour[i])});
-    dev.series.push_back({"stops.csv", fmt::format("2:((${}-${})*1e3)", 17 + i, 11 + i),
-                          fmt::format("V{} measured - V{},ideal", i + 1, i + 1),
-                          fmt::format("points pt 6 ps 1 lc rgb '{}'", kPairColour[i])});
+  for (int i = 1; i <= 3; ++i) {
+    volts.series.push_back({"stops.csv", fmt::format("$theta_R_deg:($V{}_ideal*1e3)", i),
+                            fmt::format("V{} ideal", i), line_style(i - 1)});
+    volts.series.push_back({"stops.csv", fmt::format("$theta_R_deg:($V{}*1e3)", i),
+                            fmt::format("V{} measured", i),
+                            fmt::format("points pt 7 ps 0.8 lc rgb '{}'", kPairColour[i - 1])});
+    dev.series.push_back({"stops.csv", fmt::format("$theta_R_deg:(($V{0}_ecc-$V{0}_ideal)*1e3)", i),
+                          fmt::format("ΔV{0} = V{0},ecc - V{0},ideal", i),
+                          fmt::format("linespoints lw 2 pt 7 ps 0.6 lc rgb '{}'", kPairColour[i - 1])});
+    dev.series.push_back({"stops.csv", fmt::format("$theta_R_deg:(($V{0}-$V{0}_ideal)*1e3)", i),
+                          fmt::format("V{0} measured - V{0},ideal", i),
+                          fmt::format("points pt 6 ps 1 lc rgb '{}'", kPairColour[i - 1])});
   }
   render_plots(dir, "plots.gp", {volts, dev});
   files.push_back({"voltages.png", 1, "pair voltages, ideal and measured, against θ_R"});
@@ -89,17 +88,33 @@ std::vector<DatasetFile> report_cs_study(const std::filesystem::path& dir, const
   Plot pair1{"cs_pair1.png", "Pair 1: deviation before and after 180° rotation, and CS average",
              "table angle θ_R (°)", "ΔV_1 (mV)"};
   pair1.series = {
-      {"deviations.csv", "1:($2==1?$3:NaN)", "V1br - V1ideal", "lines lw 2 lc rgb '#1f77b4'"},
-      {"deviations.csv", "1:($2==1?2*$4-$3:NaN)", "V1ar - V1ideal", "lines lw 2 lc rgb '#ff7f0e'"},
-      {"deviations.csv", "1:($2==1?$4:NaN)", "V1mr - V1ideal (CS)", "lines lw 3 lc rgb '#000000'"}};
+      {"deviations.csv", "$theta_R_deg:($pair==1?$dv_br_mV:NaN)", "V1br - V1ideal", "lines lw 2 lc rgb '#1f77b4'"},
+      {"deviations.csv", "$theta_R_deg:($pair==1?2*$dv_mr_mV-$dv_br_mV:NaN)", "V1ar - V1ideal", "lines lw 2 lc rgb '#ff7f0e'"},
+      {"deviations.csv", "$theta_R_deg:($pair==1?$dv_mr_mV:NaN)", "V1mr - V1ideal (CS)", "lines lw 3 lc rgb '#000000'"}};
+  if (study.standard_errors) {  // ± one standard error of the sampled source
+    pair1.series[0].using_ += ":$dv_br_stderr_mV";
+    pair1.series[0].style = "yerrorlines lw 2 pt 7 ps 0.3 lc rgb '#1f77b4'";
+    pair1.series[2].using_ += ":$dv_mr_stderr_mV";
+    pair1.series[2].style = "yerrorlines lw 3 pt 7 ps 0.3 lc rgb '#000000'";
+    pair1.title += " (± 1 standard error)";
+  }
   pair1.extra = "set xrange [0:360]\nset xtics 45";
   Plot all{"cs_deviations.png", "Deviations of the three pairs: before CS (dashed), after CS (solid)",
            "table angle θ_R (°)", "ΔV_i (mV)"};
+  if (study.standard_errors) all.title += " (± 1 standard error)";
   for (int i = 0; i < 3; ++i) {
-    all.series.push_back({"deviations.csv", fmt::format("1:($2=={}?$3:NaN)", i + 1),
-                          fmt::format("ΔV{} br", i + 1), line_style(i, "dt 2")});
-    all.series.push_back({"deviations.csv", fmt::format("1:($2=={}?$4:NaN)", i + 1),
-                          fmt::format("ΔV{} mr (CS)", i + 1), line_style(i)});
+    // A sampled (traced) source: each deviation ± its standard error.
+    const auto with_errors = [&](const char* value, const char* error, const char* dash) {
+      return study.standard_errors
+                 ? PlotSeries{"deviations.csv", fmt::format("$theta_R_deg:($pair=={}?{}:NaN):{}", i + 1, value, error), "",
+                              fmt::format("yerrorlines lw 2 pt 7 ps 0.3 {} lc rgb '{}'", dash, kPairColour[i])}
+                 : PlotSeries{"deviations.csv", fmt::format("$theta_R_deg:($pair=={}?{}:NaN)", i + 1, value), "",
+                              line_style(i, dash)};
+    };
+    all.series.push_back(with_errors("$dv_br_mV", "$dv_br_stderr_mV", "dt 2"));
+    all.series.back().title = fmt::format("ΔV{} br", i + 1);
+    all.series.push_back(with_errors("$dv_mr_mV", "$dv_mr_stderr_mV", ""));
+    all.series.back().title = fmt::format("ΔV{} mr (CS)", i + 1);
   }
   all.extra = "set xrange [0:360]\nset xtics 45";
   render_plots(dir, "plots.gp", {pair1, all});
@@ -118,8 +133,8 @@ std::vector<DatasetFile> report_adc_limits(const std::filesystem::path& dir,
   if (!plots) return files;
   Plot fig{"accuracy_limit.png", "ADC accuracy limit of θ12 and maximum voltage (Fig. 6)",
            "degree of polarization d", "accuracy limit (°)", "max V (mV)"};
-  fig.series = {{"accuracy_limit.csv", "1:3", "accuracy limit", "linespoints lw 2 pt 7 ps 0.7"},
-                {"accuracy_limit.csv", "1:2", "max V", "linespoints lw 2 pt 5 ps 0.7 lc rgb '#d62728'",
+  fig.series = {{"accuracy_limit.csv", "$d:$limit_deg", "accuracy limit", "linespoints lw 2 pt 7 ps 0.7"},
+                {"accuracy_limit.csv", "$d:$vmax_mV", "max V", "linespoints lw 2 pt 5 ps 0.7 lc rgb '#d62728'",
                  true}};
   fig.extra = "set logscale y\nset y2range [0:*]";
   render_plots(dir, "plots.gp", {fig});

@@ -246,18 +246,19 @@ std::vector<DatasetFile> plot_one_axis(const fs::path& dir, const GridAxis& axis
             "Expectation of ΔV_mr (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)", x,
             "expectation (mV)", "Eq. 6 - expectation (µV)"};
   for (int i = 0; i < 3; ++i) {
-    const auto col = [&](int offset) { return 2 + 4 * i + offset; };  // 1-based
-    asd.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(0)), fmt::format("ASD pair {}", i + 1), line_style(i)});
+    const auto col = [&](int offset) { return "$" + names[static_cast<std::size_t>(4 * i + offset)]; };
+    const std::string x_col = "$" + header[0] + ":";
+    asd.series.push_back({"sweep_plot.csv", x_col + col(0), fmt::format("ASD pair {}", i + 1), line_style(i)});
     // gnuplot refuses a series with no defined point: the ratio is NaN where BSD is zero.
     if (ratio_defined[static_cast<std::size_t>(i)])
-      asd.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(1)), fmt::format("ASD/BSD pair {}", i + 1),
+      asd.series.push_back({"sweep_plot.csv", x_col + col(1), fmt::format("ASD/BSD pair {}", i + 1),
                             line_style(i, "dt 2"), true});
-    mean.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(2)),
-                           fmt::format("expectation pair {}", i + 1), line_style(i)});
+    mean.series.push_back({"sweep_plot.csv", x_col + col(2), fmt::format("expectation pair {}", i + 1),
+                           line_style(i)});
     if (eq6_defined[static_cast<std::size_t>(i)]) {
-      mean.series.push_back({"sweep_plot.csv", fmt::format("1:{}", col(3)), fmt::format("Eq. 6 pair {}", i + 1),
+      mean.series.push_back({"sweep_plot.csv", x_col + col(3), fmt::format("Eq. 6 pair {}", i + 1),
                              fmt::format("points pt 6 ps 0.8 lc rgb '{}'", kPairColour[i])});
-      mean.series.push_back({"sweep_plot.csv", fmt::format("1:((${}-${})*1e3)", col(3), col(2)),
+      mean.series.push_back({"sweep_plot.csv", fmt::format("{}(({}-{})*1e3)", x_col, col(3), col(2)),
                              fmt::format("Eq. 6 - expectation, pair {}", i + 1), line_style(i, "dt 2"), true});
     }
   }
@@ -288,20 +289,20 @@ std::vector<DatasetFile> plot_two_axes(const fs::path& dir, const GridAxis& oute
   }
   write_text_file(dir / "sweep_map.csv", text);
 
-  const auto image = [&](const char* png, const std::string& title, const char* cblabel, int column) {
+  const auto image = [&](const char* png, const std::string& title, const char* cblabel, const std::string& column) {
     std::string s = fmt::format(
         "reset session\nset terminal pngcairo size 960,720 enhanced font 'DejaVu Sans,11'\n"
-        "set output '{}'\nset datafile separator ','\n"
+        "set output '{}'\nset datafile separator ','\nset datafile columnheaders\n"
         "set title \"{}\" noenhanced\nset xlabel \"{}\" noenhanced\nset ylabel \"{}\" noenhanced\n"
         "set cblabel \"{}\"\nset format cb '%g'\nset rmargin at screen 0.82\nset palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\nset autoscale fix\nset tics out\n"
-        "plot 'sweep_map.csv' skip 1 using 1:2:{} with image notitle\nunset output\n",
-        png, title, axis_label(inner), axis_label(outer), cblabel, column);
+        "plot 'sweep_map.csv' using \"{}\":\"{}\":\"{}\" with image notitle\nunset output\n",
+        png, title, axis_label(inner), axis_label(outer), cblabel, inner.key->path, outer.key->path, column);
     return s;
   };
   const std::string mean_of = by.count * bx.count < nx * ny ? " (mean of each bin)" : "";
   const std::string script =
-      image("sweep_asd.png", "Pair 1 ASD after CS" + mean_of, "ASD (mV)", 3) + "\n" +
-      image("sweep_expectation.png", "Pair 1 expectation of ΔV_mr after CS" + mean_of, "expectation (mV)", 4);
+      image("sweep_asd.png", "Pair 1 ASD after CS" + mean_of, "ASD (mV)", names[0]) + "\n" +
+      image("sweep_expectation.png", "Pair 1 expectation of ΔV_mr after CS" + mean_of, "expectation (mV)", names[1]);
   run_gnuplot(dir, "plots.gp", script, {"sweep_asd.png", "sweep_expectation.png"});
   return {{"sweep_map.csv", 1,
            fmt::format("the plotted images: pair 1 ASD and expectation, the mean over each of {}×{} bins of the "
@@ -359,6 +360,23 @@ std::vector<std::pair<std::string, std::string>> sweep_inputs(const LoadedRig& r
 }  // namespace
 
 namespace {
+// The command that continues this sweep when interrupted: its own, without --force, with --resume.
+std::string continue_command(const SweepFolder& f) {
+  if (f.command.rfind("polrig ", 0) != 0) return {};  // not started from the command line
+  // The command line's words are shell-quoted ('…'): split at spaces outside quotes.
+  std::vector<std::string> words(1);
+  bool quoted = false;
+  for (char ch : f.command) {
+    if (ch == '\'') quoted = !quoted;
+    if (ch == ' ' && !quoted) words.emplace_back();
+    else words.back() += ch;
+  }
+  std::string c;
+  for (const std::string& word : words)
+    if (word != "--force") c += (c.empty() ? "" : " ") + word;
+  return f.resume ? c : c + " --resume";
+}
+
 // The folder a sweep writes into, opened (or resumed) by rank 0.
 struct OpenSweep {
   std::optional<OutputDir> dir;
@@ -369,7 +387,7 @@ struct OpenSweep {
 
 void open_sweep(OpenSweep& o, const LoadedRig& r, const std::vector<GridAxis>& axes, int steps, const SweepFolder& f) {
   try {
-    o.dir.emplace(f.out, f.force, Resumable{kSweepStateFile, f.resume, f.force && !f.resume});
+    o.dir.emplace(f.out, f.force, Resumable{kSweepStateFile, f.resume, f.force && !f.resume, continue_command(f)});
   } catch (const std::runtime_error& e) {
     if (f.argument.empty()) throw;
     throw std::runtime_error(fmt::format("{}: {}", f.argument, e.what()));

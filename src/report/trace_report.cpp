@@ -136,16 +136,16 @@ std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const Sce
       {"scene.yaml", 1, "the scene traced (every key); loads back to the same scene"}};
   if (!plots) return files;
   Plot wall_png{"wall_radiance.png", "Wall radiance (W/m²/sr)", "φ (°)", "cos θ"};
-  wall_png.series = {{"wall_radiance.csv", "4:3:5", "L", "image"}};
+  wall_png.series = {{"wall_radiance.csv", "$phi_deg:$cos_theta:$L_Wm2sr", "L", "image"}};
   wall_png.extra = "set key off\nset xrange [0:360]\nset yrange [-1:1]";
   Plot plane_png{"plane_S0.png", fmt::format("S0 on the plane {} mm below the port (W/m²)", L_o), "x (mm)", "y (mm)"};
-  plane_png.series = {{"plane_stokes.csv", "1:2:3", "S0", "image"}};
+  plane_png.series = {{"plane_stokes.csv", "$x_mm:$y_mm:$S0", "S0", "image"}};
   plane_png.extra = "set key off\nset size ratio -1";
   Plot prof_png{"plane_profile.png", "Irradiance below the port against the distance from its axis",
                 "r (mm)", "S0 (W/m²)"};
-  prof_png.series = {{"plane_profile.csv", "1:2:3", "traced", "yerrorlines lw 2 pt 7 ps 0.6"},
-                     {"plane_profile.csv", "1:5", "uniform disk (view factor)", "lines lw 2 dt 2"},
-                     {"plane_profile.csv", "1:6", "cos⁴φ from the centre", "lines lw 2 dt 3"}};
+  prof_png.series = {{"plane_profile.csv", "$r_mm:$S0:$S0_stderr", "traced", "yerrorlines lw 2 pt 7 ps 0.6"},
+                     {"plane_profile.csv", "$r_mm:$S0_uniform_disk", "uniform disk (view factor)", "lines lw 2 dt 2"},
+                     {"plane_profile.csv", "$r_mm:$S0_cos4", "cos⁴φ from the centre", "lines lw 2 dt 3"}};
   render_plots(dir, "plots.gp", {wall_png, plane_png, prof_png});
   files.push_back({"wall_radiance.png", 1, "preview of the wall radiance map"});
   files.push_back({"plane_S0.png", 1, "preview of S0 below the port"});

@@ -24,6 +24,7 @@ struct Resumable {
   std::string record;   // the file in the staging folder that marks an interrupted, resumable run
   bool resume = false;  // continue an interrupted run (its staging folder must hold `record`)
   bool restart = false; // discard an interrupted run's staging folder (--force)
+  std::string continue_with;  // the command that continues an interrupted run, said on a signal
 };
 
 class OutputDir {
@@ -57,6 +58,8 @@ class OutputDir {
 
   // Removes the staging folder, and the parents the constructor created unless committed.
   void remove_staging_and_parents() noexcept;
+  // On stderr, when the staging folder is kept for a later run: where, how big, how to continue.
+  void say_what_is_kept() const noexcept;
 
  private:
 
@@ -66,12 +69,14 @@ class OutputDir {
 
   std::filesystem::path destination_, staging_;
   std::vector<std::filesystem::path> missing_parents_, created_parents_;
+  std::string continue_with_;
   bool replace_ = false, committed_ = false, resuming_ = false, keep_ = false;
   int lock_fd_ = -1;  // the resumable staging folder, locked
 };
 
 // On SIGINT, SIGTERM or SIGHUP: removes the staging folder and created parents of every
-// OutputDir not yet committed (but those kept by keep_on_failure()), then ends the process by the same signal. Call at the start of
+// OutputDir not yet committed (but those kept by keep_on_failure(), which it names on stderr with
+// their size and the command that continues them), then ends the process by the same signal. Call at the start of
 // main, before any other thread exists (it blocks these signals and waits for them in a thread
 // of its own, so the cleanup runs as ordinary code, not in a signal handler).
 void clean_up_outputs_on_signals();

@@ -215,6 +215,59 @@ TEST_F(Cli, ManifestStoresAnyRigTextByteForByte) {
   EXPECT_TRUE(YAML::LoadFile((tmp / "out-latin1.yaml" / "manifest.yaml").string())["rig_text_base64"]);
 }
 
+// Usage errors exit 2 naming the word, with the nearest known name when one is near.
+TEST_F(Cli, UsageErrorsNameTheWordAndSuggestTheNearestName) {
+  Result r = polrig("simualte " + shell_quote(kRig) + " -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "unknown command 'simualte' (did you mean 'simulate'?)");
+  r = polrig("study cz " + shell_quote(kRig) + " -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "polrig study: unknown command 'cz' (did you mean 'cs'?)");
+  r = polrig("simulate " + shell_quote(kRig) + " --sampels -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "polrig simulate: unknown option '--sampels' (did you mean '--samples'?)");
+  r = polrig("simulate " + shell_quote(kRig) + " --threads 0 -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "--threads");
+  // --set takes one KEY=VALUE: `-o` after it is refused as such, not read as its value.
+  r = polrig("simulate " + shell_quote(kRig) + " --set -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "--set");
+  EXPECT_HAS(r.err, "expected key.path=value");
+  EXPECT_LACKS(r.err, "--out is required");
+  // A misspelt rig key, on the command line and in a file.
+  r = polrig("simulate " + shell_quote(kRig) + " --set eccentricity.L_SI=0.1 -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "unknown key 'eccentricity.L_SI' (did you mean 'eccentricity.L_IS'?)");
+  write_file(tmp / "typo.yaml", "eccentricity:\n  alhpa_S: 10\n");
+  r = polrig("rig show " + shell_quote(tmp / "typo.yaml"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "did you mean 'eccentricity.alpha_S'?");
+  // Far from every name: no guess.
+  r = polrig("frobnicate -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "unknown command 'frobnicate'");
+  EXPECT_LACKS(r.err, "did you mean");
+  EXPECT_FALSE(fs::exists(tmp / "a"));
+  // Help and version are not errors.
+  EXPECT_EQ(polrig("--help").status, 0);
+  EXPECT_EQ(polrig("simulate --help").status, 0);
+  EXPECT_EQ(polrig("--version").status, 0);
+}
+
+// A study adc that would run for hours is refused at once, with the size it would take.
+TEST_F(Cli, StudyAdcRefusesWorkBeyondItsBound) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Result r = polrig("study adc --d 0.1:0.9:1e8 -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "100000000 values of d; at most 1000000");
+  r = polrig("study adc --d 0.1:0.9:100000 --step 0.001 -o " + shell_quote(tmp / "a"));
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "1.8e+10 θ steps; at most 2e+09");
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  EXPECT_FALSE(fs::exists(tmp / "a"));
+}
+
 TEST_F(Cli, RigShowAndRigKeys) {
   const Result show = ok("rig show " + shell_quote(kRig) + " --set device.d=0.3");
   const polrig::Rig shown = polrig::parse_rig(show.out, "rig show").rig;
@@ -464,7 +517,7 @@ TEST_F(Cli, BadInputWritesNothing) {
       {"--set negative distance", "simulate " + shell_quote(kRig) + " --set source.L_o=-1",
        "--set source.L_o=-1: key 'source.L_o': expected a length in [0.1, 1000] mm, got -1"},
       {"--set without =", "study cs " + shell_quote(kRig) + " --set source.L_o",
-       "--set source.L_o: expected key.path=value"},
+       "--set: expected key.path=value (e.g. eccentricity.L_S=0.05), got 'source.L_o'"},
       {"bad --grid key", "sweep " + shell_quote(kRig) + " --grid eccentricity.L_X=0:1:3",
        "--grid eccentricity.L_X=0:1:3: unknown key 'eccentricity.L_X'"},
       {"--grid with count 0", "sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0:1:0",
@@ -611,8 +664,8 @@ TEST_F(Cli, BadOutputNamesGetClearMessagesAndLeaveNothing) {
 
 namespace {
 // Starts polrig with default signal dispositions (a shell's background job would ignore
-// SIGINT), its output to /dev/null; returns its pid.
-pid_t spawn_polrig(const std::vector<std::string>& args, bool ignore_hangup) {
+// SIGINT), its output to /dev/null (stderr to `err`); returns its pid.
+pid_t spawn_polrig(const std::vector<std::string>& args, bool ignore_hangup, const std::string& err = "/dev/null") {
   std::vector<std::string> argv_s{kPolrigExe};
   argv_s.insert(argv_s.end(), args.begin(), args.end());
   std::vector<char*> argv;
@@ -621,7 +674,7 @@ pid_t spawn_polrig(const std::vector<std::string>& args, bool ignore_hangup) {
   posix_spawn_file_actions_t files;
   posix_spawn_file_actions_init(&files);
   posix_spawn_file_actions_addopen(&files, 1, "/dev/null", O_WRONLY, 0);
-  posix_spawn_file_actions_addopen(&files, 2, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&files, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawnattr_t attr;
   posix_spawnattr_init(&attr);
   sigset_t defaults, none;
@@ -742,7 +795,8 @@ TEST_F(Cli, SlowAnInterruptedSweepResumesToTheSameBytes) {
   fs::rename(out, ref);
   for (int sig : {SIGKILL, SIGINT}) {
     SCOPED_TRACE(sig);
-    const pid_t pid = spawn_polrig(resumable_sweep(out), false);
+    const fs::path err = tmp / "interrupted.txt";
+    const pid_t pid = spawn_polrig(resumable_sweep(out), false, err.string());
     ASSERT_GT(pid, 0);
     const std::size_t done = interrupt_after_a_checkpoint(pid, out, sig);
     ASSERT_GT(done, 0u);
@@ -758,7 +812,19 @@ TEST_F(Cli, SlowAnInterruptedSweepResumesToTheSameBytes) {
 
     std::vector<std::string> resume = resumable_sweep(out);
     resume.push_back("--resume");
-    ok(joined(resume));
+    if (sig == SIGKILL) {
+      ok(joined(resume));
+    } else {  // Ctrl-C says what it kept, where, how big, and the command that continues it
+      const std::string said = read_file(err);
+      EXPECT_HAS(said, "kept in " + staging_of(out).string() + " (");
+      EXPECT_HAS(said, " MB)");
+      const std::string tag = "polrig: to continue it: polrig ";
+      const auto at = said.find(tag);
+      ASSERT_NE(at, std::string::npos) << said;
+      const std::string command = said.substr(at + tag.size(), said.find('\n', at) - at - tag.size());
+      EXPECT_HAS(command, " --resume");
+      ok(command);
+    }
     EXPECT_FALSE(fs::exists(staging_of(out)));
     ASSERT_EQ(names_in(out), names_in(ref));
     for (const std::string& name : names_in(ref))

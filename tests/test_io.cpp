@@ -15,7 +15,9 @@
 #include "polrig/io/exr.h"
 #include "polrig/io/manifest.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/io/plot.h"
 #include "polrig/io/sweep_h5.h"
+#include "polrig/suggest.h"
 #include "support.h"
 
 namespace polrig {
@@ -61,6 +63,40 @@ TEST(Csv, RefusesNonFiniteValuesNamingTheColumnAndRow) {
   t.add_row({2, 1, nan});
   EXPECT_THROW(t.add_row({3, 1, inf}), std::runtime_error);  // undefined is NaN, never infinity
   EXPECT_EQ(t.text(), "pair,bsd_mV,ratio_pct\n1,0.5,2\n2,1,nan\n");
+}
+
+TEST(Suggest, EditDistanceIsTheTextbooks) {
+  EXPECT_EQ(edit_distance("kitten", "sitting"), 3u);  // Levenshtein's classic
+  EXPECT_EQ(edit_distance("", "abc"), 3u);
+  EXPECT_EQ(edit_distance("simualte", "simulate"), 1u);  // one swap of neighbours
+  EXPECT_EQ(edit_distance("ca", "abc"), 3u);             // optimal string alignment, not Damerau's 2
+  EXPECT_EQ(nearest_name("L_SI", {"L_IS", "L_S", "alpha_S"}), std::optional<std::string>("L_IS"));
+  EXPECT_EQ(nearest_name("frobnicate", {"simulate", "sweep"}), std::nullopt);
+  EXPECT_EQ(did_you_mean("swep", {"sweep", "study"}), " (did you mean 'sweep'?)");
+}
+
+// Plots name CSV columns by header, so a writer's new column cannot shift what a plot shows.
+TEST(PlotColumns, NamesBecomeGnuplotColumnLookups) {
+  const std::vector<std::string> header{"theta_R_deg", "t_s", "V1_ideal", "method", "eccentricity.L_IS"};
+  EXPECT_EQ(resolve_columns("$theta_R_deg:($V1_ideal*1e3)", header, "stops.csv"),
+            "\"theta_R_deg\":(column(\"V1_ideal\")*1e3)");
+  EXPECT_EQ(resolve_columns("$0:(@method eq 'cs' ? $t_s : NaN)", header, "x.csv"),
+            "$0:(strcol(\"method\") eq 'cs' ? column(\"t_s\") : NaN)");
+  EXPECT_EQ(resolve_columns("$eccentricity.L_IS:xtic(@method)", header, "x.csv"),
+            "\"eccentricity.L_IS\":xtic(strcol(\"method\"))");
+}
+
+TEST(PlotColumns, AnUnknownNameOrAColumnNumberIsRefused) {
+  const std::vector<std::string> header{"theta_R_deg", "V1"};
+  EXPECT_THROW(resolve_columns("$theta_R_deg:$V2", header, "stops.csv"), std::logic_error);
+  EXPECT_THROW(resolve_columns("2:($V1*1e3)", header, "stops.csv"), std::logic_error);
+  EXPECT_THROW(resolve_columns("$theta_R_deg:($11*1e3)", header, "stops.csv"), std::logic_error);
+  try {
+    resolve_columns("$theta_R_deg:$V2", header, "stops.csv");
+  } catch (const std::logic_error& e) {
+    EXPECT_HAS(std::string(e.what()), "stops.csv");
+    EXPECT_HAS(std::string(e.what()), "'V2'");
+  }
 }
 
 TEST(OutputDir, AppearsOnlyOnCommit) {

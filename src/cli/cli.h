@@ -40,6 +40,9 @@ struct Failure {
   std::string message;  // after "polrig: error: "
 };
 Failure failure_of(std::exception_ptr error);
+// A command-line mistake in words (exit 2): an unknown command or option with the nearest known
+// name ("did you mean"), else CLI11's own message.
+std::string usage_error(const CLI::App& app, int argc, char** argv, const CLI::ParseError& e);
 // A failure every rank has learnt at a collective point: each throws it, rank 0 prints it.
 class RanksFailure : public std::runtime_error {
  public:

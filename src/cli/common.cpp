@@ -108,8 +108,18 @@ OutputDir OutputOptions::open(bool plots_needed) const {
 void RigInput::add_to(CLI::App& app, bool required) {
   auto* r = app.add_option("RIG", path, "rig file (YAML), e.g. rigs/wang2019-indoor.yaml");
   if (required) r->required();
+  // A value that is not KEY=VALUE is refused here, so `--set -o out` names --set, not a missing -o.
+  const CLI::Validator key_value(
+      [](const std::string& s) -> std::string {
+        const auto eq = s.find('=');
+        const bool ok = eq != std::string::npos && eq > 0 &&
+                        s.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_.") == eq;
+        return ok ? std::string() : fmt::format("expected key.path=value (e.g. eccentricity.L_S=0.05), got '{}'", s);
+      },
+      "KEY=VALUE");
   app.add_option("--set", sets, "override a rig value: key.path=value (repeatable)")
       ->type_name("KEY=VALUE")
+      ->check(key_value)
       ->allow_extra_args(false);
 }
 

@@ -56,9 +56,16 @@ int main(int argc, char** argv) {
 
   try {
     app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return root ? app.exit(e) : 0;
+  } catch (const CLI::CallForAllHelp& e) {
+    return root ? app.exit(e) : 0;
+  } catch (const CLI::CallForVersion& e) {
+    return root ? app.exit(e) : 0;
   } catch (const CLI::ParseError& e) {
-    if (!root) return e.get_exit_code();  // every rank parsed the same line; rank 0 says it
-    return app.exit(e);
+    // A usage error, exit 2 as every other bad input; every rank parsed the same line.
+    if (root) std::cerr << "polrig: error: " << cli::usage_error(app, argc, argv, e) << "\n";
+    return 2;
   }
 
   std::unique_ptr<tbb::global_control> limit;

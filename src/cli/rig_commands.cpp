@@ -194,8 +194,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       const LoadedRig r = rig->load();
       require_instrument(r.rig, Instrument::kPairVoltages, "study adc", r.origin);
       const std::vector<double> ds = parse_d_list(*d_list);
+      if (const auto problem = adc_work_problem(ds.size(), *step)) throw RigError("--d, --step: " + *problem);
       OutputDir dir = out->open();
-      const auto files = report_adc_limits(dir.staging(), adc_accuracy_limits(ds, r.rig.electronics, r.rig.device.film_axis_deg, *step), out->plots());
+      const auto limits = adc_accuracy_limits(ds, r.rig.electronics, r.rig.device.film_axis_deg, *step, progress());
+      const auto files = report_adc_limits(dir.staging(), limits, out->plots());
       write_manifest(dir.staging(), {command_line(), &r, files});
       finish(dir);
     }});

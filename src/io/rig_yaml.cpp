@@ -14,6 +14,7 @@
 #include "polrig/io/scene_yaml.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sky/sun.h"
+#include "polrig/suggest.h"
 #include "yaml_load.h"
 
 namespace polrig {
@@ -79,6 +80,13 @@ class RigParser {
     throw RigError(fmt::format("{}: key '{}': {}", where(path), path, message));
   }
 
+  // " (did you mean 'eccentricity.L_IS'?)" for a path near a rig key.
+  static std::string key_suggestion(std::string_view path) {
+    std::vector<std::string> paths;
+    for (const RigKey& k : rig_keys()) paths.emplace_back(k.path);
+    return did_you_mean(path, paths);
+  }
+
   static bool is_section(std::string_view path) {
     for (const RigKey& k : rig_keys())
       if (k.path.size() > path.size() && k.path.starts_with(path) && k.path[path.size()] == '.')
@@ -88,8 +96,8 @@ class RigParser {
 
   void apply_override(YAML::Node& root, const RigOverride& o) {
     if (!find_rig_key(o.path))
-      throw RigError(fmt::format("{}: unknown key '{}' (see docs/formats.md for the rig's "
-                                 "keys)", o.text(), o.path));
+      throw RigError(fmt::format("{}: unknown key '{}'{} (see docs/formats.md for the rig's "
+                                 "keys)", o.text(), o.path, key_suggestion(o.path)));
     YAML::Node value;
     try {
       value = load_yaml(o.value, "value", "a rig value nests at most 1 level");
@@ -141,7 +149,7 @@ class RigParser {
         if (!it->second.IsMap()) fail(path, "expected a section (a mapping of keys)");
         walk(it->second, path, rig);
       } else {
-        fail(path, "unknown key (see docs/formats.md for the rig's keys)");
+        fail(path, "unknown key" + key_suggestion(path) + " (see docs/formats.md for the rig's keys)");
       }
     }
   }

@@ -857,6 +857,7 @@ scene file, line and key, or the photon count.
     require(self, Instrument::kPairVoltages, "study adc");
     const std::vector<double> ds = d_values(d);
     finite_in(step, kMinAdcStep, kMaxAdcStep, "step", "deg");
+    if (const auto problem = adc_work_problem(ds.size(), step)) throw py::value_error("d, step: " + *problem);
     const Rig r = self.rig();
     const ThreadLimit limit(threads);
     std::vector<AdcLimit> limits;

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include "polrig/calib/angles.h"
 #include "polrig/device/sensor.h"
@@ -44,11 +45,23 @@ AdcLimit adc_accuracy_limit(double d, const Electronics& e,
   return {d, vmax * 1e3, limit};
 }
 
+std::optional<std::string> adc_work_problem(std::size_t d_count, double step_deg) {
+  const double steps = static_cast<double>(d_count) * std::llround(180.0 / step_deg);
+  if (steps <= kMaxAdcSteps) return std::nullopt;
+  return fmt::format("{} values of d at a {}° step are {:.3g} θ steps; at most {:.3g}: fewer values of d or a "
+                     "larger step", d_count, step_deg, steps, kMaxAdcSteps);
+}
+
 std::vector<AdcLimit> adc_accuracy_limits(std::span<const double> ds, const Electronics& e,
                                           const std::array<double, 6>& film_axis_deg,
-                                          double step_deg) {
-  std::vector<AdcLimit> limits;
-  for (double d : ds) limits.push_back(adc_accuracy_limit(d, e, film_axis_deg, step_deg));
+                                          double step_deg, const Progress& progress) {
+  std::vector<AdcLimit> limits(ds.size());
+  progress.begin("study adc: values of d", static_cast<long long>(ds.size()));
+  tbb::parallel_for(std::size_t{0}, ds.size(), [&](std::size_t i) {
+    limits[i] = adc_accuracy_limit(ds[i], e, film_axis_deg, step_deg);
+    progress.advance();
+  });
+  progress.finish();
   return limits;
 }
 
@@ -71,6 +84,8 @@ std::vector<double> parse_d_list(std::string_view text) {
       const std::string msg = e.what();
       return fail(msg.substr(msg.find(": ") + 2));  // drop the --grid prefix
     }
+    if (axis.count > kMaxAdcD)
+      return fail(fmt::format("{} values of d; at most {}", axis.count, kMaxAdcD));
     for (int i = 0; i < axis.count; ++i) ds.push_back(axis.value(i));
     return ds;
   }
@@ -86,6 +101,8 @@ std::vector<double> parse_d_list(std::string_view text) {
     if (!is_degree_of_polarization(d))
       return fail(fmt::format("expected degrees of polarization in (0, 1), got {}", d));
     ds.push_back(d);
+    if (ds.size() > static_cast<std::size_t>(kMaxAdcD))
+      return fail(fmt::format("more than {} values of d", kMaxAdcD));
     pos = comma + 1;
   }
   return ds;

@@ -193,7 +193,7 @@ mkdir "$scratch/shrunk" && shrink_scene "$src/scenes/jf500.yaml" "$scratch/shrun
 cd "$scratch" || exit 1
 
 mpi_build=no
-if ldd "$exe" 2>/dev/null | grep -q 'libmpi'; then mpi_build=yes; fi
+case $(ldd "$exe" 2>/dev/null) in *libmpi*) mpi_build=yes ;; esac  # no grep -q: pipefail + SIGPIPE
 
 passed=0 failed=0 skipped=0 i=0
 now() { printf '%s' "${EPOCHREALTIME/,/.}"; }
@@ -210,8 +210,11 @@ for line in "${lines[@]}"; do
   cmd=$(shrink "$line") || { failed=$((failed + 1)); continue; }
   as_root_mpi=no
   if [[ $cmd == mpirun* ]]; then
-    if [ $mpi_build = no ] || ! command -v mpirun >/dev/null; then
-      report skip 0 "$line  (needs a polrig built with MPI and mpirun: $exe links no libmpi or there is no mpirun)"
+    why=
+    if [ $mpi_build = no ]; then why="$exe was built without MPI (it links no libmpi)"
+    elif ! command -v mpirun >/dev/null; then why="there is no mpirun on PATH"; fi
+    if [ -n "$why" ]; then
+      report skip 0 "$line  (skipped: $why)"
       skipped=$((skipped + 1))
       continue
     fi

@@ -14,8 +14,7 @@
 #    - `bash scripts/build-mpi.sh` is not run: the test uses the build it was given;
 #    - the `mpirun … build-mpi/polrig …` line runs with POLRIG_EXE for build-mpi/polrig, only when
 #      POLRIG_EXE was built with MPI (it links libmpi) and mpirun is found; else it says it skipped
-#      it. As root, OMPI_ALLOW_RUN_AS_ROOT(_CONFIRM)=1 are set for it (the README's comment says
-#      root needs --allow-run-as-root, which those two variables stand for).
+#      it. It runs as written otherwise: as root too (the README's line has --allow-run-as-root).
 #    The files a user is expected to bring are made before the first line that names them
 #    (make_user_file below): my_measurements.csv and more_voltages.csv from out/sim's outputs,
 #    points.csv and ins_log.csv written literally.
@@ -208,7 +207,6 @@ for line in "${lines[@]}"; do
     continue
   fi
   cmd=$(shrink "$line") || { failed=$((failed + 1)); continue; }
-  as_root_mpi=no
   if [[ $cmd == mpirun* ]]; then
     why=
     if [ $mpi_build = no ]; then why="$exe was built without MPI (it links no libmpi)"
@@ -219,7 +217,6 @@ for line in "${lines[@]}"; do
       continue
     fi
     cmd=${cmd//build-mpi\/polrig/\"$exe\"}
-    if [ "$(id -u)" = 0 ]; then as_root_mpi=yes; fi
   fi
   # A file a user is expected to have, named by this line and not made yet.
   made=yes
@@ -244,12 +241,7 @@ for line in "${lines[@]}"; do
     continue
   fi
   t0=$(now)
-  if [ $as_root_mpi = yes ]; then
-    (export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1; eval "$cmd") \
-      </dev/null >"$logs/$i.out" 2>"$logs/$i.err"
-  else
-    eval "$cmd" </dev/null >"$logs/$i.out" 2>"$logs/$i.err"
-  fi
+  eval "$cmd" </dev/null >"$logs/$i.out" 2>"$logs/$i.err"
   rc=$?
   t=$(awk -v a="$t0" -v b="$(now)" 'BEGIN { printf "%.2f", b - a }')
   if [ $rc -eq 0 ]; then

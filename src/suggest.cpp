@@ -23,7 +23,7 @@ std::size_t edit_distance(std::string_view a, std::string_view b) {
 }
 
 std::optional<std::string> nearest_name(std::string_view typed, const std::vector<std::string>& known) {
-  const std::size_t allowed = typed.size() <= 4 ? 1 : typed.size() <= 8 ? 2 : typed.size() / 3;
+  const std::size_t allowed = typed.size() <= 4 ? 1 : typed.size() <= 8 ? 2 : 3;
   std::optional<std::string> best;
   std::size_t best_distance = allowed + 1;
   for (const std::string& name : known) {

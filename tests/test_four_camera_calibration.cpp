@@ -607,3 +607,24 @@ TEST_F(FourCameraCalibrationCli, WithCheckerboardViewsTheGeometryIsTheGeometricC
     for (std::size_t j = 0; j < 4; ++j) EXPECT_EQ(measured.rows[j][measured.col(col)], sim.rows[j][sim.col(col)]) << col;
   EXPECT_EQ(test::read_file(tmp / "mout" / "polarizer.csv"), test::read_file(tmp / "out4" / "polarizer.csv"));
 }
+
+// A fisheye fit that converges to no lens (|k_i| > 10, too few or too alike views: 6 views at a
+// quarter of W16's resolution give k4 = 11.2) is a calibration that cannot be done (exit 3, the
+// fit's report), never a calibration.yaml that polrig's own reader refuses.
+class SlowFourCameraCalibrationCli : public FourCameraCalibrationCli {};  // CTest label "slow"
+
+TEST_F(SlowFourCameraCalibrationCli, AFitThatIsNoLensCannotCalibrate) {
+  if (!four_camera_geometry_available()) GTEST_SKIP() << "polrig built without OpenCV";
+  const std::string quarter =
+      "--set device.cameras.width_px=258 --set device.cameras.height_px=194 "
+      "--set device.cameras.fx_px=[192.5,192.8,192.225,192.65] --set device.cameras.fy_px=[192.5,192.8,192.225,192.65] "
+      "--set device.cameras.cx_px=[129,129.6,128.925,129.475] --set device.cameras.cy_px=[97,96.95,97.575,97.15] "
+      "--set checkerboard.views=6";
+  ok(fmt::format("simulate {} -o {} --layers all --no-plots {}", rig("wang2016-calibration.yaml"), at("cal"), quarter));
+  const Result r = polrig(fmt::format("calibrate {} --method four-camera -o {} --no-plots", at("cal"), at("out")));
+  EXPECT_EQ(r.status, 3) << r.err;
+  EXPECT_HAS(r.err, "the geometric calibration is not usable");
+  EXPECT_HAS(r.err, "is no lens (|k| ≤ 10)");
+  EXPECT_LACKS(r.err, "calibration.yaml");
+  EXPECT_FALSE(fs::exists(tmp / "out"));
+}

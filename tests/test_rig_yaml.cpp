@@ -282,7 +282,7 @@ TEST(RigYamlError, UnknownTopLevelKey) {
 
 TEST(RigYamlError, UnknownKeyInsideSection) {
   expect_file_error("source:\n  model: cos4\n  L_0: 20\n", 3, "source.L_0",
-                    "unknown key (see docs/formats.md for the rig's keys)");
+                    "unknown key (did you mean 'source.L_o'?) (see docs/formats.md for the rig's keys)");
   expect_file_error("device:\n  truth:\n    kv: [1, 1, 1]\n    kx: 1\n", 4, "device.truth.kx",
                     "unknown key");
   // A leaf key used as a section.
@@ -292,8 +292,8 @@ TEST(RigYamlError, UnknownKeyInsideSection) {
 
 TEST(RigYamlError, UnknownKeyViaSet) {
   const std::string msg = rig_error("seed: 5\n", sets({"source.L_0=20"}));
-  EXPECT_EQ(msg, "--set source.L_0=20: unknown key 'source.L_0' (see docs/formats.md for the "
-                 "rig's keys)");
+  EXPECT_EQ(msg, "--set source.L_0=20: unknown key 'source.L_0' (did you mean 'source.L_o'?) (see "
+                 "docs/formats.md for the rig's keys)");
   const std::string msg2 = rig_error("seed: 5\n", sets({"sauce.L_o=20"}));
   EXPECT_STARTS(msg2, "--set sauce.L_o=20: unknown key 'sauce.L_o'");
   // A section is not a settable key.

@@ -12,7 +12,8 @@ namespace polrig {
 std::size_t edit_distance(std::string_view a, std::string_view b);
 
 // The name in `known` nearest to `typed`, if it is near enough to be a typo: at most 1 edit for
-// names of up to 4 characters, 2 up to 8, and a third of the length beyond. Ties go to the first.
+// names of up to 4 characters, 2 up to 8, 3 beyond (a rig key path's section does not widen it).
+// Ties go to the first.
 std::optional<std::string> nearest_name(std::string_view typed, const std::vector<std::string>& known);
 
 // " (did you mean 'NAME'?)" for the nearest name, or "" when none is near.

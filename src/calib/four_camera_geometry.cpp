@@ -237,6 +237,12 @@ FourCameraGeometryFit fit_four_camera_geometry(const std::vector<std::array<Boar
       s.message = fmt::format("OpenCV: {}", e.what());
       continue;
     }
+    for (int i = 0; i < 4 && s.usable(); ++i)
+      if (std::abs(runs[j].D.at<double>(i)) > kMaxKannalaBrandtK) {
+        s.termination = GeometryTermination::Failed;
+        s.message = fmt::format("k{} = {:.4g} is no lens (|k| ≤ {}): too few views, or views too alike", i + 1,
+                                runs[j].D.at<double>(i), kMaxKannalaBrandtK);
+      }
     CameraGeometry& c = fit.camera[j];
     const cv::Mat& K = runs[j].K;
     c.fx = K.at<double>(0, 0), c.fy = K.at<double>(1, 1), c.cx = K.at<double>(0, 2), c.cy = K.at<double>(1, 2);

@@ -27,7 +27,7 @@ constexpr Range kPolarizer{-180, 180, "a polarizer axis in [-180, 180] deg"};
 constexpr Range kEps{-45, 45, "a mounting error within ±45 deg (beyond, it is another nominal axis)"};
 constexpr Range kAxis{-225, 225, "an axis in [-225, 225] deg (polarizer_deg + eps_deg)"};
 constexpr Range kFocal{1, 1e5, "a focal length in [1, 1e5] px"};
-constexpr Range kK{-10, 10, "a Kannala-Brandt coefficient within ±10"};
+constexpr Range kK{-kMaxKannalaBrandtK, kMaxKannalaBrandtK, "a Kannala-Brandt coefficient within ±10"};
 constexpr Range kRvec{-180, 180, "a rotation-vector component within ±180 deg"};
 constexpr Range kPosition{-1e4, 1e4, "a position within ±10 m (in mm)"};
 

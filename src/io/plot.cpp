@@ -22,6 +22,10 @@ namespace {
 std::string quoted(const std::string& s) {
   std::string q = "\"";
   for (char c : s) {
+    if (c == '\n') {  // a line break in a title: gnuplot's escape
+      q += "\\n";
+      continue;
+    }
     if (c == '"' || c == '\\') q += '\\';
     q += c;
   }

@@ -211,7 +211,14 @@ std::vector<std::vector<double>> binned_means(const fs::path& h5, const std::vec
 constexpr std::size_t kMaxCurveBins = 2000;  // a line plot's points along one axis
 constexpr std::size_t kMaxImageBins = 256;   // an image's pixels along each axis
 
-std::vector<DatasetFile> plot_one_axis(const fs::path& dir, const GridAxis& axis) {
+// A title's line breaks as gnuplot's "\n" escape (for a double-quoted string).
+std::string escaped_line_breaks(const std::string& text) {
+  std::string out;
+  for (char c : text) out += c == '\n' ? std::string("\\n") : std::string(1, c);
+  return out;
+}
+
+std::vector<DatasetFile> plot_one_axis(const fs::path& dir, const GridAxis& axis, const std::string& fixed) {
   const Bins bins = bins_for(axis, kMaxCurveBins);
   const std::size_t n = static_cast<std::size_t>(axis.count);
   std::vector<std::string> names, header{std::string(axis.key->path)};
@@ -241,9 +248,9 @@ std::vector<DatasetFile> plot_one_axis(const fs::path& dir, const GridAxis& axis
   write_text_file(dir / "sweep_plot.csv", table.text());
 
   const std::string x = axis_label(axis);
-  Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)", x, "ASD (mV)", "ASD/BSD (%)"};
+  Plot asd{"sweep_asd.png", "After CS: ASD (solid) and ASD/BSD (dashed, right)" + fixed, x, "ASD (mV)", "ASD/BSD (%)"};
   Plot mean{"sweep_expectation.png",
-            "Expectation of ΔV_mr (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)", x,
+            "Expectation of ΔV_mr (lines), Eq. 6 (points), Eq. 6 - expectation (dashed, right)" + fixed, x,
             "expectation (mV)", "Eq. 6 - expectation (µV)"};
   for (int i = 0; i < 3; ++i) {
     const auto col = [&](int offset) { return "$" + names[static_cast<std::size_t>(4 * i + offset)]; };
@@ -270,7 +277,8 @@ std::vector<DatasetFile> plot_one_axis(const fs::path& dir, const GridAxis& axis
                        "{} bins of the swept key", bins.count)}};
 }
 
-std::vector<DatasetFile> plot_two_axes(const fs::path& dir, const GridAxis& outer, const GridAxis& inner) {
+std::vector<DatasetFile> plot_two_axes(const fs::path& dir, const GridAxis& outer, const GridAxis& inner,
+                                       const std::string& fixed) {
   const Bins by = bins_for(outer, kMaxImageBins), bx = bins_for(inner, kMaxImageBins);
   const std::size_t ny = static_cast<std::size_t>(outer.count), nx = static_cast<std::size_t>(inner.count);
   const std::vector<std::string> names{"pair1_asd_mV", "pair1_mean_mr_mV"};
@@ -294,15 +302,17 @@ std::vector<DatasetFile> plot_two_axes(const fs::path& dir, const GridAxis& oute
         "reset session\nset terminal pngcairo size 960,720 enhanced font 'DejaVu Sans,11'\n"
         "set output '{}'\nset datafile separator ','\nset datafile columnheaders\n"
         "set title \"{}\" noenhanced\nset xlabel \"{}\" noenhanced\nset ylabel \"{}\" noenhanced\n"
-        "set cblabel \"{}\"\nset format cb '%g'\nset rmargin at screen 0.82\nset palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\nset autoscale fix\nset tics out\n"
+        "set cblabel \"{}\" offset 1.5,0\nset format cb '%g'\nset rmargin at screen 0.80\nset palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\nset autoscale fix\nset tics out\n"
         "plot 'sweep_map.csv' using \"{}\":\"{}\":\"{}\" with image notitle\nunset output\n",
-        png, title, axis_label(inner), axis_label(outer), cblabel, inner.key->path, outer.key->path, column);
+        png, escaped_line_breaks(title), axis_label(inner), axis_label(outer), cblabel, inner.key->path,
+        outer.key->path, column);
     return s;
   };
   const std::string mean_of = by.count * bx.count < nx * ny ? " (mean of each bin)" : "";
   const std::string script =
-      image("sweep_asd.png", "Pair 1 ASD after CS" + mean_of, "ASD (mV)", names[0]) + "\n" +
-      image("sweep_expectation.png", "Pair 1 expectation of ΔV_mr after CS" + mean_of, "expectation (mV)", names[1]);
+      image("sweep_asd.png", "Pair 1 ASD after CS" + mean_of + fixed, "ASD (mV)", names[0]) + "\n" +
+      image("sweep_expectation.png", "Pair 1 expectation of ΔV_mr after CS" + mean_of + fixed, "expectation (mV)",
+            names[1]);
   run_gnuplot(dir, "plots.gp", script, {"sweep_asd.png", "sweep_expectation.png"});
   return {{"sweep_map.csv", 1,
            fmt::format("the plotted images: pair 1 ASD and expectation, the mean over each of {}×{} bins of the "
@@ -322,7 +332,7 @@ std::vector<DatasetFile> SweepReport::finish(bool plots) {
   if (csv_) files.push_back({"sweep.csv", 1, "one row per grid point: the grid values and the CS summary of each pair"});
   if (!plots || axes_.empty() || axes_.size() > 2) return files;
   std::vector<DatasetFile> data =
-      axes_.size() == 1 ? plot_one_axis(dir_, axes_[0]) : plot_two_axes(dir_, axes_[0], axes_[1]);
+      axes_.size() == 1 ? plot_one_axis(dir_, axes_[0], fixed_) : plot_two_axes(dir_, axes_[0], axes_[1], fixed_);
   files.insert(files.end(), data.begin(), data.end());
   files.push_back({"sweep_asd.png", 1, axes_.size() == 1 ? "ASD and ASD/BSD against the swept key (Figs. 11a, 12a)"
                                                          : "pair 1 ASD over the grid, an image (Figs. 11a, 12a)"});
@@ -360,6 +370,20 @@ std::vector<std::pair<std::string, std::string>> sweep_inputs(const LoadedRig& r
 }  // namespace
 
 namespace {
+// "\n(fixed: eccentricity.L_IS = 0.05 mm, …)": the eccentricity keys the grid does not sweep, as
+// the rig holds them, for the plots' titles.
+std::string fixed_keys(const Rig& rig, const std::vector<GridAxis>& axes) {
+  Rig copy = rig;
+  std::string text;
+  for (const char* path : {"eccentricity.L_IS", "eccentricity.alpha_IS", "eccentricity.L_S", "eccentricity.alpha_S"}) {
+    const bool swept = std::any_of(axes.begin(), axes.end(), [&](const GridAxis& a) { return a.key->path == path; });
+    const RigKey* key = find_rig_key(path);
+    if (swept || key == nullptr || key->real == nullptr) continue;
+    text += fmt::format("{}{} = {:g} {}", text.empty() ? "" : ", ", path, key->real(copy), key->unit);
+  }
+  return text.empty() ? text : "\n(fixed: " + text + ")";
+}
+
 // The command that continues this sweep when interrupted: its own, without --force, with --resume.
 std::string continue_command(const SweepFolder& f) {
   if (f.command.rfind("polrig ", 0) != 0) return {};  // not started from the command line
@@ -411,6 +435,7 @@ void open_sweep(OpenSweep& o, const LoadedRig& r, const std::vector<GridAxis>& a
   o.manifest = Manifest{o.state.command, &r, {}, {}, o.state.working_directory};
   try {
     o.report.emplace(staging, axes, r.rig.light->has(Source::kClosedFormEq6), f.csv, manifest_fields(o.manifest), resume);
+    o.report->set_fixed_keys(fixed_keys(r.rig, axes));
   } catch (const std::runtime_error& e) {
     if (!resume) throw;
     throw std::runtime_error(fmt::format("--resume: {}; pass --force without --resume to start over", e.what()));

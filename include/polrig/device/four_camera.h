@@ -65,6 +65,10 @@ struct FourCameraSpec {
   int adc_bits = 12;  // the GC1031CP digitises to 8 or 12 bits
 };
 
+// The largest |k_i| of a lens polrig takes: W16's lens has k ≈ 0; a fit beyond is not a lens
+// (calibration.yaml's range, and where a geometric fit is called failed).
+inline constexpr double kMaxKannalaBrandtK = 10;
+
 // One camera's geometry: intrinsics, distortion and R_j1 (row-major 3 × 3).
 struct CameraGeometry {
   double fx = 770, fy = 770, cx = 517, cy = 389;

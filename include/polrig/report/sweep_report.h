@@ -39,12 +39,15 @@ class SweepReport {
   void write(std::size_t first, std::span<const CsSummary> block);
   // Makes everything written durable; returns the checkpoint (points written, CSV length).
   Resume sync();
+  // The plots' titles name these (the rig's values held fixed: "eccentricity.alpha_S = 240 deg").
+  void set_fixed_keys(std::string text) { fixed_ = std::move(text); }
   // Closes the files and draws the plots (one or two axes) from sweep.h5.
   std::vector<DatasetFile> finish(bool plots);
 
  private:
   std::filesystem::path dir_;
   std::vector<GridAxis> axes_;
+  std::string fixed_;
   SweepH5Layout layout_;
   std::optional<SweepH5Writer> h5_;
   std::optional<CsvTable> table_;

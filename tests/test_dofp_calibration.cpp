@@ -273,47 +273,68 @@ TEST(DofpCalibration, JacobianMatchesCentralDifferences) {
   EXPECT_LT(r.cwiseAbs().maxCoeff(), kPi / 4);
 }
 
-// The same with the view's projection (the cell's view 40° off the axis at azimuth 30°): the AoP
-// residual's ψ_0 column is −dφ/dψ_0, no longer −1.
+// The same for step 2's projected model (a cell whose pixels look 40° off the axis at azimuth 30°,
+// one pixel apart with f_c = 40 px): columns x = [ε2 − ε1, ε3 − ε1, ε4 − ε1, k2, k3, k4, ε1, d0] and
+// the ninth, ∂r/∂ψ_0 through every pixel's own projection, against central differences.
 TEST(DofpCalibration, ProjectedJacobianMatchesCentralDifferences) {
   const Truth t = make_truth(2, 2, 3, 1.0);
-  const Vec3 view{std::sin(rad(40.0)) * std::cos(rad(30.0)), std::sin(rad(40.0)) * std::sin(rad(30.0)),
-                  std::cos(rad(40.0))};
+  const double fc = 40.0, r = fc * std::tan(rad(40.0));
+  std::array<Vec3, 4> views;
+  for (int j = 0; j < 4; ++j) {
+    const double x = r * std::cos(rad(30.0)) + j % 2 - 0.5, y = r * std::sin(rad(30.0)) + j / 2 - 0.5;
+    const double n = std::sqrt(x * x + y * y + fc * fc);
+    views[j] = {x / n, y / n, fc / n};
+  }
+  const double eps1 = 0.4, psi0 = 12.0;
   std::vector<double> F, theta;
   for (int m = 0; m < 79; ++m) {
     theta.push_back(4.6036 * m);
-    const std::vector<double> f = frame(t, 0.7, 0.85, dofp_projected_aop_deg(view, 12.0 + theta.back()), 0.0, nullptr);
-    for (int j = 0; j < 4; ++j) F.push_back((f[j] - t.b[j]) / t.K[j]);
+    const std::vector<double> f = frame(t, 0.7, 0.0, 0.0, 0.0, nullptr);  // K/2·I + b
+    for (int j = 0; j < 4; ++j) {
+      const double phi = rad(dofp_projected_aop_deg(views[j], psi0 + theta.back()));
+      const double a = rad(t.alpha_deg[j] - t.eps_deg[j] - eps1);
+      F.push_back((f[j] - t.b[j]) / t.K[j] * (1.0 + t.k[j] * 0.85 * std::cos(2.0 * phi - 2.0 * a)));
+    }
   }
   DofpStep2Options o;
   o.view_projection = true;
-  o.focal_px = 405.4;
+  o.focal_px = fc;
+  o.psi0_deg = 13.0;
   Eigen::Matrix<double, 8, 1> x;
-  x << rad(2.0), rad(-1.5), rad(0.3), 0.97, 0.91, 0.88, rad(13.0), 0.8;
-  const Eigen::MatrixXd J = dofp_cell_jacobian(F, theta, x, o, view);
+  x << rad(2.0), rad(-1.5), rad(0.3), 0.97, 0.91, 0.88, rad(0.7), 0.8;
+  const Eigen::MatrixXd J = dofp_cell_jacobian(F, theta, x, o, views);
+  ASSERT_EQ(J.cols(), 9);
   const double h = 1e-6;
-  for (int p = 0; p < 8; ++p) {
+  for (int p = 0; p < 9; ++p) {
     Eigen::Matrix<double, 8, 1> xp = x, xm = x;
-    xp[p] += h;
-    xm[p] -= h;
+    DofpStep2Options op = o, om = o;
+    if (p < 8) {
+      xp[p] += h;
+      xm[p] -= h;
+    } else {
+      op.psi0_deg += h * 180.0 / kPi;
+      om.psi0_deg -= h * 180.0 / kPi;
+    }
     const Eigen::VectorXd fd =
-        (dofp_cell_residuals(F, theta, xp, o, view) - dofp_cell_residuals(F, theta, xm, o, view)) / (2 * h);
-    for (int m = 0; m < 3 * 79; ++m)
-      EXPECT_NEAR(J(m, p), fd[m], 1e-8) << "unknown " << p << " row " << m;
+        (dofp_cell_residuals(F, theta, xp, op, views) - dofp_cell_residuals(F, theta, xm, om, views)) / (2 * h);
+    for (int m = 0; m < 3 * 79; ++m) EXPECT_NEAR(J(m, p), fd[m], 1e-8) << "unknown " << p << " row " << m;
     EXPECT_GT(J.col(p).norm(), 1e-3) << p;
   }
-  // dφ/dψ_0 varies over the turn (cos γ to 1/cos γ): the ψ_0 column is not constant.
+  // ∂r/∂ψ_0 is −dφ_1/dψ_0 on the AoP rows up to the pixels' shifts: it varies over the turn (cos γ to
+  // 1/cos γ), unlike ∂r/∂ε1 = −1.
   double lo = 1e9, hi = -1e9;
-  for (int m = 0; m < 79; ++m) lo = std::min(lo, -J(3 * m, 6)), hi = std::max(hi, -J(3 * m, 6));
+  for (int m = 0; m < 79; ++m) lo = std::min(lo, -J(3 * m, 8)), hi = std::max(hi, -J(3 * m, 8));
   EXPECT_LT(lo, 0.9);
   EXPECT_GT(hi, 1.1);
-  // The residuals at the truth's ψ_0 and (k, ε) are zero with the projection, not without it.
+  // The residuals at the truth are zero with the projection, not without it.
   Eigen::Matrix<double, 8, 1> xt;
-  xt << rad(t.eps_deg[1]), rad(t.eps_deg[2]), rad(t.eps_deg[3]), t.k[1], t.k[2], t.k[3], rad(12.0), 0.85;
-  EXPECT_LT(dofp_cell_residuals(F, theta, xt, o, view).cwiseAbs().maxCoeff(), 1e-12);
+  xt << rad(t.eps_deg[1]), rad(t.eps_deg[2]), rad(t.eps_deg[3]), t.k[1], t.k[2], t.k[3], rad(eps1), 0.85;
+  o.psi0_deg = psi0;
+  EXPECT_LT(dofp_cell_residuals(F, theta, xt, o, views).cwiseAbs().maxCoeff(), 1e-12);
   DofpStep2Options off = o;
   off.view_projection = false;
-  EXPECT_GT(dofp_cell_residuals(F, theta, xt, off, view).cwiseAbs().maxCoeff(), rad(1.0));
+  xt[6] = rad(psi0 + eps1);  // H17's ψ_0 per cell
+  EXPECT_GT(dofp_cell_residuals(F, theta, xt, off).cwiseAbs().maxCoeff(), rad(1.0));
 }
 
 // Frames of a wide field (every pixel sees the port polarizer along its own view, as the model

@@ -175,8 +175,7 @@ inline double dot4(const double* a, const double* f) {
 // With w = w_e = 0 only the AoP residual counts (H17's cost).
 template <bool kJacobian>
 void accumulate(const CellModel& m, const double* F, const double* rot, std::size_t n, Sums& out,
-                double* residuals = nullptr, double* jacobian_rows = nullptr,
-                const double* dphi_dpsi = nullptr) {
+                double* residuals = nullptr, double* jacobian_rows = nullptr) {
   // Row-major copies of P and dP for dot4.
   double P[3][4], dP[6][3][4];
   for (int a = 0; a < 3; ++a)
@@ -232,7 +231,7 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
         e[p] = fitres ? ww * m.we * (dot4(dnv[p], f) - nf * dq3 * i3) * i3 : 0.0;
       }
       // JᵀJ's upper triangle: rows g = [g, −ww, 0], h = [h, 0, −ww·w] and e = [e, 0, 0].
-      const double g6 = dphi_dpsi ? -ww * dphi_dpsi[i] : -ww, h7 = -ww * m.w;
+      const double g6 = -ww, h7 = -ww * m.w;
       for (int p = 0; p < 6; ++p) {
         for (int q = p; q < 6; ++q) jtj[p][q] += g[p] * g[q] + h[p] * h[q] + e[p] * e[q];
         j6[p] += g[p] * g6;
@@ -407,26 +406,6 @@ ViewProjection view_projection_of(const Vec3& v) {
   p.m22 = 1.0 - g * v[1] * v[1];
   p.det = p.m11 * p.m22 - p.m12 * p.m12;
   return p;
-}
-
-// Per stop the model's rotation e^{−2iφ_m} (cos, sin, and the stop's weight, as table_rotations)
-// and dφ_m/dψ_0, with φ_m = arg(M·(cos β_m, sin β_m)), β_m = ψ_0 + s_R·θ_R,m (turn_rad holds
-// s_R·θ_R,m, weight the stops' weights).
-void projected_rotations(const ViewProjection& M, const std::vector<double>& turn_rad,
-                         const std::vector<double>& rot, double psi0, std::vector<double>& out,
-                         std::vector<double>& dphi_dpsi) {
-  const std::size_t n = turn_rad.size();
-  out.resize(3 * n);
-  dphi_dpsi.resize(n);
-  for (std::size_t m = 0; m < n; ++m) {
-    const double b = psi0 + turn_rad[m], cb = std::cos(b), sb = std::sin(b);
-    const double u1 = M.m11 * cb + M.m12 * sb, u2 = M.m12 * cb + M.m22 * sb;
-    const double uu = u1 * u1 + u2 * u2;
-    out[3 * m] = (u1 * u1 - u2 * u2) / uu;  // cos 2φ
-    out[3 * m + 1] = -2.0 * u1 * u2 / uu;   // sin(−2φ)
-    out[3 * m + 2] = rot[3 * m + 2];
-    dphi_dpsi[m] = M.det / uu;
-  }
 }
 
 // s_R·θ_R,m in radians per stop.
@@ -841,6 +820,13 @@ struct Psi0Share {
   }
 };
 
+// ∂r/∂ψ_0 of one residual row (accumulate's 8 columns) at a stop with every pixel's dφ/dψ_0.
+double psi0_column(const double* row, const double* dphi) {
+  double j = row[6] * dphi[0];
+  for (int p = 0; p < 3; ++p) j += row[p] * (dphi[p + 1] - dphi[0]);
+  return j;
+}
+
 bool psi0_share(const Vec8& x, const std::array<double, 4>& alpha, const DofpStep2Options& o, const double* F,
                 const ProjectedStops& ps, std::size_t n, Psi0Share& s) {
   std::vector<double> r(3 * n, 0.0), J(24 * n, 0.0);
@@ -851,8 +837,7 @@ bool psi0_share(const Vec8& x, const std::array<double, 4>& alpha, const DofpSte
     for (int k = 0; k < 3; ++k) {
       const Eigen::Map<const Vec8> row(&J[24 * m + 8 * k]);
       const double ri = r[3 * m + k];
-      double jpsi = row[6] * d[0];
-      for (int p = 0; p < 3; ++p) jpsi += row[p] * (d[p + 1] - d[0]);
+      const double jpsi = psi0_column(&J[24 * m + 8 * k], d);
       s.H += row * row.transpose();
       s.b += row * jpsi;
       s.gx += row * ri;
@@ -1541,16 +1526,16 @@ std::vector<double> rotations_of(const std::vector<double>& theta, double sense)
   return table_rotations(stops, sense, false);
 }
 
-// The rotations the scalar loop takes for one cell at x: table_rotations', or with the view's
-// projection the model's per stop and dφ/dψ_0.
-std::vector<double> cell_rotations(const std::vector<double>& theta, const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& o, const Vec3& view, std::vector<double>& dphi) {
-  std::vector<double> rot = rotations_of(theta, o.table_sense);
-  if (!o.view_projection) return rot;
-  std::vector<double> turns(theta.size()), out;
+// With the view's projection: a cell's stops at options.psi0_deg, as step 2 takes them.
+ProjectedStops projected_stops_of(const std::vector<double>& theta, const DofpStep2Options& o,
+                                  const std::array<Vec3, 4>& views) {
+  PixelProjections M;
+  for (int j = 0; j < 4; ++j) M[j] = view_projection_of(views[j]);
+  std::vector<double> turns(theta.size());
   for (std::size_t m = 0; m < theta.size(); ++m) turns[m] = o.table_sense * deg2rad(theta[m]);
-  projected_rotations(view_projection_of(view), turns, rot, x[6], out, dphi);
-  return out;
+  ProjectedStops ps;
+  project_stops(M, turns, rotations_of(theta, o.table_sense), deg2rad(o.psi0_deg), ps);
+  return ps;
 }
 
 }  // namespace
@@ -1559,14 +1544,6 @@ double dofp_projected_aop_deg(const Vec3& view, double psi_deg) {
   const ViewProjection M = view_projection_of(view);
   const double b = deg2rad(psi_deg), cb = std::cos(b), sb = std::sin(b);
   return rad2deg(std::atan2(M.m12 * cb + M.m22 * sb, M.m11 * cb + M.m12 * sb));
-}
-
-Vec3 dofp_cell_view(int width, int height, const DofpStep2Options& o, int cx, int cy) {
-  if (!(std::isfinite(o.focal_px) && o.focal_px > 0))
-    throw std::invalid_argument(fmt::format("DoFP: a cell's view needs a focal length > 0 px, got {}", o.focal_px));
-  const double xc = std::isnan(o.principal_x_px) ? 0.5 * width : o.principal_x_px;
-  const double yc = std::isnan(o.principal_y_px) ? 0.5 * height : o.principal_y_px;
-  return vec3::unit({2.0 * cx + 1.0 - xc, 2.0 * cy + 1.0 - yc, o.focal_px});
 }
 
 Vec3 dofp_pixel_view(int width, int height, const DofpStep2Options& o, int col, int row) {
@@ -1675,41 +1652,50 @@ FitSummary dofp_fit_psi0(const std::function<DofpPsi0Pass(double)>& pass, double
 }
 
 Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F, const std::vector<double>& theta,
-                                    const Eigen::Matrix<double, 8, 1>& x,
-                                    const DofpStep2Options& o, const Vec3& view) {
+                                    const Eigen::Matrix<double, 8, 1>& x, const DofpStep2Options& o,
+                                    const std::array<Vec3, 4>& views) {
   if (F.size() != 4 * theta.size())
     throw std::invalid_argument("dofp_cell_residuals: F needs 4 values per table angle");
-  std::vector<double> dphi;
-  const std::vector<double> rot = cell_rotations(theta, x, o, view, dphi);
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * theta.size()));
+  Sums sums;
+  if (o.view_projection) {
+    if (!accumulate_projected<false>(x, alpha_rad_of(o), o, F.data(), projected_stops_of(theta, o, views),
+                                     theta.size(), sums, r.data()))
+      throw std::invalid_argument("dofp_cell_residuals: the model is singular at x");
+    return r;
+  }
+  const std::vector<double> rot = rotations_of(theta, o.table_sense);
   CellModel model;
   if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, false, model))
     throw std::invalid_argument("dofp_cell_residuals: the model is singular at x");
-  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * theta.size()));
-  Sums sums;
-  if (o.view_projection) model.c2psi = 1.0, model.s2psi = 0.0;
-  accumulate<false>(model, F.data(), rot.data(), theta.size(), sums, r.data(), nullptr,
-                    dphi.empty() ? nullptr : dphi.data());
+  accumulate<false>(model, F.data(), rot.data(), theta.size(), sums, r.data());
   return r;
 }
 
 Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F, const std::vector<double>& theta,
-                                   const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& o, const Vec3& view) {
+                                   const Eigen::Matrix<double, 8, 1>& x, const DofpStep2Options& o,
+                                   const std::array<Vec3, 4>& views) {
   if (F.size() != 4 * theta.size())
     throw std::invalid_argument("dofp_cell_jacobian: F needs 4 values per table angle");
-  std::vector<double> dphi;
-  const std::vector<double> rot = cell_rotations(theta, x, o, view, dphi);
-  CellModel model;
-  if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
-    throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
   std::vector<double> rows(24 * theta.size(), 0.0);
   Sums sums;
-  if (o.view_projection) model.c2psi = 1.0, model.s2psi = 0.0;
-  accumulate<true>(model, F.data(), rot.data(), theta.size(), sums, nullptr, rows.data(),
-                   dphi.empty() ? nullptr : dphi.data());
-  Eigen::MatrixXd J(static_cast<Eigen::Index>(3 * theta.size()), 8);
-  for (std::size_t i = 0; i < 3 * theta.size(); ++i)
+  ProjectedStops ps;
+  if (o.view_projection) {
+    ps = projected_stops_of(theta, o, views);
+    if (!accumulate_projected<true>(x, alpha_rad_of(o), o, F.data(), ps, theta.size(), sums, nullptr, rows.data()))
+      throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
+  } else {
+    const std::vector<double> rot = rotations_of(theta, o.table_sense);
+    CellModel model;
+    if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
+      throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
+    accumulate<true>(model, F.data(), rot.data(), theta.size(), sums, nullptr, rows.data());
+  }
+  Eigen::MatrixXd J(static_cast<Eigen::Index>(3 * theta.size()), o.view_projection ? 9 : 8);
+  for (std::size_t i = 0; i < 3 * theta.size(); ++i) {
     for (int p = 0; p < 8; ++p) J(static_cast<Eigen::Index>(i), p) = rows[8 * i + p];
+    if (o.view_projection) J(static_cast<Eigen::Index>(i), 8) = psi0_column(&rows[8 * i], &ps.dphi[4 * (i / 3)]);
+  }
   return J;
 }
 

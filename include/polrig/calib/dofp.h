@@ -130,12 +130,10 @@ struct DofpStep2Options {
 // a plane polarizer whose axis lies ⊥ Z_l at psi_deg from X_l, along the unit view v (frame l,
 // v_z > 0): arg(M·(cos ψ, sin ψ)), M = I₂ − (v_x, v_y)(v_x, v_y)ᵀ/(1 + v_z) (docs/physics.md §14).
 double dofp_projected_aop_deg(const Vec3& view, double psi_deg);
-// The view through the centre of cell (cx, cy) (the corner its four pixels share): the unit vector
-// (2cx + 1 − x_c, 2cy + 1 − y_c, f_c) in frame l, with the options' focal length and principal
-// point (NaN: the image centre). Throws std::invalid_argument when focal_px is not positive.
-Vec3 dofp_cell_view(int width, int height, const DofpStep2Options& options, int cx, int cy);
-// The view through the centre of pixel (col, row), the one step 2's projected model uses:
-// (col + ½ − x_c, row + ½ − y_c, f_c), unit (device/dofp_camera.h's pixel_view at the image centre).
+// The view through the centre of pixel (col, row), the one step 2's projected model uses: the unit
+// vector (col + ½ − x_c, row + ½ − y_c, f_c) in frame l, with the options' focal length and principal
+// point (NaN: the image centre; device/dofp_camera.h's pixel_view). Throws std::invalid_argument
+// when focal_px is not positive.
 Vec3 dofp_pixel_view(int width, int height, const DofpStep2Options& options, int col, int row);
 
 // One cell's (or the global) fit: the parameters of its four pixels and how the fit ended,
@@ -266,18 +264,22 @@ DofpTruth dofp_parameter_maps(const DofpCalibration& c, std::vector<std::uint8_t
 // x = [ε2, ε3, ε4 (rad), k2, k3, k4, ψ_0 (rad), d_0]; F̃ holds 4 values per observation (TL, TR,
 // BL, BR), theta_R_deg one per observation. Residuals: per observation the AoP residual (rad)
 // , the weighted DoP residual and the weighted fit residual (0 when their weight is 0),
-// interleaved.
-// `view` (frame l) is the cell's view, used with options.view_projection only.
+// interleaved. With options.view_projection step 2's projected model instead: ψ_0 =
+// options.psi0_deg held, x = [ε2 − ε1, ε3 − ε1, ε4 − ε1, k2, k3, k4, ε1, d_0] and `views` the four
+// pixels' views (frame l, TL, TR, BL, BR).
 Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F_tilde,
                                     const std::vector<double>& theta_R_deg,
                                     const Eigen::Matrix<double, 8, 1>& x,
-                                    const DofpStep2Options& options, const Vec3& view = {0, 0, 1});
+                                    const DofpStep2Options& options,
+                                    const std::array<Vec3, 4>& views = {});
 // The analytic Jacobian (Appendix A's chain ∂φ̃/∂Q̃ · ∂Q̃/∂x in matrix form: ∂(R⁻¹Ãᵀ) =
-// R⁻¹(∂Ãᵀ − ∂R·R⁻¹Ãᵀ)), rows as dofp_cell_residuals; columns: x.
+// R⁻¹(∂Ãᵀ − ∂R·R⁻¹Ãᵀ)), rows as dofp_cell_residuals; columns: x, and with the view's projection
+// a ninth, ∂r/∂ψ_0 (rad), the column step 2's fit of ψ_0 reduces.
 Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F_tilde,
                                    const std::vector<double>& theta_R_deg,
                                    const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& options, const Vec3& view = {0, 0, 1});
+                                   const DofpStep2Options& options,
+                                   const std::array<Vec3, 4>& views = {});
 
 // One cell's sums at x by each code path of step 2, for tests: the scalar loop (the one
 // dofp_cell_residuals and dofp_cell_jacobian use), and the pass in lanes of 8 that step 2 runs

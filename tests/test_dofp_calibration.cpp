@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <complex>
+#include <iostream>
 #include <cstring>
 #include <numbers>
 #include <random>
@@ -19,6 +20,9 @@
 
 #include "polrig/calib/dofp.h"
 #include "polrig/calib/dofp_polarization.h"
+#include "polrig/rig/rig.h"
+#include "polrig/sim/dofp_frames.h"
+#include "polrig/units.h"
 
 namespace {
 using namespace polrig;
@@ -144,6 +148,7 @@ TEST(DofpCalibration, NoiseFreeFramesCalibrateBackToTheTruth) {
   const Dataset ds = make_dataset(t, 23.0, 0.8, 0.0);
   const DofpCalibration c = calibrate_dofp(t.W, t.H, ds.levels, ds.stops);
   ASSERT_EQ(c.step1.rank_deficient_pixels, 0);
+  for (const DofpCellFit& f : c.step2.cells) EXPECT_TRUE(f.usable()) << f.message;
   ASSERT_EQ(c.step2.usable_cells, 8 * 6);
   const DofpTruth p = dofp_parameter_maps(c);
   double worst[6] = {};
@@ -268,54 +273,75 @@ TEST(DofpCalibration, JacobianMatchesCentralDifferences) {
   EXPECT_LT(r.cwiseAbs().maxCoeff(), kPi / 4);
 }
 
-// The same with the view's projection (the cell's view 40° off the axis at azimuth 30°): the AoP
-// residual's ψ_0 column is −dφ/dψ_0, no longer −1.
+// The same for step 2's projected model (a cell whose pixels look 40° off the axis at azimuth 30°,
+// one pixel apart with f_c = 40 px): columns x = [ε2 − ε1, ε3 − ε1, ε4 − ε1, k2, k3, k4, ε1, d0] and
+// the ninth, ∂r/∂ψ_0 through every pixel's own projection, against central differences.
 TEST(DofpCalibration, ProjectedJacobianMatchesCentralDifferences) {
   const Truth t = make_truth(2, 2, 3, 1.0);
-  const Vec3 view{std::sin(rad(40.0)) * std::cos(rad(30.0)), std::sin(rad(40.0)) * std::sin(rad(30.0)),
-                  std::cos(rad(40.0))};
+  const double fc = 40.0, r = fc * std::tan(rad(40.0));
+  std::array<Vec3, 4> views;
+  for (int j = 0; j < 4; ++j) {
+    const double x = r * std::cos(rad(30.0)) + j % 2 - 0.5, y = r * std::sin(rad(30.0)) + j / 2 - 0.5;
+    const double n = std::sqrt(x * x + y * y + fc * fc);
+    views[j] = {x / n, y / n, fc / n};
+  }
+  const double eps1 = 0.4, psi0 = 12.0;
   std::vector<double> F, theta;
   for (int m = 0; m < 79; ++m) {
     theta.push_back(4.6036 * m);
-    const std::vector<double> f = frame(t, 0.7, 0.85, dofp_projected_aop_deg(view, 12.0 + theta.back()), 0.0, nullptr);
-    for (int j = 0; j < 4; ++j) F.push_back((f[j] - t.b[j]) / t.K[j]);
+    const std::vector<double> f = frame(t, 0.7, 0.0, 0.0, 0.0, nullptr);  // K/2·I + b
+    for (int j = 0; j < 4; ++j) {
+      const double phi = rad(dofp_projected_aop_deg(views[j], psi0 + theta.back()));
+      const double a = rad(t.alpha_deg[j] - t.eps_deg[j] - eps1);
+      F.push_back((f[j] - t.b[j]) / t.K[j] * (1.0 + t.k[j] * 0.85 * std::cos(2.0 * phi - 2.0 * a)));
+    }
   }
   DofpStep2Options o;
   o.view_projection = true;
-  o.focal_px = 405.4;
+  o.focal_px = fc;
+  o.psi0_deg = 13.0;
   Eigen::Matrix<double, 8, 1> x;
-  x << rad(2.0), rad(-1.5), rad(0.3), 0.97, 0.91, 0.88, rad(13.0), 0.8;
-  const Eigen::MatrixXd J = dofp_cell_jacobian(F, theta, x, o, view);
+  x << rad(2.0), rad(-1.5), rad(0.3), 0.97, 0.91, 0.88, rad(0.7), 0.8;
+  const Eigen::MatrixXd J = dofp_cell_jacobian(F, theta, x, o, views);
+  ASSERT_EQ(J.cols(), 9);
   const double h = 1e-6;
-  for (int p = 0; p < 8; ++p) {
+  for (int p = 0; p < 9; ++p) {
     Eigen::Matrix<double, 8, 1> xp = x, xm = x;
-    xp[p] += h;
-    xm[p] -= h;
+    DofpStep2Options op = o, om = o;
+    if (p < 8) {
+      xp[p] += h;
+      xm[p] -= h;
+    } else {
+      op.psi0_deg += h * 180.0 / kPi;
+      om.psi0_deg -= h * 180.0 / kPi;
+    }
     const Eigen::VectorXd fd =
-        (dofp_cell_residuals(F, theta, xp, o, view) - dofp_cell_residuals(F, theta, xm, o, view)) / (2 * h);
-    for (int m = 0; m < 3 * 79; ++m)
-      EXPECT_NEAR(J(m, p), fd[m], 1e-8) << "unknown " << p << " row " << m;
+        (dofp_cell_residuals(F, theta, xp, op, views) - dofp_cell_residuals(F, theta, xm, om, views)) / (2 * h);
+    for (int m = 0; m < 3 * 79; ++m) EXPECT_NEAR(J(m, p), fd[m], 1e-8) << "unknown " << p << " row " << m;
     EXPECT_GT(J.col(p).norm(), 1e-3) << p;
   }
-  // dφ/dψ_0 varies over the turn (cos γ to 1/cos γ): the ψ_0 column is not constant.
+  // ∂r/∂ψ_0 is −dφ_1/dψ_0 on the AoP rows up to the pixels' shifts: it varies over the turn (cos γ to
+  // 1/cos γ), unlike ∂r/∂ε1 = −1.
   double lo = 1e9, hi = -1e9;
-  for (int m = 0; m < 79; ++m) lo = std::min(lo, -J(3 * m, 6)), hi = std::max(hi, -J(3 * m, 6));
+  for (int m = 0; m < 79; ++m) lo = std::min(lo, -J(3 * m, 8)), hi = std::max(hi, -J(3 * m, 8));
   EXPECT_LT(lo, 0.9);
   EXPECT_GT(hi, 1.1);
-  // The residuals at the truth's ψ_0 and (k, ε) are zero with the projection, not without it.
+  // The residuals at the truth are zero with the projection, not without it.
   Eigen::Matrix<double, 8, 1> xt;
-  xt << rad(t.eps_deg[1]), rad(t.eps_deg[2]), rad(t.eps_deg[3]), t.k[1], t.k[2], t.k[3], rad(12.0), 0.85;
-  EXPECT_LT(dofp_cell_residuals(F, theta, xt, o, view).cwiseAbs().maxCoeff(), 1e-12);
+  xt << rad(t.eps_deg[1]), rad(t.eps_deg[2]), rad(t.eps_deg[3]), t.k[1], t.k[2], t.k[3], rad(eps1), 0.85;
+  o.psi0_deg = psi0;
+  EXPECT_LT(dofp_cell_residuals(F, theta, xt, o, views).cwiseAbs().maxCoeff(), 1e-12);
   DofpStep2Options off = o;
   off.view_projection = false;
-  EXPECT_GT(dofp_cell_residuals(F, theta, xt, off, view).cwiseAbs().maxCoeff(), rad(1.0));
+  xt[6] = rad(psi0 + eps1);  // H17's ψ_0 per cell
+  EXPECT_GT(dofp_cell_residuals(F, theta, xt, off).cwiseAbs().maxCoeff(), rad(1.0));
 }
 
-// Frames of a wide field (every cell's four pixels see the port polarizer along the cell's centre
-// view, as the model takes it): with the view's projection step 2 gives back the truth and Table
-// 1's step-2 row is exact; H17's model (off) leaves degrees.
+// Frames of a wide field (every pixel sees the port polarizer along its own view, as the model
+// takes it): with the view's projection step 2 gives back the truth and Table 1's step-2 row is
+// exact; H17's model (off) leaves degrees.
 // Noise-free frames whose every pixel sees the port polarizer (at 23° + θ_R on the axis, DoP 0.8)
-// along its cell's centre view, as step 2's projected model takes it.
+// along its own view, as step 2's projected model takes it.
 Dataset projected_dataset(const Truth& t, const DofpStep2Options& o) {
   Dataset ds;
   for (int i = 0; i < 30; ++i) ds.level_frames.push_back(frame(t, i / 29.0, 0.0, 0.0, 0.0, nullptr));
@@ -326,7 +352,7 @@ Dataset projected_dataset(const Truth& t, const DofpStep2Options& o) {
       std::vector<double> f(t.K.size());
       for (std::size_t p = 0; p < f.size(); ++p) {
         const int col = static_cast<int>(p % t.W), row = static_cast<int>(p / t.W);
-        const double phi = dofp_projected_aop_deg(dofp_cell_view(t.W, t.H, o, col / 2, row / 2), 23.0 + theta);
+        const double phi = dofp_projected_aop_deg(dofp_pixel_view(t.W, t.H, o, col, row), 23.0 + theta);
         const double a = rad(t.alpha_deg[t.j(p)] - t.eps_deg[p]);
         f[p] = 0.5 * t.K[p] * I * (1.0 + t.k[p] * 0.8 * std::cos(2.0 * rad(phi) - 2.0 * a)) + t.b[p];
       }
@@ -347,6 +373,7 @@ TEST(DofpCalibration, ViewProjectionCalibratesAWideFieldBackToTheTruth) {
   DofpCalibrationOptions co;
   co.step2 = o;
   const DofpCalibration c = calibrate_dofp(t.W, t.H, ds.levels, ds.stops, co);
+  for (const DofpCellFit& f : c.step2.cells) EXPECT_TRUE(f.usable()) << f.message;
   ASSERT_EQ(c.step2.usable_cells, 8 * 6);
   const DofpTruth p = dofp_parameter_maps(c);
   for (std::size_t i = 0; i < t.K.size(); ++i) {
@@ -728,4 +755,135 @@ TEST(DofpCellPolarization, RefusesMismatchedSizesAndBadParameters) {
     EXPECT_NE(std::string(e.what()).find("cell (0, 0) do not span the Stokes plane"), std::string::npos) << e.what();
   }
   EXPECT_THROW(polrig::nominal_dofp_parameters(3, 2, {0, 90, 45, 135}), std::invalid_argument);
+}
+
+// ------------------------------------------------------------ one ψ_0 for the image (issue 23)
+namespace {
+// The camera's own frames (sim/dofp_frames.h: every pixel sees the port polarizer along its own
+// view) of a camera with H17's 77° × 61° field on 64 × 48 pixels (f_c = 40.5 px, so a pixel's own
+// view matters ten times more than on H17's sensor), noise-free through a 16-bit ADC; every analyzer
+// off its nominal angle, TL included (ε = 0.5, 1.2, −0.8, 0.6° ± 0.3°), and off k = 1.
+Rig gauge_rig() {
+  Rig rig;
+  rig.device_kind = "dofp-camera";
+  rig.source.cos4.E_0 = 1.0;
+  rig.source.polarizer_deg = 20.0;  // β = θ_R − ψ_P on the axis (docs/physics.md §13): ψ_0 = −20°
+  rig.device.d = 0.999;
+  DofpCameraSpec& c = rig.camera;
+  c.width_px = 64, c.height_px = 48, c.focal_mm = 0.3;
+  c.noise = false, c.adc_bits = 16;
+  c.gain_DN = 50000, c.gain_spread = 0.02, c.mosaic_gain = {1.00, 1.06, 0.95, 1.03};
+  c.offset_DN = 20, c.offset_spread_DN = 2;
+  c.k = {0.98, 0.93, 0.96, 0.90}, c.k_spread = 0.01;
+  c.eps_deg = {0.5, 1.2, -0.8, 0.6}, c.eps_spread_deg = 0.3;
+  rig.schedule.start_deg = 0, rig.schedule.step_deg = 4.6036, rig.schedule.stop_deg = 359.0808;
+  for (int i = 0; i < 30; ++i) rig.schedule.unpolarized_levels.push_back(i / 29.0);
+  rig.schedule.intensities = {1.0};
+  rig.seed = 23;
+  return rig;
+}
+
+struct CameraRun {
+  DofpTruth truth;
+  std::vector<std::vector<double>> frames;
+  std::vector<DofpUnpolarizedLevel> levels;
+  std::vector<DofpPolarizedStop> stops;
+};
+
+CameraRun camera_run(const Rig& rig) {
+  const DofpSimulator sim(rig);
+  CameraRun r;
+  r.truth = sim.truth();
+  for (const DofpStop& s : sim.stops()) {
+    const std::vector<std::uint16_t> raw = sim.frame(s, 0);
+    r.frames.emplace_back(raw.begin(), raw.end());
+  }
+  for (std::size_t i = 0; i < sim.stops().size(); ++i) {
+    const DofpStop& s = sim.stops()[i];
+    if (s.polarized)
+      r.stops.push_back({s.theta_R_deg, s.intensity, r.frames[i]});
+    else
+      r.levels.push_back({s.intensity, r.frames[i]});
+  }
+  return r;
+}
+}  // namespace
+
+// Noise-free frames of the camera itself, rounded by a 16-bit ADC: with the view's projection
+// step 2 fits one ψ_0 for the image and every ε per cell, TL's too, to what the rounding allows.
+//
+// Tolerances, from the ADC's rounding alone (|δf| ≤ ½ DN per value; the worst case, linear):
+// - step 1, b = Σ w_i f_i and K = Σ v_i f_i over the 30 levels: |δb| ≤ ½·Σ|w_i|, |δK| ≤ ½·Σ|v_i|
+//   (computed below from the levels: 0.40 DN and 2.4e-5 of K);
+// - step 2, a pixel of modulation amplitude A = K/2·k·d (DN at I = 1, A_min ≈ 1.9e4 here) over N
+//   evenly spread stops: its angle, a least-squares fit against the regressor 2A·sin, moves by at most
+//   ½·Σ|sin|/(2A·Σsin²) = ½·(2N/π)/(A·N) = 1/(πA) rad, its amplitude by (2/π)/A relative. A
+//   constant error of a pixel (step 1's δb, or δK on the mean level) is ⊥ sin and cos over a full
+//   turn: it leaves ε and k alone. The cell's shared unknowns (ε_1's common rotation and d_0 from
+//   the same four pixels) at most double a pixel's bound: ε to 2/(πA_min), k (a ratio k_j/k_1 of two
+//   such amplitudes, plus step 1's δK/K) to 2·(2·2/(πA_min) + δK/K);
+// - ψ_0, fitted from every cell at once: within ε's bound;
+// - Table 1's step 2: a cell's AoP from its four values moves by at most ½·(|δq1| + |δq2|)/A ≤
+//   ½/A_min, its fitted ε by the bound above; o_m − o_0 differences two stops: 2·(½/A_min + 2/(πA_min)).
+// H17's gauge (ε_1 = 0 and ψ_0 per cell) fails every one of these: its cells put TL's 0.5° into
+// their ψ_0, and the projection's nonlinearity in β leaves 1e-2° in the others and in Table 1.
+TEST(DofpCalibration, ViewProjectionFitsOnePsi0AndEveryAnalyzerToTheAdcRounding) {
+  const Rig rig = gauge_rig();
+  const CameraRun run = camera_run(rig);
+  const DofpTruth& t = run.truth;
+  DofpCalibrationOptions co;
+  co.step2.view_projection = true;
+  co.step2.focal_px = focal_px(rig.camera);
+  const DofpCalibration c = calibrate_dofp(t.width, t.height, run.levels, run.stops, co);
+
+  // The rounding bounds.
+  double sx = 0, sxx = 0;
+  const double n = static_cast<double>(run.levels.size());
+  for (const DofpUnpolarizedLevel& L : run.levels) sx += L.intensity / 2;
+  const double xbar = sx / n;
+  for (const DofpUnpolarizedLevel& L : run.levels) sxx += (L.intensity / 2 - xbar) * (L.intensity / 2 - xbar);
+  double wb = 0, vK = 0;
+  for (const DofpUnpolarizedLevel& L : run.levels) {
+    const double dx = L.intensity / 2 - xbar;
+    wb += std::abs(1.0 / n - xbar * dx / sxx);
+    vK += std::abs(dx / sxx);
+  }
+  double A_min = 1e300, K_min = 1e300;
+  for (std::size_t p = 0; p < t.K.size(); ++p) {
+    A_min = std::min(A_min, 0.5 * t.K[p] * t.k[p] * rig.device.d);
+    K_min = std::min(K_min, t.K[p]);
+  }
+  const double b_tol = 0.5 * wb, K_tol = 0.5 * vK / K_min;
+  const double eps_tol = rad2deg(2.0 / (kPi * A_min)), k_tol = 2.0 * (4.0 / (kPi * A_min) + K_tol);
+  const double table_tol = rad2deg(2.0 * (0.5 / A_min + 2.0 / (kPi * A_min)));
+  EXPECT_LT(eps_tol, 2e-3);
+
+  double worst_b = 0, worst_K = 0, worst_eps = 0, worst_k = 0;
+  for (std::size_t p = 0; p < t.K.size(); ++p) {
+    worst_b = std::max(worst_b, std::abs(c.step1.b[p] - t.b[p]));
+    worst_K = std::max(worst_K, std::abs(c.step1.K[p] / t.K[p] - 1));
+  }
+  ASSERT_EQ(c.step2.usable_cells, static_cast<long long>(c.step2.cells.size()));
+  for (int cy = 0; cy < c.step2.cells_y; ++cy)
+    for (int cx = 0; cx < c.step2.cells_x; ++cx) {
+      const DofpCellFit& f = c.step2.cells[static_cast<std::size_t>(cy) * c.step2.cells_x + cx];
+      const std::size_t tl = static_cast<std::size_t>(2 * cy) * t.width + 2 * cx;
+      for (int j = 0; j < 4; ++j) {
+        const std::size_t p = tl + static_cast<std::size_t>(j / 2) * t.width + j % 2;
+        worst_eps = std::max(worst_eps, std::abs(f.eps_deg[j] - t.eps_deg[p]));
+        worst_k = std::max(worst_k, std::abs(f.k[j] - t.k[p] / t.k[tl]));
+      }
+    }
+  EXPECT_LT(worst_b, b_tol);
+  EXPECT_LT(worst_K, K_tol);
+  EXPECT_LT(worst_eps, eps_tol);
+  EXPECT_LT(worst_k, k_tol);
+  EXPECT_TRUE(c.step2.psi0_fit.usable()) << c.step2.psi0_fit.message;
+  EXPECT_NEAR(c.step2.psi0_deg, -20.0, eps_tol);
+  for (const DofpCellFit& f : c.step2.cells) EXPECT_EQ(f.psi0_deg, c.step2.psi0_deg);
+  EXPECT_LT(c.table1.rows[2].max_deg, table_tol);
+  std::cout << fmt::format("b {:.3g} (tol {:.3g}) DN, K {:.3g} ({:.3g}), eps {:.3g} ({:.3g}) deg, k {:.3g} ({:.3g}), "
+                           "psi0 {:.9g} deg ({} passes), Table 1 step 2 {:.3g} ({:.3g}) deg\n",
+                           worst_b, b_tol, worst_K, K_tol, worst_eps, eps_tol, worst_k, k_tol, c.step2.psi0_deg,
+                           c.step2.psi0_fit.evaluations, c.table1.rows[2].max_deg, table_tol);
 }

@@ -175,8 +175,7 @@ inline double dot4(const double* a, const double* f) {
 // With w = w_e = 0 only the AoP residual counts (H17's cost).
 template <bool kJacobian>
 void accumulate(const CellModel& m, const double* F, const double* rot, std::size_t n, Sums& out,
-                double* residuals = nullptr, double* jacobian_rows = nullptr,
-                const double* dphi_dpsi = nullptr) {
+                double* residuals = nullptr, double* jacobian_rows = nullptr) {
   // Row-major copies of P and dP for dot4.
   double P[3][4], dP[6][3][4];
   for (int a = 0; a < 3; ++a)
@@ -232,7 +231,7 @@ void accumulate(const CellModel& m, const double* F, const double* rot, std::siz
         e[p] = fitres ? ww * m.we * (dot4(dnv[p], f) - nf * dq3 * i3) * i3 : 0.0;
       }
       // JᵀJ's upper triangle: rows g = [g, −ww, 0], h = [h, 0, −ww·w] and e = [e, 0, 0].
-      const double g6 = dphi_dpsi ? -ww * dphi_dpsi[i] : -ww, h7 = -ww * m.w;
+      const double g6 = -ww, h7 = -ww * m.w;
       for (int p = 0; p < 6; ++p) {
         for (int q = p; q < 6; ++q) jtj[p][q] += g[p] * g[q] + h[p] * h[q] + e[p] * e[q];
         j6[p] += g[p] * g6;
@@ -409,26 +408,6 @@ ViewProjection view_projection_of(const Vec3& v) {
   return p;
 }
 
-// Per stop the model's rotation e^{−2iφ_m} (cos, sin, and the stop's weight, as table_rotations)
-// and dφ_m/dψ_0, with φ_m = arg(M·(cos β_m, sin β_m)), β_m = ψ_0 + s_R·θ_R,m (turn_rad holds
-// s_R·θ_R,m, weight the stops' weights).
-void projected_rotations(const ViewProjection& M, const std::vector<double>& turn_rad,
-                         const std::vector<double>& rot, double psi0, std::vector<double>& out,
-                         std::vector<double>& dphi_dpsi) {
-  const std::size_t n = turn_rad.size();
-  out.resize(3 * n);
-  dphi_dpsi.resize(n);
-  for (std::size_t m = 0; m < n; ++m) {
-    const double b = psi0 + turn_rad[m], cb = std::cos(b), sb = std::sin(b);
-    const double u1 = M.m11 * cb + M.m12 * sb, u2 = M.m12 * cb + M.m22 * sb;
-    const double uu = u1 * u1 + u2 * u2;
-    out[3 * m] = (u1 * u1 - u2 * u2) / uu;  // cos 2φ
-    out[3 * m + 1] = -2.0 * u1 * u2 / uu;   // sin(−2φ)
-    out[3 * m + 2] = rot[3 * m + 2];
-    dphi_dpsi[m] = M.det / uu;
-  }
-}
-
 // s_R·θ_R,m in radians per stop.
 std::vector<double> table_turns_rad(std::span<const DofpPolarizedStop> stops, double sense) {
   std::vector<double> t(stops.size());
@@ -505,6 +484,10 @@ struct ClosedFormStart {
 };
 
 const char* const kUnknownNames[8] = {"eps2", "eps3", "eps4", "k2", "k3", "k4", "psi0", "d0"};
+// With the view's projection ψ_0 is held and x_6 is ε_1, the four analyzers' common rotation
+// (x_0..2 then are ε_2..4 − ε_1).
+const char* const kProjectedUnknownNames[8] = {"eps2-eps1", "eps3-eps1", "eps4-eps1", "k2", "k3", "k4",
+                                               "eps1", "d0"};
 
 // Rank of J from JᵀJ scaled to unit diagonal, over the first `n` unknowns; `weakest` names the
 // unknown with the largest share in the least determined direction.
@@ -534,7 +517,8 @@ int jacobian_rank(const Mat8& JtJ_upper, int n, double min_ratio, int& weakest) 
 // else `nominal()`: ε = 0, k = 1 and start_sums's ψ0, d0.
 template <class Eval, class Nominal>
 DofpCellFit levenberg_marquardt(Eval&& eval, const std::optional<Vec8>& closed, Nominal&& nominal,
-                                long long n, const DofpStep2Options& o) {
+                                long long n, const DofpStep2Options& o,
+                                const char* const* names = kUnknownNames, double residual_ulps = 0) {
   DofpCellFit fit;
   fit.observations = static_cast<int>(n);
   const bool dop = o.dop_weight != 0.0;
@@ -596,7 +580,10 @@ DofpCellFit levenberg_marquardt(Eval&& eval, const std::optional<Vec8>& closed, 
     // ~10³ residuals), or, at an exact fit, the cost of residuals of a few ulps of 1 rad each
     // (3n·(4·2⁻⁵²)²) — is a stall, not the cost's floor.
     double predicted = std::numeric_limits<double>::infinity();
-    const double rounding = 1e-10 * cost + 3.0 * scale * std::pow(4.0 * std::numeric_limits<double>::epsilon(), 2);
+    // With residual_ulps > 0 also the cost's own rounding, 2·√(cost·3n)·δ for residuals each off
+    // by δ = residual_ulps·ε_double (the projected model's longer arithmetic per stop).
+    const double rounding = 1e-10 * cost + 3.0 * scale * std::pow(4.0 * std::numeric_limits<double>::epsilon(), 2) +
+                            2.0 * std::sqrt(cost * 3.0 * scale) * residual_ulps * std::numeric_limits<double>::epsilon();
     bool at_floor = false;
     for (int h = 0; h <= o.max_halvings; ++h) {
       Mat8 Aug = JtJ;
@@ -651,7 +638,7 @@ DofpCellFit levenberg_marquardt(Eval&& eval, const std::optional<Vec8>& closed, 
   if (fit.rank < unknowns) {
     fit.termination = FitTermination::RankDeficient;
     fit.message = fmt::format("the data determine {} of the {} unknowns (least: {})", fit.rank,
-                              unknowns, kUnknownNames[weakest]);
+                              unknowns, names[weakest]);
     return fit;
   }
   if (!converged) {
@@ -749,6 +736,394 @@ void gather_cell_row(const DofpStep1& s1, std::span<const DofpPolarizedStop> sto
         o[j] = s1.rank[p[j]] == 2 ? (f[p[j]] - s1.b[p[j]]) / s1.K[p[j]] : 0.0;
     }
   }
+}
+
+
+// ---- The view's projection with one ψ_0 for the image (options.view_projection; physics §14) ----
+// Each pixel j of a cell sees the port polarizer along its own view: φ_j,m = arg(M_j·(cos β_m,
+// sin β_m)), β_m = ψ_0 + s_R·θ_R,m. With ψ_0 held, the cell's unknowns are x = [ε2 − ε1, ε3 − ε1,
+// ε4 − ε1, k2, k3, k4, ε1, d0]: pixel j's term cos(2φ_j,m − 2(α_j − ε_j)) is Eq. 17's with the TL
+// pixel's AoP φ_1,m and the relative error ε_j − ε_1 + (φ_j,m − φ_1,m), so stop m has its own Ã
+// (CellModel) and the AoP residual is ½·arg[(q̃1 + i q̃2)·e^{−2iε1}·e^{−2iφ_1,m}] (accumulate's
+// with x_6 = ε1 and the rotation e^{−2iφ_1,m}).
+using PixelProjections = std::array<ViewProjection, 4>;
+// The rounding of a projected residual, in ulps of 1 rad, for the stopping rule: each stop builds
+// its own model (Ã_m, R⁻¹, the views' angles), so a few hundred operations stand between the frames
+// and r_m; 128 ulps (3e-14 rad) is far below any noise and far above what ends a well-posed fit.
+constexpr double kProjectedResidualUlps = 128;
+
+PixelProjections cell_pixel_projections(int width, int height, const DofpStep2Options& o, int cx, int cy) {
+  PixelProjections p;
+  for (int j = 0; j < 4; ++j)
+    p[j] = view_projection_of(dofp_pixel_view(width, height, o, 2 * cx + j % 2, 2 * cy + j / 2));
+  return p;
+}
+
+// φ = arg(M·(cos β, sin β)) and dφ/dβ = det M/|u|².
+double projected_angle(const ViewProjection& M, double beta, double* dphi_dbeta = nullptr) {
+  const double cb = std::cos(beta), sb = std::sin(beta);
+  const double u1 = M.m11 * cb + M.m12 * sb, u2 = M.m12 * cb + M.m22 * sb;
+  if (dphi_dbeta) *dphi_dbeta = M.det / (u1 * u1 + u2 * u2);
+  return std::atan2(u2, u1);
+}
+
+// Per stop of one cell at ψ_0: TL's rotation (cos 2φ_1,m, sin(−2φ_1,m), the stop's weight), the
+// other pixels' φ_j,m − φ_1,m (wrapped into (−π/2, π/2]) and every pixel's dφ_j,m/dψ_0.
+struct ProjectedStops {
+  std::vector<double> rot, shift, dphi;  // 3, 3 and 4 per stop
+};
+
+double wrap_half_pi(double a) { return std::remainder(a, std::numbers::pi); }
+
+void project_stops(const PixelProjections& M, const std::vector<double>& turns, const std::vector<double>& rot,
+                   double psi0, ProjectedStops& ps) {
+  const std::size_t n = turns.size();
+  ps.rot.resize(3 * n), ps.shift.resize(3 * n), ps.dphi.resize(4 * n);
+  for (std::size_t m = 0; m < n; ++m) {
+    double phi[4];
+    for (int j = 0; j < 4; ++j) phi[j] = projected_angle(M[j], psi0 + turns[m], &ps.dphi[4 * m + j]);
+    ps.rot[3 * m] = std::cos(2.0 * phi[0]);
+    ps.rot[3 * m + 1] = -std::sin(2.0 * phi[0]);
+    ps.rot[3 * m + 2] = rot[3 * m + 2];
+    for (int j = 1; j < 4; ++j) ps.shift[3 * m + j - 1] = wrap_half_pi(phi[j] - phi[0]);
+  }
+}
+
+// accumulate's sums over a cell's stops with each stop's own model (x shifted by its pixels' views);
+// residuals and Jacobian rows as accumulate's. False where the model is singular.
+template <bool kJacobian>
+bool accumulate_projected(const Vec8& x, const std::array<double, 4>& alpha, const DofpStep2Options& o,
+                          const double* F, const ProjectedStops& ps, std::size_t n, Sums& out,
+                          double* residuals = nullptr, double* jacobian_rows = nullptr) {
+  CellModel model;
+  for (std::size_t m = 0; m < n; ++m) {
+    Vec8 xm = x;
+    for (int p = 0; p < 3; ++p) xm[p] += ps.shift[3 * m + p];
+    if (!make_cell_model(xm, alpha, o.dop_weight, o.fit_weight, kJacobian, model)) return false;
+    const long long bad_before = out.bad;
+    accumulate<kJacobian>(model, F + 4 * m, &ps.rot[3 * m], 1, out, residuals ? residuals + 3 * m : nullptr,
+                          jacobian_rows ? jacobian_rows + 24 * m : nullptr);
+    if (bad_before < 0 && out.bad >= 0) out.bad = static_cast<long long>(m);
+  }
+  return true;
+}
+
+// ψ_0's share of one fit at x: J_xᵀJ_x (8 × 8), J_xᵀJ_ψ, J_xᵀr, J_ψᵀJ_ψ, J_ψᵀr and Σr². ψ_0 moves
+// TL's rotation (∂r/∂ψ_0 = ∂r/∂ε1·dφ_1/dψ_0) and each pixel's shift (∂r/∂x_p·(dφ_{p+1} − dφ_1)/dψ_0).
+struct Psi0Share {
+  Mat8 H = Mat8::Zero();
+  Vec8 b = Vec8::Zero(), gx = Vec8::Zero();
+  double c = 0, gpsi = 0, cost = 0;
+  void add(const Psi0Share& o) {
+    H += o.H, b += o.b, gx += o.gx;
+    c += o.c, gpsi += o.gpsi, cost += o.cost;
+  }
+};
+
+// ∂r/∂ψ_0 of one residual row (accumulate's 8 columns) at a stop with every pixel's dφ/dψ_0.
+double psi0_column(const double* row, const double* dphi) {
+  double j = row[6] * dphi[0];
+  for (int p = 0; p < 3; ++p) j += row[p] * (dphi[p + 1] - dphi[0]);
+  return j;
+}
+
+bool psi0_share(const Vec8& x, const std::array<double, 4>& alpha, const DofpStep2Options& o, const double* F,
+                const ProjectedStops& ps, std::size_t n, Psi0Share& s) {
+  std::vector<double> r(3 * n, 0.0), J(24 * n, 0.0);
+  Sums sums;
+  if (!accumulate_projected<true>(x, alpha, o, F, ps, n, sums, r.data(), J.data()) || sums.bad >= 0) return false;
+  for (std::size_t m = 0; m < n; ++m) {
+    const double* d = &ps.dphi[4 * m];
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Map<const Vec8> row(&J[24 * m + 8 * k]);
+      const double ri = r[3 * m + k];
+      const double jpsi = psi0_column(&J[24 * m + 8 * k], d);
+      s.H += row * row.transpose();
+      s.b += row * jpsi;
+      s.gx += row * ri;
+      s.c += jpsi * jpsi;
+      s.gpsi += jpsi * ri;
+      s.cost += ri * ri;
+    }
+  }
+  return true;
+}
+
+// The share reduced over the fit's own unknowns (d0 only with the DoP residual): one term of ψ_0's
+// Gauss–Newton equation (Schur complement).
+void reduce_psi0_share(const Psi0Share& s, bool dop, DofpPsi0Pass& pass) {
+  const int n = dop ? 8 : 7;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(s.H.topLeftCorner(n, n));
+  const Eigen::VectorXd hb = ldlt.solve(s.b.head(n)), hg = ldlt.solve(s.gx.head(n));
+  pass.gradient += s.gpsi - s.b.head(n).dot(hg);
+  pass.curvature += s.c - s.b.head(n).dot(hb);
+  pass.raw_curvature += s.c;
+  pass.cost += s.cost;
+  pass.fits += 1;
+}
+
+// A fit made with ψ_0 held (x_6 = ε1) in the absolute gauge: ε_1 = x_6, ε_j = (ε_j − ε_1) + ε_1.
+void to_absolute_gauge(DofpCellFit& fit, double psi0_deg) {
+  const double eps1 = fit.psi0_deg;  // levenberg_marquardt's x_6, wrapped into (−90°, 90°]
+  fit.eps_deg[0] = eps1;
+  for (int j = 1; j < 4; ++j) fit.eps_deg[j] += eps1;
+  fit.psi0_deg = wrap90_deg(psi0_deg);
+}
+
+// What every projected fit of one step 2 shares.
+struct ProjectedContext {
+  const DofpStep2Options& o;
+  std::array<double, 4> alpha;
+  const std::vector<double>& turns;  // s_R·θ_R,m (rad)
+  const std::vector<double>& rot;    // table_rotations (their weights)
+  const ClosedFormStart& cf;
+};
+
+// One cell fitted with ψ_0 (rad) held; its share of ψ_0's equation added to `pass` when usable.
+// A usable fit made at another ψ_0 (its psi0_deg) as a start at psi0: the same analyzers, ε_1 turned
+// by the change of ψ_0 (near the axis they trade one for one).
+std::optional<Vec8> start_from(const DofpCellFit* f, double psi0) {
+  if (!f || !f->usable()) return std::nullopt;
+  Vec8 x;
+  x << deg2rad(f->eps_deg[1] - f->eps_deg[0]), deg2rad(f->eps_deg[2] - f->eps_deg[0]),
+      deg2rad(f->eps_deg[3] - f->eps_deg[0]), f->k[1], f->k[2], f->k[3],
+      wrap_half_pi(deg2rad(f->eps_deg[0] + f->psi0_deg) - psi0), std::isnan(f->dop) ? 0.0 : f->dop;
+  return x;
+}
+
+DofpCellFit fit_projected_cell(const ProjectedContext& ctx, const PixelProjections& views, const double* F,
+                               double psi0, const DofpCellFit* warm, DofpPsi0Pass& pass) {
+  const std::size_t n = ctx.turns.size();
+  ProjectedStops ps;
+  project_stops(views, ctx.turns, ctx.rot, psi0, ps);
+  const auto eval = [&](const Vec8& x, bool jac, Sums& sums) {
+    return jac ? accumulate_projected<true>(x, ctx.alpha, ctx.o, F, ps, n, sums)
+               : accumulate_projected<false>(x, ctx.alpha, ctx.o, F, ps, n, sums);
+  };
+  std::optional<Vec8> closed = start_from(warm, psi0);
+  if (!closed && ctx.cf.ok) {
+    Eigen::Matrix<double, 3, 4> g = Eigen::Matrix<double, 3, 4>::Zero();
+    ctx.cf.add(F, n, g);
+    if (Vec8 x; ctx.cf.start(g, ctx.alpha, x)) {
+      x[6] = wrap_half_pi(x[6] - psi0);  // H17's gauge: its ψ_0 is ψ_0 + ε1 (near the axis)
+      closed = x;
+    }
+  }
+  const auto nominal = [&] {
+    double re = 0, im = 0, dsum = 0;
+    long long dn = 0;
+    CellModel model;
+    if (make_cell_model(ideal_x(), ctx.alpha, ctx.o.dop_weight, ctx.o.fit_weight, false, model))
+      start_sums(model, F, ps.rot.data(), n, re, im, dsum, dn);
+    return nominal_start(0.5 * std::atan2(im, re), dn > 0 ? dsum / dn : 0.0);
+  };
+  DofpCellFit fit = levenberg_marquardt(eval, closed, nominal, static_cast<long long>(n), ctx.o,
+                                        kProjectedUnknownNames, kProjectedResidualUlps);
+  Vec8 x;
+  x << deg2rad(fit.eps_deg[1]), deg2rad(fit.eps_deg[2]), deg2rad(fit.eps_deg[3]), fit.k[1], fit.k[2], fit.k[3],
+      deg2rad(fit.psi0_deg), std::isnan(fit.dop) ? 0.0 : fit.dop;
+  to_absolute_gauge(fit, rad2deg(psi0));
+  if (Psi0Share s; fit.usable() && psi0_share(x, ctx.alpha, ctx.o, F, ps, n, s))
+    reduce_psi0_share(s, ctx.o.dop_weight != 0.0, pass);
+  return fit;
+}
+
+
+// Table 1 with the view's projection: a cell's port-plane angle β̃ from its four values F̃. Its
+// model depends on β itself (the pixels' shifts φ_j − φ_1), so from the shifts 0: the TL view's
+// AoP φ̃_1 = φ̃ − ε1, β̃ = arg(M_1⁻¹·(cos φ̃_1, sin φ̃_1)) (M⁻¹ ∝ adj M), the shifts at β̃, again until
+// β̃ moves by < 1e-13 rad (each step shrinks the error by |d(φ_j − φ_1)/dβ|, ~1e-3 for H17's
+// pixels) or 50 steps. False where the AoP is undefined.
+struct ProjectedCell {
+  Vec8 x;       // [ε2 − ε1, ε3 − ε1, ε4 − ε1, k2, k3, k4, ·, ·]
+  double eps1;  // rad
+  PixelProjections views;
+};
+
+bool port_angle(const ProjectedCell& c, const std::array<double, 4>& alpha, const double* F, double& beta) {
+  double shift[3] = {0, 0, 0};
+  beta = std::numeric_limits<double>::quiet_NaN();
+  CellModel m;
+  for (int it = 0; it < 50; ++it) {
+    Vec8 x = c.x;
+    for (int p = 0; p < 3; ++p) x[p] += shift[p];
+    if (!make_cell_model(x, alpha, 0.0, 0.0, false, m)) return false;
+    const double q1 = m.P(0, 0) * F[0] + m.P(0, 1) * F[1] + m.P(0, 2) * F[2] + m.P(0, 3) * F[3];
+    const double q2 = m.P(1, 0) * F[0] + m.P(1, 1) * F[1] + m.P(1, 2) * F[2] + m.P(1, 3) * F[3];
+    if (!(q1 * q1 + q2 * q2 > 0)) return false;
+    const double phi1 = 0.5 * std::atan2(q2, q1) - c.eps1, cp = std::cos(phi1), sp = std::sin(phi1);
+    const ViewProjection& M = c.views[0];
+    const double b = std::atan2(-M.m12 * cp + M.m11 * sp, M.m22 * cp - M.m12 * sp);
+    const bool settled = std::abs(wrap_half_pi(b - beta)) < 1e-13;
+    beta = b;
+    if (settled) break;
+    const double phi0 = projected_angle(c.views[0], beta);
+    for (int j = 1; j < 4; ++j) shift[j - 1] = wrap_half_pi(projected_angle(c.views[j], beta) - phi0);
+  }
+  return true;
+}
+
+// A cell with a pixel step 1 left undetermined: its fit says so (true), and is not run.
+bool undetermined_cell_fit(const DofpStep1& s1, int cx, int cy, std::size_t stops, DofpCellFit& fit) {
+  const long long p = undetermined_pixel(s1, cx, cy);
+  if (p < 0) return false;
+  fit.termination = FitTermination::RankDeficient;
+  fit.observations = static_cast<int>(stops);
+  fit.message = fmt::format("step 1 left pixel (column {}, row {}) undetermined (rank {})", p % s1.width,
+                            p / s1.width, int{s1.rank[p]});
+  return true;
+}
+
+// One pass of the per-cell projected fit at ψ_0 (rad): every cell of `out`, the sums in row order.
+// Each usable fit of `starts` (the previous pass's, at its own ψ_0) starts its cell's fit.
+std::vector<DofpPsi0Pass> projected_cells_pass(const DofpStep1& s1, std::span<const DofpPolarizedStop> stops,
+                                               const ProjectedContext& ctx, double psi0,
+                                               std::span<const DofpCellFit> starts, DofpStep2& out,
+                                               const Progress& progress) {
+  const int cells_x = out.cells_x, cells_y = out.cells_y;
+  const std::size_t M = stops.size();
+  std::vector<DofpPsi0Pass> rows(static_cast<std::size_t>(cells_y));
+  progress.begin(fmt::format("calibrate dofp: step 2 cells at psi0 = {:.9g} deg", rad2deg(psi0)),
+                 static_cast<long long>(out.cells.size()));
+  tbb::parallel_for(tbb::blocked_range<int>(0, cells_y, 1), [&](const tbb::blocked_range<int>& r) {
+    std::vector<double> F;
+    for (int cy = r.begin(); cy < r.end(); ++cy) {
+      gather_cell_row(s1, stops, cy, F);
+      for (int cx = 0; cx < cells_x; ++cx) {
+        const std::size_t c = static_cast<std::size_t>(cy) * cells_x + cx;
+        DofpCellFit fit;
+        if (!undetermined_cell_fit(s1, cx, cy, M, fit))
+          fit = fit_projected_cell(ctx, cell_pixel_projections(s1.width, s1.height, ctx.o, cx, cy),
+                                   &F[static_cast<std::size_t>(cx) * M * 4], psi0,
+                                   c < starts.size() ? &starts[c] : nullptr, rows[static_cast<std::size_t>(cy)]);
+        out.cells[c] = std::move(fit);
+      }
+      progress.advance(cells_x);
+    }
+  });
+  progress.finish();
+  return rows;
+}
+
+// The global projected fit at ψ_0 (rad): one set for every cell `ok` marks (F: gather_cell_row's
+// rows), its share of ψ_0's equation reduced once over the set's unknowns.
+DofpCellFit projected_global_fit(const DofpStep1& s1, const std::vector<std::vector<double>>& F,
+                                 const std::vector<std::uint8_t>& ok, long long used, const ProjectedContext& ctx,
+                                 double psi0, DofpPsi0Pass& pass) {
+  const int cells_x = s1.width / 2, cells_y = s1.height / 2;
+  const std::size_t M = ctx.turns.size();
+  const auto cell_data = [&](int cx, int cy, ProjectedStops& ps) -> const double* {
+    if (!ok[static_cast<std::size_t>(cy) * cells_x + cx]) return nullptr;
+    project_stops(cell_pixel_projections(s1.width, s1.height, ctx.o, cx, cy), ctx.turns, ctx.rot, psi0, ps);
+    return &F[static_cast<std::size_t>(cy)][static_cast<std::size_t>(cx) * M * 4];
+  };
+  // Sums of `each(cy, cx, Fc, ps, acc)` over the cells, by rows in parallel, added in row order.
+  const auto over_cells = [&](auto each, auto& total) {
+    using Acc = std::decay_t<decltype(total)>;
+    std::vector<Acc> rows(static_cast<std::size_t>(cells_y));
+    std::vector<std::uint8_t> fine(static_cast<std::size_t>(cells_y), 1);
+    tbb::parallel_for(0, cells_y, [&](int cy) {
+      ProjectedStops ps;
+      for (int cx = 0; cx < cells_x; ++cx)
+        if (const double* Fc = cell_data(cx, cy, ps); Fc && !each(Fc, ps, rows[static_cast<std::size_t>(cy)]))
+          fine[static_cast<std::size_t>(cy)] = 0;
+    });
+    for (const Acc& a : rows) total.add(a);
+    return std::all_of(fine.begin(), fine.end(), [](std::uint8_t f) { return f != 0; });
+  };
+  const auto eval = [&](const Vec8& x, bool jac, Sums& total) {
+    return over_cells([&](const double* Fc, const ProjectedStops& ps, Sums& acc) {
+      return jac ? accumulate_projected<true>(x, ctx.alpha, ctx.o, Fc, ps, M, acc)
+                 : accumulate_projected<false>(x, ctx.alpha, ctx.o, Fc, ps, M, acc);
+    }, total);
+  };
+  std::optional<Vec8> closed;
+  if (ctx.cf.ok) {  // the pooled right-hand sides of every cell used, in row order
+    Eigen::Matrix<double, 3, 4> g = Eigen::Matrix<double, 3, 4>::Zero();
+    for (int cy = 0; cy < cells_y; ++cy)
+      for (int cx = 0; cx < cells_x; ++cx)
+        if (ok[static_cast<std::size_t>(cy) * cells_x + cx])
+          ctx.cf.add(&F[static_cast<std::size_t>(cy)][static_cast<std::size_t>(cx) * M * 4], M, g);
+    if (Vec8 x; ctx.cf.start(g, ctx.alpha, x)) {
+      x[6] = wrap_half_pi(x[6] - psi0);
+      closed = x;
+    }
+  }
+  const auto nominal = [&] {
+    struct Start {
+      double re = 0, im = 0, dsum = 0;
+      long long dn = 0;
+      void add(const Start& o) { re += o.re, im += o.im, dsum += o.dsum, dn += o.dn; }
+    } st;
+    CellModel model;
+    if (make_cell_model(ideal_x(), ctx.alpha, ctx.o.dop_weight, ctx.o.fit_weight, false, model))
+      over_cells([&](const double* Fc, const ProjectedStops& ps, Start& a) {
+        start_sums(model, Fc, ps.rot.data(), M, a.re, a.im, a.dsum, a.dn);
+        return true;
+      }, st);
+    return nominal_start(0.5 * std::atan2(st.im, st.re), st.dn > 0 ? st.dsum / st.dn : 0.0);
+  };
+  DofpCellFit fit = levenberg_marquardt(eval, closed, nominal, used * static_cast<long long>(M), ctx.o,
+                                        kProjectedUnknownNames, kProjectedResidualUlps);
+  if (used == 0) fit.message = "step 1 left every cell undetermined";
+  Vec8 x;
+  x << deg2rad(fit.eps_deg[1]), deg2rad(fit.eps_deg[2]), deg2rad(fit.eps_deg[3]), fit.k[1], fit.k[2], fit.k[3],
+      deg2rad(fit.psi0_deg), std::isnan(fit.dop) ? 0.0 : fit.dop;
+  to_absolute_gauge(fit, rad2deg(psi0));
+  Psi0Share share;
+  if (fit.usable() && over_cells([&](const double* Fc, const ProjectedStops& ps, Psi0Share& acc) {
+        return psi0_share(x, ctx.alpha, ctx.o, Fc, ps, M, acc);
+      }, share))
+    reduce_psi0_share(share, ctx.o.dop_weight != 0.0, pass);
+  return fit;
+}
+
+
+// Step 2 with the view's projection: every cell (or the one global set) fitted at ψ_0, ψ_0 itself
+// fitted for the whole image by dofp_fit_psi0 unless options.psi0_deg holds it.
+DofpStep2 projected_step2(const DofpStep1& s1, std::span<const DofpPolarizedStop> stops, const DofpStep2Options& o,
+                          const std::vector<double>& rot, const ClosedFormStart& cf, const Progress& progress,
+                          DofpStep2& out) {
+  const std::vector<double> turns = table_turns_rad(stops, o.table_sense);
+  const ProjectedContext ctx{o, alpha_rad_of(o), turns, rot, cf};
+  const int cells_x = out.cells_x, cells_y = out.cells_y;
+  std::function<DofpPsi0Pass(double)> pass;
+  std::vector<std::vector<double>> F;
+  std::vector<std::uint8_t> ok;
+  long long used = 0;
+  std::vector<DofpCellFit> previous(o.start_cells.begin(), o.start_cells.end());
+  if (o.scope == DofpStep2Scope::PerCell) {
+    out.cells.resize(static_cast<std::size_t>(cells_x) * cells_y);
+    pass = [&](double psi0_deg) {
+      out.psi0_rows = projected_cells_pass(s1, stops, ctx, deg2rad(psi0_deg), previous, out, progress);
+      previous = out.cells;  // the next pass starts where this one ended
+      return dofp_sum(out.psi0_rows);
+    };
+  } else {
+    F.resize(static_cast<std::size_t>(cells_y));
+    ok.resize(static_cast<std::size_t>(cells_x) * cells_y);
+    tbb::parallel_for(0, cells_y, [&](int cy) {
+      gather_cell_row(s1, stops, cy, F[static_cast<std::size_t>(cy)]);
+      for (int cx = 0; cx < cells_x; ++cx)
+        ok[static_cast<std::size_t>(cy) * cells_x + cx] = undetermined_pixel(s1, cx, cy) < 0;
+    });
+    for (std::uint8_t v : ok) used += v;
+    pass = [&](double psi0_deg) {
+      out.psi0_rows.assign(1, DofpPsi0Pass{});
+      out.cells.assign(1, projected_global_fit(s1, F, ok, used, ctx, deg2rad(psi0_deg), out.psi0_rows[0]));
+      return out.psi0_rows[0];
+    };
+  }
+  const auto run = [&](double psi0_deg) { return out.psi0_pass = pass(psi0_deg); };
+  if (std::isfinite(o.psi0_deg)) {
+    out.psi0_deg = o.psi0_deg;
+    run(o.psi0_deg);
+    out.psi0_fit.message = "psi0 held (one pass of the fit)";
+  } else {
+    out.psi0_fit = dofp_fit_psi0(run, dofp_psi0_start_deg(dofp_psi0_start_rows(s1, stops, o)), o, out.psi0_deg);
+  }
+  for (const DofpCellFit& c : out.cells) out.usable_cells += c.usable();
+  return out;
 }
 
 }  // namespace
@@ -875,46 +1250,28 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
   const StopArrays st(rot);
   const ClosedFormStart cf(stops, rot);
   const std::size_t M = stops.size();
-  const std::vector<double> turns = table_turns_rad(stops, o.table_sense);
-  const bool projected = o.view_projection;
   DofpStep2 out;
   out.scope = o.scope;
   out.cells_x = s1.width / 2;
   out.cells_y = s1.height / 2;
   const int cells_x = out.cells_x, cells_y = out.cells_y;
+  if (o.view_projection) return projected_step2(s1, stops, o, rot, cf, progress, out);
 
   if (o.scope == DofpStep2Scope::PerCell) {
     out.cells.resize(static_cast<std::size_t>(cells_x) * cells_y);
     progress.begin("calibrate dofp: step 2 cells", static_cast<long long>(out.cells.size()));
     tbb::parallel_for(tbb::blocked_range<int>(0, cells_y, 1), [&](const tbb::blocked_range<int>& r) {
-      std::vector<double> F, rotp, dphi;
+      std::vector<double> F;
       SoaScratch sc;
       for (int cy = r.begin(); cy < r.end(); ++cy) {
         gather_cell_row(s1, stops, cy, F);
         for (int cx = 0; cx < cells_x; ++cx) {
           DofpCellFit& fit = out.cells[static_cast<std::size_t>(cy) * cells_x + cx];
-          if (const long long p = undetermined_pixel(s1, cx, cy); p >= 0) {
-            fit.termination = FitTermination::RankDeficient;
-            fit.observations = static_cast<int>(M);
-            fit.message = fmt::format("step 1 left pixel (column {}, row {}) undetermined (rank {})",
-                                      p % s1.width, p / s1.width, int{s1.rank[p]});
-            continue;
-          }
+          if (undetermined_cell_fit(s1, cx, cy, M, fit)) continue;
           const double* Fc = &F[static_cast<std::size_t>(cx) * M * 4];
           CellModel model;
-          const ViewProjection proj =
-              projected ? view_projection_of(dofp_cell_view(s1.width, s1.height, o, cx, cy)) : ViewProjection{};
           const auto eval = [&](const Vec8& x, bool jac, Sums& sums) {
             if (!make_cell_model(x, alpha, o.dop_weight, o.fit_weight, jac, model)) return false;
-            if (projected) {  // the scalar loop with the model's rotation per stop
-              model.c2psi = 1.0, model.s2psi = 0.0;
-              projected_rotations(proj, turns, rot, x[6], rotp, dphi);
-              if (jac)
-                accumulate<true>(model, Fc, rotp.data(), M, sums, nullptr, nullptr, dphi.data());
-              else
-                accumulate<false>(model, Fc, rotp.data(), M, sums, nullptr, nullptr, dphi.data());
-              return true;
-            }
             if (jac)
               accumulate_soa<true>(model, Fc, st, rot.data(), sc, sums);
             else
@@ -957,21 +1314,9 @@ DofpStep2 calibrate_dofp_step2(const DofpStep1& s1, std::span<const DofpPolarize
       std::vector<Sums> rows(cells_y);
       tbb::parallel_for(0, cells_y, [&](int cy) {
         SoaScratch sc;
-        std::vector<double> rotp, dphi;
         for (int cx = 0; cx < cells_x; ++cx) {
           if (!ok[static_cast<std::size_t>(cy) * cells_x + cx]) continue;
           const double* Fc = &F[cy][static_cast<std::size_t>(cx) * M * 4];
-          if (projected) {
-            CellModel cm = model;
-            cm.c2psi = 1.0, cm.s2psi = 0.0;
-            projected_rotations(view_projection_of(dofp_cell_view(s1.width, s1.height, o, cx, cy)), turns, rot,
-                                x[6], rotp, dphi);
-            if (jac)
-              accumulate<true>(cm, Fc, rotp.data(), M, rows[cy], nullptr, nullptr, dphi.data());
-            else
-              accumulate<false>(cm, Fc, rotp.data(), M, rows[cy], nullptr, nullptr, dphi.data());
-            continue;
-          }
           if (jac)
             accumulate_soa<true>(model, Fc, st, rot.data(), sc, rows[cy]);
           else
@@ -1052,14 +1397,19 @@ DofpTable1 dofp_table1(const DofpStep1& s1, const DofpStep2& s2,
     }
   if (cells.empty())
     throw CalibrationError("DoFP Table 1: no cell has a usable step 1 and step 2");
-  // With the view's projection, each cell's AoP goes back to the port plane before the mean:
-  // β̃ = arg(M⁻¹·(cos φ̃, sin φ̃)) (M⁻¹ = adj M / det M; only the direction counts, so adj M).
-  std::vector<ViewProjection> back;
+  // With the view's projection, each cell's AoP goes back to the port plane before the mean
+  // (port_angle): the cell's relative (k, ε), its ε_1 and its pixels' views.
+  std::vector<ProjectedCell> back;
   if (o.view_projection)
-    for (std::size_t c : cells) {
-      const ViewProjection M = view_projection_of(
-          dofp_cell_view(s1.width, s1.height, o, static_cast<int>(c % cells_x), static_cast<int>(c / cells_x)));
-      back.push_back({M.m22, -M.m12, M.m11, 1.0});
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const int cx = static_cast<int>(cells[i] % cells_x), cy = static_cast<int>(cells[i] / cells_x);
+      const DofpCellFit& fit = s2.cells[s2.scope == DofpStep2Scope::Global ? 0 : cells[i]];
+      ProjectedCell pc{Vec8::Zero(), deg2rad(fit.eps_deg[0]), cell_pixel_projections(s1.width, s1.height, o, cx, cy)};
+      for (int j = 1; j < 4; ++j) {
+        pc.x[j - 1] = deg2rad(fit.eps_deg[j] - fit.eps_deg[0]);
+        pc.x[j + 2] = fit.k[j];
+      }
+      back.push_back(pc);
     }
 
   // Circular mean per stop and row: ½·arg Σ_cells (q̃1 + i q̃2)/|q̃|.
@@ -1077,19 +1427,22 @@ DofpTable1 dofp_table1(const DofpStep1& s1, const DofpStep2& s2,
         raw[j] = f[p[j]];
         F[j] = (f[p[j]] - s1.b[p[j]]) / s1.K[p[j]];
       }
+      if (!back.empty()) {
+        const ProjectedCell ideal_cell{ideal_x(), 0.0, back[i].views};
+        const Eigen::Vector4d* values[3] = {&raw, &F, &F};
+        const ProjectedCell* models[3] = {&ideal_cell, &ideal_cell, &back[i]};
+        for (int k = 0; k < 3; ++k)
+          if (double beta; port_angle(*models[k], alpha, values[k]->data(), beta)) {
+            re[k] += std::cos(2.0 * beta);
+            im[k] += std::sin(2.0 * beta);
+          }
+        continue;
+      }
       const Eigen::Vector2d q[3] = {ideal.P.topRows<2>() * raw, ideal.P.topRows<2>() * F,
                                     fitted[i] * F};
       for (int k = 0; k < 3; ++k) {
         const double a = q[k].norm();
         if (!(a > 0)) continue;
-        if (!back.empty()) {
-          const double phi = 0.5 * std::atan2(q[k][1], q[k][0]), c = std::cos(phi), s = std::sin(phi);
-          const ViewProjection& B = back[i];
-          const double t1 = B.m11 * c + B.m12 * s, t2 = B.m12 * c + B.m22 * s, tt = t1 * t1 + t2 * t2;
-          re[k] += (t1 * t1 - t2 * t2) / tt;
-          im[k] += 2.0 * t1 * t2 / tt;
-          continue;
-        }
         re[k] += q[k][0] / a;
         im[k] += q[k][1] / a;
       }
@@ -1173,16 +1526,16 @@ std::vector<double> rotations_of(const std::vector<double>& theta, double sense)
   return table_rotations(stops, sense, false);
 }
 
-// The rotations the scalar loop takes for one cell at x: table_rotations', or with the view's
-// projection the model's per stop and dφ/dψ_0.
-std::vector<double> cell_rotations(const std::vector<double>& theta, const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& o, const Vec3& view, std::vector<double>& dphi) {
-  std::vector<double> rot = rotations_of(theta, o.table_sense);
-  if (!o.view_projection) return rot;
-  std::vector<double> turns(theta.size()), out;
+// With the view's projection: a cell's stops at options.psi0_deg, as step 2 takes them.
+ProjectedStops projected_stops_of(const std::vector<double>& theta, const DofpStep2Options& o,
+                                  const std::array<Vec3, 4>& views) {
+  PixelProjections M;
+  for (int j = 0; j < 4; ++j) M[j] = view_projection_of(views[j]);
+  std::vector<double> turns(theta.size());
   for (std::size_t m = 0; m < theta.size(); ++m) turns[m] = o.table_sense * deg2rad(theta[m]);
-  projected_rotations(view_projection_of(view), turns, rot, x[6], out, dphi);
-  return out;
+  ProjectedStops ps;
+  project_stops(M, turns, rotations_of(theta, o.table_sense), deg2rad(o.psi0_deg), ps);
+  return ps;
 }
 
 }  // namespace
@@ -1193,50 +1546,156 @@ double dofp_projected_aop_deg(const Vec3& view, double psi_deg) {
   return rad2deg(std::atan2(M.m12 * cb + M.m22 * sb, M.m11 * cb + M.m12 * sb));
 }
 
-Vec3 dofp_cell_view(int width, int height, const DofpStep2Options& o, int cx, int cy) {
+Vec3 dofp_pixel_view(int width, int height, const DofpStep2Options& o, int col, int row) {
   if (!(std::isfinite(o.focal_px) && o.focal_px > 0))
-    throw std::invalid_argument(fmt::format("DoFP: a cell's view needs a focal length > 0 px, got {}", o.focal_px));
+    throw std::invalid_argument(fmt::format("DoFP: a pixel's view needs a focal length > 0 px, got {}", o.focal_px));
   const double xc = std::isnan(o.principal_x_px) ? 0.5 * width : o.principal_x_px;
   const double yc = std::isnan(o.principal_y_px) ? 0.5 * height : o.principal_y_px;
-  return vec3::unit({2.0 * cx + 1.0 - xc, 2.0 * cy + 1.0 - yc, o.focal_px});
+  return vec3::unit({col + 0.5 - xc, row + 0.5 - yc, o.focal_px});
+}
+
+DofpPsi0Pass dofp_sum(std::span<const DofpPsi0Pass> rows) {
+  DofpPsi0Pass total;
+  for (const DofpPsi0Pass& r : rows) total.add(r);
+  return total;
+}
+
+double dofp_psi0_start_deg(std::span<const std::array<double, 2>> rows) {
+  double re = 0, im = 0;
+  for (const std::array<double, 2>& r : rows) re += r[0], im += r[1];
+  return rad2deg(0.5 * std::atan2(im, re));
+}
+
+std::vector<std::array<double, 2>> dofp_psi0_start_rows(const DofpStep1& s1, std::span<const DofpPolarizedStop> stops,
+                                                        const DofpStep2Options& o) {
+  const std::vector<double> rot = table_rotations(stops, o.table_sense, o.weight_by_intensity);
+  const ClosedFormStart cf(stops, rot);
+  const std::array<double, 4> alpha = alpha_rad_of(o);
+  const int cells_x = s1.width / 2, cells_y = s1.height / 2;
+  const std::size_t M = stops.size();
+  std::vector<std::array<double, 2>> rows(static_cast<std::size_t>(cells_y), {0.0, 0.0});
+  if (!cf.ok) return rows;
+  tbb::parallel_for(0, cells_y, [&](int cy) {
+    std::vector<double> F;
+    gather_cell_row(s1, stops, cy, F);
+    for (int cx = 0; cx < cells_x; ++cx) {
+      if (undetermined_pixel(s1, cx, cy) >= 0) continue;
+      Eigen::Matrix<double, 3, 4> g = Eigen::Matrix<double, 3, 4>::Zero();
+      cf.add(&F[static_cast<std::size_t>(cx) * M * 4], M, g);
+      if (Vec8 x; cf.start(g, alpha, x)) {
+        rows[static_cast<std::size_t>(cy)][0] += std::cos(2.0 * x[6]);
+        rows[static_cast<std::size_t>(cy)][1] += std::sin(2.0 * x[6]);
+      }
+    }
+  });
+  return rows;
+}
+
+FitSummary dofp_fit_psi0(const std::function<DofpPsi0Pass(double)>& pass, double start_deg,
+                         const DofpStep2Options& o, double& psi0_deg) {
+  constexpr int kHalvings = 5;  // [C] each try is a pass over every cell
+  FitSummary s;
+  s.cost_unit = "rad^2";
+  s.solver_status = "gauss_newton";
+  double psi = deg2rad(start_deg);
+  DofpPsi0Pass P = pass(start_deg);
+  s.evaluations = 1;
+  s.initial_cost = 0.5 * P.cost;
+  const auto end = [&](FitTermination t, std::string message) {
+    s.termination = t;
+    s.message = std::move(message);
+  };
+  for (int it = 1;; ++it) {
+    s.observations = static_cast<int>(P.fits);
+    if (P.fits == 0) {
+      end(FitTermination::TooFewObservations, fmt::format("no usable fit at psi0 = {:.6g} deg", rad2deg(psi)));
+      break;
+    }
+    if (!(P.curvature > o.min_singular_ratio * o.min_singular_ratio * P.raw_curvature)) {
+      end(FitTermination::RankDeficient,
+          fmt::format("the views cannot tell psi0 from the analyzers' common rotation eps1 (reduced curvature "
+                      "{:.3g} of {:.3g}): the field is too narrow", P.curvature, P.raw_curvature));
+      break;
+    }
+    double step = -P.gradient / P.curvature;
+    if (std::abs(step) < o.step_tolerance) {
+      end(FitTermination::Converged, "");
+      break;
+    }
+    if (it > o.max_iterations) {
+      end(FitTermination::NoConvergence,
+          fmt::format("|dpsi0| still >= {:g} after {} iterations", o.step_tolerance, o.max_iterations));
+      break;
+    }
+    bool accepted = false;
+    for (int h = 0; h <= kHalvings && !accepted; ++h, step *= 0.5) {
+      DofpPsi0Pass T = pass(rad2deg(psi + step));
+      ++s.evaluations;
+      // Not above the cost but for rounding (1e-12 of it): a last small step must not stall.
+      if (T.fits > 0 && T.cost <= P.cost * (1.0 + 1e-12)) {
+        psi += step;
+        P = T;
+        accepted = true;
+      }
+    }
+    s.iterations = it;
+    if (!accepted) {
+      P = pass(rad2deg(psi));  // the cells at the ψ_0 reported
+      ++s.evaluations;
+      end(FitTermination::NoConvergence, fmt::format("no step of psi0 lowered the cost after {} tries", kHalvings + 1));
+      break;
+    }
+  }
+  s.final_cost = 0.5 * P.cost;
+  psi0_deg = wrap90_deg(rad2deg(psi));
+  return s;
 }
 
 Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F, const std::vector<double>& theta,
-                                    const Eigen::Matrix<double, 8, 1>& x,
-                                    const DofpStep2Options& o, const Vec3& view) {
+                                    const Eigen::Matrix<double, 8, 1>& x, const DofpStep2Options& o,
+                                    const std::array<Vec3, 4>& views) {
   if (F.size() != 4 * theta.size())
     throw std::invalid_argument("dofp_cell_residuals: F needs 4 values per table angle");
-  std::vector<double> dphi;
-  const std::vector<double> rot = cell_rotations(theta, x, o, view, dphi);
+  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * theta.size()));
+  Sums sums;
+  if (o.view_projection) {
+    if (!accumulate_projected<false>(x, alpha_rad_of(o), o, F.data(), projected_stops_of(theta, o, views),
+                                     theta.size(), sums, r.data()))
+      throw std::invalid_argument("dofp_cell_residuals: the model is singular at x");
+    return r;
+  }
+  const std::vector<double> rot = rotations_of(theta, o.table_sense);
   CellModel model;
   if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, false, model))
     throw std::invalid_argument("dofp_cell_residuals: the model is singular at x");
-  Eigen::VectorXd r = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * theta.size()));
-  Sums sums;
-  if (o.view_projection) model.c2psi = 1.0, model.s2psi = 0.0;
-  accumulate<false>(model, F.data(), rot.data(), theta.size(), sums, r.data(), nullptr,
-                    dphi.empty() ? nullptr : dphi.data());
+  accumulate<false>(model, F.data(), rot.data(), theta.size(), sums, r.data());
   return r;
 }
 
 Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F, const std::vector<double>& theta,
-                                   const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& o, const Vec3& view) {
+                                   const Eigen::Matrix<double, 8, 1>& x, const DofpStep2Options& o,
+                                   const std::array<Vec3, 4>& views) {
   if (F.size() != 4 * theta.size())
     throw std::invalid_argument("dofp_cell_jacobian: F needs 4 values per table angle");
-  std::vector<double> dphi;
-  const std::vector<double> rot = cell_rotations(theta, x, o, view, dphi);
-  CellModel model;
-  if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
-    throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
   std::vector<double> rows(24 * theta.size(), 0.0);
   Sums sums;
-  if (o.view_projection) model.c2psi = 1.0, model.s2psi = 0.0;
-  accumulate<true>(model, F.data(), rot.data(), theta.size(), sums, nullptr, rows.data(),
-                   dphi.empty() ? nullptr : dphi.data());
-  Eigen::MatrixXd J(static_cast<Eigen::Index>(3 * theta.size()), 8);
-  for (std::size_t i = 0; i < 3 * theta.size(); ++i)
+  ProjectedStops ps;
+  if (o.view_projection) {
+    ps = projected_stops_of(theta, o, views);
+    if (!accumulate_projected<true>(x, alpha_rad_of(o), o, F.data(), ps, theta.size(), sums, nullptr, rows.data()))
+      throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
+  } else {
+    const std::vector<double> rot = rotations_of(theta, o.table_sense);
+    CellModel model;
+    if (!make_cell_model(x, alpha_rad_of(o), o.dop_weight, o.fit_weight, true, model))
+      throw std::invalid_argument("dofp_cell_jacobian: the model is singular at x");
+    accumulate<true>(model, F.data(), rot.data(), theta.size(), sums, nullptr, rows.data());
+  }
+  Eigen::MatrixXd J(static_cast<Eigen::Index>(3 * theta.size()), o.view_projection ? 9 : 8);
+  for (std::size_t i = 0; i < 3 * theta.size(); ++i) {
     for (int p = 0; p < 8; ++p) J(static_cast<Eigen::Index>(i), p) = rows[8 * i + p];
+    if (o.view_projection) J(static_cast<Eigen::Index>(i), 8) = psi0_column(&rows[8 * i], &ps.dphi[4 * (i / 3)]);
+  }
   return J;
 }
 

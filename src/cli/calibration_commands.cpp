@@ -146,6 +146,8 @@ void run_calibrate_dofp(const std::string& input, const std::string& rig_path, c
                            c.step2.usable_cells, c.step2.cells.size(), c.table1.intensity);
   for (const DofpOrientationRow& row : c.table1.rows)
     std::cout << fmt::format("  {:6s} {:.4f} / {:.4f} / {:.4f}\n", row.name, row.max_deg, row.mean_deg, row.std_deg);
+  if (view_projection)
+    std::cout << fmt::format("  psi0 {:.9g} deg for the image: {}\n", c.step2.psi0_deg, c.step2.psi0_fit.brief_report());
 }
 
 // `calibrate DIR --method four-camera`: W16's radiometric and polarizer-angle calibration of a

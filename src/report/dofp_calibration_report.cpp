@@ -17,6 +17,7 @@
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/plot.h"
+#include "polrig/units.h"
 
 namespace polrig {
 
@@ -87,18 +88,22 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
                        num(c.table1.rows[2].error_deg[m]));
   write_text_file(dir / "errors.csv", err);
 
-  std::string cells =
+  // With the view's projection ε_1 is fitted too (no gauge): its column only then, so that the
+  // default's file is unchanged.
+  const bool eps1 = c.options.step2.view_projection;
+  std::string cells = fmt::format(
       "cell_x,cell_y,termination,iterations,rank,observations,initial_rms_deg,final_rms_deg,"
-      "psi0_deg,dop,k2,k3,k4,eps2_deg,eps3_deg,eps4_deg,message\n";
+      "psi0_deg,dop,k2,k3,k4,{}eps2_deg,eps3_deg,eps4_deg,message\n", eps1 ? "eps1_deg," : "");
   const bool global = c.step2.scope == DofpStep2Scope::Global;
   for (std::size_t i = 0; i < c.step2.cells.size(); ++i) {
     const DofpCellFit& f = c.step2.cells[i];
     const std::string x = global ? "" : fmt::format("{}", i % c.step2.cells_x);
     const std::string y = global ? "" : fmt::format("{}", i / c.step2.cells_x);
-    cells += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", x, y,
+    cells += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{}{},{},{},{}\n", x, y,
                          termination_name(f.termination), f.iterations, f.rank, f.observations,
                          num(f.initial_rms_deg), num(f.final_rms_deg), num(f.psi0_deg),
-                         num(f.dop), num(f.k[1]), num(f.k[2]), num(f.k[3]), num(f.eps_deg[1]),
+                         num(f.dop), num(f.k[1]), num(f.k[2]), num(f.k[3]),
+                         eps1 ? num(f.eps_deg[0]) + "," : "", num(f.eps_deg[1]),
                          num(f.eps_deg[2]), num(f.eps_deg[3]), quoted(f.message));
   }
   write_text_file(dir / "cells.csv", cells);
@@ -106,8 +111,17 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
   std::string summary = "quantity,value\n";
   summary += fmt::format("scope,{}\n", dofp_scope_name(c.step2.scope));
   summary += fmt::format("table_sense,{}\n", num(c.options.step2.table_sense));
-  if (c.options.step2.view_projection)  // only when on: the default's file is unchanged
+  if (c.options.step2.view_projection) {  // only when on: the default's file is unchanged
+    const FitSummary& f = c.step2.psi0_fit;
     summary += fmt::format("view_projection_focal_px,{}\n", num(c.options.step2.focal_px));
+    summary += fmt::format("psi0_deg,{}\n", num(c.step2.psi0_deg));
+    summary += fmt::format("psi0_termination,{}\n", termination_name(f.termination));
+    summary += fmt::format("psi0_iterations,{}\n", f.iterations);
+    summary += fmt::format("psi0_passes,{}\n", f.evaluations);
+    summary += fmt::format("psi0_initial_cost_rad2,{}\n", num(f.initial_cost));
+    summary += fmt::format("psi0_final_cost_rad2,{}\n", num(f.final_cost));
+    summary += fmt::format("psi0_message,{}\n", quoted(f.message));
+  }
   summary += fmt::format("pixels,{}\n", static_cast<long long>(W) * H);
   summary += fmt::format("step1_rank_deficient_pixels,{}\n", c.step1.rank_deficient_pixels);
   summary += fmt::format("step2_fits,{}\n", c.step2.cells.size());
@@ -267,25 +281,25 @@ DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrati
   s2.scope = options.step2.scope;
   s2.cells_x = cells_x, s2.cells_y = H / 2;
   s2.cells.resize(static_cast<std::size_t>(s2.cells_x) * static_cast<std::size_t>(s2.cells_y));
-  progress.begin("calibrate dofp: steps 1 and 2 by bands of rows", H);
-  for (int row0 = 0; row0 < H; row0 += band_rows) {
-    const int rows = std::min(band_rows, H - row0);
-    const std::vector<std::vector<double>> level_rows = read_mean_rows(dataset, level_ix, row0, rows);
-    const std::vector<std::vector<double>> stop_rows = read_mean_rows(dataset, stop_ix, row0, rows);
-    std::vector<DofpUnpolarizedLevel> levels;
+  // A band's stops (rows [row0, row0 + rows) of each) and its step 1.
+  struct Band {
+    std::vector<std::vector<double>> stop_rows;
     std::vector<DofpPolarizedStop> stops;
+    DofpStep1 step1;
+  };
+  const auto read_band = [&](int row0, int rows, Band& band) {
+    const std::vector<std::vector<double>> level_rows = read_mean_rows(dataset, level_ix, row0, rows);
+    band.stop_rows = read_mean_rows(dataset, stop_ix, row0, rows);
+    std::vector<DofpUnpolarizedLevel> levels;
+    band.stops.clear();
     for (std::size_t i = 0; i < level_ix.size(); ++i) levels.push_back({dataset.stops[level_ix[i]].intensity, level_rows[i]});
     for (std::size_t i = 0; i < stop_ix.size(); ++i) {
       const DofpDatasetStop& st = dataset.stops[stop_ix[i]];
-      stops.push_back({st.theta_R_deg, st.intensity, stop_rows[i]});
+      band.stops.push_back({st.theta_R_deg, st.intensity, band.stop_rows[i]});
     }
-    const DofpStep1 b1 = calibrate_dofp_step1(W, rows, levels, options.step1);
-    // A band's cells see the views of their rows in the whole frame: the principal point in the
-    // band's own rows (NaN, the frame's centre, only matters with the view's projection on).
-    DofpStep2Options band_step2 = options.step2;
-    if (band_step2.view_projection)
-      band_step2.principal_y_px = (std::isfinite(band_step2.principal_y_px) ? band_step2.principal_y_px : 0.5 * H) - row0;
-    DofpStep2 b2 = calibrate_dofp_step2(b1, stops, band_step2);
+    band.step1 = calibrate_dofp_step1(W, rows, levels, options.step1);
+  };
+  const auto keep_step1 = [&](int row0, const DofpStep1& b1) {
     const std::size_t p0 = static_cast<std::size_t>(row0) * static_cast<std::size_t>(W);
     std::copy(b1.K.begin(), b1.K.end(), s1.K.begin() + static_cast<std::ptrdiff_t>(p0));
     std::copy(b1.b.begin(), b1.b.end(), s1.b.begin() + static_cast<std::ptrdiff_t>(p0));
@@ -293,6 +307,8 @@ DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrati
     std::copy(b1.rank.begin(), b1.rank.end(), s1.rank.begin() + static_cast<std::ptrdiff_t>(p0));
     std::copy(b1.levels_used.begin(), b1.levels_used.end(), s1.levels_used.begin() + static_cast<std::ptrdiff_t>(p0));
     s1.rank_deficient_pixels += b1.rank_deficient_pixels;
+  };
+  const auto keep_step2 = [&](int row0, const DofpStep1& b1, DofpStep2& b2) {
     for (std::size_t i = 0; i < b2.cells.size(); ++i) {
       DofpCellFit& fit = b2.cells[i];
       // Step 2 names an undetermined pixel by its row in the band: the same message with the
@@ -306,12 +322,68 @@ DofpCalibration calibrate_dofp_dataset(const DofpDataset& dataset, DofpCalibrati
           break;
         }
       }
-      s2.usable_cells += fit.usable();
       s2.cells[static_cast<std::size_t>(row0 / 2) * static_cast<std::size_t>(cells_x) + i] = std::move(fit);
     }
-    progress.advance(rows);
+  };
+  // A band's cells see the views of their rows in the whole frame: the principal point in the
+  // band's own rows (NaN, the frame's centre, only matters with the view's projection on).
+  const auto band_options = [&](int row0) {
+    DofpStep2Options band_step2 = options.step2;
+    if (band_step2.view_projection)
+      band_step2.principal_y_px = (std::isfinite(band_step2.principal_y_px) ? band_step2.principal_y_px : 0.5 * H) - row0;
+    return band_step2;
+  };
+  if (options.step2.view_projection) {
+    // One ψ_0 for the whole image: step 1 and the start by bands, then each pass of the ψ_0 fit
+    // (dofp_fit_psi0) fits every band's cells at its ψ_0.
+    // The sums per cell row, added in row order: the whole frame's bits (calibrate_dofp_step2).
+    std::vector<std::array<double, 2>> start;
+    progress.begin("calibrate dofp: step 1 by bands of rows", H);
+    for (int row0 = 0; row0 < H; row0 += band_rows) {
+      Band band;
+      read_band(row0, std::min(band_rows, H - row0), band);
+      keep_step1(row0, band.step1);
+      for (const std::array<double, 2>& r : dofp_psi0_start_rows(band.step1, band.stops, band_options(row0)))
+        start.push_back(r);
+      progress.advance(band.step1.height);
+    }
+    progress.finish();
+    bool first = true;
+    const auto pass = [&](double psi0_deg) {
+      s2.psi0_rows.clear();
+      progress.begin(fmt::format("calibrate dofp: step 2 by bands of rows at psi0 = {:.9g} deg", psi0_deg), H);
+      for (int row0 = 0; row0 < H; row0 += band_rows) {
+        Band band;
+        read_band(row0, std::min(band_rows, H - row0), band);
+        DofpStep2Options o = band_options(row0);
+        o.psi0_deg = psi0_deg;
+        const std::size_t c0 = static_cast<std::size_t>(row0 / 2) * static_cast<std::size_t>(cells_x);
+        if (!first)  // each pass starts at the last one's fits
+          o.start_cells = std::span<const DofpCellFit>(s2.cells).subspan(c0, static_cast<std::size_t>(band.step1.height / 2) * cells_x);
+        DofpStep2 b2 = calibrate_dofp_step2(band.step1, band.stops, o);
+        s2.psi0_rows.insert(s2.psi0_rows.end(), b2.psi0_rows.begin(), b2.psi0_rows.end());
+        keep_step2(row0, band.step1, b2);
+        progress.advance(band.step1.height);
+      }
+      progress.finish();
+      first = false;
+      return s2.psi0_pass = dofp_sum(s2.psi0_rows);
+    };
+    s2.psi0_fit = dofp_fit_psi0(pass, dofp_psi0_start_deg(start), options.step2, s2.psi0_deg);
+    for (const DofpCellFit& fit : s2.cells) s2.usable_cells += fit.usable();
+  } else {
+    progress.begin("calibrate dofp: steps 1 and 2 by bands of rows", H);
+    for (int row0 = 0; row0 < H; row0 += band_rows) {
+      Band band;
+      read_band(row0, std::min(band_rows, H - row0), band);
+      DofpStep2 b2 = calibrate_dofp_step2(band.step1, band.stops, band_options(row0));
+      keep_step1(row0, band.step1);
+      keep_step2(row0, band.step1, b2);
+      progress.advance(band.step1.height);
+    }
+    progress.finish();
+    for (const DofpCellFit& fit : s2.cells) s2.usable_cells += fit.usable();
   }
-  progress.finish();
 
   // Table 1 from whole frames of its stops only (those of its intensity: the largest unless chosen).
   double intensity = options.table1_intensity;

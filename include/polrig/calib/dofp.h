@@ -15,6 +15,7 @@
 // BL (2cx, 2cy+1), BR (2cx+1, 2cy+1), whose axes are DofpCameraSpec::mosaic_deg in that order.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <span>
 #include <string>
@@ -105,26 +106,35 @@ struct DofpStep2Options {
   // nonlinear (Rician) biases out of (k, ε). false: H17's equal weights.
   bool weight_by_intensity = true;
   // The view's projection [C, not in H17] (docs/physics.md §14). Off: H17's model, every cell
-  // sees the port polarizer at β_m = ψ_0 + s_R·θ_R,m. On: the cell, seen along the view v through
-  // its centre (pinhole: focal_px and the principal point; the analyzer in the image plane),
-  // sees φ_m = arg(M·(cos β_m, sin β_m)), M = I₂ − (v_x, v_y)(v_x, v_y)ᵀ/(1 + v_z): a plane
-  // polarizer's AoP off the axis (tan φ = tan β / cos γ along the azimuth 0). Table 1 then maps
-  // each cell's AoP back to the port plane, β̃ = arg(M⁻¹·(cos φ̃, sin φ̃)), before the mean (all
-  // three rows). Needs focal_px > 0; NaN principal point: the image centre (width/2, height/2).
+  // sees the port polarizer at β_m = ψ_0 + s_R·θ_R,m, with ψ_0 per cell and the gauge ε_1 = 0.
+  // On: each pixel, seen along its own view v (pinhole: focal_px and the principal point; the
+  // analyzer in the image plane), sees φ_m = arg(M·(cos β_m, sin β_m)),
+  // M = I₂ − (v_x, v_y)(v_x, v_y)ᵀ/(1 + v_z): a plane polarizer's AoP off the axis (tan φ =
+  // tan β / cos γ along the azimuth 0). φ is nonlinear in β, so ε_1 is no longer a gauge: one ψ_0
+  // for the whole image (one port polarizer; DofpStep2::psi0_fit) and every ε_1..ε_4 per cell.
+  // Table 1 then maps each cell's AoP back to the port plane before the mean (all three rows).
+  // Needs focal_px > 0; NaN principal point: the image centre (width/2, height/2).
   bool view_projection = false;
   double focal_px = 0;
   double principal_x_px = std::numeric_limits<double>::quiet_NaN();
   double principal_y_px = std::numeric_limits<double>::quiet_NaN();
+  // With view_projection: NaN fits ψ_0 (degrees); a finite value holds it there, so that one pass
+  // of the ψ_0 fit can run on a band of rows (DofpStep2::psi0_rows, dofp_fit_psi0).
+  double psi0_deg = std::numeric_limits<double>::quiet_NaN();
+  // With view_projection and per-cell scope, optional: the previous pass's fits of these cells
+  // (row-major, every cell), each usable one the start of its cell's fit at the new ψ_0.
+  std::span<const struct DofpCellFit> start_cells;
 };
 
 // The AoP (degrees, image frame from X_l towards Y_l) that an analyzer in the image plane sees of
 // a plane polarizer whose axis lies ⊥ Z_l at psi_deg from X_l, along the unit view v (frame l,
 // v_z > 0): arg(M·(cos ψ, sin ψ)), M = I₂ − (v_x, v_y)(v_x, v_y)ᵀ/(1 + v_z) (docs/physics.md §14).
 double dofp_projected_aop_deg(const Vec3& view, double psi_deg);
-// The view through the centre of cell (cx, cy) (the corner its four pixels share): the unit vector
-// (2cx + 1 − x_c, 2cy + 1 − y_c, f_c) in frame l, with the options' focal length and principal
-// point (NaN: the image centre). Throws std::invalid_argument when focal_px is not positive.
-Vec3 dofp_cell_view(int width, int height, const DofpStep2Options& options, int cx, int cy);
+// The view through the centre of pixel (col, row), the one step 2's projected model uses: the unit
+// vector (col + ½ − x_c, row + ½ − y_c, f_c) in frame l, with the options' focal length and principal
+// point (NaN: the image centre; device/dofp_camera.h's pixel_view). Throws std::invalid_argument
+// when focal_px is not positive.
+Vec3 dofp_pixel_view(int width, int height, const DofpStep2Options& options, int col, int row);
 
 // One cell's (or the global) fit: the parameters of its four pixels and how the fit ended,
 // after calib/fit.h's FitSummary. Only usable() cells have parameters to use; the others hold
@@ -132,8 +142,9 @@ Vec3 dofp_cell_view(int width, int height, const DofpStep2Options& options, int 
 // k = 1, ε = 0 there.
 struct DofpCellFit {
   std::array<double, 4> k = {1, 1, 1, 1};
-  std::array<double, 4> eps_deg = {0, 0, 0, 0};
-  double psi0_deg = 0;  // ψ_0: the AoP at θ_R = 0 (image frame, (−90°, 90°])
+  std::array<double, 4> eps_deg = {0, 0, 0, 0};  // ε_1 = 0 (the gauge) unless view_projection
+  double psi0_deg = 0;  // ψ_0: the AoP at θ_R = 0 (image frame, (−90°, 90°]); the image's one
+                        // ψ_0 with view_projection
   double dop = std::numeric_limits<double>::quiet_NaN();  // d_0, the source's DoP (NaN if w = 0)
   FitTermination termination = FitTermination::TooFewObservations;
   std::string message;  // why a fit did not converge ("" when it did)
@@ -146,12 +157,51 @@ struct DofpCellFit {
   bool usable() const { return termination == FitTermination::Converged; }
 };
 
+// One pass of the ψ_0 fit (view_projection): every cell fitted with ψ_0 held, and the Gauss–Newton
+// normal equation of ψ_0 reduced over each fit's own unknowns (a Schur complement), summed over
+// the usable fits. Sums over bands of rows add up to the whole image's.
+struct DofpPsi0Pass {
+  double gradient = 0;   // Σ (J_ψᵀr − J_ψᵀJ_x·(J_xᵀJ_x)⁻¹·J_xᵀr)
+  double curvature = 0;  // Σ (J_ψᵀJ_ψ − J_ψᵀJ_x·(J_xᵀJ_x)⁻¹·J_xᵀJ_ψ)
+  double raw_curvature = 0;  // Σ J_ψᵀJ_ψ (how much of ψ_0's signal the fits' own unknowns leave)
+  double cost = 0;       // Σ r² of the usable fits
+  long long fits = 0;    // usable fits summed
+  void add(const DofpPsi0Pass& o) {
+    gradient += o.gradient, curvature += o.curvature, raw_curvature += o.raw_curvature;
+    cost += o.cost, fits += o.fits;
+  }
+};
+
 struct DofpStep2 {
   DofpStep2Scope scope = DofpStep2Scope::PerCell;
   int cells_x = 0, cells_y = 0;
   std::vector<DofpCellFit> cells;  // cells_y × cells_x, row-major; one entry when Global
   long long usable_cells = 0;
+  // view_projection only: how the fit of the image's one ψ_0 ended (calib/fit.h's convention; its
+  // costs are ½·Σr² in rad²), and the last pass's sums (at options.psi0_deg when that was given).
+  FitSummary psi0_fit;
+  double psi0_deg = std::numeric_limits<double>::quiet_NaN();
+  DofpPsi0Pass psi0_pass;                 // = dofp_sum(psi0_rows)
+  std::vector<DofpPsi0Pass> psi0_rows;    // per cell row (one entry with the global scope)
 };
+// The rows' sums added in row order from zero: the same bits for any split into bands.
+DofpPsi0Pass dofp_sum(std::span<const DofpPsi0Pass> rows);
+
+// The ψ_0 fit's outer loop (Gauss–Newton on ψ_0, every fit's own unknowns re-fitted at each ψ_0;
+// halving a step that raises the cost): `pass(ψ_0 in degrees)` fits every cell there. Ends
+// converged when |Δψ_0| < step_tolerance (rad), rank_deficient when the reduced curvature is below
+// min_singular_ratio² of the raw one (a narrow field: ψ_0 and ε_1 cannot be told apart). The last
+// pass run is at the returned ψ_0 (psi0_deg).
+FitSummary dofp_fit_psi0(const std::function<DofpPsi0Pass(double)>& pass, double start_deg,
+                         const DofpStep2Options& options, double& psi0_deg);
+// The start of that loop: ½·arg Σ exp(2i·ψ̂_c) over the cells' closed-form starts ψ̂_c (H17's gauge,
+// where ψ̂_c = ψ_0 + ε_1 near the axis), as the sums (Σ cos 2ψ̂_c, Σ sin 2ψ̂_c) per cell row (add
+// them in row order, as dofp_sum).
+std::vector<std::array<double, 2>> dofp_psi0_start_rows(const DofpStep1& step1,
+                                                        std::span<const DofpPolarizedStop> stops,
+                                                        const DofpStep2Options& options);
+// ½·arg of those sums added in row order (degrees).
+double dofp_psi0_start_deg(std::span<const std::array<double, 2>> rows);
 
 // Step 2 (Eqs. 20–29), in parallel over cells (TBB), bit-identical for any thread count.
 // Throws std::invalid_argument for bad input (sizes, non-finite values, a table_sense other
@@ -214,18 +264,22 @@ DofpTruth dofp_parameter_maps(const DofpCalibration& c, std::vector<std::uint8_t
 // x = [ε2, ε3, ε4 (rad), k2, k3, k4, ψ_0 (rad), d_0]; F̃ holds 4 values per observation (TL, TR,
 // BL, BR), theta_R_deg one per observation. Residuals: per observation the AoP residual (rad)
 // , the weighted DoP residual and the weighted fit residual (0 when their weight is 0),
-// interleaved.
-// `view` (frame l) is the cell's view, used with options.view_projection only.
+// interleaved. With options.view_projection step 2's projected model instead: ψ_0 =
+// options.psi0_deg held, x = [ε2 − ε1, ε3 − ε1, ε4 − ε1, k2, k3, k4, ε1, d_0] and `views` the four
+// pixels' views (frame l, TL, TR, BL, BR).
 Eigen::VectorXd dofp_cell_residuals(const std::vector<double>& F_tilde,
                                     const std::vector<double>& theta_R_deg,
                                     const Eigen::Matrix<double, 8, 1>& x,
-                                    const DofpStep2Options& options, const Vec3& view = {0, 0, 1});
+                                    const DofpStep2Options& options,
+                                    const std::array<Vec3, 4>& views = {});
 // The analytic Jacobian (Appendix A's chain ∂φ̃/∂Q̃ · ∂Q̃/∂x in matrix form: ∂(R⁻¹Ãᵀ) =
-// R⁻¹(∂Ãᵀ − ∂R·R⁻¹Ãᵀ)), rows as dofp_cell_residuals; columns: x.
+// R⁻¹(∂Ãᵀ − ∂R·R⁻¹Ãᵀ)), rows as dofp_cell_residuals; columns: x, and with the view's projection
+// a ninth, ∂r/∂ψ_0 (rad), the column step 2's fit of ψ_0 reduces.
 Eigen::MatrixXd dofp_cell_jacobian(const std::vector<double>& F_tilde,
                                    const std::vector<double>& theta_R_deg,
                                    const Eigen::Matrix<double, 8, 1>& x,
-                                   const DofpStep2Options& options, const Vec3& view = {0, 0, 1});
+                                   const DofpStep2Options& options,
+                                   const std::array<Vec3, 4>& views = {});
 
 // One cell's sums at x by each code path of step 2, for tests: the scalar loop (the one
 // dofp_cell_residuals and dofp_cell_jacobian use), and the pass in lanes of 8 that step 2 runs

@@ -1,7 +1,7 @@
 """`pip install --no-build-isolation .` (pyproject.toml, setup.py) into a fresh venv: the wheel
 holds the module and its stubs, and its python imports polrig from anywhere, with the version of
-CMakeLists.txt. The module is built in the CTest build folder (POLRIG_CMAKE_BUILD_DIR), so only the
-wheel is new."""
+CMakeLists.txt. The module is the CTest build folder's (POLRIG_CMAKE_BUILD_DIR), packed as built:
+only the wheel is new, and the build folder is left as it was."""
 import json
 import os
 import pathlib
@@ -36,9 +36,12 @@ def test_pip_install_into_a_venv(tmp_path):
     env = {k: v for k, v in os.environ.items() if not k.startswith(("PYTHON", "PIP_"))}
     env.update(PYTHONNOUSERSITE="1", PIP_NO_INDEX="1", PIP_DISABLE_PIP_VERSION_CHECK="1",
                POLRIG_CMAKE_BUILD_DIR=BUILD)
+    modules = list(pathlib.Path(BUILD, "python", "polrig").glob("_polrig*.so"))
+    before = [m.stat().st_mtime_ns for m in modules]
     p = subprocess.run([str(py), "-m", "pip", "install", "--no-build-isolation", str(ROOT)],
                        env=env, cwd=tmp_path, capture_output=True, text=True)
     assert p.returncode == 0, p.stdout[-4000:] + p.stderr[-4000:]
+    assert [m.stat().st_mtime_ns for m in modules] == before, "pip rebuilt the CTest build's module"
 
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()

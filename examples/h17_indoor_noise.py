@@ -12,6 +12,7 @@ Runs as a script (the test suite runs it) and writes h17_indoor_noise.png to OUT
 """
 import pathlib
 import sys
+import tempfile
 
 import matplotlib
 matplotlib.use("Agg")  # files only; in Jupyter, drop this line
@@ -22,7 +23,8 @@ import polrig
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 out = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ".")
-data = out / "h17_indoor_data"
+scratch = tempfile.TemporaryDirectory()  # the dataset: only the plot stays in OUT_DIR
+data = pathlib.Path(scratch.name) / "h17_indoor"
 rig = polrig.Rig.load(str(ROOT / "rigs" / "han2017-indoor.yaml"),
                       set={"device.width_px": 64, "device.height_px": 48})
 rig.simulate_frames(data, frames="mean", force=True)

@@ -12,6 +12,7 @@ Runs as a script (the test suite runs it) and writes h17_outdoor_elevation.png t
 import datetime
 import pathlib
 import sys
+import tempfile
 
 import matplotlib
 matplotlib.use("Agg")  # files only; in Jupyter, drop this line
@@ -41,6 +42,7 @@ def utc_at_elevation(h_deg):
     return (t0 + datetime.timedelta(seconds=round(lo))).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
+scratch = tempfile.TemporaryDirectory()  # the datasets: only the plot stays in OUT_DIR
 rows = []
 print("h_s (deg)  UTC                    heading error SD (deg): eigenvector  single-point  line-detection  | H17")
 for h in H17:
@@ -48,7 +50,7 @@ for h in H17:
     rig = polrig.Rig.load(str(ROOT / "rigs" / "han2017-outdoor.yaml"),
                           set={"device.width_px": 160, "device.height_px": 120, "device.focal_mm": 0.75,
                                "sky.first_stop_utc": utc})
-    data = out / f"h17_sky_{h:+.1f}"
+    data = pathlib.Path(scratch.name) / f"h17_sky_{h:+.1f}"
     rig.simulate_frames(data, frames="mean", force=True)
     frames = polrig.orient_dofp_dataset(data, heading_prior_deg=0.0)
     err = {m: [] for m in METHODS}

@@ -24,6 +24,7 @@ Writes w16_eigen_bias.png (and prints the tables) to OUT_DIR:
 import math
 import pathlib
 import sys
+import tempfile
 
 import numpy as np
 
@@ -278,7 +279,8 @@ def plot(rows, beta, d0, valid, loc_rows):
 def main():
     out.mkdir(parents=True, exist_ok=True)
     rows, beta, d0, valid = frame_study()
-    loc_rows = locate_study(out)
+    with tempfile.TemporaryDirectory() as scratch:  # the datasets: only the plot stays in OUT_DIR
+        loc_rows = locate_study(pathlib.Path(scratch))
     plot(rows, beta, d0, valid, loc_rows)
 
 

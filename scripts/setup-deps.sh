@@ -20,6 +20,9 @@ packages=(
   python3-dev pybind11-dev    # the Python module (docs/python.md)
   python3-numpy python3-pytest python3-matplotlib  # its arrays, its tests, its examples' plots
   python3-h5py                # the tests read sweep.h5 with an independent HDF5 reader
+  python3-setuptools python3-wheel python3-pip python3-venv  # `pip install --no-build-isolation .`
+                              # (pyproject.toml, setup.py) without PyPI, into a venv (its test)
+  python3-nbconvert python3-ipykernel  # runs examples/polrig_tour.ipynb in its test
   libopenmpi-dev openmpi-bin  # -DPOLRIG_MPI=ON: sweeps across processes and machines (docs/scale.md)
 )
 

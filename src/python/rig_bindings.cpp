@@ -199,8 +199,9 @@ Raises polrig.RigError naming the file, line, key and value.)doc")
               if (r.rig().instrument().has(f.flag)) out.emplace_back(f.name);
             return out;
           }, "What the rig's instrument measures (its flags): \"pair_voltages\" (the "
-             "six-photodiode sensor: simulate, the studies, calibrate's Eq. 15 methods) and/or "
-             "\"frames\" (the DoFP camera).")
+             "six-photodiode sensor: simulate, the studies, calibrate's Eq. 15 methods), "
+             "\"frames\" (the cameras), \"mosaic\" (the DoFP camera's polarizer mosaic), "
+             "\"camera_array\" (W16's four cameras).")
       .def("can", [](const PyRig& r, const std::string& capability) {
             for (const InstrumentFlagInfo& f : instrument_flags())
               if (f.name == capability) return r.rig().instrument().has(f.flag);

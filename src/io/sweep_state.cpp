@@ -13,6 +13,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "yaml_load.h"
 
 namespace polrig {
 namespace fs = std::filesystem;
@@ -31,8 +33,9 @@ std::optional<SweepState> read_sweep_state(const fs::path& dir) {
   const fs::path path = dir / kSweepStateFile;
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::nullopt;
+  const YAML::Node n = load_yaml<DataError>(read_yaml_file<DataError>(path, "sweep's progress record"), path.string(),
+                                            "a progress record nests 2 levels", kMaxYamlBytes);
   try {
-    const YAML::Node n = YAML::LoadFile(path.string());
     SweepState s;
     s.points_done = n["points_done"].as<std::size_t>();
     s.csv_bytes = n["csv_bytes"].as<std::uint64_t>();

@@ -39,6 +39,8 @@ std::optional<SweepState> read_sweep_state(const fs::path& dir) {
     SweepState s;
     s.points_done = n["points_done"].as<std::size_t>();
     s.csv_bytes = n["csv_bytes"].as<std::uint64_t>();
+    if (const YAML::Node f = n["h5_fingerprint"]) s.h5_fingerprint = f.as<std::string>();
+    if (const YAML::Node f = n["csv_fingerprint"]) s.csv_fingerprint = f.as<std::string>();
     s.command = n["command"].as<std::string>();
     s.working_directory = n["working_directory"].as<std::string>();
     for (const auto& kv : n["inputs"]) s.inputs.emplace_back(kv.first.as<std::string>(), kv.second.as<std::string>());
@@ -53,6 +55,8 @@ void write_sweep_state(const fs::path& dir, const SweepState& s) {
   out << YAML::BeginMap;
   out << YAML::Key << "points_done" << YAML::Value << s.points_done;
   out << YAML::Key << "csv_bytes" << YAML::Value << s.csv_bytes;
+  out << YAML::Key << "h5_fingerprint" << YAML::Value << YAML::DoubleQuoted << s.h5_fingerprint;
+  out << YAML::Key << "csv_fingerprint" << YAML::Value << YAML::DoubleQuoted << s.csv_fingerprint;
   out << YAML::Key << "command" << YAML::Value << YAML::DoubleQuoted << s.command;
   out << YAML::Key << "working_directory" << YAML::Value << YAML::DoubleQuoted << s.working_directory;
   out << YAML::Key << "inputs" << YAML::Value << YAML::BeginMap;

@@ -7,7 +7,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -85,6 +87,22 @@ std::vector<std::string> entries_where(const fs::path& parent, Keep keep) {
 inline bool starts_with_png_signature(const fs::path& p) {
   const std::string data = read_file(p);
   return data.size() > 8 && data.compare(0, 8, std::string("\x89PNG\r\n\x1a\n", 8)) == 0;
+}
+
+// Rewrites the data window in the header of the OpenEXR file `p` to claim `width` × `height`
+// pixels (its pixels left as they are): a forged header, as an adversary's file would have.
+inline void claim_exr_size(const fs::path& p, int width, int height) {
+  std::string bytes = read_file(p);
+  const std::string tag("dataWindow\0box2i\0", 17);
+  const std::size_t at = bytes.find(tag);
+  ASSERT_NE(at, std::string::npos) << p << " has no dataWindow";
+  const std::size_t box = at + tag.size() + 4;  // past the attribute's size
+  std::int32_t v[4];
+  std::memcpy(v, bytes.data() + box, sizeof v);  // x_min, y_min, x_max, y_max (little endian)
+  v[2] = v[0] + width - 1;
+  v[3] = v[1] + height - 1;
+  std::memcpy(bytes.data() + box, v, sizeof v);
+  write_file(p, bytes);
 }
 
 // ---------------------------------------------------------------------------------------------

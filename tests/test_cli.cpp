@@ -761,16 +761,17 @@ std::string joined(const std::vector<std::string>& args) {
 }
 fs::path staging_of(const fs::path& out) { return out.parent_path() / ("." + out.filename().string() + ".resumable"); }
 
-// Waits until the staging folder's progress record shows a completed block, then sends `sig`
-// and waits for the process. Returns the points the record held, or 0 if the run ended first.
-std::size_t interrupt_after_a_checkpoint(pid_t pid, const fs::path& out, int sig) {
+// Waits until the staging folder's progress record shows a completed block (more than `after`
+// points), then sends `sig` and waits for the process. Returns the points the record held, or 0
+// if the run ended first.
+std::size_t interrupt_after_a_checkpoint(pid_t pid, const fs::path& out, int sig, std::size_t after = 0) {
   std::size_t done = 0;
-  for (int i = 0; i < 20000 && done == 0; ++i) {
+  for (int i = 0; i < 20000 && done <= after; ++i) {
     try {
       if (const auto s = polrig::read_sweep_state(staging_of(out))) done = s->points_done;
     } catch (const std::exception&) {  // read while it was renamed
     }
-    if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    if (done <= after) std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   ::kill(pid, sig);
   int status = 0;
@@ -861,6 +862,71 @@ TEST_F(Cli, SlowResumingRefusesOtherInputsAndForceStartsOver) {
   ok(joined(force));
   EXPECT_FALSE(fs::exists(staging_of(out)));
   EXPECT_FALSE(fs::exists(out / polrig::kSweepStateFile));
+}
+
+// Issue 23 item 10: --resume checks the progress record against sweep.h5 and sweep.csv before
+// continuing them. A sweep.h5 of an earlier checkpoint (its later points never written: they
+// became 0.0 in the finished folder) and a record whose points_done or csv_bytes was changed by
+// hand gave a wrong folder with exit 0; each is refused, naming the file, and the progress kept.
+TEST_F(Cli, SlowResumingRefusesFilesThatDoNotMatchTheRecord) {
+  const fs::path out = tmp / "sweep", staging = staging_of(out);
+  const fs::path h5 = staging / "sweep.h5", csv = staging / "sweep.csv", record = staging / polrig::kSweepStateFile;
+  std::vector<std::string> resume = resumable_sweep(out);
+  resume.push_back("--resume");
+  pid_t pid = spawn_polrig(resumable_sweep(out), false);
+  ASSERT_GT(pid, 0);
+  const std::size_t first = interrupt_after_a_checkpoint(pid, out, SIGKILL);
+  ASSERT_GT(first, 0u);
+  const std::string early_h5 = read_file(h5);
+  pid = spawn_polrig(resume, false);  // on to a later checkpoint
+  ASSERT_GT(pid, 0);
+  const std::size_t later = interrupt_after_a_checkpoint(pid, out, SIGKILL, first);
+  ASSERT_GT(later, first);
+  ASSERT_LT(later, 200000u);
+  const std::string good_h5 = read_file(h5), good_record = read_file(record);
+
+  const auto refused = [&](const std::string& says) {
+    const Result r = polrig(joined(resume));
+    EXPECT_EQ(r.status, 1) << r.err;
+    EXPECT_HAS(r.err, "--resume: " + says);
+    EXPECT_HAS(r.err, "pass --force without --resume to start over");
+    EXPECT_FALSE(fs::exists(out));
+    EXPECT_TRUE(fs::exists(record)) << "a refused resume must keep the progress";
+  };
+  // `key: VALUE` of the record replaced.
+  const auto record_with = [&](const std::string& key, const std::string& value) {
+    std::string text;
+    for (const std::string& line : lines_of(good_record))
+      text += (line.rfind(key + ": ", 0) == 0 ? key + ": " + value : line) + "\n";
+    EXPECT_NE(text, good_record) << key;
+    write_file(record, text);
+  };
+  const auto number_in_record = [&](const std::string& key) {
+    for (const std::string& line : lines_of(good_record))
+      if (line.rfind(key + ": ", 0) == 0) return std::stoull(line.substr(key.size() + 2));
+    ADD_FAILURE() << key << " not in the record";
+    return 0ull;
+  };
+
+  write_file(h5, early_h5);
+  refused(h5.string() + ": its first " + std::to_string(later) + " points are not those " + record.string() + " counts");
+  write_file(h5, good_h5);
+
+  record_with("points_done", std::to_string(later - 1));
+  refused(h5.string() + ": its first " + std::to_string(later - 1) + " points are not those");
+  record_with("points_done", "999999999");
+  refused(record.string() + ": points_done 999999999, but the grid has 200000 points");
+  const std::uint64_t csv_bytes = number_in_record("csv_bytes");
+  record_with("csv_bytes", std::to_string(csv_bytes - 1));
+  refused(csv.string() + ": its first " + std::to_string(csv_bytes - 1) + " bytes are not the header and the " +
+          std::to_string(later) + " lines");
+  EXPECT_GE(fs::file_size(csv), csv_bytes) << "a refused resume must not cut sweep.csv";
+
+  // The record as written resumes.
+  write_file(record, good_record);
+  ok(joined(resume));
+  EXPECT_FALSE(fs::exists(staging));
+  EXPECT_TRUE(fs::exists(out / "sweep.h5"));
 }
 
 TEST_F(Cli, ABadPointAfterACheckpointLeavesNothingToResume) {

@@ -321,9 +321,32 @@ TEST(DofpMeasuredDataset, WithoutTruthExrTheRigMustGiveTheCamera) {
   // Another frame size than the rig's: the stop's file is named.
   write_text(dir / "rig.yaml", "device:\n  kind: dofp-camera\n  width_px: 26\n  height_px: 20\n  pixel_um: 7.4\n"
                                "  focal_mm: 3\n  mosaic_deg: [0, 90, 45, 135]\n");
-  EXPECT_HAS(error_of([&] { calibrate_dofp_folder(dir); }), "stop_0000.exr: 24 × 20 px (the dataset's camera: 26 × 20)");
+  EXPECT_HAS(error_of([&] { calibrate_dofp_folder(dir); }), "stop_0000.exr: 24 × 20 px (expected 26 × 20)");
   // A rig without frames.
   write_text(dir / "rig.yaml", "device:\n  d: 0.9\n");
   EXPECT_HAS(error_of([&] { read_dofp_dataset(dir); }), "device.kind six-photodiode");
+  fs::remove_all(dir);
+}
+
+// Issue 23 §5.8: a pixel above the ADC's range (device.adc_bits: 12 bits here) is refused, naming
+// the file, the channel and the pixel; calibrate --method dofp took it.
+TEST(DofpDatasetCalibration, PixelsAboveTheAdcsRangeAreRefused) {
+  const fs::path dir = fresh_dir("above_adc");
+  DofpDatasetOptions o;
+  o.storage = DofpFrameStorage::Sum;
+  write_dofp_dataset(small_indoor(), dir, o, "test", false);
+  const DofpDataset d = read_dofp_dataset(dir);
+  ASSERT_EQ(d.adc_bits, 12);
+  const fs::path file = dir / d.stops[1].file;
+  saturate(file, 7, 0, d.stops[1].frames);  // 4095 DN a frame: the top, accepted
+  EXPECT_NO_THROW(read_dofp_mean_frame(d, 1));
+  ExrImage image = read_exr_image(file);
+  image.attributes = {};
+  for (ExrUintChannel& c : image.uints)
+    if (c.name == "raw_sum") c.pixels[7] = 4096u * static_cast<std::uint32_t>(d.stops[1].frames);
+  write_exr_image(file, image, ExrCompression::Piz);
+  const std::string e = error_of([&] { calibrate_dofp_folder(dir); });
+  EXPECT_HAS(e, file.string() + ": channel raw_sum: pixel 7 holds");
+  EXPECT_HAS(e, "above the 12-bit ADC's 4095 DN");
   fs::remove_all(dir);
 }

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <atomic>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -14,6 +15,7 @@
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/manifest.h"
+#include "polrig/io/measured.h"
 #include "polrig/io/output_dir.h"
 #include "polrig/io/plot.h"
 #include "polrig/io/sweep_h5.h"
@@ -433,4 +435,43 @@ TEST(Manifest, NamesEveryFileWithItsSchema) {
 }
 
 }  // namespace
+}  // namespace polrig
+
+namespace polrig {
+
+// Issue 23 §5.1: the size a header claims is checked before any pixel is allocated. A 64-byte-per-
+// line file claiming 100000² px would need 40 GB per channel; it is refused by its header alone,
+// naming the file, against the size expected or, with none, against the cameras' limit.
+TEST(Exr, AHeaderClaimingAnotherSizeIsRefusedBeforeItsPixelsAreAllocated) {
+  const fs::path dir = fresh_dir("exr-claimed-size");
+  fs::create_directories(dir);
+  const fs::path file = dir / "frame.exr";
+  ExrImage image;
+  image.width = 8, image.height = 6;
+  image.floats.push_back({"AoP", std::vector<float>(48, 1.0f)});
+  image.uints.push_back({"raw.000", std::vector<std::uint32_t>(48, 7)});
+  write_exr_image(file, image);
+  EXPECT_EQ(read_exr_image(file, ExrSize{8, 6}).uints[0].pixels[47], 7u);
+  test::claim_exr_size(file, 100000, 100000);
+  const auto refusal = [&](const std::function<void()>& read) {
+    try {
+      read();
+    } catch (const DataError& e) {
+      return std::string(e.what());
+    } catch (const std::exception& e) {
+      return "not a DataError: " + std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string expected = file.string() + ": 100000 × 100000 px (expected 8 × 6)";
+  EXPECT_EQ(refusal([&] { read_exr_image(file, ExrSize{8, 6}); }), expected);
+  EXPECT_EQ(refusal([&] { read_exr_rows(file, 0, 1, nullptr, ExrSize{8, 6}); }), expected);
+  int w = 0, h = 0;
+  EXPECT_EQ(refusal([&] { read_exr(file, w, h, ExrSize{8, 6}); }), expected);
+  const std::string limit = file.string() + ": 100000 × 100000 px (expected at most 16384 × 16384)";
+  EXPECT_EQ(refusal([&] { read_exr_image(file); }), limit);
+  EXPECT_EQ(refusal([&] { read_exr(file, w, h); }), limit);
+  fs::remove_all(dir);
+}
+
 }  // namespace polrig

@@ -627,7 +627,7 @@ TEST(RigYamlFile, DirectoryIsNotARigFile) {
     FAIL() << "load_rig accepted a directory";
   } catch (const RigError& e) {
     EXPECT_EQ(std::string(e.what()),
-              tmp.path().string() + ": cannot read the rig file: not a regular file");
+              tmp.path().string() + ": cannot read the rig file: it is a directory (expected a file)");
   }
 }
 

@@ -55,6 +55,20 @@ def test_sky_from_rig_is_polrig_sky_rig(tmp_path):
         polrig.Sky.from_rig(polrig.Rig())
 
 
+def test_read_exr_checks_the_size_from_the_header(tmp_path):
+    """Issue 23 §5.1: width= and height= are checked against the header before any pixel is read;
+    a file OpenEXR cannot read is a polrig.DataError (a ValueError) naming it."""
+    run_cli("sky", OUTDOOR, "-o", tmp_path / "s", "--size", 32, "--no-plots")
+    exr = str(tmp_path / "s" / "sky.exr")
+    assert polrig.read_exr(exr, width=32, height=32)["AoP"].shape == (32, 32)
+    with pytest.raises(polrig.DataError, match=r"sky\.exr: 32 × 32 px \(expected 32 × 31\)"):
+        polrig.read_exr(exr, width=32, height=31)
+    with pytest.raises(ValueError, match="give width and height, or neither"):
+        polrig.read_exr(exr, width=32)
+    with pytest.raises(ValueError, match="cannot read the EXR image"):
+        polrig.read_exr(str(tmp_path / "missing.exr"))
+
+
 def test_map_threads_do_not_change_it():
     sky = polrig.Sky()
     a, b = sky.map(64, threads=1), sky.map(64, threads=2)

@@ -411,7 +411,11 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
     out->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back(
-        {app, [=] { run_calibrate(*input, *method, *rig, *settings, *drift, *view_projection, *geometry, *out); }});
+        {app, [=] {
+           require_file_name(*app, "--rig", *rig);
+           require_file_name(*app, "--geometry", geometry->file);
+           run_calibrate(*input, *method, *rig, *settings, *drift, *view_projection, *geometry, *out);
+         }});
   }
   {
     auto* app = root.add_subcommand("apply", "turn voltages into θ and d with calibrated parameters");

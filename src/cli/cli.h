@@ -106,6 +106,9 @@ void add_threads_option(CLI::App& app, int& threads);
 // A check for a real-valued option: a finite number in [lo, hi] ("nan" and "inf", which
 // CLI::Range lets through, are refused). `unit` is shown after the range.
 CLI::Validator finite_range(double lo, double hi, const std::string& unit = "");
+// A file option given as '' (an empty shell variable) is refused (DataError, exit 2), not taken as
+// absent: `value` is what `option` of `app` holds.
+void require_file_name(const CLI::App& app, const std::string& option, const std::string& value);
 // "LAT,LON" in degrees, north and east positive, latitude in [−90, 90] and longitude in
 // [−180, 180]; DataError (exit 2) naming `option` and the text otherwise.
 Site parse_site(const std::string& text, const std::string& option = "--site");

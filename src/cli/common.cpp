@@ -12,6 +12,7 @@
 
 #include "cli.h"
 #include "polrig/io/measured.h"
+#include "polrig/quoted.h"
 #include "polrig/io/plot.h"
 #include "polrig/calib/fit.h"
 #include "polrig/rig/error.h"
@@ -136,10 +137,14 @@ CLI::Validator finite_range(double lo, double hi, const std::string& unit) {
       [=](const std::string& s) -> std::string {
         double v = 0;
         if (!CLI::detail::lexical_cast(s, v) || !std::isfinite(v) || v < lo || v > hi)
-          return fmt::format("expected a finite number in {}, got {}", range, s);
+          return fmt::format("expected a finite number in {}, got {}", range, quoted_value(s));
         return {};
       },
       range);
+}
+
+void require_file_name(const CLI::App& app, const std::string& option, const std::string& value) {
+  if (app.count(option) > 0 && value.empty()) throw DataError(fmt::format("{} '': expected a file name", option));
 }
 
 Site parse_site(const std::string& text, const std::string& option) {
@@ -156,9 +161,9 @@ Site parse_site(const std::string& text, const std::string& option) {
       !number(std::string_view(text).substr(0, comma), site.lat_deg) ||
       !number(std::string_view(text).substr(comma + 1), site.lon_deg))
     throw DataError(fmt::format("{} '{}': expected LAT,LON in degrees (finite numbers), e.g. "
-                                "38.879167,121.543889", option, text));
+                                "38.879167,121.543889", option, quoted_value(text)));
   if (const auto problem = site_problem(site))
-    throw DataError(fmt::format("{} '{}': {}", option, text, *problem));
+    throw DataError(fmt::format("{} '{}': {}", option, quoted_value(text), *problem));
   return site;
 }
 
@@ -166,7 +171,7 @@ UtcTime parse_utc_option(const std::string& text, const std::string& option) {
   try {
     return parse_utc(text);
   } catch (const std::invalid_argument& e) {
-    throw DataError(fmt::format("{} {}: {}", option, text, e.what()));
+    throw DataError(fmt::format("{} {}: {}", option, quoted_value(text), e.what()));
   }
 }
 

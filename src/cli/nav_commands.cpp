@@ -11,6 +11,7 @@
 
 #include "cli.h"
 #include "polrig/io/csv.h"
+#include "polrig/quoted.h"
 #include "polrig/io/measured.h"
 #include "polrig/nav/heading.h"
 #include "polrig/nav/heading_rows.h"
@@ -69,7 +70,7 @@ std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::option
     const InputRange range = heading_query_range(field);
     if (v < range.lo || v > range.hi)
       throw DataError(fmt::format("{}:{}: column '{}': {} is outside [{}, {}] ({})", f.origin,
-                                  f.line[r], f.header[c], f.rows[r][c], range.lo, range.hi,
+                                  f.line[r], f.header[c], quoted_value(f.rows[r][c]), range.lo, range.hi,
                                   what ? what : range.what));
     return v;
   };
@@ -80,7 +81,7 @@ std::vector<HeadingQuery> read_heading_input(const CsvFile& f, const std::option
       h.at.utc = parse_utc(f.rows[r][c_utc]);
     } catch (const std::invalid_argument& e) {
       throw DataError(fmt::format("{}:{}: column 'utc': '{}': {}", f.origin, f.line[r],
-                                  f.rows[r][c_utc], e.what()));
+                                  quoted_value(f.rows[r][c_utc]), e.what()));
     }
     h.tilt.roll_deg = ranged(r, c_roll, "roll_deg", nullptr);
     h.tilt.pitch_deg = ranged(r, c_pitch, "pitch_deg", nullptr);
@@ -257,10 +258,11 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
     app->add_option("--heading-prior", *heading_prior, "an approximate heading of the camera's X_l at table angle 0 "
                                                        "(deg, clockwise from north; each frame adds its table angle): "
                                                        "chooses between the sun and the antisun near the horizon")
-        ->check(CLI::Range(-360.0, 360.0));
+        ->check(finite_range(-360.0, 360.0, "deg"));
     out->add_to(*app);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
+                          require_file_name(*app, "--params", *params);
                           run_orient(*input, *params, *conversion, *dop_weighting, *correct_noise_bias, *heading_prior,
                                      *out);
                         }});
@@ -286,7 +288,10 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
                     "a four-camera calibration.yaml (calibrate --method four-camera): re-fuse each stop's raw frames "
                     "(a dataset written with --layers all) with it instead of the dataset's fused layers");
     commands.push_back(
-        {app, [=] { run_locate(*input, *prior, *dop_weighting, *calibration, *out, *correct_noise_bias); }});
+        {app, [=] {
+           require_file_name(*app, "--calibration", *calibration);
+           run_locate(*input, *prior, *dop_weighting, *calibration, *out, *correct_noise_bias);
+         }});
   }
   {
     auto* app = study.add_subcommand(

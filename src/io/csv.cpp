@@ -12,6 +12,10 @@
 
 #include <fmt/format.h>
 
+#include "polrig/io/measured.h"
+#include "polrig/quoted.h"
+#include "polrig/sky/sun.h"
+
 namespace polrig {
 
 CsvTable::CsvTable(std::vector<std::string> header)
@@ -133,8 +137,42 @@ double csv_number(const std::string& text, const std::filesystem::path& file, in
   const char* end = text.data() + text.size();
   const auto r = std::from_chars(text.data(), end, v);
   if (r.ec != std::errc() || r.ptr != end || !std::isfinite(v))
-    throw std::runtime_error(fmt::format("{}:{}: column {}: '{}' is not a finite number", file.string(), line, column, text));
+    throw DataError(fmt::format("{}:{}: column {}: '{}' is not a finite number", file.string(), line, column, quoted_value(text)));
   return v;
+}
+
+int csv_whole_number(const std::string& text, const std::filesystem::path& file, int line, const char* column, int lo,
+                     int hi) {
+  const double v = csv_number(text, file, line, column);
+  if (v != std::floor(v) || v < lo || v > hi)
+    throw DataError(fmt::format("{}:{}: column {}: {} (expected a whole number in [{}, {}])", file.string(), line, column,
+                                quoted_value(text), lo, hi));
+  return static_cast<int>(v);
+}
+
+bool csv_flag(const std::string& text, const std::filesystem::path& file, int line, const char* column) {
+  const double v = csv_number(text, file, line, column);
+  if (v != 0 && v != 1)
+    throw DataError(fmt::format("{}:{}: column {}: {} (expected 0 or 1)", file.string(), line, column, quoted_value(text)));
+  return v == 1;
+}
+
+double csv_nonnegative(const std::string& text, const std::filesystem::path& file, int line, const char* column) {
+  const double v = csv_number(text, file, line, column);
+  if (v < 0)
+    throw DataError(fmt::format("{}:{}: column {}: {} (expected a number ≥ 0)", file.string(), line, column,
+                                quoted_value(text)));
+  return v;
+}
+
+std::string csv_utc(const std::string& text, const std::filesystem::path& file, int line, const char* column) {
+  if (text.empty()) return text;
+  try {
+    (void)parse_utc(text);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("{}:{}: column {}: '{}': {}", file.string(), line, column, quoted_value(text), e.what()));
+  }
+  return text;
 }
 
 }  // namespace polrig

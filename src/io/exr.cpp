@@ -19,7 +19,11 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfStdIO.h>
+#include <ImfVersion.h>
 #include <fmt/format.h>
+
+#include "polrig/io/measured.h"
 
 namespace polrig {
 
@@ -66,12 +70,54 @@ class CheckedOStream : public Imf::OStream {
 };
 }  // namespace
 
-std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, int& height) {
+namespace {
+// The data window's size from the header, refused before any pixel is allocated: another size
+// than `expected`, or (nothing expected) an empty image or a side beyond kMaxExrSide. Computed
+// in 64 bits: a forged window does not overflow.
+ExrSize claimed_size(const std::filesystem::path& path, const Imath::Box2i& dw, const std::optional<ExrSize>& expected) {
+  const long long w = static_cast<long long>(dw.max.x) - dw.min.x + 1;
+  const long long h = static_cast<long long>(dw.max.y) - dw.min.y + 1;
+  const bool ok = expected ? w == expected->width && h == expected->height
+                           : w >= 1 && h >= 1 && w <= kMaxExrSide && h <= kMaxExrSide;
+  if (!ok)
+    throw DataError(fmt::format("{}: {} × {} px (expected {})", path.string(), w, h,
+                                expected ? fmt::format("{} × {}", expected->width, expected->height)
+                                         : fmt::format("at most {} × {}", kMaxExrSide, kMaxExrSide)));
+  return {static_cast<int>(w), static_cast<int>(h)};
+}
+
+// The size the file's (first) header claims, checked as claimed_size() checks it, reading only
+// the magic number, the version field and the header's attributes: Imf::InputFile allocates its
+// line buffers and line-offset table from the data window, and reads that table, before a caller
+// could look at the header. A file this pass cannot read (missing, not an OpenEXR file, a header
+// cut short) is left to Imf::InputFile, which says what is wrong with it.
+void check_header_size(const std::filesystem::path& path, const std::optional<ExrSize>& expected) {
+  Imf::Header header;
   try {
+    Imf::StdIFStream in(path.string().c_str());
+    char start[8];
+    in.read(start, 8);
+    if (!Imf::isImfMagic(start)) return;
+    int version = 0;
+    for (int i = 7; i >= 4; --i) version = (version << 8) | static_cast<unsigned char>(start[i]);  // little endian
+    if (Imf::getVersion(version) != Imf::EXR_VERSION || !Imf::supportsFlags(Imf::getFlags(version))) return;
+    header.readFrom(in, version);
+  } catch (const std::exception&) {
+    return;
+  }
+  claimed_size(path, header.dataWindow(), expected);
+}
+}  // namespace
+
+std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, int& height,
+                                 std::optional<ExrSize> expected) {
+  try {
+    check_header_size(path, expected);
     Imf::InputFile file(path.string().c_str());
     const Imath::Box2i dw = file.header().dataWindow();
-    width = dw.max.x - dw.min.x + 1;
-    height = dw.max.y - dw.min.y + 1;
+    const ExrSize size = claimed_size(path, dw, expected);
+    width = size.width;
+    height = size.height;
     std::vector<ExrChannel> out;
     for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it)
       out.push_back({it.name(), std::vector<float>(static_cast<std::size_t>(width) * static_cast<std::size_t>(height))});
@@ -82,8 +128,10 @@ std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, 
     file.setFrameBuffer(fb);
     file.readPixels(dw.min.y, dw.max.y);
     return out;
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read the EXR image: {}", path.string(), e.what()));
+  } catch (const DataError&) {
+    throw;
+  } catch (const std::exception& e) {  // missing, truncated, not an EXR: bad input (exit 2)
+    throw DataError(fmt::format("{}: cannot read the EXR image: {}", path.string(), e.what()));
   }
 }
 
@@ -146,18 +194,21 @@ void write_exr_image(const std::filesystem::path& path, const ExrImage& image, E
 
 namespace {
 // Rows [first_row, first_row + rows) of the image; rows < 0: to the bottom.
-ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height) {
+ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height,
+                   const std::optional<ExrSize>& expected) {
   try {
+    check_header_size(path, expected);
     Imf::InputFile file(path.string().c_str());
     const Imf::Header& h = file.header();
     const Imath::Box2i dw = h.dataWindow();
-    const int height = dw.max.y - dw.min.y + 1;
+    const ExrSize size = claimed_size(path, dw, expected);
+    const int height = size.height;
     if (image_height) *image_height = height;
     if (rows < 0) rows = height - first_row;
     if (first_row < 0 || rows < 1 || first_row > height - rows)
       throw std::runtime_error(fmt::format("rows {} to {} of an image of {} rows", first_row, first_row + rows - 1, height));
     ExrImage image;
-    image.width = dw.max.x - dw.min.x + 1;
+    image.width = size.width;
     image.height = rows;
     const std::size_t n = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
     const std::size_t row_floats = sizeof(float) * static_cast<std::size_t>(image.width);
@@ -194,18 +245,23 @@ ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, i
         image.attributes.vectors.push_back({it.name(), {v->value().x, v->value().y, v->value().z}});
     }
     return image;
-  } catch (const std::exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read the EXR image: {}", path.string(), e.what()));
+  } catch (const DataError&) {
+    throw;
+  } catch (const std::exception& e) {  // missing, truncated, not an EXR: bad input (exit 2)
+    throw DataError(fmt::format("{}: cannot read the EXR image: {}", path.string(), e.what()));
   }
 }
 }  // namespace
 
-ExrImage read_exr_image(const std::filesystem::path& path) { return read_rows(path, 0, -1, nullptr); }
+ExrImage read_exr_image(const std::filesystem::path& path, std::optional<ExrSize> expected) {
+  return read_rows(path, 0, -1, nullptr, expected);
+}
 
-ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height) {
+ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height,
+                       std::optional<ExrSize> expected) {
   if (rows < 1)
-    throw std::runtime_error(fmt::format("{}: cannot read the EXR image: {} rows requested", path.string(), rows));
-  return read_rows(path, first_row, rows, image_height);
+    throw DataError(fmt::format("{}: cannot read the EXR image: {} rows requested", path.string(), rows));
+  return read_rows(path, first_row, rows, image_height, expected);
 }
 
 }  // namespace polrig

@@ -1,4 +1,5 @@
 #include "polrig/io/four_camera_calibration.h"
+#include "polrig/quoted.h"
 
 #include <cmath>
 #include <set>
@@ -10,6 +11,7 @@
 
 #include "polrig/io/measured.h"
 #include "polrig/units.h"
+#include "yaml_load.h"
 
 namespace polrig {
 
@@ -30,6 +32,7 @@ constexpr Range kFocal{1, 1e5, "a focal length in [1, 1e5] px"};
 constexpr Range kK{-kMaxKannalaBrandtK, kMaxKannalaBrandtK, "a Kannala-Brandt coefficient within ±10"};
 constexpr Range kRvec{-180, 180, "a rotation-vector component within ±180 deg"};
 constexpr Range kPosition{-1e4, 1e4, "a position within ±10 m (in mm)"};
+constexpr Range kRotationElement{-1, 1, "a rotation matrix's element in [-1, 1]"};
 
 std::string where(const std::filesystem::path& path, const YAML::Node& node) {
   return node.Mark().is_null() ? path.string() : fmt::format("{}:{}", path.string(), node.Mark().line + 1);
@@ -37,7 +40,7 @@ std::string where(const std::filesystem::path& path, const YAML::Node& node) {
 
 [[noreturn]] void refuse(const std::filesystem::path& path, const YAML::Node& node, const std::string& key,
                          const std::string& problem) {
-  throw DataError(fmt::format("{}: key '{}': {}", where(path, node), key, problem));
+  throw DataError(fmt::format("{}: key '{}': {}", where(path, node), quoted_value(key), problem));
 }
 
 double number(const std::filesystem::path& path, const YAML::Node& node, const std::string& key, const Range& r) {
@@ -46,9 +49,9 @@ double number(const std::filesystem::path& path, const YAML::Node& node, const s
   try {
     v = node.as<double>();
   } catch (const YAML::Exception&) {
-    refuse(path, node, key, fmt::format("expected {}, got '{}'", r.why, node.Scalar()));
+    refuse(path, node, key, fmt::format("expected {}, got '{}'", r.why, quoted_value(node.Scalar())));
   }
-  if (!(std::isfinite(v) && v >= r.lo && v <= r.hi)) refuse(path, node, key, fmt::format("expected {}, got {}", r.why, node.Scalar()));
+  if (!(std::isfinite(v) && v >= r.lo && v <= r.hi)) refuse(path, node, key, fmt::format("expected {}, got {}", r.why, quoted_value(node.Scalar())));
   return v;
 }
 
@@ -81,6 +84,35 @@ std::string quoted(const std::string& text) {
     q += ch;
   }
   return q + "\"";
+}
+
+// A whole number of pixels in kSize.
+int pixels(const std::filesystem::path& path, const YAML::Node& node, const std::string& key) {
+  const double v = number(path, node, key, kSize);
+  if (v != std::floor(v)) refuse(path, node, key, fmt::format("expected {}, got {}", kSize.why, quoted_value(node.Scalar())));
+  return static_cast<int>(v);
+}
+
+// truth.yaml's virtual_camera: exactly its five keys, each in its range.
+VirtualCameraSpec virtual_camera(const std::filesystem::path& path, const YAML::Node& v) {
+  if (!v.IsMap()) refuse(path, v, "virtual_camera", "expected a map (width_px, height_px, f_c_px, cx_px, cy_px)");
+  static const std::set<std::string> kKeys = {"width_px", "height_px", "f_c_px", "cx_px", "cy_px"};
+  for (const auto& kv : v)
+    if (!kKeys.contains(kv.first.as<std::string>()))
+      refuse(path, kv.first, "virtual_camera." + kv.first.as<std::string>(),
+             "unknown key (expected width_px, height_px, f_c_px, cx_px, cy_px)");
+  const auto get = [&](const char* k, const char* what) {
+    return child(path, v, k, std::string("virtual_camera.") + k, what);
+  };
+  VirtualCameraSpec s;
+  s.width = pixels(path, get("width_px", "the fused image's columns"), "virtual_camera.width_px");
+  s.height = pixels(path, get("height_px", "the fused image's rows"), "virtual_camera.height_px");
+  s.camera.f_c_px = number(path, get("f_c_px", "the focal length"), "virtual_camera.f_c_px", kFocal);
+  s.camera.x_c_px = number(path, get("cx_px", "the principal point's column"), "virtual_camera.cx_px",
+                       {0, double(s.width), "a principal point inside the image: [0, width_px] px"});
+  s.camera.y_c_px = number(path, get("cy_px", "the principal point's row"), "virtual_camera.cy_px",
+                       {0, double(s.height), "a principal point inside the image: [0, height_px] px"});
+  return s;
 }
 
 }  // namespace
@@ -121,14 +153,9 @@ std::string four_camera_calibration_yaml(const FourCameraCalibrationFile& f) {
 }
 
 FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::path& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path.string());
-  } catch (const YAML::BadFile&) {
-    throw DataError(fmt::format("{}: cannot open", path.string()));
-  } catch (const YAML::Exception& e) {
-    throw DataError(fmt::format("{}:{}: not YAML: {}", path.string(), e.mark.line + 1, e.msg));
-  }
+  const YAML::Node root = load_yaml<DataError>(read_yaml_file<DataError>(path, "calibration file"), path.string(),
+                                              "a calibration.yaml nests 3 levels", kMaxYamlBytes);
+  refuse_duplicate_keys<DataError>(root, path.string());
   if (!root.IsMap()) throw DataError(fmt::format("{}: expected a map of keys (width_px, height_px, cameras, ...)", path.string()));
   // truth.yaml's keys beside the calibration's: read where shared, ignored otherwise.
   static const std::set<std::string> kTop = {"width_px", "height_px", "sources", "cameras",
@@ -146,6 +173,7 @@ FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::pa
   if (w != std::floor(w)) refuse(path, root["width_px"], "width_px", fmt::format("expected an integer, got {}", w));
   if (h != std::floor(h)) refuse(path, root["height_px"], "height_px", fmt::format("expected an integer, got {}", h));
   m.width = static_cast<int>(w), m.height = static_cast<int>(h);
+  if (const YAML::Node v = root["virtual_camera"]) f.virtual_camera = virtual_camera(path, v);
   if (const YAML::Node s = root["sources"]) {
     if (!s.IsMap()) refuse(path, s, "sources", "expected a map (radiometric, polarizer, geometry)");
     for (const auto& kv : s) {
@@ -169,7 +197,7 @@ FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::pa
         refuse(path, kv.first, at + "." + kv.first.as<std::string>(), "unknown key");
     const YAML::Node id = child(path, c, "camera", at + ".camera", "its number, 1 to 4 in order");
     if (number(path, id, at + ".camera", {1, 4, "1 to 4"}) != static_cast<double>(j + 1))
-      refuse(path, id, at + ".camera", fmt::format("expected {} (the cameras in order), got {}", j + 1, id.Scalar()));
+      refuse(path, id, at + ".camera", fmt::format("expected {} (the cameras in order), got {}", j + 1, quoted_value(id.Scalar())));
     CameraGeometry& g = m.camera[j];
     const auto req = [&](const char* k, const Range& r) { return number(path, child(path, c, k, at + "." + k, r.why), at + "." + k, r); };
     g.fx = req("fx_px", kFocal);
@@ -186,6 +214,7 @@ FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::pa
     if (j == 0 && angle != 0)
       refuse(path, c["rvec_deg"], at + ".rvec_deg", fmt::format("expected [0, 0, 0]: camera 1 defines the frame, got a {} deg rotation", angle));
     g.R = rotation_from_vector({deg2rad(r[0]), deg2rad(r[1]), deg2rad(r[2])});
+    if (const YAML::Node R = c["R_j1"]) f.R_j1[j] = numbers<9>(path, R, at + ".R_j1", kRotationElement);
     if (const YAML::Node p = c["position_mm"]) {
       const std::array<double, 3> q = numbers<3>(path, p, at + ".position_mm", kPosition);
       f.position_mm[j] = {q[0], q[1], q[2]};

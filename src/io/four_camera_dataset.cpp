@@ -12,37 +12,28 @@
 
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
+#include "polrig/io/four_camera_calibration.h"
+#include "polrig/io/measured.h"
+#include "yaml_load.h"
 
 namespace polrig {
 
 namespace {
 
-double yaml_number(const YAML::Node& node, const char* key, const std::filesystem::path& file) {
-  const YAML::Node v = node[key];
-  double x = 0;
-  try {
-    if (!v || !v.IsScalar()) throw YAML::Exception(YAML::Mark::null_mark(), "missing");
-    x = v.as<double>();
-  } catch (const YAML::Exception&) {
-    throw std::runtime_error(fmt::format("{}: virtual_camera.{}: expected a number", file.string(), key));
-  }
-  if (!std::isfinite(x)) throw std::runtime_error(fmt::format("{}: virtual_camera.{}: not finite", file.string(), key));
-  return x;
-}
-
-YAML::Node load_yaml(const std::filesystem::path& file) {
-  try {
-    return YAML::LoadFile(file.string());
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read: {}", file.string(), e.what()));
-  }
+// A dataset's board.yaml: read, checked (size, aliases, nesting, keys given twice) and parsed as
+// every YAML file polrig reads.
+YAML::Node load_yaml_file(const std::filesystem::path& file) {
+  const YAML::Node root = load_yaml<DataError>(read_yaml_file<DataError>(file, "dataset's YAML file"), file.string(),
+                                               "a dataset's YAML nests 3 levels", kMaxYamlBytes);
+  refuse_duplicate_keys<DataError>(root, file.string());
+  return root;
 }
 
 // A measured dataset: the size from the first stop's EXR (one line block read), the virtual camera
 // from its attributes when it holds fused layers.
 void measured_size_and_camera(FourCameraDataset& d) {
   if (d.stops.empty())
-    throw std::runtime_error(fmt::format("{}: no stop, and no truth.yaml to give the cameras' size",
+    throw DataError(fmt::format("{}: no stop, and no truth.yaml to give the cameras' size",
                                          (d.dir / "stops.csv").string()));
   const std::filesystem::path file = d.dir / d.stops.front().file;
   const ExrImage first = read_exr_rows(file, 0, 1, &d.height);
@@ -60,34 +51,32 @@ FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir) {
   const std::filesystem::path truth_file = dir / "truth.yaml";
   const bool simulated = std::filesystem::exists(truth_file);
   if (simulated) {
-    const YAML::Node v = load_yaml(truth_file)["virtual_camera"];
-    if (!v || !v.IsMap()) throw std::runtime_error(fmt::format("{}: no virtual_camera section", truth_file.string()));
-    d.width = static_cast<int>(yaml_number(v, "width_px", truth_file));
-    d.height = static_cast<int>(yaml_number(v, "height_px", truth_file));
-    d.camera = CameraIntrinsics{yaml_number(v, "f_c_px", truth_file), yaml_number(v, "cx_px", truth_file),
-                                yaml_number(v, "cy_px", truth_file)};
+    const std::optional<VirtualCameraSpec> v = read_four_camera_calibration(truth_file).virtual_camera;
+    if (!v) throw DataError(fmt::format("{}: no virtual_camera section", truth_file.string()));
+    d.width = v->width, d.height = v->height;
+    d.camera = v->camera;
   }
 
   const std::filesystem::path csv = dir / "stops.csv";
   std::ifstream in(csv);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", csv.string()));
+  if (!in) throw DataError(fmt::format("{}: cannot open", csv.string()));
   std::string line;
   std::getline(in, line);
   const std::string header =
       "stop,utc,t_s,theta_R_deg,intensity,polarized,heading_deg,sun_x_cam1,sun_y_cam1,sun_z_cam1,"
       "sun_azimuth_deg,sun_zenith_deg,file";
-  if (line != header) throw std::runtime_error(fmt::format("{}:1: expected the header {}", csv.string(), header));
+  if (line != header) throw DataError(fmt::format("{}:1: expected the header {}", csv.string(), header));
   for (int n = 2; std::getline(in, line); ++n) {
     if (line.empty()) continue;
     const std::vector<std::string> c = split_csv_line(line);
-    if (c.size() != 13) throw std::runtime_error(fmt::format("{}:{}: expected 13 columns, got {}", csv.string(), n, c.size()));
+    if (c.size() != 13) throw DataError(fmt::format("{}:{}: expected 13 columns, got {}", csv.string(), n, c.size()));
     FourCameraDatasetStop s;
     s.stop = static_cast<int>(csv_number(c[0], csv, n, "stop"));
-    s.utc = c[1];
+    s.utc = csv_utc(c[1], csv, n, "utc");
     s.t_s = csv_number(c[2], csv, n, "t_s");
     s.theta_R_deg = csv_number(c[3], csv, n, "theta_R_deg");
-    s.intensity = csv_number(c[4], csv, n, "intensity");
-    s.polarized = csv_number(c[5], csv, n, "polarized") != 0;
+    s.intensity = csv_nonnegative(c[4], csv, n, "intensity");
+    s.polarized = csv_flag(c[5], csv, n, "polarized");
     if (!c[6].empty()) s.heading_deg = csv_number(c[6], csv, n, "heading_deg");
     if (!c[7].empty())
       s.sun_camera1 = Vec3{csv_number(c[7], csv, n, "sun_x_cam1"), csv_number(c[8], csv, n, "sun_y_cam1"),
@@ -103,22 +92,18 @@ namespace {
 const ExrChannel& float_channel(const ExrImage& image, const std::string& name, const std::filesystem::path& file) {
   for (const ExrChannel& c : image.floats)
     if (c.name == name) return c;
-  throw std::runtime_error(fmt::format("{}: no channel {}", file.string(), name));
+  throw DataError(fmt::format("{}: no channel {}", file.string(), name));
 }
 const ExrUintChannel& uint_channel(const ExrImage& image, const std::string& name, const std::filesystem::path& file) {
   for (const ExrUintChannel& c : image.uints)
     if (c.name == name) return c;
-  throw std::runtime_error(fmt::format("{}: no channel {} (written with --layers fused or aop?)", file.string(), name));
+  throw DataError(fmt::format("{}: no channel {} (written with --layers fused or aop?)", file.string(), name));
 }
 ExrImage stop_image(const FourCameraDataset& d, std::size_t stop_index, std::filesystem::path& file) {
   if (stop_index >= d.stops.size())
-    throw std::runtime_error(fmt::format("{}: stop {} (the dataset has {})", d.dir.string(), stop_index, d.stops.size()));
+    throw DataError(fmt::format("{}: stop {} (the dataset has {})", d.dir.string(), stop_index, d.stops.size()));
   file = d.dir / d.stops[stop_index].file;
-  ExrImage image = read_exr_image(file);
-  if (image.width != d.width || image.height != d.height)
-    throw std::runtime_error(fmt::format("{}: {} × {} px (expected {} × {})", file.string(), image.width, image.height,
-                                         d.width, d.height));
-  return image;
+  return read_exr_image(file, ExrSize{d.width, d.height});
 }
 }  // namespace
 
@@ -142,7 +127,7 @@ std::array<std::vector<std::uint16_t>, 4> read_four_camera_raw(const FourCameraD
     const ExrUintChannel& c = uint_channel(image, fmt::format("cam{}", j + 1), file);
     raw[j].reserve(c.pixels.size());
     for (std::uint32_t v : c.pixels) {
-      if (v > 65535) throw std::runtime_error(fmt::format("{}: cam{} holds {} (expected 16-bit DN)", file.string(), j + 1, v));
+      if (v > 65535) throw DataError(fmt::format("{}: cam{} holds {} (expected 16-bit DN)", file.string(), j + 1, v));
       raw[j].push_back(static_cast<std::uint16_t>(v));
     }
   }
@@ -161,15 +146,15 @@ double board_number(const YAML::Node& root, const char* key, const std::filesyst
     if (!v || !v.IsScalar()) throw YAML::Exception(YAML::Mark::null_mark(), "missing");
     x = v.as<double>();
   } catch (const YAML::Exception&) {
-    throw std::runtime_error(fmt::format("{}: {}: expected a number", file.string(), key));
+    throw DataError(fmt::format("{}: {}: expected a number", file.string(), key));
   }
-  if (!std::isfinite(x)) throw std::runtime_error(fmt::format("{}: {}: not finite", file.string(), key));
+  if (!std::isfinite(x)) throw DataError(fmt::format("{}: {}: not finite", file.string(), key));
   return x;
 }
 int board_count(const YAML::Node& root, const char* key, const std::filesystem::path& file, int lo, int hi) {
   const double x = board_number(root, key, file);
   if (x != std::floor(x) || x < lo || x > hi)
-    throw std::runtime_error(fmt::format("{}: {}: expected an integer in [{}, {}], got {}", file.string(), key, lo, hi, x));
+    throw DataError(fmt::format("{}: {}: expected an integer in [{}, {}], got {}", file.string(), key, lo, hi, x));
   return static_cast<int>(x);
 }
 }  // namespace
@@ -179,13 +164,8 @@ CheckerboardViews read_checkerboard_views(const std::filesystem::path& dir) {
   out.dir = dir;
   const std::filesystem::path yaml = dir / "checkerboard" / "board.yaml";
   if (!std::filesystem::exists(dir / "checkerboard")) return out;
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(yaml.string());
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(fmt::format("{}: cannot read: {}", yaml.string(), e.what()));
-  }
-  if (!root.IsMap()) throw std::runtime_error(fmt::format("{}: expected a mapping", yaml.string()));
+  const YAML::Node root = load_yaml_file(yaml);
+  if (!root.IsMap()) throw DataError(fmt::format("{}: expected a mapping", yaml.string()));
   out.board.views = board_count(root, "views", yaml, 0, 10000);
   out.board.inner_corners = {board_count(root, "inner_cols", yaml, 3, 100), board_count(root, "inner_rows", yaml, 3, 100)};
   out.board.square_mm = board_number(root, "square_mm", yaml);
@@ -193,23 +173,23 @@ CheckerboardViews read_checkerboard_views(const std::filesystem::path& dir) {
   out.width = board_count(root, "width_px", yaml, 2, 16384);
   out.height = board_count(root, "height_px", yaml, 2, 16384);
   if (!(out.board.square_mm > 0))
-    throw std::runtime_error(fmt::format("{}: square_mm: expected > 0, got {}", yaml.string(), out.board.square_mm));
+    throw DataError(fmt::format("{}: square_mm: expected > 0, got {}", yaml.string(), out.board.square_mm));
 
   const std::filesystem::path csv = dir / "checkerboard" / "poses.csv";
   std::ifstream in(csv);
-  if (!in) throw std::runtime_error(fmt::format("{}: cannot open", csv.string()));
+  if (!in) throw DataError(fmt::format("{}: cannot open", csv.string()));
   std::string line;
   std::getline(in, line);
   const std::string header = "view,file,R_00,R_01,R_02,R_10,R_11,R_12,R_20,R_21,R_22,t_x_mm,t_y_mm,t_z_mm";
-  if (line != header) throw std::runtime_error(fmt::format("{}:1: expected the header {}", csv.string(), header));
+  if (line != header) throw DataError(fmt::format("{}:1: expected the header {}", csv.string(), header));
   static constexpr const char* kR[9] = {"R_00", "R_01", "R_02", "R_10", "R_11", "R_12", "R_20", "R_21", "R_22"};
   for (int n = 2; std::getline(in, line); ++n) {
     if (line.empty()) continue;
     const std::vector<std::string> c = split_csv_line(line);
-    if (c.size() != 14) throw std::runtime_error(fmt::format("{}:{}: expected 14 columns, got {}", csv.string(), n, c.size()));
+    if (c.size() != 14) throw DataError(fmt::format("{}:{}: expected 14 columns, got {}", csv.string(), n, c.size()));
     const double view = csv_number(c[0], csv, n, "view");
     if (view != static_cast<double>(out.files.size() + 1))
-      throw std::runtime_error(fmt::format("{}:{}: view {} (expected {})", csv.string(), n, c[0], out.files.size() + 1));
+      throw DataError(fmt::format("{}:{}: view {} (expected {})", csv.string(), n, c[0], out.files.size() + 1));
     out.files.push_back(c[1]);
     if (c[2].empty()) {
       out.poses.emplace_back();
@@ -221,25 +201,22 @@ CheckerboardViews read_checkerboard_views(const std::filesystem::path& dir) {
     out.poses.emplace_back(p);
   }
   if (static_cast<int>(out.files.size()) != out.board.views)
-    throw std::runtime_error(fmt::format("{}: {} views (board.yaml says {})", csv.string(), out.files.size(), out.board.views));
+    throw DataError(fmt::format("{}: {} views (board.yaml says {})", csv.string(), out.files.size(), out.board.views));
   return out;
 }
 
 std::array<std::vector<std::uint16_t>, 4> read_checkerboard_view(const CheckerboardViews& views, std::size_t v) {
   if (v >= views.files.size())
-    throw std::runtime_error(fmt::format("{}: checkerboard view {} (the dataset has {})", views.dir.string(), v + 1,
+    throw DataError(fmt::format("{}: checkerboard view {} (the dataset has {})", views.dir.string(), v + 1,
                                          views.files.size()));
   const std::filesystem::path file = views.dir / views.files[v];
-  const ExrImage image = read_exr_image(file);
-  if (image.width != views.width || image.height != views.height)
-    throw std::runtime_error(fmt::format("{}: {} × {} px (expected {} × {})", file.string(), image.width, image.height,
-                                         views.width, views.height));
+  const ExrImage image = read_exr_image(file, ExrSize{views.width, views.height});
   std::array<std::vector<std::uint16_t>, 4> raw;
   for (std::size_t j = 0; j < 4; ++j) {
     const ExrUintChannel& c = uint_channel(image, fmt::format("cam{}", j + 1), file);
     raw[j].reserve(c.pixels.size());
     for (std::uint32_t x : c.pixels) {
-      if (x > 65535) throw std::runtime_error(fmt::format("{}: cam{} holds {} (expected 16-bit DN)", file.string(), j + 1, x));
+      if (x > 65535) throw DataError(fmt::format("{}: cam{} holds {} (expected 16-bit DN)", file.string(), j + 1, x));
       raw[j].push_back(static_cast<std::uint16_t>(x));
     }
   }
@@ -249,27 +226,12 @@ std::array<std::vector<std::uint16_t>, 4> read_checkerboard_view(const Checkerbo
 std::optional<FourCameraGeometryTruth> read_four_camera_geometry_truth(const std::filesystem::path& dir) {
   const std::filesystem::path file = dir / "truth.yaml";
   if (!std::filesystem::exists(file)) return std::nullopt;  // a measured dataset
-  const YAML::Node cams = load_yaml(file)["cameras"];
-  if (!cams || !cams.IsSequence()) return std::nullopt;
-  if (cams.size() != 4) throw std::runtime_error(fmt::format("{}: cameras: expected 4, got {}", file.string(), cams.size()));
+  const FourCameraCalibrationFile f = read_four_camera_calibration(file);
   FourCameraGeometryTruth t;
-  try {
-    for (std::size_t j = 0; j < 4; ++j) {
-      const YAML::Node c = cams[j];
-      CameraGeometry& g = t.camera[j];
-      g.fx = c["fx_px"].as<double>(), g.fy = c["fy_px"].as<double>();
-      g.cx = c["cx_px"].as<double>(), g.cy = c["cy_px"].as<double>();
-      const auto k = c["k"].as<std::vector<double>>();
-      const auto R = c["R_j1"].as<std::vector<double>>();
-      const auto p = c["position_mm"].as<std::vector<double>>();
-      if (k.size() != 4 || R.size() != 9 || p.size() != 3) throw YAML::Exception(YAML::Mark::null_mark(), "sizes");
-      std::copy(k.begin(), k.end(), g.k.begin());
-      std::copy(R.begin(), R.end(), g.R.begin());
-      t.position_mm[j] = {p[0], p[1], p[2]};
-    }
-  } catch (const YAML::Exception&) {
-    throw std::runtime_error(fmt::format("{}: cameras: expected fx_px, fy_px, cx_px, cy_px, k (4), R_j1 (9) and "
-                                         "position_mm (3) numbers for each camera", file.string()));
+  for (std::size_t j = 0; j < 4; ++j) {
+    t.camera[j] = f.model.camera[j];
+    if (f.R_j1[j]) t.camera[j].R = *f.R_j1[j];  // as written: rvec_deg rounds it
+    t.position_mm[j] = f.position_mm[j];
   }
   return t;
 }

@@ -1,4 +1,5 @@
 #include "polrig/io/measured.h"
+#include "polrig/quoted.h"
 
 #include <charconv>
 #include <cmath>
@@ -89,7 +90,7 @@ double CsvFile::number(std::size_t row, std::size_t col) const {
   auto [end, err] = std::from_chars(b, e, v);
   if (s.empty() || err != std::errc() || end != e || !std::isfinite(v))
     throw DataError(fmt::format("{}:{}: column '{}': expected a finite number, got '{}'", origin,
-                                line[row], header[col], s));
+                                line[row], header[col], quoted_value(s)));
   return v;
 }
 
@@ -118,7 +119,7 @@ MeasuredData stops_of(const CsvFile& f, bool need_angle) {
       } catch (const std::invalid_argument& e) {
         throw DataError(fmt::format("{}:{}: column 'utc': expected an ISO 8601 UTC time such as "
                                     "2018-11-16T08:09:40Z, got '{}' ({})", f.origin, f.line[r],
-                                    f.rows[r][*utc], e.what()));
+                                    quoted_value(f.rows[r][*utc]), e.what()));
       }
     }
   }

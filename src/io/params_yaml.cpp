@@ -1,4 +1,5 @@
 #include "polrig/io/params_yaml.h"
+#include "polrig/quoted.h"
 
 #include <cmath>
 #include <fstream>
@@ -10,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "polrig/io/measured.h"
+#include "yaml_load.h"
 
 namespace polrig {
 
@@ -66,23 +68,6 @@ std::string params_to_yaml(const CalibrationResult& r, double v_dec) {
 
 namespace {
 
-// A key that appears twice in one mapping (yaml-cpp keeps both and returns the first).
-void refuse_duplicate_keys(const YAML::Node& node, const std::string& file) {
-  if (node.IsSequence())
-    for (const YAML::Node& item : node) refuse_duplicate_keys(item, file);
-  if (!node.IsMap()) return;
-  std::map<std::string, int> first_line;
-  for (auto it = node.begin(); it != node.end(); ++it) {
-    const std::string key = it->first.IsScalar() ? it->first.Scalar() : "?";
-    const int line = it->first.Mark().line + 1;
-    const auto [at, inserted] = first_line.emplace(key, line);
-    if (!inserted)
-      throw DataError(fmt::format("{}:{}: key '{}': duplicate key (first at line {})", file, line,
-                                  key, at->second));
-    refuse_duplicate_keys(it->second, file);
-  }
-}
-
 // The physical range of each value, as the rig's device.truth and electronics keys have them.
 struct ParamRange {
   double lo, hi;
@@ -105,34 +90,22 @@ constexpr ParamRange kScaleRange{0.01, 10, false, false, "log amplifiers give te
 }  // namespace
 
 LoadedParams read_params_yaml(const std::filesystem::path& path) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw DataError(fmt::format("{}: cannot read the parameter file: no such file", path.string()));
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream buf;
-  buf << in.rdbuf();
-  return parse_params_yaml(buf.str(), path.string());
+  return parse_params_yaml(read_yaml_file<DataError>(path, "parameter file"), path.string());
 }
 
 LoadedParams parse_params_yaml(std::string_view text, std::string_view origin) {
   const std::string file(origin);
-  YAML::Node root;
-  try {
-    root = YAML::Load(std::string(text));
-  } catch (const YAML::Exception& e) {
-    throw DataError(fmt::format("{}:{}:{}: YAML syntax error: {}", file, e.mark.line + 1,
-                                e.mark.column + 1, e.msg));
-  }
+  const YAML::Node root = load_yaml<DataError>(std::string(text), file, "a params.yaml nests 2 levels", kMaxYamlBytes);
   if (!root.IsMap())
     throw DataError(fmt::format("{}: expected a mapping with alpha_deg, k_mV, kv, kd and d_a", file));
-  refuse_duplicate_keys(root, file);
+  refuse_duplicate_keys<DataError>(root, file);
   static const std::set<std::string> known = {"params_schema", "method", "d_a", "d_a_source", "drift",
                                               "volts_per_decade", "alpha_deg", "k_mV", "kv", "kd",
                                               "standard_error", "fit", "accuracy_deg"};
   for (auto it = root.begin(); it != root.end(); ++it) {
     const std::string key = it->first.IsScalar() ? it->first.Scalar() : "?";
     if (!known.count(key))
-      throw DataError(fmt::format("{}:{}: key '{}': unknown key", file, it->first.Mark().line + 1, key));
+      throw DataError(fmt::format("{}:{}: key '{}': unknown key", file, it->first.Mark().line + 1, quoted_value(key)));
   }
   const auto where = [&](const YAML::Node& n, const char* key) {
     return fmt::format("{}:{}: key '{}'", file, n.Mark().line + 1, key);
@@ -143,11 +116,11 @@ LoadedParams parse_params_yaml(std::string_view text, std::string_view origin) {
       v = n.as<double>();
     } catch (const YAML::Exception&) {
       throw DataError(fmt::format("{}: expected a number, got '{}'", where(n, key),
-                                  n.IsScalar() ? n.Scalar() : "?"));
+                                  n.IsScalar() ? quoted_value(n.Scalar()) : "?"));
     }
     if (!std::isfinite(v) || !range.contains(v))
       throw DataError(fmt::format("{}: expected a value in {} ({}), got {}", where(n, key),
-                                  range.text(), range.why, n.Scalar()));
+                                  range.text(), range.why, quoted_value(n.Scalar())));
     return v;
   };
   const auto list = [&](const char* key, auto& dst, const ParamRange& range) {

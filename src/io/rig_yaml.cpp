@@ -1,4 +1,5 @@
 #include "polrig/io/rig_yaml.h"
+#include "polrig/quoted.h"
 
 #include <charconv>
 #include <cmath>
@@ -77,7 +78,7 @@ class RigParser {
   }
 
   [[noreturn]] void fail(const std::string& path, const std::string& message) const {
-    throw RigError(fmt::format("{}: key '{}': {}", where(path), path, message));
+    throw RigError(fmt::format("{}: key '{}': {}", where(path), quoted_value(path), message));
   }
 
   // " (did you mean 'eccentricity.L_IS'?)" for a path near a rig key.
@@ -155,7 +156,7 @@ class RigParser {
   }
 
   static std::string shown(const YAML::Node& n) {
-    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsScalar()) return fmt::format("'{}'", quoted_value(n.Scalar()));
     if (n.IsSequence()) return "a list";
     if (n.IsMap()) return "a mapping";
     return "nothing";
@@ -170,7 +171,7 @@ class RigParser {
       fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
     }
     if (k.valid_real && !k.valid_real(v))
-      fail(path, fmt::format("expected {}, got {}", k.expects, n.Scalar()));
+      fail(path, fmt::format("expected {}, got {}", k.expects, quoted_value(n.Scalar())));
     return v;
   }
 
@@ -185,7 +186,7 @@ class RigParser {
         if (!n.IsScalar() || !parse_integer(n.Scalar(), v))
           fail(path, fmt::format("expected {}, got {}", k.expects, shown(n)));
         if (k.valid_integer && !k.valid_integer(v))
-          fail(path, fmt::format("expected {}, got {}", k.expects, n.Scalar()));
+          fail(path, fmt::format("expected {}, got {}", k.expects, quoted_value(n.Scalar())));
         k.integer(rig) = static_cast<int>(v);
         return;
       }
@@ -368,17 +369,7 @@ LoadedRig parse_rig(std::string_view text, std::string_view origin,
 }
 
 LoadedRig load_rig(const std::filesystem::path& file, const std::vector<RigOverride>& overrides) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec))
-    throw RigError(fmt::format("{}: cannot read the rig file: {}", file.string(),
-                               std::filesystem::exists(file, ec) ? "not a regular file"
-                                                                 : "no such file"));
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream buf;
-  buf << in.rdbuf();
-  if (!in && !in.eof())
-    throw RigError(fmt::format("{}: cannot read the rig file", file.string()));
-  return parse_rig(buf.str(), file.string(), overrides);
+  return parse_rig(read_yaml_file(file, "rig file", kMaxRigYamlBytes), file.string(), overrides);
 }
 
 std::string rig_to_yaml(const Rig& rig_in) {

@@ -1,4 +1,5 @@
 #include "polrig/io/scene_yaml.h"
+#include "polrig/quoted.h"
 
 #include <cmath>
 #include <fstream>
@@ -37,7 +38,7 @@ class MapReader {
     } catch (const std::exception&) {
       fail(n, key, fmt::format("expected {}, got {}", expects, shown(n)));
     }
-    if (!ok(v)) fail(n, key, fmt::format("expected {}, got {}", expects, n.Scalar()));
+    if (!ok(v)) fail(n, key, fmt::format("expected {}, got {}", expects, quoted_value(n.Scalar())));
     return v;
   }
   double real(const char* key, double def, bool (*ok)(double), const char* expects) {
@@ -59,7 +60,7 @@ class MapReader {
       fail(n, key, fmt::format("expected {}, got {}", expects, shown(n)));
     }
     if (v != std::floor(v) || v < static_cast<double>(lo) || v > static_cast<double>(hi))
-      fail(n, key, fmt::format("expected {}, got {}", expects, n.Scalar()));
+      fail(n, key, fmt::format("expected {}, got {}", expects, quoted_value(n.Scalar())));
     return static_cast<long long>(v);
   }
   Vec3 vec3(const char* key, Vec3 def) {
@@ -122,7 +123,7 @@ class MapReader {
     return n ? n : YAML::Node(YAML::NodeType::Undefined);
   }
   static std::string shown(const YAML::Node& n) {
-    if (n.IsScalar()) return "'" + n.Scalar() + "'";
+    if (n.IsScalar()) return fmt::format("'{}'", quoted_value(n.Scalar()));
     if (n.IsSequence()) return "a list";
     if (n.IsMap()) return "a mapping";
     return "nothing";
@@ -261,14 +262,7 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
 }
 
 SceneSpec load_scene(const std::filesystem::path& file) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(file, ec))
-    throw RigError(fmt::format("{}: cannot read the scene file: {}", file.string(),
-                               std::filesystem::exists(file, ec) ? "not a regular file" : "no such file"));
-  std::ifstream in(file, std::ios::binary);
-  std::stringstream buf;
-  buf << in.rdbuf();
-  return parse_scene(buf.str(), file.string());
+  return parse_scene(read_yaml_file(file, "scene file"), file.string());
 }
 
 std::string scene_to_yaml(const SceneSpec& s) {

@@ -13,6 +13,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "yaml_load.h"
 
 namespace polrig {
 namespace fs = std::filesystem;
@@ -31,11 +33,14 @@ std::optional<SweepState> read_sweep_state(const fs::path& dir) {
   const fs::path path = dir / kSweepStateFile;
   std::error_code ec;
   if (!fs::exists(path, ec)) return std::nullopt;
+  const YAML::Node n = load_yaml<DataError>(read_yaml_file<DataError>(path, "sweep's progress record"), path.string(),
+                                            "a progress record nests 2 levels", kMaxYamlBytes);
   try {
-    const YAML::Node n = YAML::LoadFile(path.string());
     SweepState s;
     s.points_done = n["points_done"].as<std::size_t>();
     s.csv_bytes = n["csv_bytes"].as<std::uint64_t>();
+    if (const YAML::Node f = n["h5_fingerprint"]) s.h5_fingerprint = f.as<std::string>();
+    if (const YAML::Node f = n["csv_fingerprint"]) s.csv_fingerprint = f.as<std::string>();
     s.command = n["command"].as<std::string>();
     s.working_directory = n["working_directory"].as<std::string>();
     for (const auto& kv : n["inputs"]) s.inputs.emplace_back(kv.first.as<std::string>(), kv.second.as<std::string>());
@@ -50,6 +55,8 @@ void write_sweep_state(const fs::path& dir, const SweepState& s) {
   out << YAML::BeginMap;
   out << YAML::Key << "points_done" << YAML::Value << s.points_done;
   out << YAML::Key << "csv_bytes" << YAML::Value << s.csv_bytes;
+  out << YAML::Key << "h5_fingerprint" << YAML::Value << YAML::DoubleQuoted << s.h5_fingerprint;
+  out << YAML::Key << "csv_fingerprint" << YAML::Value << YAML::DoubleQuoted << s.csv_fingerprint;
   out << YAML::Key << "command" << YAML::Value << YAML::DoubleQuoted << s.command;
   out << YAML::Key << "working_directory" << YAML::Value << YAML::DoubleQuoted << s.working_directory;
   out << YAML::Key << "inputs" << YAML::Value << YAML::BeginMap;

@@ -563,16 +563,21 @@ void bind_sky(py::module_& m) {
       "Raises polrig.DataError naming the file, line and column of a bad CSV, or the channel.");
 
   // ---- EXR
-  m.def("read_exr", [](const std::string& path) {
-        int width = 0, height = 0;
-        std::vector<ExrChannel> channels = read_exr(path, width, height);
+  m.def("read_exr", [](const std::string& path, std::optional<int> width, std::optional<int> height) {
+        if (width.has_value() != height.has_value()) throw py::value_error("read_exr: give width and height, or neither");
+        std::optional<ExrSize> expected;
+        if (width) expected = ExrSize{*width, *height};
+        int w = 0, h = 0;
+        std::vector<ExrChannel> channels = read_exr(path, w, h, expected);
         py::dict d;
-        for (ExrChannel& c : channels) d[py::str(c.name)] = take(std::move(c.pixels), {height, width});
+        for (ExrChannel& c : channels) d[py::str(c.name)] = take(std::move(c.pixels), {h, w});
         return d;
-      }, "path"_a,
+      }, "path"_a, py::kw_only(), "width"_a = py::none(), "height"_a = py::none(),
       "The channels of an OpenEXR file (e.g. `polrig sky`'s sky.exr: S0, S1, S2, AoP, DoP, A) as "
-      "{name: float32 array of shape (height, width)}, row-major, top row first. Raises "
-      "RuntimeError naming the file when OpenEXR cannot read it.");
+      "{name: float32 array of shape (height, width)}, row-major, top row first. The size is checked "
+      "from the header before any pixel is read: with width and height, another size raises "
+      "polrig.DataError (\"FILE: N × M px (expected W × H)\"); without them, a side beyond 16384 px "
+      "does. Raises polrig.DataError naming the file when OpenEXR cannot read it (missing, truncated).");
 }
 
 }  // namespace polrig::python

@@ -75,6 +75,12 @@ DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, con
   if (run.suns.empty())
     throw std::invalid_argument("no polarized stop with a UTC time: nothing to locate from (a sky dataset's stops.csv "
                                 "gives utc)");
+  // Eq. 17 has two unknowns (latitude, longitude): fewer sightings leave the fix undetermined
+  // (its cost and residuals NaN).
+  if (sightings.size() < 2)
+    throw std::invalid_argument(fmt::format("{} of {} polarized stops gave a sun vector: the position fix (W16 Eq. 17) "
+                                            "needs at least 2 sightings at different times", sightings.size(),
+                                            run.suns.size()));
   run.location = locate(sightings, prior, options);
   return run;
 }

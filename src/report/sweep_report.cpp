@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <fstream>
 #include <functional>
 #include <limits>
 #include <stdexcept>
@@ -68,14 +69,23 @@ std::string line_style(int pair, const char* extra = "") {
   return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
 }
 
-// 64-bit FNV-1a: a short, stable fingerprint of a long input (a rig's text, an axis's values).
+// 64-bit FNV-1a: a short, stable fingerprint of a long input (a rig's text, an axis's values,
+// the files a resumable sweep has written).
+void fnv_add(std::uint64_t& h, std::string_view bytes) {
+  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
+}
+std::string fnv_text(std::uint64_t h) { return fmt::format("{:016x}", h); }
 struct Fingerprint {
   std::uint64_t h = 14695981039346656037ull;
-  void add(std::string_view bytes) {
-    for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-  }
-  std::string text() const { return fmt::format("{:016x}", h); }
+  void add(std::string_view bytes) { fnv_add(h, bytes); }
+  std::string text() const { return fnv_text(h); }
 };
+// sweep.h5's fingerprint takes each point's values, column after column, in point order: the
+// same whatever the blocks were.
+void add_point(std::uint64_t& h, const double* column0, std::size_t stride, std::size_t columns) {
+  for (std::size_t c = 0; c < columns; ++c)
+    fnv_add(h, std::string_view(reinterpret_cast<const char*>(column0 + c * stride), sizeof(double)));
+}
 std::string fingerprint(std::string_view bytes) {
   Fingerprint f;
   f.add(bytes);
@@ -110,6 +120,7 @@ SweepReport::SweepReport(const fs::path& dir, std::vector<GridAxis> axes, bool e
                          std::optional<Resume> resume)
     : dir_(dir), axes_(std::move(axes)), layout_(sweep_h5_layout(axes_, eq6, attributes)) {
   const fs::path h5 = dir / "sweep.h5", csv_path = dir / "sweep.csv";
+  if (resume) check_resume(*resume, csv);
   h5_.emplace(resume ? SweepH5Writer::reopen(h5, layout_) : SweepH5Writer::create(h5, layout_));
   if (csv) {
     table_.emplace(csv_header(axes_));
@@ -117,9 +128,75 @@ SweepReport::SweepReport(const fs::path& dir, std::vector<GridAxis> axes, bool e
       if (c.may_be_nan) table_->allow_undefined(c.name);
     csv_ = resume ? std::make_unique<TextFileWriter>(csv_path, resume->csv_bytes)
                   : std::make_unique<TextFileWriter>(csv_path);
-    if (!resume) csv_->write(table_->header_line());
+    if (!resume) {
+      const std::string header = table_->header_line();
+      csv_->write(header);
+      fnv_add(csv_hash_, header);
+    }
   }
   if (resume) points_ = resume->points_done;
+}
+
+// The record against the files, before either is reopened: the points it counts fit the grid,
+// sweep.h5's first points_done points are those it fingerprinted, and sweep.csv's first
+// csv_bytes bytes are its header and one line per point, as fingerprinted. The hashes go on
+// from there. (A sweep.csv shorter than csv_bytes is left to TextFileWriter, which names it.)
+void SweepReport::check_resume(const Resume& r, bool csv) {
+  const fs::path record = dir_ / kSweepStateFile, h5 = dir_ / "sweep.h5", csv_path = dir_ / "sweep.csv";
+  const std::size_t total = layout_.points();
+  if (r.points_done > total)
+    throw std::runtime_error(fmt::format("{}: points_done {}, but the grid has {} points: the record was changed",
+                                         record.string(), r.points_done, total));
+  if (r.h5_fingerprint.empty() || (csv && r.csv_fingerprint.empty()))
+    throw std::runtime_error(fmt::format("{}: no fingerprint of the files it counts (h5_fingerprint{}): they cannot "
+                                         "be checked", record.string(), csv ? ", csv_fingerprint" : ""));
+  {
+    const SweepH5Reader reader(h5);
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t columns = layout_.columns.size();
+    std::vector<double> values(columns * kChunk);
+    std::uint64_t h = kFnvBasis;
+    for (std::size_t first = 0; first < r.points_done; first += kChunk) {
+      const std::size_t n = std::min(kChunk, r.points_done - first);
+      for (std::size_t c = 0; c < columns; ++c)
+        reader.read(layout_.columns[c].name, first, std::span<double>(values.data() + c * n, n));
+      for (std::size_t k = 0; k < n; ++k) add_point(h, values.data() + k, n, columns);
+    }
+    if (fnv_text(h) != r.h5_fingerprint)
+      throw std::runtime_error(fmt::format("{}: its first {} points are not those {} counts (the file is from another "
+                                           "checkpoint, or one of them was changed)",
+                                           h5.string(), r.points_done, record.string()));
+    h5_hash_ = h;
+  }
+  if (!csv) {
+    if (r.csv_bytes != 0)
+      throw std::runtime_error(fmt::format("{}: csv_bytes {}, but this sweep writes no sweep.csv: the record was changed",
+                                           record.string(), r.csv_bytes));
+    return;
+  }
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(csv_path, ec);
+  if (ec || size < r.csv_bytes) return;  // TextFileWriter names it
+  std::ifstream in(csv_path, std::ios::binary);
+  std::vector<char> buffer(1 << 20);
+  std::uint64_t h = kFnvBasis, left = r.csv_bytes, lines = 0;
+  char last = '\n';
+  while (left > 0 && in) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(left, buffer.size()));
+    if (!in.read(buffer.data(), static_cast<std::streamsize>(n))) break;
+    const std::string_view bytes(buffer.data(), n);
+    fnv_add(h, bytes);
+    lines += static_cast<std::uint64_t>(std::count(bytes.begin(), bytes.end(), '\n'));
+    last = bytes.back();
+    left -= n;
+  }
+  if (left > 0)
+    throw std::runtime_error(fmt::format("{}: cannot read its first {} bytes", csv_path.string(), r.csv_bytes));
+  if (lines != r.points_done + 1 || last != '\n' || fnv_text(h) != r.csv_fingerprint)
+    throw std::runtime_error(fmt::format("{}: its first {} bytes are not the header and the {} lines {} counts (the file "
+                                         "is from another checkpoint, or one of them was changed)",
+                                         csv_path.string(), r.csv_bytes, r.points_done, record.string()));
+  csv_hash_ = h;
 }
 
 void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
@@ -142,6 +219,7 @@ void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
       columns_[c * n + k] = v;
     }
   h5_->write(first, n, columns_);
+  for (std::size_t k = 0; k < n; ++k) add_point(h5_hash_, columns_.data() + k, n, kColumns);
   if (csv_) {
     std::vector<double> row;
     for (std::size_t k = 0; k < n; ++k) {
@@ -151,14 +229,17 @@ void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
       for (std::size_t c = 0; c < kColumns; ++c) row.push_back(columns_[c * n + k]);
       table_->add_row(row);
     }
-    csv_->write(table_->take_body());
+    const std::string body = table_->take_body();
+    csv_->write(body);
+    fnv_add(csv_hash_, body);
   }
   points_ += n;
 }
 
 SweepReport::Resume SweepReport::sync() {
   h5_->sync();
-  return {points_, csv_ ? csv_->sync() : 0};
+  const std::uint64_t csv_bytes = csv_ ? csv_->sync() : 0;
+  return {points_, csv_bytes, fnv_text(h5_hash_), csv_ ? fnv_text(csv_hash_) : std::string()};
 }
 
 namespace {
@@ -428,9 +509,12 @@ void open_sweep(OpenSweep& o, const LoadedRig& r, const std::vector<GridAxis>& a
                                            "--resume to start over", staging.string(), fmt::join(differ, ", ")));
     o.state.points_done = saved->points_done;
     o.state.csv_bytes = saved->csv_bytes;
+    o.state.h5_fingerprint = saved->h5_fingerprint;
+    o.state.csv_fingerprint = saved->csv_fingerprint;
     o.state.command = saved->command;
     o.state.working_directory = saved->working_directory;
-    resume = SweepReport::Resume{o.state.points_done, o.state.csv_bytes};
+    resume = SweepReport::Resume{o.state.points_done, o.state.csv_bytes, o.state.h5_fingerprint,
+                                 o.state.csv_fingerprint};
   }
   o.manifest = Manifest{o.state.command, &r, {}, {}, o.state.working_directory};
   try {
@@ -485,6 +569,8 @@ fs::path sweep_to_folder(const LoadedRig& r, const std::vector<GridAxis>& axes, 
       const SweepReport::Resume at = o.report->sync();
       o.state.points_done = at.points_done;
       o.state.csv_bytes = at.csv_bytes;
+      o.state.h5_fingerprint = at.h5_fingerprint;
+      o.state.csv_fingerprint = at.csv_fingerprint;
       o.dir->keep_on_failure();  // first: a signal between the record and this would remove it
       write_sweep_state(o.dir->staging(), o.state);
       checkpointed = true;

@@ -1,4 +1,5 @@
 #include "polrig/rig/keys.h"
+#include "polrig/quoted.h"
 
 #include <charconv>
 #include <algorithm>
@@ -19,7 +20,7 @@ double parse_finite_number(std::string_view text, std::string_view what) {
   if (b != e && *b == '+') ++b;
   auto [end, ec] = std::from_chars(b, e, v);
   if (b == e || ec != std::errc() || end != e || !std::isfinite(v))
-    throw RigError(fmt::format("{}: expected a finite number, got '{}'", what, text));
+    throw RigError(fmt::format("{}: expected a finite number, got '{}'", what, quoted_value(text)));
   return v;
 }
 

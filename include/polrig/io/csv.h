@@ -62,5 +62,13 @@ void write_text_file(const std::filesystem::path& path, const std::string& text)
 // "FILE:LINE: column COLUMN: 'TEXT' is not a finite number".
 std::vector<std::string> split_csv_line(const std::string& line);
 double csv_number(const std::string& text, const std::filesystem::path& file, int line, const char* column);
+// The checks the dataset readers (DoFP and four-camera stops.csv) share, each a DataError naming
+// file:line and the column: a whole number in [lo, hi]; 0 or 1; a number ≥ 0; an ISO 8601 UTC
+// time with Z (returned as written) or empty.
+int csv_whole_number(const std::string& text, const std::filesystem::path& file, int line, const char* column, int lo,
+                     int hi);
+bool csv_flag(const std::string& text, const std::filesystem::path& file, int line, const char* column);
+double csv_nonnegative(const std::string& text, const std::filesystem::path& file, int line, const char* column);
+std::string csv_utc(const std::string& text, const std::filesystem::path& file, int line, const char* column);
 
 }  // namespace polrig

@@ -12,6 +12,9 @@
 
 namespace polrig {
 
+// The most frames a stop may have: their raw_sum of 16-bit DN fits 32 bits.
+inline constexpr int kMaxFramesPerStop = 65536;
+
 struct DofpDatasetStop {
   int stop = 0;
   double theta_R_deg = 0;
@@ -20,7 +23,7 @@ struct DofpDatasetStop {
   double intensity = 1;
   bool polarized = true;
   std::optional<double> heading_deg;   // true heading of X_l (sky rigs), else none
-  int frames = 1;
+  int frames = 1;  // in [1, kMaxFramesPerStop]
   std::string file;                    // relative to the dataset folder
 };
 

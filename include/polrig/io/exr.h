@@ -28,8 +28,19 @@ void write_exr(const std::filesystem::path& path, int width, int height,
                const std::vector<ExrChannel>& channels,
                ExrCompression compression = ExrCompression::Zip);
 
-// Reads the named channels back (for tests and users' checks).
-std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, int& height);
+// An image's size in pixels.
+struct ExrSize {
+  int width = 0, height = 0;
+};
+// The largest side a reader accepts when no size is expected: the cameras' limit (device.width_px,
+// height_px ≤ 16384), checked, like an expected size, from the header before any pixel is allocated.
+inline constexpr int kMaxExrSide = 16384;
+
+// Reads the named channels back (for tests and users' checks). With `expected`, a header of
+// another size is refused (DataError "FILE: N × M px (expected W × H)") before any pixel is
+// allocated; without it, a side beyond kMaxExrSide is.
+std::vector<ExrChannel> read_exr(const std::filesystem::path& path, int& width, int& height,
+                                 std::optional<ExrSize> expected = std::nullopt);
 
 // A 32-bit unsigned-integer channel (OpenEXR's UINT): raw counts, stored exactly.
 struct ExrUintChannel {
@@ -63,11 +74,14 @@ struct ExrImage {
 void write_exr_image(const std::filesystem::path& path, const ExrImage& image,
                      ExrCompression compression = ExrCompression::Zip);
 // Reads an image back: FLOAT and HALF channels as floats, UINT channels as uints, and the string,
-// double, float, int and V3d attributes (float and int as doubles). Throws naming the file.
-ExrImage read_exr_image(const std::filesystem::path& path);
+// double, float, int and V3d attributes (float and int as doubles). Throws naming the file; the
+// size is checked from the header first, as read_exr's.
+ExrImage read_exr_image(const std::filesystem::path& path, std::optional<ExrSize> expected = std::nullopt);
 // Rows [first_row, first_row + rows) of an image (row 0: the data window's top), as read_exr_image
 // but with height `rows`; only the line blocks holding them are decompressed; *image_height (when
-// given) is the whole image's. Throws naming the file, also for rows outside the image.
-ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height = nullptr);
+// given) is the whole image's. Throws naming the file, also for rows outside the image; the whole
+// image's size is checked from the header first, as read_exr's.
+ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height = nullptr,
+                       std::optional<ExrSize> expected = std::nullopt);
 
 }  // namespace polrig

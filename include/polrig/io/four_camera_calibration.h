@@ -7,12 +7,20 @@
 // writes and what `--geometry` and `locate --calibration` read.
 #include <array>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "polrig/device/four_camera.h"
+#include "polrig/nav/orientation.h"
 #include "polrig/vec3.h"
 
 namespace polrig {
+
+// truth.yaml's virtual_camera: camera 1's undistorted pinhole grid, the fused layers' image.
+struct VirtualCameraSpec {
+  int width = 0, height = 0;
+  CameraIntrinsics camera;
+};
 
 struct FourCameraCalibrationFile {
   FourCameraModel model;  // width, height, each camera's geometry, K, b, axis_deg = φ_j + ε_j
@@ -23,16 +31,20 @@ struct FourCameraCalibrationFile {
   bool radiometric = false, polarizer = false;
   // Where each part came from (sources.radiometric/polarizer/geometry; "" when not given).
   std::string radiometric_from, polarizer_from, geometry_from;
+  // truth.yaml's extra keys, checked as strictly: its virtual_camera, and each camera's R_j1 as
+  // written (exact, where rvec_deg rounds).
+  std::optional<VirtualCameraSpec> virtual_camera;
+  std::array<std::optional<std::array<double, 9>>, kFourCameras> R_j1{};
 };
 
 // The file's text (shortest round-trip numbers: it reads back to the same doubles). It does not
 // check ranges: report/four_camera_calibration_report.h reads what it writes back.
 std::string four_camera_calibration_yaml(const FourCameraCalibrationFile& file);
 
-// Reads calibration.yaml (or truth.yaml). Throws DataError naming the file, the line, the key and the
-// value for a missing, malformed or out-of-range value (every value has a physical range, docs/
-// formats.md), an unknown key, cameras not numbered 1–4 in order, camera 1 rotated, or axis_deg ≠
-// polarizer_deg + eps_deg.
+// Reads calibration.yaml (or truth.yaml: the one reader of both). Throws DataError naming the file,
+// the line, the key and the value for a missing, malformed or out-of-range value (every value has a
+// physical range, docs/formats.md), an unknown key, a key given twice, cameras not numbered 1–4 in
+// order, camera 1 rotated, or axis_deg ≠ polarizer_deg + eps_deg.
 FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::path& path);
 
 // The model of a full calibration.yaml (what `locate --calibration` fuses with): read_four_camera_

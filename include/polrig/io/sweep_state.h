@@ -18,6 +18,9 @@ struct SweepState {
   std::uint64_t csv_bytes = 0;   // sweep.csv's length then (0 without --csv)
   std::string command, working_directory;  // the original run's, for its manifest
   std::vector<std::pair<std::string, std::string>> inputs;  // name, value
+  // Fingerprints of what the files held then, checked before resuming: sweep.h5's values of
+  // points [0, points_done) and sweep.csv's first csv_bytes bytes ("" without --csv).
+  std::string h5_fingerprint, csv_fingerprint;
 };
 
 // Null when `dir` holds no record. Throws std::runtime_error naming the file if it is unreadable.

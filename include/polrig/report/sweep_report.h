@@ -30,14 +30,18 @@ class SweepReport {
   struct Resume {
     std::size_t points_done = 0;
     std::uint64_t csv_bytes = 0;
+    std::string h5_fingerprint, csv_fingerprint;  // SweepState's
   };
   // Creates sweep.h5 (and sweep.csv with `csv`) in `dir`; with `resume`, continues the files of
-  // an interrupted run after its last checkpoint.
+  // an interrupted run after its last checkpoint, once the files are checked against it (a
+  // sweep.h5 or sweep.csv of another checkpoint, or a record changed by hand, is refused:
+  // std::runtime_error naming the file).
   SweepReport(const std::filesystem::path& dir, std::vector<GridAxis> axes, bool eq6, bool csv,
               const std::vector<std::pair<std::string, std::string>>& attributes,
               std::optional<Resume> resume = std::nullopt);
   void write(std::size_t first, std::span<const CsSummary> block);
-  // Makes everything written durable; returns the checkpoint (points written, CSV length).
+  // Makes everything written durable; returns the checkpoint (points written, CSV length and
+  // the files' fingerprints).
   Resume sync();
   // The plots' titles name these (the rig's values held fixed: "eccentricity.alpha_S = 240 deg").
   void set_fixed_keys(std::string text) { fixed_ = std::move(text); }
@@ -54,6 +58,12 @@ class SweepReport {
   std::unique_ptr<TextFileWriter> csv_;
   std::vector<double> columns_;  // one block, column after column
   std::size_t points_ = 0;
+  // 64-bit FNV-1a of the values written to sweep.h5 (point after point, each point's columns in
+  // order) and of the bytes written to sweep.csv.
+  std::uint64_t h5_hash_ = kFnvBasis, csv_hash_ = kFnvBasis;
+  static constexpr std::uint64_t kFnvBasis = 14695981039346656037ull;
+
+  void check_resume(const Resume& resume, bool csv);
 };
 
 struct SweepFolder {

@@ -261,7 +261,7 @@ std::vector<DatasetFile> report_four_camera_calibration(const std::filesystem::p
     r.series.push_back({"radiometric.csv", fmt::format("$intensity:($camera=={}?$residual_DN:NaN)", j), fmt::format("camera {} residual", j),
                         fmt::format("linespoints lw 1 dt 2 pt 4 ps 0.8 lc rgb '{}'", colours[j - 1]), true});
   }
-  r.extra = "set key inside top left opaque box\nset grid\nset ytics nomirror\nset y2tics";
+  r.extra = "set grid\nset ytics nomirror\nset y2tics";  // the legend outside, clear of the points
   Plot a{"polarizer.png", "Polarizer-angle calibration: fused AoP residual over the table's turn", "table angle θ_R (°)",
          "mean AoP residual over the window (°)"};
   a.series = {{"polarizer.csv", "$theta_R_deg:$residual_before_deg", "nominal axes (ψ_0 refitted)", "linespoints lw 1.5 pt 6 ps 0.8 lc rgb '#d62728'"},

@@ -27,6 +27,9 @@ std::optional<std::string> nearest_name(std::string_view typed, const std::vecto
   std::optional<std::string> best;
   std::size_t best_distance = allowed + 1;
   for (const std::string& name : known) {
+    // At least the difference in length: a far longer word costs no quadratic distance.
+    const std::size_t apart = typed.size() > name.size() ? typed.size() - name.size() : name.size() - typed.size();
+    if (apart > allowed) continue;
     const std::size_t d = edit_distance(typed, name);
     if (d < best_distance && name != typed) {
       best = name;

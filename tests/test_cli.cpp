@@ -817,7 +817,7 @@ TEST_F(Cli, SlowAnInterruptedSweepResumesToTheSameBytes) {
       const std::string said = read_file(err);
       EXPECT_HAS(said, "kept in " + staging_of(out).string() + " (");
       EXPECT_HAS(said, " MB)");
-      const std::string tag = "polrig: to continue it: polrig ";
+      const std::string tag = "polrig: to continue it, in " + fs::current_path().string() + ": polrig ";
       const auto at = said.find(tag);
       ASSERT_NE(at, std::string::npos) << said;
       const std::string command = said.substr(at + tag.size(), said.find('\n', at) - at - tag.size());

@@ -52,6 +52,9 @@ Rig sky_camera_rig() {
   s.sky.mount.mount_deg = 20;
   rig.source = s;
   rig.light = make_source(s);
+  // As load_rig: the sky sets the rig's d (its value at the first stop), so that the rig.yaml a
+  // dataset carries loads back.
+  if (const std::optional<double> d = rig.light->rig_degree_of_polarization(rig.source_view())) rig.device.d = *d;
   return rig;
 }
 

@@ -680,7 +680,7 @@ TEST_F(SkyCli, MapWritesExrSunYamlAndPreviews) {
   EXPECT_PRED_FORMAT2(test::HasText, bad_utc.err, "\"2019-09-18T08:14:00\"");
   EXPECT_FALSE(fs::exists(tmp / "bad"));
   // Bad input is exit 2 (as every command's), one site range for every command, and a
-  // missing -o is CLI11's "required" (106) unless a subcommand is given.
+  // missing -o is a usage error (exit 2) unless a subcommand is given.
   EXPECT_EQ(bad.status, 2);
   EXPECT_EQ(bad_utc.status, 2);
   const Result east = polrig("sky -o " + test::shell_quote(tmp / "bad") + " --site 10,200 --no-plots");

@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include "cli.h"
+#include "polrig/quoted.h"
 #include "polrig/suggest.h"
 
 namespace polrig::cli {
@@ -60,7 +61,7 @@ std::optional<std::string> unknown_word(const CLI::App& top, int argc, char** ar
       const std::string name = word.substr(0, word.find('='));
       const CLI::Option* o = find_option(*app, name);
       if (!o)
-        return fmt::format("{}unknown option '{}'{}", where(app), name,
+        return fmt::format("{}unknown option '{}'{}", where(app), quoted_value(name),
                            did_you_mean(name, option_names(*app)));
       if (o->get_type_size_max() > 0 && name.size() == word.size()) ++i;  // its value
     } else if (word.size() > 1 && word[0] == '-') {
@@ -70,7 +71,7 @@ std::optional<std::string> unknown_word(const CLI::App& top, int argc, char** ar
     } else if (const CLI::App* sub = find_subcommand(*app, word)) {
       app = sub;
     } else if (!app->get_subcommands({}).empty() && !takes_positionals(*app)) {
-      return fmt::format("{}unknown command '{}'{}; the commands: {}", where(app), word,
+      return fmt::format("{}unknown command '{}'{}; the commands: {}", where(app), quoted_value(word),
                          did_you_mean(word, subcommand_names(*app)),
                          fmt::join(subcommand_names(*app), ", "));
     }

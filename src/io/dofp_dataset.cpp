@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -124,7 +125,7 @@ DofpDataset read_dofp_dataset(const std::filesystem::path& dir) {
     if (c.size() != 9)
       throw DataError(fmt::format("{}:{}: {} columns (expected 9)", csv.string(), n, c.size()));
     DofpDatasetStop s;
-    s.stop = static_cast<int>(csv_number(c[0], csv, n, "stop"));
+    s.stop = csv_whole_number(c[0], csv, n, "stop", 0, std::numeric_limits<int>::max());
     s.theta_R_deg = csv_number(c[1], csv, n, "theta_R_deg");
     s.t_s = csv_number(c[2], csv, n, "t_s");
     s.utc = csv_utc(c[3], csv, n, "utc");

@@ -71,7 +71,7 @@ FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir) {
     const std::vector<std::string> c = split_csv_line(line);
     if (c.size() != 13) throw DataError(fmt::format("{}:{}: expected 13 columns, got {}", csv.string(), n, c.size()));
     FourCameraDatasetStop s;
-    s.stop = static_cast<int>(csv_number(c[0], csv, n, "stop"));
+    s.stop = csv_whole_number(c[0], csv, n, "stop", 0, std::numeric_limits<int>::max());
     s.utc = csv_utc(c[1], csv, n, "utc");
     s.t_s = csv_number(c[2], csv, n, "t_s");
     s.theta_R_deg = csv_number(c[3], csv, n, "theta_R_deg");

@@ -297,9 +297,11 @@ void OutputDir::say_what_is_kept() const noexcept {
        it.increment(ec))
     if (it->is_regular_file(ec)) bytes += it->file_size(ec);
   const std::string how = continue_with_.empty() ? "run the same command with --resume" : continue_with_;
+  const std::string here = fs::current_path(ec).string();  // the command's relative paths start here
   std::fprintf(stderr, "%spolrig: interrupted; the work done so far is kept in %s (%.1f MB)\n"
-               "polrig: to continue it: %s\n",
-               ::isatty(2) ? "\r\033[K" : "", staging_.c_str(), static_cast<double>(bytes) / 1e6, how.c_str());
+               "polrig: to continue it, in %s: %s\n",
+               ::isatty(2) ? "\r\033[K" : "", staging_.c_str(), static_cast<double>(bytes) / 1e6, here.c_str(),
+               how.c_str());
 }
 
 OutputDir::~OutputDir() {

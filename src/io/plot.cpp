@@ -2,9 +2,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -132,15 +129,12 @@ std::string script_for(const fs::path& dir, const Plot& p) {
 bool gnuplot_available() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
 
 namespace {
-// Runs gnuplot in DIR on `script` (given on its standard input); its messages go to `log`, which is
-// read and removed. Returns what went wrong, or "" when it exited 0.
+// Runs gnuplot in DIR on the script file `script` (a name in DIR); its messages go to `log`, which
+// is read and removed. Returns what went wrong, or "" when it exited 0.
 std::string gnuplot_problem(const fs::path& dir, const std::string& script, const fs::path& log) {
-  const std::string cmd = fmt::format("cd {} && gnuplot > {} 2>&1", shell_quoted(dir.string()),
-                                      shell_quoted(log.string()));
-  FILE* pipe = ::popen(cmd.c_str(), "w");
-  if (pipe == nullptr) return fmt::format("cannot start gnuplot: {}", std::strerror(errno));
-  std::fwrite(script.data(), 1, script.size(), pipe);
-  const int rc = ::pclose(pipe);
+  const std::string cmd = fmt::format("cd {} && gnuplot {} > {} 2>&1", shell_quoted(dir.string()),
+                                      shell_quoted(script), shell_quoted(log.string()));
+  const int rc = std::system(cmd.c_str());
   std::ifstream in(log);
   std::stringstream msg;
   msg << in.rdbuf();
@@ -179,7 +173,11 @@ void render_plots(const fs::path& dir, const std::string& script_name,
   std::vector<std::string> problems(plots.size());
   progress.begin("plots", static_cast<long long>(plots.size()));
   tbb::parallel_for(std::size_t{0}, plots.size(), [&](std::size_t i) {
-    problems[i] = gnuplot_problem(dir, scripts[i], dir / fmt::format("{}.{}.log", script_name, i));
+    const std::string part = fmt::format(".{}.{}", script_name, i);  // this plot's lines alone
+    write_text_file(dir / part, scripts[i]);
+    problems[i] = gnuplot_problem(dir, part, dir / (part + ".log"));
+    std::error_code ec;
+    fs::remove(dir / part, ec);
     progress.advance();
   });
   progress.finish();
@@ -194,7 +192,7 @@ void render_plots(const fs::path& dir, const std::string& script_name,
 void run_gnuplot(const fs::path& dir, const std::string& script_name, const std::string& script,
                  const std::vector<std::string>& pngs) {
   write_text_file(dir / script_name, script);
-  if (const std::string problem = gnuplot_problem(dir, script, dir / (script_name + ".log")); !problem.empty())
+  if (const std::string problem = gnuplot_problem(dir, script_name, dir / (script_name + ".log")); !problem.empty())
     throw std::runtime_error(fmt::format("gnuplot failed on {}: {}", script_name, problem));
   require_pngs(dir, pngs);
 }

@@ -98,7 +98,7 @@ class RigParser {
   void apply_override(YAML::Node& root, const RigOverride& o) {
     if (!find_rig_key(o.path))
       throw RigError(fmt::format("{}: unknown key '{}'{} (see docs/formats.md for the rig's "
-                                 "keys)", o.text(), o.path, key_suggestion(o.path)));
+                                 "keys)", quoted_value(o.text()), quoted_value(o.path), key_suggestion(o.path)));
     YAML::Node value;
     try {
       value = load_yaml(o.value, "value", "a rig value nests at most 1 level");

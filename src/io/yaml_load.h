@@ -51,7 +51,13 @@ class Budget : public YAML::EventHandler {
   void OnDocumentEnd() override {}
   void OnNull(const YAML::Mark& m, YAML::anchor_t a) override { leaf(m, a); }
   void OnScalar(const YAML::Mark& m, const std::string&, YAML::anchor_t a, const std::string&) override { leaf(m, a); }
-  void OnAlias(const YAML::Mark& m, YAML::anchor_t a) override { add(m, anchors_[a]); }
+  void OnAlias(const YAML::Mark& m, YAML::anchor_t a) override {
+    // yaml-cpp knows an anchor before its node ends, so `&x [*x]` would build a cycle.
+    for (const Open& o : open_)
+      if (o.anchor == a && a != YAML::NullAnchor)
+        throw Exceeded{m, "an alias inside its own anchor's node (a cycle)"};
+    add(m, anchors_[a]);
+  }
   void OnSequenceStart(const YAML::Mark& m, const std::string&, YAML::anchor_t a, YAML::EmitterStyle::value) override {
     open(m, a);
   }

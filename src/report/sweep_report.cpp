@@ -470,9 +470,10 @@ std::string continue_command(const SweepFolder& f) {
   if (f.command.rfind("polrig ", 0) != 0) return {};  // not started from the command line
   // The command line's words are shell-quoted ('…'): split at spaces outside quotes.
   std::vector<std::string> words(1);
-  bool quoted = false;
+  bool quoted = false, escaped = false;  // shell_word writes a ' inside a word as '\''
   for (char ch : f.command) {
-    if (ch == '\'') quoted = !quoted;
+    if (ch == '\'' && !escaped) quoted = !quoted;
+    escaped = !quoted && ch == '\\' && !escaped;
     if (ch == ' ' && !quoted) words.emplace_back();
     else words.back() += ch;
   }

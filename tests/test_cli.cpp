@@ -787,7 +787,11 @@ std::set<std::string> names_in(const fs::path& dir) {
 }
 }  // namespace
 
-TEST_F(Cli, SlowAnInterruptedSweepResumesToTheSameBytes) {
+// CTest label "slow" (the suite's name starts with Slow): each runs sweeps of thousands of points
+// several times, and is run once, in the full suite.
+class SlowCliResume : public Cli {};
+
+TEST_F(SlowCliResume, AnInterruptedSweepResumesToTheSameBytes) {
   // The reference: an uninterrupted run, written to the same -o (the manifest records it).
   const fs::path out = tmp / "runs" / "sweep", ref = tmp / "reference";
   ok(joined(resumable_sweep(out)));
@@ -832,7 +836,7 @@ TEST_F(Cli, SlowAnInterruptedSweepResumesToTheSameBytes) {
   }
 }
 
-TEST_F(Cli, SlowResumingRefusesOtherInputsAndForceStartsOver) {
+TEST_F(SlowCliResume, ResumingRefusesOtherInputsAndForceStartsOver) {
   const fs::path out = tmp / "sweep";
   const pid_t pid = spawn_polrig(resumable_sweep(out), false);
   ASSERT_GT(pid, 0);
@@ -868,7 +872,7 @@ TEST_F(Cli, SlowResumingRefusesOtherInputsAndForceStartsOver) {
 // continuing them. A sweep.h5 of an earlier checkpoint (its later points never written: they
 // became 0.0 in the finished folder) and a record whose points_done or csv_bytes was changed by
 // hand gave a wrong folder with exit 0; each is refused, naming the file, and the progress kept.
-TEST_F(Cli, SlowResumingRefusesFilesThatDoNotMatchTheRecord) {
+TEST_F(SlowCliResume, ResumingRefusesFilesThatDoNotMatchTheRecord) {
   const fs::path out = tmp / "sweep", staging = staging_of(out);
   const fs::path h5 = staging / "sweep.h5", csv = staging / "sweep.csv", record = staging / polrig::kSweepStateFile;
   std::vector<std::string> resume = resumable_sweep(out);

@@ -208,6 +208,29 @@ TEST(FourCameraCalibration, AopAloneIsRankDeficient) {
   EXPECT_LT(c.polarizer.singular_ratio, 0.05);
 }
 
+// Polarized stops 90° apart turn the polarizer through two orientations only: each camera then sees
+// one number, d·cos 2(ψ_0 − a_j), for five unknowns (ε_2..ε_4, ψ_0, d_0). The fit says so instead of
+// "converging" (the views' small projection terms made the Jacobian look full rank: the old fit
+// reported rank 5 of 5, a DoP of 1.02 and ε errors of 6–13°). Stops 60° apart are enough.
+TEST(FourCameraCalibration, StopsNinetyDegreesApartAreAnIllPosedDesign) {
+  for (const double step : {90.0, 60.0}) {
+    const Rig rig = parse_rig(rig_text("", false, step), "cal").rig;
+    const FourCameraSimulator sim(rig);
+    const Stops s = stops_of(sim, false);
+    const FourCameraModel& t = sim.truth();
+    const FourCameraCalibration c =
+        calibrate_four_camera<double>(t.camera, t.width, t.height, s.levels_d, s.polarized_d, options_for(sim));
+    if (step == 90.0) {
+      EXPECT_EQ(c.polarizer.summary.termination, FitTermination::RankDeficient) << c.polarizer.summary.brief_report();
+      EXPECT_HAS(c.polarizer.summary.message, "too few orientations");
+      EXPECT_HAS(c.polarizer.summary.message, "90° apart");
+    } else {
+      ASSERT_TRUE(c.polarizer.usable()) << c.polarizer.summary.brief_report();
+      EXPECT_NEAR(c.polarizer.dop, 0.999, 1e-6);
+    }
+  }
+}
+
 // The default noise (10 e⁻/DN, 1 DN read noise, 12 bits): K_j, b_j within 4 standard errors, the
 // standard errors themselves what the noise model predicts for a window mean (σ² = signal/10 +
 // 1 + 1/12 DN² per pixel, over 65 × 65 px, propagated through the line), and ε_j within 4 of the

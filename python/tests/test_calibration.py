@@ -351,6 +351,10 @@ def test_array_arguments_convert_and_read_well(indoor):
         params.apply([[0.1, 0.1], [0.1, 0.1]])
     with pytest.raises(TypeError, match=r"V: expected an array of numbers, got <class 'str'>"):
         params.apply("volts")
+    # A broadcast too big to copy is named as memory, with its size, not as a wrong type.
+    huge = np.broadcast_to(np.float32(0.1), (10**12, 3))
+    with pytest.raises(ValueError, match=r"V: 3000000000000 numbers do not fit in memory"):
+        params.apply(huge)
     with pytest.raises(ValueError, match=r"theta_R_deg: expected a 1-D array, got shape \(\)"):
         polrig.calibrate(3.0, data.V)
     # help() names the kinds of the arguments, not pybind11's 'handle'.

@@ -161,6 +161,8 @@ def test_bad_input_gives_a_status_or_a_value_error():
         polrig.sun_vector(np.zeros((4, 4)), f_c_px=0.0)
     with pytest.raises(ValueError, match="hough_bin_deg"):
         polrig.orient(np.zeros((4, 4)), hough_bin_deg=0.0)
+    with pytest.raises(ValueError, match=r"hough_bin_deg = 1e-09: must be in \[0.001°, 30°\]"):
+        polrig.orient(np.zeros((4, 4)), hough_bin_deg=1e-9)
 
 
 def test_correct_noise_bias_removes_the_bias_and_measures_the_noise():

@@ -18,6 +18,24 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
+// How well the polarized stops' table angles separate the analyzers' axes from the DoP: σ_min/σ_max of
+// the design [1, cos 2θ_R, sin 2θ_R]. Each camera sees 1 + d·cos 2(β − a_j) with β = ψ_0 + s_R·θ_R; with
+// only two polarizer orientations (stops 90° apart: 2θ_R on one line) it gives one number per camera,
+// d·cos 2(ψ_0 − a_j), for the fit's unknowns ε_2..ε_4, ψ_0 and d_0: five unknowns from four numbers.
+// Three orientations or more (not all near one line through 2θ) give the three per camera the fit needs.
+double table_design_ratio(const std::vector<double>& theta_R_deg) {
+  Eigen::MatrixXd A(static_cast<Eigen::Index>(theta_R_deg.size()), 3);
+  for (Eigen::Index m = 0; m < A.rows(); ++m) {
+    const double t = 2 * deg2rad(theta_R_deg[static_cast<std::size_t>(m)]);
+    A.row(m) << 1.0, std::cos(t), std::sin(t);
+  }
+  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(A).singularValues();
+  return s(2) / s(0);
+}
+// [C] Below this the stops' orientations are too close to two (a full turn in equal steps: 1/√2; stops
+// at 0°, 90° and 5°: 0.06).
+constexpr double kMinTableDesignRatio = 0.05;
+
 // An axial difference in radians, wrapped into [−π/2, π/2).
 double wrap90_rad(double d) {
   d = std::fmod(d, kPi);
@@ -363,6 +381,15 @@ PolarizerFit fit_polarizer_angles(const PolarizerSamples& s, const PolarizerOpti
   if (M < 3 || P == 0) {
     fit.summary.termination = FitTermination::TooFewObservations;
     fit.summary.message = fmt::format("{} polarized stop(s): the angles need at least 3 table angles", M);
+    return fit;
+  }
+  if (const double ratio = table_design_ratio(s.theta_R_deg); !(ratio >= kMinTableDesignRatio)) {
+    fit.summary.termination = FitTermination::RankDeficient;
+    fit.summary.message = fmt::format(
+        "the polarized stops turn the polarizer through too few orientations to separate the analyzers' axes from the "
+        "DoP (σ_min/σ_max of [1, cos 2θ_R, sin 2θ_R] = {:.2g}, needs ≥ {}; stops 90° apart give two orientations, "
+        "0): turn the table in steps that are not a multiple of 90°, e.g. 30°",
+        ratio, kMinTableDesignRatio);
     return fit;
   }
   // The start: ε = 0, ψ_0 the circular mean of φ̂ − s_R·θ_R, d_0 the mean d̂ with the nominal axes.

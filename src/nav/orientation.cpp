@@ -124,9 +124,11 @@ void check_orientation_settings(const OrientationSettings& s) {
         "orientation setting line_aop_tolerance_deg = {}: must be below 45°", s.line_aop_tolerance_deg));
   check_finite_positive(s.line_min_radius_px, "line_min_radius_px", true);
   check_finite_positive(s.hough_bin_deg, "hough_bin_deg");
-  if (s.hough_bin_deg > 30)
+  // Below 0.001° (180 000 bins) the bins are far finer than any AoP's noise, and the count of bins
+  // would outgrow memory (1e-9° asked for 1.8e11).
+  if (s.hough_bin_deg > 30 || s.hough_bin_deg < 1e-3)
     throw std::invalid_argument(fmt::format(
-        "orientation setting hough_bin_deg = {}: must be at most 30°", s.hough_bin_deg));
+        "orientation setting hough_bin_deg = {}: must be in [0.001°, 30°]", s.hough_bin_deg));
   if (s.prior_sun) {
     const Vec3& p = *s.prior_sun;
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]) || vec3::norm(p) == 0)

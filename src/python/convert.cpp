@@ -54,13 +54,19 @@ std::string shape_text(const py::array& a) {
 }  // namespace
 
 DoubleArray as_array(const py::handle& obj, const char* name, int ndim, py::ssize_t columns) {
-  DoubleArray a;
-  try {
-    a = DoubleArray::ensure(obj);
-  } catch (const py::error_already_set&) {
-  }
+  const DoubleArray a = DoubleArray::ensure(obj);  // a null array on failure (pybind11 clears the error)
   if (!a) {
-    PyErr_Clear();
+    // Ask NumPy why: a huge broadcast or strided view fails for memory, being copied whole, not for its type.
+    try {
+      py::module_::import("numpy").attr("ascontiguousarray")(obj, "float64");
+    } catch (py::error_already_set& e) {
+      if (e.matches(PyExc_MemoryError)) {
+        const std::string size = py::str(py::module_::import("numpy").attr("size")(obj)).cast<std::string>();
+        throw py::value_error(fmt::format(
+            "{}: {} numbers do not fit in memory as one contiguous float64 array ({}); a broadcast or a strided "
+            "view is copied whole before polrig reads it", name, size, e.what()));
+      }
+    }
     throw py::type_error(fmt::format("{}: expected an array of numbers, got {}", name,
                                      py::str(py::type::of(obj)).cast<std::string>()));
   }

@@ -21,7 +21,8 @@
 #    points.csv and ins_log.csv written literally.
 # 4. One line per command with its time; a command that exits non-zero is a failure, printed with
 #    its stderr; the last line is "readme: N passed, M failed" (and skipped ones); exit 1 on any
-#    failure. The scratch folder is removed on success and kept (its path printed) on failure.
+#    failure. The scratch folder is removed on success (kept with POLRIG_README_KEEP=1, to look at
+#    the plots) and kept (its path printed) on failure.
 # It takes about a minute on the 2-core development machine shared with three builds (load ≈ 10);
 # the largest part is `polrig trace` (≈ 13 s, its 61 × 61 plane map whatever the scene's samples).
 set -uo pipefail
@@ -266,5 +267,9 @@ echo "readme: $passed passed, $failed failed, $skipped skipped"
 if [ $failed -gt 0 ]; then
   echo "readme: the scratch folder is kept: $scratch (logs: $logs)" >&2
   exit 1
+fi
+if [ -n "${POLRIG_README_KEEP:-}" ]; then  # to look at what the commands wrote
+  echo "readme: the scratch folder is kept (POLRIG_README_KEEP): $scratch" >&2
+  exit 0
 fi
 cd / && rm -rf "$scratch" "$logs"

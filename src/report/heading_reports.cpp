@@ -141,7 +141,7 @@ std::vector<DatasetFile> report_heading_trials(const std::filesystem::path& dir,
                  {"cdf.csv", "$noise_deg:$fraction", "sensor noise alone", "steps lw 2 lc rgb '#1f77b4'"}};
   dist.extra = "set logscale x\nset yrange [0:1]\nset format x '%g'";
   for (Plot* p : {&sync, &roll, &pitch, &mount_z, &mount_t, &ins, &pmax})
-    p->extra = "set key below horizontal";  // the scatter gets the whole width
+    p->extra = "set key below horizontal spacing 1.4";  // the scatter gets the whole width
   render_plots(dir, "plots.gp", {sync, roll, pitch, mount_z, mount_t, ins, pmax, dist}, progress);
   for (const char* png : {"error_vs_sync.png", "error_vs_roll.png", "error_vs_pitch.png",
                           "error_vs_mount_azimuth.png", "error_vs_mount_tilt.png",

@@ -66,7 +66,7 @@ std::vector<DatasetFile> report_orientation(const std::filesystem::path& dir,
                "linespoints pt 5 ps 0.6 lw 1 lc rgb '#2ca02c'"},
               {"orientation.csv", only("eigenvector"), "eigenvector",
                "linespoints pt 9 ps 0.7 lw 2 lc rgb '#1f77b4'"}};
-  p.extra = "set key below horizontal\nset grid";
+  p.extra = "set key below horizontal spacing 1.4\nset grid";
   render_plots(dir, "plots.gp", {p});
   files.push_back({"heading_error.png", 1, "heading error per frame of the three methods"});
   return files;

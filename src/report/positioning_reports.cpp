@@ -112,7 +112,7 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
                    {"summary.csv", "($window_s/60):" + on("window", "eq15_km"),
                     "Eq. 15 (each window's first and last sighting: its Δβ)", eq15},
                    {"summary.csv", "($window_s/60):" + on("window", "linear_rms_km"), "linearized least squares", lin}};
-  window.extra = "set logscale xy\nset format y '%g'\nset format x '%g'\nset key below horizontal";
+  window.extra = "set logscale xy\nset format y '%g'\nset format x '%g'\nset key below horizontal spacing 1.4";
   Plot noise{"error_vs_noise.png",
              fmt::format("Position error against the zenith-angle noise ({} s window, tilt {}°; {})",
                          b.window_s, s.baseline_tilt_deg, tail),
@@ -122,7 +122,7 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
                   {"summary.csv", "$noise_sd_deg:" + on("noise", "eq15_km"),
                    fmt::format("Eq. 15 (first and last sighting, Δβ = {:.2f}°)", b.delta_beta_deg), eq15},
                   {"summary.csv", "$noise_sd_deg:" + on("noise", "linear_rms_km"), "linearized least squares", lin}};
-  noise.extra = "set key below horizontal";
+  noise.extra = "set key below horizontal spacing 1.4";
   Plot tilt{"error_vs_tilt.png",
             fmt::format("Position error against the levelling error ({} s window, σ = {}°; {})", b.window_s,
                         s.baseline_noise_sd_deg, tail),
@@ -132,14 +132,14 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
                  {"summary.csv", "$tilt_deg:" + on("tilt", "eq15_km"),
                   fmt::format("Eq. 15 with ε = √(σ² + τ²), Δβ = {:.2f}°", b.delta_beta_deg), eq15},
                  {"summary.csv", "$tilt_deg:" + on("tilt", "linear_rms_km"), "linearized least squares", lin}};
-  tilt.extra = "set key below horizontal";
+  tilt.extra = "set key below horizontal spacing 1.4";
   Plot fixes{"fixes.png",
              fmt::format("Fixes around the truth ({} s window, σ = {}°, tilt {}°; {})", b.window_s, b.noise_sd_deg,
                          b.tilt_deg, tail),
              "east (km)", "north (km)"};
   fixes.series = {{"trials.csv", fmt::format("($cell=={} ? $east_km : NaN):$north_km", baseline), "fixes",
                    "points pt 7 ps 0.5 lc rgb '#1f77b4'"}};
-  fixes.extra = "set size ratio -1\nset key below horizontal";
+  fixes.extra = "set size ratio -1\nset key inside top right opaque\nset xzeroaxis lt -1\nset yzeroaxis lt -1";  // the axes cross at the truth
   fixes.width = 700;
   fixes.height = 700;
   render_plots(dir, "plots.gp", {window, noise, tilt, fixes});

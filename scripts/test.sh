@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # The second set-up command (CI runs exactly this): install what is missing, then
-#   1. build with AddressSanitizer + UndefinedBehaviorSanitizer (build-asan/) and run the fast
-#      tests (CTest label "fast") under them;
-#   2. build the libFuzzer targets with clang (build-fuzz/, without OpenCV: -DPOLRIG_OPENCV=OFF,
-#      so CI compiles both configurations of the geometric calibration; the fuzzers do not reach
-#      it) and run each for a fixed number of inputs: a crash, a hang (> 1 s per input) or a leak
-#      fails;
-#   3. build normally (build/, warnings as errors, with MPI: -DPOLRIG_MPI=ON, with OpenCV) and run
-#      every test, the slow physics checks (CTest label "slow", the full-size geometric calibration
-#      among them) and the runs under `mpirun -np 2` (label "mpi") included. The README's build
-#      (scripts/run.sh) stays without MPI.
+#   1. build once with clang, AddressSanitizer + UndefinedBehaviorSanitizer and libFuzzer's coverage
+#      (build-san/: the library, the executable, the tests and the fuzzers; without OpenCV,
+#      -DPOLRIG_OPENCV=OFF, so CI compiles both configurations of the geometric calibration) and
+#      run the fast tests (CTest label "fast") under the sanitizers;
+#   2. run each fuzzer of that build for a fixed number of inputs: a crash, a hang (> 1 s per
+#      input) or a leak fails;
+#   3. build normally (build/, g++, warnings as errors, with MPI: -DPOLRIG_MPI=ON, with OpenCV) and
+#      run every test, the slow physics checks (CTest label "slow", the full-size geometric
+#      calibration among them) and the runs under `mpirun -np 2` (label "mpi") included. The
+#      README's build (scripts/run.sh) stays without MPI.
+# One sanitizer build, not two (a g++ one for the tests and a clang one for the fuzzers): compiling
+# is most of CI's time on a 2-core machine, and the fuzzers need clang anyway.
 # The full ctest runs last, so the output ends with its summary (after the timing summary).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,22 +37,17 @@ export ASAN_OPTIONS="detect_leaks=1:check_initialization_order=1:strict_init_ord
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=0"
 
-asan_build() {
-  cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPOLRIG_SANITIZERS='address;undefined' \
-    -DPOLRIG_BUILD_BENCH=OFF "${launcher[@]}" >/dev/null
-  cmake --build build-asan -j2
+san_build() {
+  cmake -S . -B build-san -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+    -DPOLRIG_FUZZ=ON -DPOLRIG_SANITIZERS='address;undefined' -DPOLRIG_BUILD_BENCH=OFF \
+    -DPOLRIG_OPENCV=OFF "${launcher[@]}" >/dev/null
+  cmake --build build-san -j2
 }
-asan_tests() { ctest --test-dir build-asan -L fast --output-on-failure -j2; }
+san_tests() { ctest --test-dir build-san -L fast --output-on-failure -j2; }
 
-fuzz_build() {
-  cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
-    -DPOLRIG_FUZZ=ON -DPOLRIG_SANITIZERS='address;undefined' -DPOLRIG_BUILD_TESTS=OFF \
-    -DPOLRIG_BUILD_BENCH=OFF -DPOLRIG_OPENCV=OFF "${launcher[@]}" >/dev/null
-  cmake --build build-fuzz -j2 --target polrig_fuzzers
-}
 fuzz_run() {  # fuzz_run TARGET SEED_DIR…: new inputs go to a scratch folder, never to the repository
-  local target=$1 work=build-fuzz/run/$1
-  local exe=build-fuzz/fuzz/fuzz_$1
+  local target=$1 work=build-san/run/$1
+  local exe=build-san/fuzz/fuzz_$1
   shift
   rm -rf "$work" && mkdir -p "$work/corpus"
   if "$exe" -runs="$FUZZ_RUNS" -timeout=1 -detect_leaks=1 -seed=1 -rss_limit_mb=2048 \
@@ -73,9 +70,8 @@ fuzz_run() {  # fuzz_run TARGET SEED_DIR…: new inputs go to a scratch folder, 
   return 1
 }
 
-stage "ASan+UBSan build" asan_build
-stage "ASan+UBSan fast tests" asan_tests
-stage "fuzz build (clang)" fuzz_build
+stage "sanitizer build (clang)" san_build
+stage "ASan+UBSan fast tests" san_tests
 stage "fuzz rig_yaml" fuzz_run rig_yaml fuzz/corpus/rig_yaml rigs
 stage "fuzz scene_yaml" fuzz_run scene_yaml fuzz/corpus/scene_yaml scenes
 stage "fuzz measured_csv" fuzz_run measured_csv fuzz/corpus/measured_csv

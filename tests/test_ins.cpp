@@ -209,6 +209,12 @@ std::vector<ImuSample> zero_samples(std::size_t n, double dt) {
 
 TEST(InsImu, Z21DefaultsAreTable1InSi) {
   const ImuErrorSpec z = z21_imu_errors();
+  // The filter's default noise is the same IMU's: white noise only (Z21's biases are constants).
+  const ErrorModelNoise n = FilterSettings{}.noise;
+  EXPECT_EQ(n.arw, z.gyro.white_noise);
+  EXPECT_EQ(n.vrw, z.accel.white_noise);
+  EXPECT_TRUE(std::isinf(n.gyro_tau_s.x()));
+  EXPECT_NEAR(FilterSettings{}.sigma_H_rad, rad(0.1), 1e-18);
   EXPECT_NEAR(z.gyro.turn_on_bias_sigma.x(), 2.4240684e-5, 1e-12);  // 5°/h in rad/s
   EXPECT_NEAR(z.gyro.white_noise.y(), 1.4544410e-4, 1e-11);         // 0.5°/√h in rad/√s
   EXPECT_NEAR(z.accel.turn_on_bias_sigma.z(), 4.903325e-4, 1e-12);  // 50 µg in m/s²
@@ -241,6 +247,11 @@ TEST(InsImu, GaussMarkovStepIsExact) {
   }
   // The increments carry the bias times Δt and nothing else here.
   EXPECT_DOUBLE_EQ(c.samples[5].dtheta.y(), c.gyro_bias[5].y() * dt);
+  // The error model takes the same process: ε̇ = −ε/τ with Q_c = 2σ²/τ.
+  const ErrorModelNoise noise = error_model_noise(spec);
+  EXPECT_EQ(noise.gyro_tau_s, Eigen::Vector3d::Constant(tau));
+  EXPECT_DOUBLE_EQ(process_noise_density(InsState{}, noise)(kGyroBias, kGyroBias), 2 * sigma * sigma / tau);
+  EXPECT_TRUE(std::isinf(noise.accel_tau_s.z()));
 }
 
 TEST(InsImu, CorruptionIsCounterBasedAndDeterministic) {
@@ -464,11 +475,8 @@ TEST(InsErrorModel, AlignmentEquilibriaAndTheHeadingFloor) {
   Vector15 y = x;
   y[kPhi + 2] += 1e-3;
   EXPECT_NEAR((F * y)[kPhi], -kEarthRate * std::cos(kLat) * 1e-3, 1e-15);
-  x.setZero();
-  x[kGyroBias] = rad(5) / 3600;
-  x[kPhi + 2] = 0;
-  // φ_U that cancels the east bias in φ̇_E, from F alone: −F(φ_E, ε_x)·ε/F(φ_E, φ_U).
-  const double phi_U = -F(kPhi, kGyroBias) * x[kGyroBias] / F(kPhi, kPhi + 2);
+  // φ_U that cancels a 5°/h east bias in φ̇_E, from F alone: −F(φ_E, ε_x)·ε/F(φ_E, φ_U).
+  const double phi_U = -F(kPhi, kGyroBias) * (rad(5) / 3600) / F(kPhi, kPhi + 2);
   EXPECT_NEAR(std::abs(deg(phi_U)), 24.9, 0.05);
 }
 
@@ -753,8 +761,7 @@ TEST(InsFilter, ClosedLoopOnZ21sStaticRunBoundsTheDrift) {
   const CorruptedImu imu = corrupt_imu(tr.imu, spec, 2021);
   FilterSettings settings;
   settings.mechanization.hold_height_m = 50;
-  settings.noise.arw = spec.gyro.white_noise;
-  settings.noise.vrw = spec.accel.white_noise;
+  settings.noise = error_model_noise(spec);
   const LinearZ21 sys;
   Matrix15 P0 = sys.P0;
   P0(kDh, kDh) = 0;  // held
@@ -789,6 +796,7 @@ TEST(InsFilter, ClosedLoopOnZ21sStaticRunBoundsTheDrift) {
 
 TEST(InsFilter, ANonFiniteMeasurementIsDataNotACrash) {
   InsFilter filter(static_state(), LinearZ21().P0);
+  EXPECT_THROW(filter.update({1.0, 0.4, 0.03, 1.0}), std::invalid_argument);  // not the state's time
   EXPECT_EQ(filter.summary().status, FilterStatus::NoUpdates);
   filter.update({0, std::numeric_limits<double>::quiet_NaN(), 0.03, 1.0});
   const FilterSummary s = filter.summary();

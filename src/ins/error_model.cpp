@@ -8,6 +8,23 @@
 
 namespace polrig {
 
+ErrorModelNoise error_model_noise(const ImuErrorSpec& imu) {
+  ErrorModelNoise n;
+  n.arw = imu.gyro.white_noise;
+  n.vrw = imu.accel.white_noise;
+  for (int i = 0; i < 3; ++i) {
+    if (imu.gyro.bias_instability[i] > 0) {
+      n.gyro_tau_s[i] = imu.gyro.correlation_time_s[i];
+      n.gyro_bias_sigma[i] = imu.gyro.bias_instability[i];
+    }
+    if (imu.accel.bias_instability[i] > 0) {
+      n.accel_tau_s[i] = imu.accel.correlation_time_s[i];
+      n.accel_bias_sigma[i] = imu.accel.bias_instability[i];
+    }
+  }
+  return n;
+}
+
 Matrix15 error_dynamics(const InsState& s, const Eigen::Vector3d& f_n, const ErrorModelNoise& noise) {
   const double L = s.lat_rad, h = s.h_m;
   const double vE = s.v_n.x(), vN = s.v_n.y();

@@ -101,6 +101,8 @@ void InsFilter::predict(const ImuSample& raw) {
 }
 
 ScalarUpdate InsFilter::update(const SunElevation& m) {
+  if (!(std::abs(m.t_s - state_.t_s) <= 1e-3))
+    throw std::invalid_argument(fmt::format("filter: a measurement at {} s for the state at {} s", m.t_s, state_.t_s));
   const SunElevationModel model = sun_elevation_model(state_.lat_rad, state_.lon_rad, m.dec_rad, m.gha_rad);
   RowVector15 H = RowVector15::Zero();
   H[kDLat] = model.d_lat;

@@ -13,6 +13,7 @@
 
 #include <Eigen/Core>
 
+#include "polrig/ins/imu.h"
 #include "polrig/ins/mechanization.h"
 
 namespace polrig {
@@ -33,6 +34,10 @@ struct ErrorModelNoise {
   Eigen::Vector3d gyro_bias_sigma = Eigen::Vector3d::Zero();
   Eigen::Vector3d accel_bias_sigma = Eigen::Vector3d::Zero();
 };
+
+// The model's noise from an IMU's error spec: the white-noise densities and the Gauss–Markov
+// biases (σ, τ); the constant, turn-on and random-walk parts are left to P0.
+ErrorModelNoise error_model_noise(const ImuErrorSpec& imu);
 
 // F at the state s with specific force f^n.
 Matrix15 error_dynamics(const InsState& s, const Eigen::Vector3d& f_n,

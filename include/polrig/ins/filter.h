@@ -19,6 +19,7 @@
 #include "polrig/ins/error_model.h"
 #include "polrig/ins/imu.h"
 #include "polrig/ins/mechanization.h"
+#include "polrig/units.h"
 
 namespace polrig {
 
@@ -62,12 +63,12 @@ struct ErrorFilter {
 };
 
 struct FilterSettings {
-  double sigma_H_rad = 0.1 * 3.14159265358979323846 / 180;  // the compass' elevation σ [C]
+  double sigma_H_rad = deg2rad(0.1);  // the compass' elevation σ [C]
   bool adaptive = true;            // Sage–Husa R [C]
   double sage_husa_b = 0.98;       // Z21's forgetting factor as b (spec §4.7)
   double R_min_factor = 0.01, R_max_factor = 100;  // PSINS's clamp on R, times R0
   MechanizationOptions mechanization;  // Z21 holds the height to its barometer
-  ErrorModelNoise noise;
+  ErrorModelNoise noise = error_model_noise(z21_imu_errors());  // Z21's Table 1 [C]
 };
 
 struct SunElevation {
@@ -105,7 +106,9 @@ class InsFilter {
 
   // Mechanizes one sample (biases compensated) and predicts x, P with Φ = I + FΔt.
   void predict(const ImuSample& cur);
-  // A sun-elevation update at the current state (call when t_s matches), with feedback.
+  // A sun-elevation update at the current state, with feedback. Throws std::invalid_argument when
+  // m.t_s is more than 1 ms from the state's time (a programming error); a non-finite measurement
+  // is data: skipped and counted in the summary.
   ScalarUpdate update(const SunElevation& m);
 
   const InsState& state() const { return state_; }

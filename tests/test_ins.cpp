@@ -558,6 +558,43 @@ TEST(InsErrorModel, LinearModelFollowsTheNonlinearMechanization) {
   }
 }
 
+TEST(InsErrorModel, NoiseGrowthMatchesTheClosedForms) {
+  // Spec §4.7, static and level, the covariance propagated from 0 with Z21's noise: heading
+  // σ = N√t (0.29° over 1200 s at 0.5°/√h); north position σ from VRW alone VRW·t^{3/2}/√3 and
+  // from ARW alone g·N·t^{5/2}/√20, at 60 s where the Schuler feedback's share is (ω_s t)²/~10
+  // < 0.1 %. The heading's random walk is φ_U − sin L·δλ: φ_U also carries the turn of ENU
+  // between the true and the computed longitude (the transport rate's tan L·δV_E/(R_N + h),
+  // which alone makes σ(φ_U) 6 % larger at 1200 s). The Earth-rate coupling left is (Ω t)²/3
+  // ≈ 0.15 % at 1200 s: 1 % and 0.5 % bounds.
+  const InsState s = static_state();
+  const double g = somigliana(kLat, 50), N = rad(0.5) / 60, VRW = 25e-6 * kStandardG;
+  const Matrix15 F = error_dynamics(s, {0, 0, g});
+  const auto covariance = [&](const ErrorModelNoise& noise, double t_end, double dt) {
+    const Discretized d = discretize_van_loan(F, process_noise_density(s, noise), dt);
+    Matrix15 P = Matrix15::Zero();
+    for (int k = 0; k < static_cast<int>(std::lround(t_end / dt)); ++k) P = d.Phi * P * d.Phi.transpose() + d.Q;
+    return P;
+  };
+  const auto sigma = [&](const ErrorModelNoise& noise, double t_end, double dt, int index) {
+    return std::sqrt(covariance(noise, t_end, dt)(index, index));
+  };
+  ErrorModelNoise arw, vrw;
+  arw.arw.setConstant(N);
+  vrw.vrw.setConstant(VRW);
+  Vector15 heading = Vector15::Zero();
+  heading[kPhi + 2] = 1;
+  heading[kDLon] = -std::sin(kLat);
+  const Matrix15 P_arw = covariance(arw, 1200, 1);
+  const double sigma_heading = std::sqrt(heading.dot(P_arw * heading));
+  std::printf("heading σ over 1200 s: φ_U − sin L δλ %.4f°, φ_U %.4f°, N√t %.4f°\n", deg(sigma_heading),
+              deg(std::sqrt(P_arw(kPhi + 2, kPhi + 2))), deg(N * std::sqrt(1200.0)));
+  EXPECT_NEAR(sigma_heading / (N * std::sqrt(1200.0)), 1.0, 0.01);
+  EXPECT_NEAR(deg(N * std::sqrt(1200.0)), 0.29, 0.005);
+  const double R_M = earth_radii(kLat).R_M + 50;
+  EXPECT_NEAR(sigma(vrw, 60, 0.1, kDLat) * R_M / (VRW * std::pow(60.0, 1.5) / std::sqrt(3.0)), 1.0, 0.005);
+  EXPECT_NEAR(sigma(arw, 60, 0.1, kDLat) * R_M / (g * N * std::pow(60.0, 2.5) / std::sqrt(20.0)), 1.0, 0.005);
+}
+
 TEST(InsErrorModel, FirstOrderAndVanLoanDiscretizations) {
   InsState s = static_state(30);
   s.v_n << 15, 8, 0.5;

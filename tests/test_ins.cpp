@@ -652,13 +652,18 @@ TEST(InsFilter, SunElevationAtZ21sStartAndItsRowAgainstFiniteDifferences) {
   EXPECT_LT(m.d_lon, 0.0);
 }
 
-TEST(InsFilter, SageHusaFollowsPsinsRecursion) {
-  // β₁ = 1, β_{k+1} = β_k/(β_k + b) → 1 − b; R₁ = the first sample; clamped to [0.01, 100]·R0.
+TEST(InsFilter, SageHusaFollowsTheSpecRecursion) {
+  // β₁ = 1, β_{k+1} = β_k/(β_k + b) → 1 − b; R₁ = the first sample; the sample raised to
+  // 0.01·R0, the average capped at 100·R0 (spec §4.7).
   SageHusaR sh(1.0, 0.98);
   EXPECT_DOUBLE_EQ(sh.update(2.0, 0.5), 3.5);  // r² − HPHᵀ = 3.5, β = 1
-  EXPECT_NEAR(sh.beta(), 1 / 1.98, 1e-15);
-  EXPECT_DOUBLE_EQ(sh.update(0.0, 1.0), (1 - 1 / 1.98) * 3.5 + 1 / 1.98 * 0.01);  // raised to R_min
-  EXPECT_DOUBLE_EQ(sh.update(20.0, 0.0), 100.0);  // above R_max: R_max
+  const double beta2 = 1 / 1.98, beta3 = beta2 / (beta2 + 0.98);
+  EXPECT_NEAR(sh.beta(), beta2, 1e-15);
+  const double R2 = (1 - beta2) * 3.5 + beta2 * 0.01;  // the sample −1 raised to R_min
+  EXPECT_DOUBLE_EQ(sh.update(0.0, 1.0), R2);
+  // A sample of 150 > R_max moves R by β only (PSINS would set R_max = 100).
+  EXPECT_NEAR(sh.update(std::sqrt(150.0), 0.0), (1 - beta3) * R2 + beta3 * 150, 1e-12);
+  EXPECT_DOUBLE_EQ(sh.update(100.0, 0.0), 100.0);  // an average above R_max: R_max
   for (int k = 0; k < 5000; ++k) sh.update(1.0, 0.0);
   EXPECT_NEAR(sh.beta(), 0.02, 1e-4);
   EXPECT_NEAR(sh.R(), 1.0, 1e-9);
@@ -783,52 +788,82 @@ TEST(InsFilter, SageHusaRecoversAnUnderstatedR) {
   EXPECT_GT(nis_fixed / m, 3.0);
 }
 
-// Z21's static run in simulation: 1200 s of a 50 Hz IMU with Table 1's errors, a sun elevation
-// every second with 0.1° noise, height held. The SINS alone drifts tens of km (spec §4.6 item 3,
-// [SIM-trend]); the filter keeps the error along the sun's azimuth — the one direction an
-// elevation sees — at the compass' level (0.1° ≈ 11 km) and its summary is consistent.
-TEST(InsFilter, ClosedLoopOnZ21sStaticRunBoundsTheDrift) {
+// Z21's static run in simulation: a 50 Hz IMU with Table 1's errors (seed 2021), yaw 30°, height
+// held, and a sun elevation every second with noise σ_meas; the INS alone beside the filter.
+struct Z21Run {
+  InsState sins, filtered;
+  TruthSample end;
+  FilterSummary summary;
+  double sigma_along_sun_m = 0;  // the filter's 1σ along the sun's azimuth at the end
+  double along_sun_m = 0;        // its error there
+};
+
+Z21Run run_z21(double duration_s, double sigma_meas_deg, FilterSettings settings) {
   const double rate = 50;
-  const Trajectory tr = generate_trajectory(static_spec(1200, rate, {0, 0, rad(30)}));
-  const ImuErrorSpec spec = [&] {
-    ImuErrorSpec s = z21_imu_errors();
-    s.rate_hz = rate;
-    return s;
-  }();
+  TrajectorySpec traj = static_spec(duration_s, rate, {0, 0, rad(30)});
+  traj.substeps = 2;  // static: Simpson is exact for the constant rates
+  const Trajectory tr = generate_trajectory(traj);
+  ImuErrorSpec spec = z21_imu_errors();
+  spec.rate_hz = rate;
   const CorruptedImu imu = corrupt_imu(tr.imu, spec, 2021);
-  FilterSettings settings;
   settings.mechanization.hold_height_m = 50;
   settings.noise = error_model_noise(spec);
-  const LinearZ21 sys;
-  Matrix15 P0 = sys.P0;
+  Matrix15 P0 = LinearZ21().P0;
   P0(kDh, kDh) = 0;  // held
-  P0.block<3, 3>(kPhi, kPhi).diagonal() << std::pow(rad(0.05), 2), std::pow(rad(0.05), 2), std::pow(rad(0.5), 2);
-  InsState start = state_of(tr.truth[0]);
+  const InsState start = state_of(tr.truth[0]);
   InsFilter filter(start, P0, settings);
-  std::vector<InsState> sins = run_ins(start, imu.samples, settings.mechanization);
+  Z21Run run;
+  run.sins = run_ins(start, imu.samples, settings.mechanization).back();
   for (std::size_t k = 0; k < imu.samples.size(); ++k) {
     filter.predict(imu.samples[k]);
     if ((k + 1) % static_cast<std::size_t>(rate) != 0) continue;
     const double t = imu.samples[k].t_s;
     const test::AlmanacHourAngle sun = test::almanac_dec_gha(kZ21StartUnix + t);
     const double H_true = std::asin(sun_elevation_model(kLat, kLon, sun.dec_rad, sun.gha_rad).sin_H);
-    filter.update({t, H_true + rad(0.1) * standard_normal(99, 0, k, 0), sun.dec_rad, sun.gha_rad});
+    filter.update({t, H_true + rad(sigma_meas_deg) * standard_normal(99, 0, k, 0), sun.dec_rad, sun.gha_rad});
   }
-  const TruthSample& end = tr.truth.back();
-  const double A_s = rad(test::almanac_sun(kZ21StartUnix + 1200, 39.979, 116.339).azimuth_deg);
-  const auto along_sun_km = [&](const InsState& s) {
-    return (north_error_m(end, s) * std::cos(A_s) + east_error_m(end, s) * std::sin(A_s)) / 1000;
-  };
-  const double sins_km = std::hypot(north_error_m(end, sins.back()), east_error_m(end, sins.back())) / 1000;
-  const FilterSummary summary = filter.summary();
-  std::printf("Z21 run: SINS %.1f km; integrated along the sun %.2f km; %s\n", sins_km, along_sun_km(filter.state()),
-              summary.BriefReport().c_str());
+  run.end = tr.truth.back();
+  run.filtered = filter.state();
+  run.summary = filter.summary();
+  // Metres along the sun's azimuth A_s per radian of δL and δλ.
+  const double A_s = rad(test::almanac_sun(kZ21StartUnix + duration_s, 39.979, 116.339).azimuth_deg);
+  const EarthRadii r = earth_radii(kLat);
+  const Eigen::Vector2d a((r.R_M + 50) * std::cos(A_s), (r.R_N + 50) * std::cos(kLat) * std::sin(A_s));
+  run.sigma_along_sun_m = std::sqrt(a.dot(filter.P().block<2, 2>(kDLat, kDLat) * a));
+  run.along_sun_m = north_error_m(run.end, run.filtered) * std::cos(A_s) + east_error_m(run.end, run.filtered) * std::sin(A_s);
+  return run;
+}
+
+// Spec §4.6 item 3 [SIM-trend]: the SINS alone drifts tens of km in 1200 s, while the filter keeps
+// the error along the sun's azimuth — the one direction an elevation sees (spec §4.3) — inside
+// 4σ of its own covariance, that σ below the compass' 0.1° ≈ 11 km, and its summary consistent.
+TEST(InsFilter, ClosedLoopOnZ21sStaticRunBoundsTheDrift) {
+  const Z21Run run = run_z21(1200, 0.1, {});
+  const double sins_km = std::hypot(north_error_m(run.end, run.sins), east_error_m(run.end, run.sins)) / 1000;
+  std::printf("Z21 run: SINS %.1f km; integrated along the sun %.3f km (1σ %.3f km); %s\n", sins_km,
+              run.along_sun_m / 1000, run.sigma_along_sun_m / 1000, run.summary.BriefReport().c_str());
   EXPECT_GT(sins_km, 5.0);
-  EXPECT_LT(std::abs(along_sun_km(filter.state())), 11.0);
-  EXPECT_EQ(summary.updates, 1200);
-  EXPECT_EQ(summary.predictions, 60000);
-  EXPECT_EQ(summary.status, FilterStatus::Ok) << summary.BriefReport();
-  EXPECT_LT(summary.nis_outside_95, 0.15);
+  EXPECT_LT(std::abs(run.along_sun_m), 4 * run.sigma_along_sun_m);
+  EXPECT_LT(run.sigma_along_sun_m, 11e3);
+  EXPECT_EQ(run.summary.updates, 1200);
+  EXPECT_EQ(run.summary.predictions, 60000);
+  EXPECT_EQ(run.summary.status, FilterStatus::Ok) << run.summary.BriefReport();
+  EXPECT_LT(run.summary.nis_outside_95, 0.15);
+}
+
+// The compass four times noisier than σ_H says: with R fixed the summary reports the filter
+// inconsistent (mean NIS ≈ 16 over 300 updates, far outside χ²(300)/300's 99.9 % band
+// [0.75, 1.28]); Sage–Husa's R absorbs it and the summary is ok again.
+TEST(InsFilter, SummaryFlagsAnUnderstatedCompassAndSageHusaAbsorbsIt) {
+  FilterSettings fixed;
+  fixed.adaptive = false;
+  const Z21Run a = run_z21(300, 0.4, fixed), b = run_z21(300, 0.4, {});
+  std::printf("fixed R: %s\nSage–Husa: %s\n", a.summary.BriefReport().c_str(), b.summary.BriefReport().c_str());
+  EXPECT_EQ(a.summary.status, FilterStatus::Inconsistent);
+  EXPECT_GT(a.summary.mean_nis, 8.0);
+  EXPECT_EQ(b.summary.status, FilterStatus::Ok) << b.summary.BriefReport();
+  // R settles near (cos H·0.4°)², 16 times the nominal (the EMA's sd at β ≈ 0.02 is ~15 %).
+  EXPECT_NEAR(b.summary.final_R / std::pow(std::cos(rad(21.9)) * rad(0.4), 2), 1.0, 0.5);
 }
 
 TEST(InsFilter, ANonFiniteMeasurementIsDataNotACrash) {

@@ -36,7 +36,7 @@ SageHusaR::SageHusaR(double R0, double b, double min_factor, double max_factor)
 
 double SageHusaR::update(double innovation, double HPHt) {
   const double sample = std::max(innovation * innovation - HPHt, R_min_);
-  R_ = sample > R_max_ ? R_max_ : (1 - beta_) * R_ + beta_ * sample;
+  R_ = std::min((1 - beta_) * R_ + beta_ * sample, R_max_);
   beta_ = beta_ / (beta_ + b_);
   return R_;
 }

@@ -31,9 +31,12 @@ struct SunElevationModel {
 };
 SunElevationModel sun_elevation_model(double lat_rad, double lon_rad, double dec_rad, double gha_rad);
 
-// The Sage–Husa estimate of a scalar R (PSINS kfupdate.m; spec §4.7):
-//   R_k = (1 − β_k)·R_{k−1} + β_k·(r² − H P⁻ Hᵀ),   β_{k+1} = β_k/(β_k + b),
-// the sample r² − HP⁻Hᵀ raised to R_min first; R_k = R_max when the sample exceeds R_max.
+// The Sage–Husa estimate of a scalar R (spec §4.7; PSINS kfupdate.m):
+//   R_k = min((1 − β_k)·R_{k−1} + β_k·s_k, R_max),   s_k = max(r² − H P⁻ Hᵀ, R_min),
+//   β_1 = 1,   β_{k+1} = β_k/(β_k + b).
+// PSINS instead sets R_k = R_max whenever one sample s_k exceeds R_max: a single 2.5σ innovation
+// then throws R to its ceiling when the true R is within ~6× of it (test_ins), so polrig clamps
+// the average, as the spec's formula reads.
 class SageHusaR {
  public:
   SageHusaR(double R0, double b = 0.98, double min_factor = 0.01, double max_factor = 100);

@@ -107,7 +107,8 @@ class InsFilter {
  public:
   InsFilter(const InsState& initial, const Matrix15& P0, const FilterSettings& settings = {});
 
-  // Mechanizes one sample (biases compensated) and predicts x, P with Φ = I + FΔt.
+  // Mechanizes one raw sample (the bias estimates removed) over Δt = cur.t_s − state().t_s and
+  // predicts x, P with Φ = I + FΔt, F at the new state and f^n of the sample.
   void predict(const ImuSample& cur);
   // A sun-elevation update at the current state, with feedback. Throws std::invalid_argument when
   // m.t_s is more than 1 ms from the state's time (a programming error); a non-finite measurement

@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libembree-dev libopenexr-dev
   liberfa-dev                 # the sun's apparent position (IAU SOFA-derived ERFA, as astropy)
+  libgeographiclib-dev        # ins/: WGS-84 radii and normal gravity (GeographicLib, pkg-config)
   libhdf5-dev hdf5-tools       # sweep.h5 (serial HDF5 + its high-level dimension scales; h5dump to inspect it)
   libhwy-dev                  # Highway: the CS study's vectorised logarithms (src/vector_log.cpp)
   libopencv-dev               # the four cameras' geometric calibration (OpenCV's checkerboard corners and

@@ -33,3 +33,25 @@ inline AlmanacSun almanac_sun(double unix_s, double lat_deg, double lon_deg) {
 }
 
 }  // namespace polrig::test
+
+namespace polrig::test {
+
+// The same almanac's apparent declination δ and Greenwich hour angle GHA = GMST − α (radians):
+// the inputs of Z21's Eq. 9 (ins/filter.h), from the formulas of almanac_sun above.
+struct AlmanacHourAngle {
+  double dec_rad, gha_rad;
+};
+
+inline AlmanacHourAngle almanac_dec_gha(double unix_s) {
+  constexpr double kDeg = std::numbers::pi / 180.0;
+  const double n = unix_s / 86400.0 + 2440587.5 - 2451545.0;
+  const double ut_h = std::fmod(unix_s, 86400.0) / 3600.0;
+  const double L = 280.460 + 0.9856474 * n, g = (357.528 + 0.9856003 * n) * kDeg;
+  const double lam = (L + 1.915 * std::sin(g) + 0.020 * std::sin(2 * g)) * kDeg;
+  const double eps = (23.439 - 0.0000004 * n) * kDeg;
+  const double ra = std::atan2(std::cos(eps) * std::sin(lam), std::cos(lam));
+  const double gmst_h = 6.697375 + 0.0657098242 * n + ut_h;
+  return {std::asin(std::sin(eps) * std::sin(lam)), 15.0 * gmst_h * kDeg - ra};
+}
+
+}  // namespace polrig::test

@@ -185,9 +185,10 @@ TEST(Architecture, ThePartsTableListsTheLayersBottomFirst) {
 
 TEST(Architecture, ThePartsTableMakesItsIncludesOnlyPromises) {
   const auto promises = part_promises(read(kRoot / "docs/architecture.md"));
-  ASSERT_EQ(promises.size(), 3u);
+  ASSERT_EQ(promises.size(), 4u);
   EXPECT_EQ(promises.at("sky"), (std::set<std::string>{kTopLevel, "optics"}));
   EXPECT_EQ(promises.at("spectral"), (std::set<std::string>{kTopLevel}));
+  EXPECT_EQ(promises.at("ins"), (std::set<std::string>{kTopLevel}));
   EXPECT_EQ(promises.at("nav"), (std::set<std::string>{kTopLevel, "sky"}));
 }
 

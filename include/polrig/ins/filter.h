@@ -1,0 +1,139 @@
+#pragma once
+// Z21's filter (docs/physics.md §18.6; spec sky-and-compasses.md §4.3, §4.4, §4.7): the 15-state
+// error Kalman filter of ins/error_model.h, predicted at the IMU rate with Φ = I + F·Δt, updated
+// by the sun's elevation,
+//   z = sin H_c − sin H^n,   sin H_c = sin L̃ sin Dec + cos L̃ cos Dec cos LHA,   LHA = GHA + λ̃,
+//   H = [0₁ₓ₆, ∂sinH/∂L, ∂sinH/∂λ, 0₁ₓ₇]  (spec §4.3's corrected Eq. 15),
+//   R = (cos H^n·σ_H)²,
+// with the Joseph-form covariance update, optionally Sage–Husa's adaptive R, and closed-loop
+// feedback into the INS state and the bias estimates after every update. Dec and GHA (the sun's
+// declination and Greenwich hour angle, radians) are plain numbers here: sky/ supplies them.
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include <Eigen/Core>
+
+#include "polrig/ins/error_model.h"
+#include "polrig/ins/imu.h"
+#include "polrig/ins/mechanization.h"
+#include "polrig/units.h"
+
+namespace polrig {
+
+// sin H of the sun at (L, λ) and its partial derivatives (spec §4.3 Eq. 16, corrected).
+struct SunElevationModel {
+  double sin_H = 0;
+  double d_lat = 0;  // ∂sinH/∂L = sin Dec cos L − cos Dec sin L cos LHA
+  double d_lon = 0;  // ∂sinH/∂λ = −cos Dec cos L sin LHA
+};
+SunElevationModel sun_elevation_model(double lat_rad, double lon_rad, double dec_rad, double gha_rad);
+
+// The Sage–Husa estimate of a scalar R (spec §4.7; PSINS kfupdate.m):
+//   R_k = min((1 − β_k)·R_{k−1} + β_k·s_k, R_max),   s_k = max(r² − H P⁻ Hᵀ, R_min),
+//   β_1 = 1,   β_{k+1} = β_k/(β_k + b).
+// PSINS instead sets R_k = R_max whenever one sample s_k exceeds R_max: a single 2.5σ innovation
+// then throws R to its ceiling when the true R is within ~6× of it (test_ins), so polrig clamps
+// the average, as the spec's formula reads.
+class SageHusaR {
+ public:
+  SageHusaR(double R0, double b = 0.98, double min_factor = 0.01, double max_factor = 100);
+  double update(double innovation, double HPHt);  // returns the new R
+  double R() const { return R_; }
+  double beta() const { return beta_; }
+
+ private:
+  double R_, b_, R_min_, R_max_, beta_ = 1.0;
+};
+
+struct ScalarUpdate {
+  double innovation = 0;   // z − H x⁻
+  double variance = 0;     // S = H P⁻ Hᵀ + R
+  double nis = 0;          // innovation² / S
+  double R = 0;
+};
+
+// The linear Kalman filter on the 15 error states.
+struct ErrorFilter {
+  Vector15 x = Vector15::Zero();
+  Matrix15 P = Matrix15::Zero();
+
+  void predict(const Matrix15& Phi, const Matrix15& Q);
+  // One scalar measurement z = H x + v, v ~ N(0, R); P by Joseph's form (I − KH)P(I − KH)ᵀ + KRKᵀ.
+  ScalarUpdate update(const RowVector15& H, double z, double R);
+};
+
+struct FilterSettings {
+  double sigma_H_rad = deg2rad(0.1);  // the compass' elevation σ [C]
+  bool adaptive = true;            // Sage–Husa R [C]
+  double sage_husa_b = 0.98;       // Z21's forgetting factor as b (spec §4.7)
+  double R_min_factor = 0.01, R_max_factor = 100;  // PSINS's clamp on R, times R0
+  MechanizationOptions mechanization;  // Z21 holds the height to its barometer
+  ErrorModelNoise noise = error_model_noise(z21_imu_errors());  // Z21's Table 1 [C]
+};
+
+struct SunElevation {
+  double t_s = 0;
+  double elevation_rad = 0;  // H^n, measured
+  double dec_rad = 0, gha_rad = 0;  // the sun's, at t_s
+};
+
+enum class FilterStatus {
+  Ok,              // every update finite and the NIS consistent
+  NoUpdates,       // predicted only
+  Inconsistent,    // the mean NIS is outside its 99.9 % χ² band for the number of updates
+  NonFinite        // a measurement, innovation or covariance was not finite: the update was skipped
+};
+std::string_view filter_status_name(FilterStatus s);  // "ok", "no_updates", "inconsistent", "non_finite"
+
+// How a run went (after Ceres's Solver::Summary): failures are data.
+struct FilterSummary {
+  FilterStatus status = FilterStatus::NoUpdates;
+  int predictions = 0;
+  int updates = 0;
+  int skipped = 0;                  // non-finite measurements or innovations
+  double innovation_mean = 0;       // of z − Hx⁻
+  double innovation_rms = 0;
+  double mean_nis = 0;
+  double nis_outside_95 = 0;        // the fraction outside χ²(1)'s [0.000982, 5.024]
+  double final_R = std::numeric_limits<double>::quiet_NaN();
+  std::string BriefReport() const;  // one line
+};
+
+// The INS with the filter in closed loop.
+class InsFilter {
+ public:
+  InsFilter(const InsState& initial, const Matrix15& P0, const FilterSettings& settings = {});
+
+  // Mechanizes one raw sample (the bias estimates removed) over Δt = cur.t_s − state().t_s and
+  // predicts x, P with Φ = I + FΔt, F at the new state and f^n of the sample.
+  void predict(const ImuSample& cur);
+  // A sun-elevation update at the current state, with feedback. Throws std::invalid_argument when
+  // m.t_s is more than 1 ms from the state's time (a programming error); a non-finite measurement
+  // is data: skipped and counted in the summary.
+  ScalarUpdate update(const SunElevation& m);
+
+  const InsState& state() const { return state_; }
+  const Eigen::Vector3d& gyro_bias() const { return gyro_bias_; }
+  const Eigen::Vector3d& accel_bias() const { return accel_bias_; }
+  const Matrix15& P() const { return filter_.P; }
+  // The R of the last update (Sage–Husa's estimate when adaptive), NaN before the first.
+  double R() const { return last_R_; }
+  FilterSummary summary() const;
+
+ private:
+  InsState state_;
+  ImuSample prev_;
+  bool has_prev_ = false;
+  Eigen::Vector3d gyro_bias_ = Eigen::Vector3d::Zero(), accel_bias_ = Eigen::Vector3d::Zero();
+  ErrorFilter filter_;
+  FilterSettings settings_;
+  std::optional<SageHusaR> sage_husa_;  // started at the first update's (cos H^n σ_H)²
+  double last_R_ = std::numeric_limits<double>::quiet_NaN();
+  int predictions_ = 0, updates_ = 0, skipped_ = 0, nis_outside_ = 0;
+  double sum_r_ = 0, sum_r2_ = 0, sum_nis_ = 0;
+};
+
+}  // namespace polrig

@@ -1,0 +1,63 @@
+#pragma once
+// A vehicle's true trajectory from a list of segments, and the ideal IMU that flies it
+// (docs/physics.md §18.3).
+//
+// The truth's kinematics: speed u along the body's forward axis projected by yaw and pitch,
+//   v^n = u·(sin ψ cos θ, cos ψ cos θ, sin θ),
+//   L̇ = v_N/(R_M + h),  λ̇ = v_E/((R_N + h) cos L),  ḣ = v_U,
+// with u, ψ (yaw) and θ (pitch) piecewise linear in time (the segments' rates); roll stays.
+// The ideal IMU outputs the integrals over each interval of
+//   ω_ib^b = ω_nb^b + C_n^b·(ω_ie^n + ω_en^n),
+//   f^b    = C_n^b·(v̇^n + (2ω_ie^n + ω_en^n) × v^n − g^n),
+// ω_nb^b from the Euler rates in closed form, evaluated along the truth (position by RK4 on
+// substeps) and integrated by Simpson's rule over the same substeps: never by differencing
+// sampled attitudes. Static (u = 0, no rates) reduces to ω_ib^b = C_n^b ω_ie^n, f^b = −C_n^b g^n.
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "polrig/ins/attitude.h"
+#include "polrig/ins/imu.h"
+
+namespace polrig {
+
+enum class SegmentKind { Static, Accelerate, Turn, Climb };
+std::string_view segment_kind_name(SegmentKind k);  // "static", "accelerate", "turn", "climb"
+
+struct Segment {
+  SegmentKind kind = SegmentKind::Static;
+  double duration_s = 0;
+  double rate = 0;  // accelerate: du/dt (m/s²); turn: dψ/dt (rad/s, clockwise); climb: dθ/dt (rad/s)
+};
+
+struct TrajectorySpec {
+  double lat_rad = 0, lon_rad = 0, h_m = 0;
+  Euler attitude;          // roll stays as given
+  double speed_mps = 0;    // along the forward axis; Static segments need 0
+  std::vector<Segment> segments;
+  double imu_rate_hz = 100;
+  int substeps = 8;        // per IMU interval, even (Simpson)
+};
+
+struct TruthSample {
+  double t_s = 0;
+  double lat_rad = 0, lon_rad = 0, h_m = 0;
+  Eigen::Matrix3d C_bn = Eigen::Matrix3d::Identity();
+  Euler euler;
+  Eigen::Vector3d v_n = Eigen::Vector3d::Zero();
+};
+
+// truth[0] is the start (t = 0) and truth[k] the end of imu[k − 1]'s interval: imu has one
+// sample fewer than truth.
+struct Trajectory {
+  std::vector<TruthSample> truth;
+  std::vector<ImuSample> imu;
+};
+
+// Throws std::invalid_argument: a segment whose duration is not a whole number of IMU intervals
+// (its boundaries must fall on samples), a static segment while moving, a negative speed, odd
+// or non-positive substeps, a non-positive rate.
+Trajectory generate_trajectory(const TrajectorySpec& spec);
+
+}  // namespace polrig

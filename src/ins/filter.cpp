@@ -1,0 +1,158 @@
+#include "polrig/ins/filter.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+namespace polrig {
+namespace {
+
+// χ²(1)'s 2.5 % and 97.5 % quantiles.
+constexpr double kChi2Lo95 = 0.000982069, kChi2Hi95 = 5.023886;
+
+// Wilson–Hilferty: the p-quantile of χ²(n)/n from the normal quantile z_p.
+double chi2_mean_quantile(int n, double z) {
+  const double a = 2.0 / (9.0 * n);
+  const double c = 1 - a + z * std::sqrt(a);
+  return c * c * c;
+}
+
+}  // namespace
+
+SunElevationModel sun_elevation_model(double L, double lon, double dec, double gha) {
+  const double lha = gha + lon;
+  const double sL = std::sin(L), cL = std::cos(L), sD = std::sin(dec), cD = std::cos(dec);
+  return {sL * sD + cL * cD * std::cos(lha), sD * cL - cD * sL * std::cos(lha), -cD * cL * std::sin(lha)};
+}
+
+SageHusaR::SageHusaR(double R0, double b, double min_factor, double max_factor)
+    : R_(R0), b_(b), R_min_(min_factor * R0), R_max_(max_factor * R0) {
+  if (!(R0 > 0) || !(b > 0) || !(min_factor > 0) || !(max_factor >= min_factor))
+    throw std::invalid_argument(fmt::format("Sage–Husa R: R0 {}, b {}, clamp {}…{} must be positive and ordered",
+                                            R0, b, min_factor, max_factor));
+}
+
+double SageHusaR::update(double innovation, double HPHt) {
+  const double sample = std::max(innovation * innovation - HPHt, R_min_);
+  R_ = std::min((1 - beta_) * R_ + beta_ * sample, R_max_);
+  beta_ = beta_ / (beta_ + b_);
+  return R_;
+}
+
+void ErrorFilter::predict(const Matrix15& Phi, const Matrix15& Q) {
+  x = Phi * x;
+  P = Phi * P * Phi.transpose() + Q;
+  P = 0.5 * (P + P.transpose()).eval();
+}
+
+ScalarUpdate ErrorFilter::update(const RowVector15& H, double z, double R) {
+  ScalarUpdate u;
+  const Vector15 PHt = P * H.transpose();
+  u.innovation = z - H.dot(x);
+  u.R = R;
+  u.variance = H.dot(PHt) + R;
+  u.nis = u.innovation * u.innovation / u.variance;
+  const Vector15 K = PHt / u.variance;
+  x += K * u.innovation;
+  const Matrix15 IKH = Matrix15::Identity() - K * H;
+  P = IKH * P * IKH.transpose() + K * R * K.transpose();
+  P = 0.5 * (P + P.transpose()).eval();
+  return u;
+}
+
+std::string_view filter_status_name(FilterStatus s) {
+  switch (s) {
+    case FilterStatus::Ok: return "ok";
+    case FilterStatus::NoUpdates: return "no_updates";
+    case FilterStatus::Inconsistent: return "inconsistent";
+    case FilterStatus::NonFinite: return "non_finite";
+  }
+  return "?";
+}
+
+std::string FilterSummary::BriefReport() const {
+  return fmt::format("{}: {} predictions, {} updates ({} skipped), innovation mean {:.3g} rms {:.3g}, "
+                     "mean NIS {:.3g}, {:.1f} % outside χ²(1) 95 %, R {:.3g}",
+                     filter_status_name(status), predictions, updates, skipped, innovation_mean,
+                     innovation_rms, mean_nis, 100 * nis_outside_95, final_R);
+}
+
+InsFilter::InsFilter(const InsState& initial, const Matrix15& P0, const FilterSettings& settings)
+    : state_(initial), settings_(settings) {
+  filter_.P = P0;
+  if (!(settings.sigma_H_rad > 0))
+    throw std::invalid_argument(fmt::format("filter: σ_H {} rad must be > 0", settings.sigma_H_rad));
+}
+
+void InsFilter::predict(const ImuSample& raw) {
+  const double dt = raw.t_s - state_.t_s;
+  const ImuSample cur = compensate(raw, gyro_bias_, accel_bias_, dt);
+  const ImuSample& prev = has_prev_ ? prev_ : cur;
+  const Eigen::Vector3d f_n = specific_force_n(state_, cur, dt);
+  state_ = mechanize(state_, prev, cur, settings_.mechanization);
+  const Matrix15 F = error_dynamics(state_, f_n, settings_.noise);
+  const Discretized d = discretize_first_order(F, process_noise_density(state_, settings_.noise), dt);
+  filter_.predict(d.Phi, d.Q);
+  prev_ = cur;
+  has_prev_ = true;
+  ++predictions_;
+}
+
+ScalarUpdate InsFilter::update(const SunElevation& m) {
+  if (!(std::abs(m.t_s - state_.t_s) <= 1e-3))
+    throw std::invalid_argument(fmt::format("filter: a measurement at {} s for the state at {} s", m.t_s, state_.t_s));
+  const SunElevationModel model = sun_elevation_model(state_.lat_rad, state_.lon_rad, m.dec_rad, m.gha_rad);
+  RowVector15 H = RowVector15::Zero();
+  H[kDLat] = model.d_lat;
+  H[kDLon] = model.d_lon;
+  const double z = model.sin_H - std::sin(m.elevation_rad);
+  const double R_nominal = std::pow(std::cos(m.elevation_rad) * settings_.sigma_H_rad, 2);
+  if (!std::isfinite(z) || !filter_.P.allFinite()) {
+    ++skipped_;
+    return {z, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), R_nominal};
+  }
+  double R = R_nominal;
+  if (settings_.adaptive) {
+    if (!sage_husa_)
+      sage_husa_.emplace(R_nominal, settings_.sage_husa_b, settings_.R_min_factor, settings_.R_max_factor);
+    R = sage_husa_->update(z - H.dot(filter_.x), H.dot(filter_.P * H.transpose()));
+  }
+  const ScalarUpdate u = filter_.update(H, z, R);
+  feed_back(filter_.x, state_, gyro_bias_, accel_bias_);
+  filter_.x.setZero();
+  last_R_ = R;
+  ++updates_;
+  sum_r_ += u.innovation;
+  sum_r2_ += u.innovation * u.innovation;
+  sum_nis_ += u.nis;
+  if (u.nis < kChi2Lo95 || u.nis > kChi2Hi95) ++nis_outside_;
+  return u;
+}
+
+FilterSummary InsFilter::summary() const {
+  FilterSummary s;
+  s.predictions = predictions_;
+  s.updates = updates_;
+  s.skipped = skipped_;
+  s.final_R = last_R_;
+  if (updates_ > 0) {
+    s.innovation_mean = sum_r_ / updates_;
+    s.innovation_rms = std::sqrt(sum_r2_ / updates_);
+    s.mean_nis = sum_nis_ / updates_;
+    s.nis_outside_95 = static_cast<double>(nis_outside_) / updates_;
+  }
+  constexpr double z999 = 3.2905;  // the two-sided 99.9 % normal quantile
+  if (skipped_ > 0 || !filter_.P.allFinite() || !state_.v_n.allFinite())
+    s.status = FilterStatus::NonFinite;
+  else if (updates_ == 0)
+    s.status = FilterStatus::NoUpdates;
+  else if (s.mean_nis < chi2_mean_quantile(updates_, -z999) || s.mean_nis > chi2_mean_quantile(updates_, z999))
+    s.status = FilterStatus::Inconsistent;
+  else
+    s.status = FilterStatus::Ok;
+  return s;
+}
+
+}  // namespace polrig

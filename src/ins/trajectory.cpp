@@ -1,0 +1,171 @@
+#include "polrig/ins/trajectory.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include <fmt/format.h>
+
+#include "polrig/ins/earth.h"
+
+namespace polrig {
+namespace {
+
+// The commanded part of the truth at one instant: speed and Euler angles with their rates.
+struct Motion {
+  double u = 0, du = 0;
+  double yaw = 0, dyaw = 0;
+  double pitch = 0, dpitch = 0;
+  double roll = 0;
+};
+
+struct Position {
+  double L = 0, lon = 0, h = 0;
+};
+
+Eigen::Vector3d velocity_n(const Motion& m) {
+  const double cp = std::cos(m.pitch);
+  return m.u * Eigen::Vector3d(std::sin(m.yaw) * cp, std::cos(m.yaw) * cp, std::sin(m.pitch));
+}
+
+Eigen::Vector3d acceleration_n(const Motion& m) {
+  const double sy = std::sin(m.yaw), cy = std::cos(m.yaw), sp = std::sin(m.pitch), cp = std::cos(m.pitch);
+  const Eigen::Vector3d dir(sy * cp, cy * cp, sp);
+  const Eigen::Vector3d ddir(cy * cp * m.dyaw - sy * sp * m.dpitch, -sy * cp * m.dyaw - cy * sp * m.dpitch,
+                             cp * m.dpitch);
+  return m.du * dir + m.u * ddir;
+}
+
+Position position_rate(const Position& p, const Eigen::Vector3d& v) {
+  const EarthRadii r = earth_radii(p.L);
+  return {v.y() / (r.R_M + p.h), v.x() / ((r.R_N + p.h) * std::cos(p.L)), v.z()};
+}
+
+Position add(const Position& p, const Position& d, double s) {
+  return {p.L + s * d.L, p.lon + s * d.lon, p.h + s * d.h};
+}
+
+// ω_nb^b of C_b^n = Rz(−ψ)·Rx(θ)·Ry(γ) with only ψ and θ changing.
+Eigen::Vector3d omega_nb_b(const Motion& m) {
+  const Eigen::Matrix3d RyT = Eigen::AngleAxisd(-m.roll, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d RxT = Eigen::AngleAxisd(-m.pitch, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  return RyT * (RxT * Eigen::Vector3d(0, 0, -m.dyaw) + Eigen::Vector3d(m.dpitch, 0, 0));
+}
+
+struct BodyRates {
+  Eigen::Vector3d omega_ib_b, f_b;
+};
+
+BodyRates body_rates(const Motion& m, const Position& p) {
+  const Eigen::Matrix3d C_bn = C_bn_from_euler({m.roll, m.pitch, m.yaw});
+  const Eigen::Vector3d v = velocity_n(m);
+  const Eigen::Vector3d w_ie = omega_ie_n(p.L), w_en = omega_en_n(v, p.L, p.h);
+  const Eigen::Vector3d a = acceleration_n(m) + (2 * w_ie + w_en).cross(v) - gravity_n(p.L, p.h);
+  return {omega_nb_b(m) + C_bn.transpose() * (w_ie + w_en), C_bn.transpose() * a};
+}
+
+Motion motion_at(const Motion& start, const Segment& s, double t) {
+  Motion m = start;
+  m.du = m.dyaw = m.dpitch = 0;
+  switch (s.kind) {
+    case SegmentKind::Static: break;
+    case SegmentKind::Accelerate: m.du = s.rate; break;
+    case SegmentKind::Turn: m.dyaw = s.rate; break;
+    case SegmentKind::Climb: m.dpitch = s.rate; break;
+  }
+  m.u += m.du * t;
+  m.yaw += m.dyaw * t;
+  m.pitch += m.dpitch * t;
+  return m;
+}
+
+TruthSample truth_of(double t, const Motion& m, const Position& p) {
+  TruthSample s;
+  s.t_s = t;
+  s.lat_rad = p.L;
+  s.lon_rad = p.lon;
+  s.h_m = p.h;
+  s.C_bn = C_bn_from_euler({m.roll, m.pitch, m.yaw});
+  s.euler = euler_from_C_bn(s.C_bn);
+  s.v_n = velocity_n(m);
+  return s;
+}
+
+void check(const TrajectorySpec& spec) {
+  if (!(spec.imu_rate_hz > 0))
+    throw std::invalid_argument(fmt::format("trajectory: IMU rate {} Hz must be > 0", spec.imu_rate_hz));
+  if (spec.substeps < 2 || spec.substeps % 2 != 0)
+    throw std::invalid_argument(fmt::format("trajectory: substeps {} must be even and ≥ 2", spec.substeps));
+  if (spec.speed_mps < 0)
+    throw std::invalid_argument(fmt::format("trajectory: speed {} m/s must be ≥ 0", spec.speed_mps));
+}
+
+long intervals_of(const Segment& s, double rate_hz, std::size_t index) {
+  const double n = s.duration_s * rate_hz;
+  const long k = std::lround(n);
+  if (!(s.duration_s > 0) || std::abs(n - static_cast<double>(k)) > 1e-9 * std::max(1.0, n))
+    throw std::invalid_argument(fmt::format(
+        "trajectory: segment {} ({}) lasts {} s, not a positive whole number of IMU intervals at {} Hz",
+        index, segment_kind_name(s.kind), s.duration_s, rate_hz));
+  return k;
+}
+
+}  // namespace
+
+std::string_view segment_kind_name(SegmentKind k) {
+  switch (k) {
+    case SegmentKind::Static: return "static";
+    case SegmentKind::Accelerate: return "accelerate";
+    case SegmentKind::Turn: return "turn";
+    case SegmentKind::Climb: return "climb";
+  }
+  return "?";
+}
+
+Trajectory generate_trajectory(const TrajectorySpec& spec) {
+  check(spec);
+  const double dt = 1.0 / spec.imu_rate_hz;
+  const int M = spec.substeps;
+  const double hs = dt / M;
+  Trajectory out;
+  Motion seg_start{spec.speed_mps, 0, spec.attitude.yaw_rad, 0, spec.attitude.pitch_rad, 0, spec.attitude.roll_rad};
+  Position p{spec.lat_rad, spec.lon_rad, spec.h_m};
+  double t = 0;
+  out.truth.push_back(truth_of(t, seg_start, p));
+  for (std::size_t si = 0; si < spec.segments.size(); ++si) {
+    const Segment& s = spec.segments[si];
+    const long n = intervals_of(s, spec.imu_rate_hz, si);
+    if (s.kind == SegmentKind::Static) {
+      // A brake to rest ends at 0 up to rounding (a rate times a whole number of intervals).
+      if (std::abs(seg_start.u) > 1e-9)
+        throw std::invalid_argument(fmt::format("trajectory: segment {} is static while moving at {} m/s", si, seg_start.u));
+      seg_start.u = 0;
+    }
+    for (long k = 0; k < n; ++k) {
+      // Simpson over M substeps of the interval; RK4 carries the position between the nodes.
+      const double tau0 = static_cast<double>(k) * dt;
+      BodyRates r0 = body_rates(motion_at(seg_start, s, tau0), p);
+      Eigen::Vector3d sum_w = r0.omega_ib_b, sum_f = r0.f_b;
+      for (int j = 1; j <= M; ++j) {
+        const double ta = tau0 + (j - 1) * hs;
+        const auto rate = [&](double tt, const Position& q) { return position_rate(q, velocity_n(motion_at(seg_start, s, tt))); };
+        const Position k1 = rate(ta, p);
+        const Position k2 = rate(ta + hs / 2, add(p, k1, hs / 2));
+        const Position k3 = rate(ta + hs / 2, add(p, k2, hs / 2));
+        const Position k4 = rate(ta + hs, add(p, k3, hs));
+        p = {p.L + hs / 6 * (k1.L + 2 * k2.L + 2 * k3.L + k4.L), p.lon + hs / 6 * (k1.lon + 2 * k2.lon + 2 * k3.lon + k4.lon),
+             p.h + hs / 6 * (k1.h + 2 * k2.h + 2 * k3.h + k4.h)};
+        const BodyRates r = body_rates(motion_at(seg_start, s, ta + hs), p);
+        const double w = (j == M) ? 1.0 : (j % 2 == 1 ? 4.0 : 2.0);
+        sum_w += w * r.omega_ib_b;
+        sum_f += w * r.f_b;
+      }
+      t += dt;
+      out.imu.push_back({t, sum_w * hs / 3, sum_f * hs / 3});
+      out.truth.push_back(truth_of(t, motion_at(seg_start, s, tau0 + dt), p));
+    }
+    seg_start = motion_at(seg_start, s, static_cast<double>(n) * dt);
+  }
+  return out;
+}
+
+}  // namespace polrig

@@ -9,6 +9,7 @@
 
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -465,4 +466,44 @@ TEST(UnitArrayRig, ABadValueNamesFileLineKeyAndValue) {
   // Another instrument refuses the unit array's keys.
   EXPECT_HAS(rig_error("device:\n  units:\n    ring_tilt_deg: 20\n"),
              "unitrig.yaml:3: key 'device.units.ring_tilt_deg': expected no value with device.kind six-photodiode");
+}
+
+// Every real key the unit array reads at either end of its range (an open end nudged inside): each
+// unit's reading is finite, or says why there is none (measured_angles' problem, e.g. an ADC that
+// clamps at electronics.vref_V = 0.01 V).
+TEST(UnitArrayRig, EveryKeyAtEitherEndOfItsRangeGivesReadingsOrAProblem) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const Sky sky = z21_sky();
+  int checked = 0;
+  for (const RigKey& k : rig_keys()) {
+    if (!k.read_by_instrument("unit-array") || !k.range) continue;
+    if (k.kind != RigKey::Kind::Real && k.kind != RigKey::Kind::RealArray && k.kind != RigKey::Kind::RealList) continue;
+    if (!k.read_by_source("cos4")) continue;  // another source's keys: read_units takes the sky itself
+    // Keys every instrument accepts that the units do not read (the table's stops, the port's light).
+    if (k.path.starts_with("schedule.") || k.path.starts_with("source.")) continue;
+    for (bool upper : {false, true}) {
+      double v = upper ? k.range->hi : k.range->lo;
+      if (upper ? k.range->hi_open : k.range->lo_open) v = std::nextafter(v, upper ? -inf : inf);
+      Rig rig = unit_rig({{"electronics.noise_sigma_V", "1e-4"}});
+      if (k.kind == RigKey::Kind::Real) k.real(rig) = v;
+      else if (k.kind == RigKey::Kind::RealArray) for (double& x : k.array(rig)) x = v;
+      else k.list(rig).assign(k.path.find("mount_error") != std::string_view::npos ? 9 : k.list(rig).size(), v);
+      if (k.path == "device.units.tilt_deg" || k.path == "device.units.azimuth_deg" || k.path == "device.units.roll_deg") {
+        rig.units.tilt_deg.assign(3, k.path == "device.units.tilt_deg" ? v : 30.0);
+        rig.units.azimuth_deg = {0, 120, 240};
+        if (k.path == "device.units.azimuth_deg") rig.units.azimuth_deg.assign(3, v);
+        rig.units.roll_deg.assign(3, k.path == "device.units.roll_deg" ? v : 0.0);
+      }
+      if (k.path == "device.truth.kd" && upper) rig.device.truth.kd.fill(0.0);
+      ASSERT_FALSE(check_rig(rig).has_value()) << k.path << " = " << v << ": " << check_rig(rig)->message;
+      for (const UnitSample& u : read_units(rig, sky, kZ21Start, body_axes_enu(30, 2, -3), rig.seed, 0)) {
+        if (!u.problem.empty()) continue;
+        EXPECT_TRUE(std::isfinite(u.aop_rad) && std::isfinite(u.dop)) << k.path << " = " << v;
+        EXPECT_TRUE(std::isfinite(u.V[0]) && std::isfinite(u.V[1]) && std::isfinite(u.V[2])) << k.path << " = " << v;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GE(checked, 2 * 15);
+  std::printf("%d key ends read\n", checked);
 }

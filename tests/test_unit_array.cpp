@@ -171,7 +171,7 @@ TEST(UnitArraySense, AZenithUnitFacingEastReadsTheSunsAzimuth) {
   const Rig rig = unit_rig({{"device.units.tilt_deg", "[0]"}, {"device.units.azimuth_deg", "[0]"}});
   const Sky sky = z21_sky();
   const UnitArrayTruth t = unit_array_truth(rig.units, rig.seed);
-  // Heading 90°: forward (Y_b) east... we want X_b east: heading 0 gives X_b = east, Y_b = north.
+  // Heading 0, level: X_b (= X_m of the zenith unit) east, Y_b north.
   const Axes3 C_bn = body_axes_enu(0, 0, 0);
   ASSERT_NEAR(C_bn[0][0], 1.0, 1e-15);
   const SunPosition sun = sun_position(kZ21Start, sky.site, sky.sun);

@@ -54,10 +54,11 @@ Rig camera_rig() { return load_rig(kIndoor).rig; }
 
 TEST(InstrumentFactory, KindsAndFlags) {
   const auto kinds = instrument_kinds();
-  ASSERT_EQ(kinds.size(), 3u);
+  ASSERT_EQ(kinds.size(), 4u);
   EXPECT_EQ(kinds[0], "six-photodiode");
   EXPECT_EQ(kinds[1], "dofp-camera");
   EXPECT_EQ(kinds[2], "four-camera");
+  EXPECT_EQ(kinds[3], "unit-array");
   for (std::string_view kind : kinds) EXPECT_EQ(make_instrument(kind)->kind(), kind);
 
   const auto six = make_instrument("six-photodiode");
@@ -74,6 +75,7 @@ TEST(InstrumentFactory, KindsAndFlags) {
   EXPECT_EQ(kinds_with(Instrument::kFrames), "dofp-camera four-camera");
   EXPECT_EQ(kinds_with(Instrument::kMosaic), "dofp-camera");
   EXPECT_EQ(kinds_with(Instrument::kCameraArray), "four-camera");
+  EXPECT_EQ(kinds_with(Instrument::kUnitArray), "unit-array");
   // W16's four cameras take frames but have no mosaic: the DoFP-only commands refuse them.
   const auto four = make_instrument("four-camera");
   EXPECT_TRUE(four->has(Instrument::kFrames));
@@ -144,11 +146,18 @@ TEST(InstrumentKeys, DeviceKeysBelongToOneInstrumentButKindAndD) {
     if (!k.path.starts_with("device.")) continue;
     SCOPED_TRACE(std::string(k.path));
     const bool six = k.read_by_instrument("six-photodiode"), cam = k.read_by_instrument("dofp-camera"),
-               four = k.read_by_instrument("four-camera");
+               four = k.read_by_instrument("four-camera"), units = k.read_by_instrument("unit-array");
     if (k.path == "device.kind" || k.path == "device.d") {
-      EXPECT_TRUE(six && cam && four);
+      EXPECT_TRUE(six && cam && four && units);
+    } else if (k.path.starts_with("device.truth.") || k.path == "device.film_axes_deg") {
+      // The six-photodiode sensor's parameters: also every unit's of a unit array.
+      EXPECT_EQ(k.instruments, "six-photodiode unit-array");
     } else {
-      EXPECT_EQ(int(six) + int(cam) + int(four), 1);
+      EXPECT_EQ(int(six) + int(cam) + int(four) + int(units), 1);
+      // The unit array's keys are under device.units.
+      if (units) {
+        EXPECT_TRUE(k.path.starts_with("device.units."));
+      }
       // The four cameras' keys are under device.cameras (device.width_px is the DoFP camera's).
       if (four) {
         EXPECT_TRUE(k.path.starts_with("device.cameras."));
@@ -158,8 +167,8 @@ TEST(InstrumentKeys, DeviceKeysBelongToOneInstrumentButKindAndD) {
   for (const char* p : {"schedule.unpolarized_levels", "schedule.intensities"})
     EXPECT_EQ(find_rig_key(p)->instruments, "dofp-camera four-camera") << p;
   EXPECT_EQ(find_rig_key("schedule.frames_per_stop")->instruments, "dofp-camera");
-  EXPECT_EQ(find_rig_key("schedule.samples_per_stop")->instruments, "six-photodiode");
-  EXPECT_EQ(find_rig_key("electronics.adc_bits")->instruments, "six-photodiode");
+  EXPECT_EQ(find_rig_key("schedule.samples_per_stop")->instruments, "six-photodiode unit-array");
+  EXPECT_EQ(find_rig_key("electronics.adc_bits")->instruments, "six-photodiode unit-array");
 }
 
 // Every field of DofpCameraSpec has its key: the key's accessor reaches that very field.
@@ -288,7 +297,7 @@ TEST(InstrumentRigFiles, ASixPhotodiodeKeyInACameraRigIsRefused) {
             "six.yaml:3: key 'device.focal_mm': expected no value with device.kind six-photodiode (only "
             "device.kind dofp-camera reads it)");
   EXPECT_HAS(error_of([&] { parse_rig("device: {kind: camera}\n", "x.yaml"); }),
-             "x.yaml:1: key 'device.kind': expected \"six-photodiode\", \"dofp-camera\" or \"four-camera\", got 'camera'");
+             "x.yaml:1: key 'device.kind': expected \"six-photodiode\", \"dofp-camera\", \"four-camera\" or \"unit-array\", got 'camera'");
 }
 
 TEST(InstrumentRigFiles, TheEffectiveRigLoadsBackAndLeavesTheDefaultKindOut) {

@@ -31,13 +31,21 @@ class FourCamera final : public Instrument {
   unsigned flags() const override { return kFrames | kCameraArray; }
 };
 
-constexpr std::array<std::string_view, 3> kKinds = {"six-photodiode", "dofp-camera", "four-camera"};
+// Z21's unit-array compass: device/unit_array.h, calib/unit_array.h, nav/unit_array.h.
+class UnitArray final : public Instrument {
+ public:
+  std::string_view kind() const override { return "unit-array"; }
+  unsigned flags() const override { return kUnitArray; }
+};
 
-constexpr std::array<InstrumentFlagInfo, 4> kFlags = {{
+constexpr std::array<std::string_view, 4> kKinds = {"six-photodiode", "dofp-camera", "four-camera", "unit-array"};
+
+constexpr std::array<InstrumentFlagInfo, 5> kFlags = {{
     {Instrument::kPairVoltages, "pair_voltages", "pair voltages"},
     {Instrument::kFrames, "frames", "frames"},
     {Instrument::kMosaic, "mosaic", "a polarizer mosaic"},
     {Instrument::kCameraArray, "camera_array", "a camera array"},
+    {Instrument::kUnitArray, "unit_array", "a unit array"},
 }};
 
 }  // namespace
@@ -70,6 +78,10 @@ std::shared_ptr<const Instrument> make_instrument(std::string_view kind) {
   if (kind == "four-camera") {
     static const auto cameras = std::make_shared<const FourCamera>();
     return cameras;
+  }
+  if (kind == "unit-array") {
+    static const auto units = std::make_shared<const UnitArray>();
+    return units;
   }
   throw std::invalid_argument("unknown instrument '" + std::string(kind) + "'");
 }

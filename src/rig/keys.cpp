@@ -93,6 +93,8 @@ RigKey only(RigKey k, std::string_view instruments) {
 }
 constexpr std::string_view kSix = "six-photodiode", kCamera = "dofp-camera";
 constexpr std::string_view kFour = "four-camera", kCameras = "dofp-camera four-camera";
+// Z21's unit array; its units are six-photodiode sensors, which read the sensor's own keys.
+constexpr std::string_view kUnits = "unit-array", kSixAndUnits = "six-photodiode unit-array";
 
 // An integer key in [lo, hi]; `even`: whole 2 × 2 mosaic cells.
 template <long long lo, long long hi, bool even = false>
@@ -131,7 +133,8 @@ std::vector<RigKey> make_keys() {
     RigKey k{"device.kind", K::Text, "", instrument_kinds_text(),
              "the instrument: six-photodiode is W19's sensor (pair voltages), dofp-camera H17's "
              "pixelated polarization camera (frames), four-camera W16's four cameras with one "
-             "polarizer each (frames, a fused Stokes image); it decides which device.* keys the rig reads"};
+             "polarizer each (frames, a fused Stokes image), unit-array Z21's compass of six-photodiode "
+             "units each along its own view (an AoP and a DoP per unit); it decides which device.* keys the rig reads"};
     k.text = [](Rig& r) -> std::string& { return r.device_kind; };
     k.valid_text = [](std::string_view v) {
       for (std::string_view kind : instrument_kinds())
@@ -193,6 +196,9 @@ std::vector<RigKey> make_keys() {
   // instrument) is the six-photodiode sensor's.
   for (RigKey& k : keys)
     if (k.path != "device.kind" && k.path != "device.d") k.instruments = kSix;
+  // Each unit of a unit array is that sensor: its true parameters and film axes (the theory model).
+  for (RigKey& k : keys)
+    if (k.path.starts_with("device.truth.") || k.path == "device.film_axes_deg") k.instruments = kSixAndUnits;
   // --- device.kind dofp-camera (device/dofp_camera.h; spec sky-and-compasses.md §2.1–2.3) --
   keys.push_back(reads(only(integer(
       "device.width_px", "an even integer in [2, 16384]", "image columns (H17's CCD: 640)",
@@ -464,6 +470,80 @@ std::vector<RigKey> make_keys() {
       "the source's intensity units (unpolarized: f_j = K_j·I + b_j) [C: 2.5, 0.15, 0.6]",
       "non-negative; 1000 units saturate any ADC at the cameras' gains",
       [](Rig& r) { return std::span<double>(r.checkerboard.intensity); }), kFour), kSimulate, ""));
+  // --- device.kind unit-array (device/unit_array.h; spec sky-and-compasses.md §4.1–4.2): Z21's
+  // units, each a six-photodiode sensor (device.truth.*, electronics.*, schedule.samples_per_stop).
+  {
+    const auto list = [&](std::string_view path, std::string_view unit, std::string_view noun, RealRange r,
+                          std::string_view doc, std::string_view why, std::vector<double>& (*ref)(Rig&),
+                          bool (*valid)(double)) {
+      RigKey k{path, K::RealList, unit, expects_text(noun, r, unit), doc, why};
+      k.list = ref;
+      k.range = r;
+      k.max_items = 64;
+      k.valid_real = valid;
+      keys.push_back(reads(only(k, kUnits), kSimulate, ""));
+    };
+    constexpr RealRange kTilt{0.0, 90.0}, kError{-10.0, 10.0};
+    keys.push_back(reads(only(boolean(
+        "device.units.zenith", "a unit looking along Z_b (up), unit 0, the layout's middle unit [C: true]",
+        [](Rig& r) -> bool& { return r.units.zenith_unit; }), kUnits), kSimulate, ""));
+    keys.push_back(reads(only(real<kTilt>(
+        "device.units.ring_tilt_deg", "deg", "an angle", "tilt β of the ring units' views from Z_b [C: 30]",
+        "0 is the zenith; beyond 90° a unit looks below the body's horizon",
+        [](Rig& r) -> double& { return r.units.ring_tilt_deg; }), kUnits), kSimulate, ""));
+    list("device.units.ring_azimuths_deg", "deg", "a list of up to 64 angles", kTurn,
+         "azimuths of the ring units' views, from X_b (right) towards Y_b (forward), after the zenith unit "
+         "[C: 0, 45, …, 315]",
+         "an orientation: one turn either way; 64 units is beyond any compass of the kind",
+         [](Rig& r) -> std::vector<double>& { return r.units.ring_azimuths_deg; }, &within<kTurn>);
+    list("device.units.tilt_deg", "deg", "a list of up to 64 angles", kTilt,
+         "an explicit layout (replaces device.units.zenith and the ring): each unit's tilt β from Z_b",
+         "0 is the zenith; beyond 90° a unit looks below the body's horizon",
+         [](Rig& r) -> std::vector<double>& { return r.units.tilt_deg; }, &within<kTilt>);
+    list("device.units.azimuth_deg", "deg", "a list of up to 64 angles", kTurn,
+         "an explicit layout: each unit's azimuth a, from X_b towards Y_b (one per tilt)",
+         "an orientation: one turn either way",
+         [](Rig& r) -> std::vector<double>& { return r.units.azimuth_deg; }, &within<kTurn>);
+    list("device.units.roll_deg", "deg", "a list of up to 64 angles", kTurn,
+         "an explicit layout: each unit's roll ρ about its own view, C_m^b = Rz(a)·Ry(β)·Rz(ρ) (one per tilt; "
+         "none: 0)",
+         "an orientation: one turn either way",
+         [](Rig& r) -> std::vector<double>& { return r.units.roll_deg; }, &within<kTurn>);
+    keys.push_back(reads(only(real<RealRange{0.0, 10.0}>(
+        "device.units.mount_error_sd_deg", "deg", "a standard deviation",
+        "σ of each unit's three mounting errors δ (about its own X, Y, Z), drawn with the rig's seed; truth only "
+        "(Z21: E-vector errors of 1.2–4.6° before installation calibration) [C: 0]",
+        "mounting errors are small angles: beyond 10° the unit is mounted elsewhere",
+        [](Rig& r) -> double& { return r.units.mount_error_sd_deg; }), kUnits), kSimulate, ""));
+    for (std::size_t a = 0; a < 3; ++a) {
+      static constexpr std::array<std::string_view, 3> paths{"device.units.mount_error_x_deg",
+                                                             "device.units.mount_error_y_deg",
+                                                             "device.units.mount_error_z_deg"};
+      static constexpr std::array<std::string_view, 3> docs{
+          "explicit mounting errors δ_x (about each unit's X_m), one per unit; replace the draw of this axis",
+          "explicit mounting errors δ_y (about each unit's Y_m), one per unit; replace the draw of this axis",
+          "explicit mounting errors δ_z (about each unit's view Z_m: a turn of its zero direction), one per "
+          "unit; replace the draw of this axis"};
+      list(paths[a], "deg", "a list of up to 64 angles", kError, docs[a],
+           "mounting errors are small angles: beyond 10° the unit is mounted elsewhere",
+           a == 0   ? +[](Rig& r) -> std::vector<double>& { return r.units.mount_error_x_deg; }
+           : a == 1 ? +[](Rig& r) -> std::vector<double>& { return r.units.mount_error_y_deg; }
+                    : +[](Rig& r) -> std::vector<double>& { return r.units.mount_error_z_deg; },
+           &within<kError>);
+    }
+    keys.push_back(reads(only(array<kError>(
+        "device.units.misalignment_deg", "deg", "3 angles",
+        "the compass's misalignment μ to the body, about X_b, Y_b, Z_b: C_m^b,true = Rx·Ry·Rz(μ)·C_m^b·…; truth only "
+        "[C: 0, 0, 0]",
+        "a misalignment is a small angle: beyond 10° the compass is mounted otherwise",
+        [](Rig& r) { return std::span<double>(r.units.misalignment_deg); }), kUnits), kSimulate, ""));
+    RigKey k{"device.units.apply", K::Text, "", "truth or theory",
+             "the calibration model each unit's voltages are read with (polrig apply): truth, its own "
+             "device.truth (a perfectly calibrated unit), or theory, the nominal parameters of device.film_axes_deg"};
+    k.text = [](Rig& r) -> std::string& { return r.units.apply; };
+    k.valid_text = [](std::string_view v) { return v == "truth" || v == "theory"; };
+    keys.push_back(reads(only(k, kUnits), kSimulate, ""));
+  }
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
@@ -653,7 +733,7 @@ std::vector<RigKey> make_keys() {
              "samples the sensor records at each stop (the paper averages 40)"};
     k.integer = [](Rig& r) -> int& { return r.schedule.samples_per_stop; };
     k.valid_integer = [](long long v) { return v >= 1 && v <= 100000; };
-    keys.push_back(reads(only(k, kSix), kSimulate, ""));
+    keys.push_back(reads(only(k, kSixAndUnits), kSimulate, ""));
   }
   keys.push_back(reads(real<RealRange{0.01, 1000.0}>(
       "schedule.speed_deg_s", "deg/s", "a speed",
@@ -719,7 +799,7 @@ std::vector<RigKey> make_keys() {
   // The log amplifiers and the signed ADC are the six-photodiode sensor's (the camera's own ADC
   // and noise are device.* keys).
   for (RigKey& k : keys)
-    if (k.path.starts_with("electronics.")) k.instruments = kSix;
+    if (k.path.starts_with("electronics.")) k.instruments = kSixAndUnits;
   // --- seed ---------------------------------------------------------------------------
   {
     RigKey k{"seed", K::Seed, "", "an unsigned 64-bit integer",
@@ -817,6 +897,8 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
                         fmt::format("expected the white squares brighter than the black ones, got white {} and black {}",
                                     b.intensity[0], b.intensity[1])};
   }
+  if (rig.instrument().has(Instrument::kUnitArray))
+    if (auto p = unit_array_problem(rig.units)) return RigProblem{p->path, p->message};
   for (int m = 0; m < 6 && rig.instrument().has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.
     if ((1.0 + rig.device.truth.kd[m]) * rig.device.d >= 1.0)

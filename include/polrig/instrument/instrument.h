@@ -27,6 +27,10 @@ class Instrument {
     // Several cameras, one polarizer each, co-registered into one Stokes image (W16's four-camera
     // sensor, device/four_camera.h).
     kCameraArray = 1u << 3,
+    // Several six-photodiode units, each looking along its own axis and reporting an AoP and a
+    // DoP in its own frame (Z21's nine-unit compass, device/unit_array.h, calib/unit_array.h): the
+    // sun vector from two units (nav/unit_array.h). No pair voltages of one turntable sensor.
+    kUnitArray = 1u << 4,
   };
 
   virtual ~Instrument() = default;
@@ -36,8 +40,8 @@ class Instrument {
   bool has(Flag f) const { return (flags() & f) != 0; }
 };
 
-// The instrument of `kind` (device.kind): "six-photodiode" (the default), "dofp-camera" or
-// "four-camera".
+// The instrument of `kind` (device.kind): "six-photodiode" (the default), "dofp-camera",
+// "four-camera" or "unit-array".
 // Throws std::invalid_argument for another kind.
 std::shared_ptr<const Instrument> make_instrument(std::string_view kind);
 // The kinds make_instrument knows, for the device.kind key's check and its documentation.

@@ -11,6 +11,7 @@
 #include "polrig/device/electronics.h"
 #include "polrig/device/four_camera.h"
 #include "polrig/device/sensor.h"
+#include "polrig/device/unit_array.h"
 #include "polrig/geometry/checkerboard.h"
 #include "polrig/geometry/geometry.h"
 #include "polrig/geometry/schedule.h"
@@ -29,6 +30,9 @@ struct Rig {
   SensorSpec device;
   DofpCameraSpec camera;  // the DoFP camera's settings (device.* keys of device.kind dofp-camera)
   FourCameraSpec four_camera;  // W16's four cameras (device.* keys of device.kind four-camera)
+  // Z21's unit-array compass (device.units.* keys of device.kind unit-array); each unit is a
+  // six-photodiode sensor with `device`'s true parameters and the rig's `electronics`.
+  UnitArraySpec units;
   CheckerboardSpec checkerboard;  // the four cameras' calibration target (checkerboard.* keys)
   SourceSpec source;  // the source.* keys' settings
   // The light, made by make_source from `source` when the rig loads (cos⁴ by default) and shared

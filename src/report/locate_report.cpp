@@ -180,12 +180,20 @@ std::vector<DatasetFile> location_plots(const std::filesystem::path& dir, const 
   }
   heading.extra = "set xdata time\nset timefmt '%Y-%m-%dT%H:%M:%SZ'\nset format x '%H:%M:%S'\n"
                   "set xtics rotate by -30\nset key below horizontal maxrows 1\nset offsets 0, 0, graph 0.1, graph 0.1";
-  render_plots(dir, "plots.gp", {map, heading});
-  return {{"map.csv", 1, "fix.png's data: the fix, the truth (when known) and per stop its line of position: the "
-                         "point (lat_deg, lon_deg) and half the line (dlat_deg, dlon_deg)"},
-          {"fix.png", 1, "the fix, the truth and the stops' lines of position on a map"},
-          {"heading.png", 1, "the heading per stop against time, with the truth and the error when known"},
-          {"plots.gp", 1, "the gnuplot script of fix.png and heading.png"}};
+  // Without a usable fix every heading is NaN: nothing to draw against time.
+  const bool headings = std::any_of(run.location.samples.begin(), run.location.samples.end(),
+                                    [](const LocateSample& s) { return std::isfinite(s.heading_deg); });
+  std::vector<Plot> plots{map};
+  if (headings) plots.push_back(heading);
+  render_plots(dir, "plots.gp", plots);
+  std::vector<DatasetFile> files{
+      {"map.csv", 1, "fix.png's data: the fix, the truth (when known) and per stop its line of position: the "
+                     "point (lat_deg, lon_deg) and half the line (dlat_deg, dlon_deg)"},
+      {"fix.png", 1, "the fix, the truth and the stops' lines of position on a map"}};
+  if (headings)
+    files.push_back({"heading.png", 1, "the heading per stop against time, with the truth and the error when known"});
+  files.push_back({"plots.gp", 1, "the gnuplot script of fix.png and heading.png"});
+  return files;
 }
 
 }  // namespace

@@ -210,7 +210,8 @@ inline std::vector<std::pair<std::string, TabulatedCurves>> tabulate_script(cons
   std::string script;
   std::vector<std::string> pngs;
   for (const std::string& line : lines_of(read_file(dir / script_name))) {
-    if (line.rfind("set terminal", 0) == 0) continue;
+    // The table prints numbers in the axes' tic format: gnuplot's default (6 digits) instead.
+    if (line.rfind("set terminal", 0) == 0 || line.rfind("set format", 0) == 0) continue;
     if (line.rfind("set output", 0) == 0) {
       const auto a = line.find('"'), b = line.rfind('"');
       pngs.push_back(line.substr(a + 1, b - a - 1));

@@ -54,8 +54,9 @@ std::vector<DatasetFile> report_stop_previews(const fs::path& dir, const std::ve
                                  options.grid_text, sampled, options.grid_columns[0], options.grid_columns[1])});
 
     const int W = st.cols * p, H = st.rows * p;
-    // The image about 640 px wide, its height in proportion, room for the titles and the colour bar.
-    const int width = 860, height = 150 + static_cast<int>(std::lround(640.0 * H / W));
+    // The image about 640 px wide, its height in proportion, room for the titles and the colour bar
+    // with its label (clipped at 860 px wide for 5-character ticks).
+    const int width = 920, height = 150 + static_cast<int>(std::lround(640.0 * H / W));
     const std::string frame = fmt::format(
         "unset key\nset size ratio -1\nset tics out\nset xrange [0:{}]\nset yrange [{}:0]\nset grid front\n", W, H);
     const auto image = [&](const char* suffix, const char* what, const std::string& column, const std::string& cb,

@@ -7,6 +7,8 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 namespace polrig::test {
@@ -198,6 +201,52 @@ inline std::string shell_quote(const fs::path& p) { return shell_quote(p.string(
 
 // True if `gnuplot` runs (the plotting commands need it).
 inline bool gnuplot_present() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
+
+// What gnuplot plotted, read back through its `set table`: per PNG of a script (render_plots'),
+// per curve title, the rows of numbers it tabulated ("nan" as NaN; a pixel type letter dropped).
+using TabulatedCurves = std::vector<std::pair<std::string, std::vector<std::vector<double>>>>;
+inline std::vector<std::pair<std::string, TabulatedCurves>> tabulate_script(const fs::path& dir,
+                                                                            const std::string& script_name) {
+  std::string script;
+  std::vector<std::string> pngs;
+  for (const std::string& line : lines_of(read_file(dir / script_name))) {
+    // The table prints numbers in the axes' tic format: gnuplot's default (6 digits) instead.
+    if (line.rfind("set terminal", 0) == 0 || line.rfind("set format", 0) == 0) continue;
+    if (line.rfind("set output", 0) == 0) {
+      const auto a = line.find('"'), b = line.rfind('"');
+      pngs.push_back(line.substr(a + 1, b - a - 1));
+      script += "set table '" + pngs.back() + ".table'\n";
+    } else if (line == "unset output") {
+      script += "unset table\n";
+    } else {
+      script += line + "\n";
+    }
+  }
+  write_file(dir / "tabulate.gp", script);
+  const std::string cmd = "cd " + shell_quote(dir) + " && gnuplot tabulate.gp 2>/dev/null";
+  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  std::vector<std::pair<std::string, TabulatedCurves>> out;
+  for (const std::string& png : pngs) {
+    TabulatedCurves curves;
+    for (const std::string& line : lines_of(read_file(dir / (png + ".table")))) {
+      const std::string tag = "# Curve title: \"";
+      if (line.rfind(tag, 0) == 0) {
+        curves.push_back({line.substr(tag.size(), line.size() - tag.size() - 1), {}});
+        continue;
+      }
+      if (line.empty() || line[0] == '#' || curves.empty()) continue;
+      std::stringstream ss(line);
+      std::vector<double> row;
+      for (std::string word; ss >> word;) {
+        if (word == "nan" || word == "NaN") row.push_back(std::nan(""));
+        else if (std::isdigit(static_cast<unsigned char>(word.back())) || word.back() == '.') row.push_back(std::stod(word));
+      }
+      curves.back().second.push_back(row);
+    }
+    out.push_back({png, curves});
+  }
+  return out;
+}
 
 // What one run of the polrig executable gave.
 struct RunResult {

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <string>
 
+#include <fmt/format.h>
+
 #include "support.h"
 
 namespace fs = std::filesystem;
@@ -97,7 +99,7 @@ TEST_F(CliPositioning, LocateFromAFourCameraDatasetFindsTheSiteAndHeading) {
       " --set 'device.cameras.cx_px=[129, 129.6, 128.925, 129.475]'"
       " --set 'device.cameras.cy_px=[97, 96.95, 97.575, 97.15]'";
   const fs::path data = tmp / "w16", out = tmp / "loc";
-  ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml")) + " --layers aop" + quarter +
+  ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml")) + " --layers aop --no-plots" + quarter +
      " -o " + shell_quote(data));
   ok("locate " + shell_quote(data) + " --prior 29,113.5 -o " + shell_quote(out));
   const Csv stops = read_csv(data / "stops.csv"), sun = read_csv(out / "sun.csv");
@@ -127,6 +129,66 @@ TEST_F(CliPositioning, LocateFromAFourCameraDatasetFindsTheSiteAndHeading) {
   ASSERT_EQ(fix.rows.size(), 2u);
   EXPECT_LT(std::stod(fix.rows[1][fix.col("lat_deg")]), -40.0);
   EXPECT_HAS(read_file(out / "manifest.yaml"), "sun.csv");
+
+  // The plots (issue 23 §4): fix.png, the fix, the truth and each stop's line of position from
+  // map.csv; heading.png, heading.csv's headings against time. gnuplot's own table of each plot
+  // gives the columns read by name (6 significant digits).
+  for (const char* f : {"map.csv", "fix.png", "heading.png", "plots.gp"})
+    EXPECT_HAS(read_file(out / "manifest.yaml"), fmt::format("  {}:", f));
+  const Csv map = read_csv(out / "map.csv");
+  const auto cell = [](const Csv& c, std::size_t row, const char* name) { return std::stod(c.rows[row][c.col(name)]); };
+  ASSERT_EQ(map.rows.size(), 2u + 13u);
+  EXPECT_EQ(map.rows[0][map.col("mark")], "fix");
+  EXPECT_EQ(map.rows[0][map.col("lat_deg")], fix.rows[0][fix.col("lat_deg")]);
+  EXPECT_EQ(map.rows[0][map.col("lon_deg")], fix.rows[0][fix.col("lon_deg")]);
+  EXPECT_EQ(map.rows[1][map.col("mark")], "truth");
+  EXPECT_EQ(cell(map, 1, "lat_deg"), 28.221);
+  EXPECT_EQ(cell(map, 1, "lon_deg"), 112.992);
+  // Each stop's line of position passes `residual_deg` of arc from the fix away from the sun's
+  // azimuth β, perpendicular to β (the intercept method), at equal ground scale at the truth.
+  const double fix_lat = cell(fix, 0, "lat_deg"), fix_lon = cell(fix, 0, "lon_deg"), c = std::cos(28.221 / deg);
+  for (std::size_t k = 0; k < 13; ++k) {
+    EXPECT_EQ(map.rows[2 + k][map.col("mark")], "line");
+    EXPECT_EQ(map.rows[2 + k][map.col("utc")], heading.rows[k][heading.col("utc")]);
+    const double r = cell(heading, k, "residual_deg"), b = cell(heading, k, "beta_deg") / deg;
+    EXPECT_NEAR(cell(map, 2 + k, "lat_deg"), fix_lat - r * std::cos(b), 1e-12) << k;
+    EXPECT_NEAR(cell(map, 2 + k, "lon_deg"), fix_lon - r * std::sin(b) / c, 1e-12) << k;
+    EXPECT_NEAR(cell(map, 2 + k, "dlat_deg") * std::cos(b) + cell(map, 2 + k, "dlon_deg") * c * std::sin(b), 0.0, 1e-12);
+  }
+  const auto plots = tabulate_script(out, "plots.gp");
+  ASSERT_EQ(plots.size(), 2u);
+  const auto finite_rows = [&](const std::string& png, const std::string& title) {
+    std::vector<std::vector<double>> rows;
+    for (const auto& [name, curves] : plots)
+      for (const auto& [t, r] : curves)
+        if (name == png && t == title)
+          for (const auto& row : r)
+            if (!row.empty() && std::isfinite(row[0])) rows.push_back(row);
+    return rows;
+  };
+  const auto near = [](double a, double b) { return std::abs(a - b) <= 1e-5 * std::abs(b); };
+  const auto fix_point = finite_rows("fix.png", "fix");
+  ASSERT_EQ(fix_point.size(), 1u);
+  EXPECT_TRUE(near(fix_point[0][0], fix_lon) && near(fix_point[0][1], fix_lat)) << fix_point[0][0] << " " << fix_point[0][1];
+  const auto truth_point = finite_rows("fix.png", "truth");
+  ASSERT_EQ(truth_point.size(), 1u);
+  EXPECT_TRUE(near(truth_point[0][0], 112.992) && near(truth_point[0][1], 28.221));
+  const auto lines = finite_rows("fix.png", "each stop's line of position");
+  ASSERT_EQ(lines.size(), 13u);
+  for (std::size_t k = 0; k < 13; ++k) {  // from one end by twice the half line (6 digits of each): centred on the point
+    ASSERT_EQ(lines[k].size(), 4u);
+    EXPECT_NEAR(lines[k][0] + 0.5 * lines[k][2], cell(map, 2 + k, "lon_deg"), 1.2e-3) << k;
+    EXPECT_NEAR(lines[k][1] + 0.5 * lines[k][3], cell(map, 2 + k, "lat_deg"), 1.2e-3) << k;
+  }
+  // heading.png's x is the time (a string in the table): its y values, stop by stop.
+  for (const auto& [title, column] : {std::pair{"heading", "heading_deg"}, {"true heading", "heading_true_deg"}}) {
+    std::vector<std::vector<double>> rows;
+    for (const auto& [name, curves] : plots)
+      for (const auto& [t, r] : curves)
+        if (name == "heading.png" && t == title) rows = r;
+    ASSERT_EQ(rows.size(), 13u) << title;
+    for (std::size_t k = 0; k < 13; ++k) EXPECT_TRUE(near(rows[k].at(0), cell(heading, k, column))) << title << " " << k;
+  }
 }
 
 TEST_F(CliPositioning, LocateRefusesWhatItCannotUse) {

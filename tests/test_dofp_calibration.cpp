@@ -681,6 +681,16 @@ TEST(DofpCalibrationReport, WritesParamsTableCellsAndPlots) {
   if (plots) {
     for (const char* png : {"errors.png", "map_K.png", "map_b.png", "map_k.png", "map_eps_deg.png"})
       EXPECT_GT(std::filesystem::file_size(dir / png), 1000u) << png;
+    // The maps' axes are image pixels (each cell over its 2 × 2 pixels), labelled; the reference
+    // pixel, each cell's TL (step 2's gauge k_1 = 1, ε_1 = 0), named in every map.
+    const std::string maps = slurp(dir / "maps.gp");
+    for (const char* part : {"set xlabel 'pixel column'", "set ylabel 'pixel row'", "set xrange [0:16]",
+                             "set yrange [12:0]", "dx=2 dy=2 origin=(1,1)", "reference pixel: each cell's TL"}) {
+      EXPECT_NE(maps.find(part), std::string::npos) << part;
+    }
+    std::size_t marks = 0;
+    for (std::size_t at = 0; (at = maps.find("set title 'TL: the reference pixel'", at)) != std::string::npos; ++at) ++marks;
+    EXPECT_EQ(marks, 4u);
   }
   std::filesystem::remove_all(dir);
 }

@@ -2,6 +2,8 @@
 
 Camera rigs are named by the rig key device.kind, in rigs/han2017-*.yaml (the seam lane's); until
 they are in the tree, these tests skip."""
+import shutil
+
 import numpy as np
 import pytest
 
@@ -52,6 +54,15 @@ def test_frames_equal_the_cli_dataset_bit_for_bit(tmp_path):
     for name in ("K", "b", "k", "eps_deg", "alpha_deg"):
         assert np.array_equal(truth[name].astype(np.float32), ds_cli["truth"][name])
     assert ds_cli["f_c_px"] == pytest.approx(405.405, abs=1e-3)
+    # The CLI draws the previews (formats.md §6.14d); Python with plots=True, the same data bit for bit.
+    assert not (tmp_path / "py" / "previews").exists()
+    if shutil.which("gnuplot"):
+        rig.simulate_frames(tmp_path / "pyplots", truth_layers=True, plots=True, threads=1)
+        for name in ("stop_0000.csv", "stop_0002.csv", "previews.gp"):
+            assert (tmp_path / "pyplots" / "previews" / name).read_bytes() == \
+                (tmp_path / "cli" / "previews" / name).read_bytes(), name
+        for name in ("stop_0000_aop.png", "stop_0002_dop.png", "stop_0002_s0.png"):
+            assert (tmp_path / "pyplots" / "previews" / name).stat().st_size > 1000, name
 
 
 def test_thread_counts_give_the_same_frame_and_bad_arguments_are_refused():

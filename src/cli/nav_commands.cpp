@@ -189,7 +189,7 @@ void run_locate(const std::string& input, const std::string& prior_text, bool do
   OutputDir d = out.open();
   std::vector<std::string> inputs = {input};
   if (calibration) inputs.push_back(calibration_path);
-  write_manifest(d.staging(), {command_line(), nullptr, report_dataset_location(d.staging(), run), inputs});
+  write_manifest(d.staging(), {command_line(), nullptr, report_dataset_location(d.staging(), run, out.plots()), inputs});
   finish(d);
   std::cout << (calibration ? fmt::format("fused with {} (each stop's raw frames)\n", calibration_path)
                             : std::string("the dataset's fused layers\n"));

@@ -113,6 +113,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         if (*truth_layers)
           throw RigError(fmt::format("--truth-layers: device.kind {} writes its truth in truth.yaml", r.rig.device_kind));
         FourCameraDatasetOptions o;
+        o.previews = out->plots();
         o.layers = *layers == "fused" ? FourCameraLayers::Fused : *layers == "aop" ? FourCameraLayers::Aop
                                                                                      : FourCameraLayers::All;
         try {
@@ -134,6 +135,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         o.storage = *frames == "mean" ? DofpFrameStorage::Sum : DofpFrameStorage::Every;
         o.truth_layers = *truth_layers;
         o.analyzer = *analyzer == "in-front" ? DofpAnalyzer::InFront : DofpAnalyzer::ImagePlane;
+        o.previews = out->plots();
         try {
           const DofpSimulator check(r.rig, o.analyzer);  // refused before the folder is opened
         } catch (const std::invalid_argument& e) {

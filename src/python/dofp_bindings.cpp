@@ -13,6 +13,7 @@
 #include "convert.h"
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/io/plot.h"
 #include "polrig/report/dofp_dataset.h"
 #include "polrig/sim/dofp_frames.h"
 #include "rig_handle.h"
@@ -69,6 +70,8 @@ camera rig; docs/formats.md) and returns its path.
   frames: 'every' (every frame) or 'mean' (the per-stop mean, stored exactly as the frames' sum).
   truth_layers: also write each stop's S0, S1, S2, AoP, DoP.  analyzer: as dofp_frame.
   force: replace an existing folder.
+  plots: also draw the previews (previews/: the first and last stops' AoP, DoP and S0 PNGs; needs
+    gnuplot; the CLI draws them unless --no-plots).
   {threads}
   {progress}
 )doc";
@@ -151,9 +154,13 @@ void bind_dofp(py::module_& m) {
   }, kTruthDoc);
 
   rig.def("simulate_frames", [](const PyRig& self, const std::filesystem::path& out, const std::string& frames,
-                                bool truth_layers, const std::string& analyzer, bool force, std::optional<int> threads,
-                                const py::object& progress) {
+                                bool truth_layers, const std::string& analyzer, bool force, bool plots,
+                                std::optional<int> threads, const py::object& progress) {
+    if (plots && !gnuplot_available())
+      throw std::runtime_error("plots=True needs gnuplot, which was not found; install it "
+                               "(scripts/setup-deps.sh) or pass plots=False");
     DofpDatasetOptions o;
+    o.previews = plots;
     if (frames != "every" && frames != "mean")
       throw py::value_error(fmt::format("frames='{}' (expected 'every' or 'mean')", frames));
     o.storage = frames == "mean" ? DofpFrameStorage::Sum : DofpFrameStorage::Every;
@@ -164,8 +171,9 @@ void bind_dofp(py::module_& m) {
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     const std::string command = fmt::format("python: polrig.Rig({}).simulate_frames(out='{}', frames='{}', "
-                                            "truth_layers={}, analyzer='{}')",
-                                            loaded.origin, out.string(), frames, truth_layers ? "True" : "False", analyzer);
+                                            "truth_layers={}, analyzer='{}'{})",
+                                            loaded.origin, out.string(), frames, truth_layers ? "True" : "False", analyzer,
+                                            plots ? ", plots=True" : "");
     {
       py::gil_scoped_release release;
       write_dofp_dataset(loaded, out, o, command, force, p);
@@ -173,7 +181,7 @@ void bind_dofp(py::module_& m) {
     return out;
   }, with_shared(kSimulateFramesDoc).c_str(), py::arg("out"), py::kw_only(), py::arg("frames") = "every",
      py::arg("truth_layers") = false, py::arg("analyzer") = "image-plane", py::arg("force") = false,
-     py::arg("threads") = py::none(), py::arg("progress") = py::none());
+     py::arg("plots") = false, py::arg("threads") = py::none(), py::arg("progress") = py::none());
 
   m.def("read_dofp_dataset", [](const std::filesystem::path& dir, bool mean_frames) {
     DofpDataset d;

@@ -13,6 +13,7 @@
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/io/four_camera_dataset.h"
+#include "polrig/io/plot.h"
 #include "polrig/report/four_camera_dataset.h"
 #include "polrig/sim/checkerboard.h"
 #include "polrig/sim/four_camera_frames.h"
@@ -91,6 +92,8 @@ for a four-camera rig; docs/formats.md "Four-camera dataset") and returns its pa
   layers: 'fused' (S0, S1, S2, AoP, DoP, valid: the default), 'all' (also the raw frames) or 'aop'
   (AoP, DoP and valid only).
   force: replace an existing folder.
+  plots: also draw the previews (previews/: the first and last stops' fused AoP, DoP and S0 PNGs;
+    needs gnuplot; the CLI draws them unless --no-plots).
   {threads}
   {progress}
 )doc";
@@ -161,22 +164,27 @@ void bind_four_camera(py::module_& m) {
   }, kTruthDoc);
 
   rig.def("simulate_four_camera", [](const PyRig& self, const std::filesystem::path& out, const std::string& layers,
-                                     bool force, std::optional<int> threads, const py::object& progress) {
+                                     bool force, bool plots, std::optional<int> threads, const py::object& progress) {
+    if (plots && !gnuplot_available())
+      throw std::runtime_error("plots=True needs gnuplot, which was not found; install it "
+                               "(scripts/setup-deps.sh) or pass plots=False");
     FourCameraDatasetOptions o;
     o.layers = layers_of(layers);
+    o.previews = plots;
     const LoadedRig loaded = self.loaded;
     simulator(loaded);  // refused before the folder is made
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
-    const std::string command = fmt::format("python: polrig.Rig({}).simulate_four_camera(out='{}', layers='{}')",
-                                            loaded.origin, out.string(), layers);
+    const std::string command = fmt::format("python: polrig.Rig({}).simulate_four_camera(out='{}', layers='{}'{})",
+                                            loaded.origin, out.string(), layers, plots ? ", plots=True" : "");
     {
       py::gil_scoped_release release;
       write_four_camera_dataset(loaded, out, o, command, force, p);
     }
     return out;
   }, with_shared(kSimulateDoc).c_str(), py::arg("out"), py::kw_only(), py::arg("layers") = "fused",
-     py::arg("force") = false, py::arg("threads") = py::none(), py::arg("progress") = py::none());
+     py::arg("force") = false, py::arg("plots") = false, py::arg("threads") = py::none(),
+     py::arg("progress") = py::none());
 
   m.def("read_four_camera_dataset", [](const std::filesystem::path& dir, std::optional<int> stop, bool raw) {
     FourCameraDataset d;

@@ -162,6 +162,8 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
                            {"eps_deg", "ε (°)", &p.eps_deg}};
   const int cw = W / 2, ch = H / 2;
   const char* pos[4] = {"TL", "TR", "BL", "BR"};
+  const char* gauge = c.options.step2.view_projection ? "step 2's gauge k_1 = 1; ε_1 fitted with the view's projection"
+                                                      : "step 2's gauge k_1 = 1, ε_1 = 0, Eq. 25";
   std::string script;
   std::vector<std::string> pngs;
   for (const MapSpec& m : maps) {
@@ -172,19 +174,24 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
                                          m.name, cw, ch, m.name)});
     const std::string png = fmt::format("map_{}.png", m.name);
     pngs.push_back(png);
+    // Axes in image pixels (a pixel (col, row) from col to col + 1): each cell's value drawn over
+    // its 2 × 2 pixels. The reference pixel of every cell is its TL (mosaic position
+    // 1: step 2's gauge k_1 = 1, ε_1 = 0, Eq. 25; ε_1 fitted with the view's projection), marked
+    // in its panel's title.
     script += fmt::format(
-        "reset session\nset terminal pngcairo size 1200,980 enhanced font 'DejaVu Sans,10'\n"
-        "set output '{}'\nset multiplot layout 2,2 title \"{} by mosaic position (cells; "
-        "image rows downward)\" noenhanced\n"
+        "reset session\nset terminal pngcairo size 1200,1000 enhanced font 'DejaVu Sans,10'\n"
+        "set output '{}'\nset multiplot layout 2,2 title \"{} by mosaic position (one value per 2 × 2 "
+        "cell, drawn over its pixels; image rows downward)\\nreference pixel: each cell's TL ({})\" noenhanced\n"
         "set palette defined (0 '#440154', 0.25 '#3b528b', 0.5 '#21918c', 0.75 '#5ec962', 1 '#fde725')\n"
-        "set xrange [-0.5:{}]\nset yrange [{}:-0.5]\nset size ratio -1\nset tics out\n"
-        "set format cb '%g'\n",
-        png, m.label, cw - 0.5, ch - 0.5);
+        "set xrange [0:{}]\nset yrange [{}:0]\nset size ratio -1\nset tics out\n"
+        "set xlabel 'pixel column'\nset ylabel 'pixel row'\nset format cb '%g'\n",
+        png, m.label, gauge, W, H);
     for (int j = 0; j < 4; ++j)
       script += fmt::format(
-          "set title '{}'\nplot '{}' binary array=({},{}) format='%float32' skip={} "
-          "endian=little with image notitle\n",
-          pos[j], bin, cw, ch, static_cast<long long>(j) * cw * ch * 4);
+          "set title '{}' tc rgb '{}'\nplot '{}' binary array=({},{}) dx=2 dy=2 origin=(1,1) format='%float32' "
+          "skip={} endian=little with image notitle\n",
+          j == 0 ? "TL: the reference pixel" : pos[j], j == 0 ? "#d62728" : "black", bin, cw, ch,
+          static_cast<long long>(j) * cw * ch * 4);
     script += "unset multiplot\nunset output\n";
   }
   run_gnuplot(dir, "maps.gp", script, pngs);

@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include "polrig/calib/dofp_polarization.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/report/dataset_previews.h"
 #include "polrig/sky/sensor_view.h"
 #include "polrig/sky/sun.h"
 #include "polrig/units.h"
@@ -51,7 +53,14 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
   progress.begin("simulate: frames", total);
   const std::size_t n = static_cast<std::size_t>(sim.width()) * static_cast<std::size_t>(sim.height());
   std::string csv = "stop,theta_R_deg,t_s,utc,intensity,polarized,heading_deg,frames,file\n";
+  // The previews' stops: the first and the last (one when they are the same).
+  const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
+  std::vector<PreviewStop> previews;
+  const DofpTruth nominal = nominal_dofp_parameters(sim.width(), sim.height(), rig.camera.mosaic_deg);
   for (const DofpStop& stop : sim.stops()) {
+    const std::size_t index = static_cast<std::size_t>(&stop - sim.stops().data());
+    const bool preview = options.previews && (index == 0 || index == last);
+    std::vector<std::uint32_t> preview_sum(preview ? n : 0);
     const std::string file = fmt::format("frames/stop_{:04}.exr", stop.index);
     ExrImage image;
     image.width = sim.width(), image.height = sim.height();
@@ -64,6 +73,7 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
         image.uints.push_back({fmt::format("raw.{:03}", f), std::vector<std::uint32_t>(raw.begin(), raw.end())});
       else
         for (std::size_t i = 0; i < n; ++i) sum[i] += raw[i];
+      for (std::size_t i = 0; i < preview_sum.size(); ++i) preview_sum[i] += raw[i];
       progress.advance();
     }
     if (options.storage == DofpFrameStorage::Sum) image.uints.push_back({"raw_sum", std::move(sum)});
@@ -104,16 +114,41 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
     write_exr_image(dir / file, image, ExrCompression::Piz);
     csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc, stop.intensity,
                        stop.polarized ? 1 : 0, heading, stop.frames, file);
+    if (preview && stop.frames > 0) {
+      // The mean frame as read_dofp_mean_frame reads it back (the sum over the frames), its cells'
+      // polarization with the nominal parameters (as `orient` without --params).
+      std::vector<double> mean(n);
+      for (std::size_t i = 0; i < n; ++i) mean[i] = double(preview_sum[i]) / stop.frames;
+      DofpCellPolarization cells = dofp_cell_polarization(mean, nominal);
+      PreviewStop p;
+      p.stem = fmt::format("stop_{:04}", stop.index);
+      p.title = fmt::format("stop {}: θ_R = {:.6g}°, t = {:.6g} s{}, {}, intensity {:.6g}\nthe mean of {} frame{}, per "
+                            "2 × 2 cell, nominal parameters", stop.index, stop.theta_R_deg, stop.t_s,
+                            utc.empty() ? std::string() : fmt::format(" ({})", utc),
+                            stop.polarized ? "polarized" : "unpolarized", stop.intensity, stop.frames,
+                            stop.frames == 1 ? "" : "s");
+      p.cols = cells.cells_x, p.rows = cells.cells_y, p.pixels = 2;
+      p.aop_deg = std::move(cells.aop_deg), p.dop = std::move(cells.dop), p.S0 = std::move(cells.S0);
+      previews.push_back(std::move(p));
+    }
   }
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
-  return {{"stops.csv", 1,
+  PreviewOptions po;
+  po.grid_columns[0] = "cell_x", po.grid_columns[1] = "cell_y";
+  po.grid_text = "2 × 2 cell";
+  po.s0_label = "S0 (DN)";
+  po.frame_text = "from the image +x towards +y";
+  std::vector<DatasetFile> files = {{"stops.csv", 1,
            "one row per stop: stop, theta_R_deg, t_s, utc (sky rigs), intensity, polarized (0/1), heading_deg "
            "(true geographic azimuth of X_l, sky rigs), frames, file"},
           {"truth.exr", 1, "per-pixel truth K, b, k, eps_deg, alpha_deg (float) and the intrinsics"},
           {"frames", 1,
            "frames/stop_NNNN.exr: raw DN as UINT channels raw.NNN (every frame) or raw_sum (the frames' sum), "
            "optional truth layers S0, S1, S2, AoP, DoP"}};
+  const std::vector<DatasetFile> shown = report_stop_previews(dir, previews, po);
+  files.insert(files.end(), shown.begin(), shown.end());
+  return files;
 }
 
 void write_dofp_dataset(const LoadedRig& rig, const std::filesystem::path& destination,

@@ -5,6 +5,7 @@
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/report/dataset_previews.h"
 #include "polrig/report/four_camera_geometry.h"
 #include "polrig/sky/sensor_view.h"
 #include "polrig/sky/sun.h"
@@ -70,13 +71,28 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
   std::string csv =
       "stop,utc,t_s,theta_R_deg,intensity,polarized,heading_deg,sun_x_cam1,sun_y_cam1,sun_z_cam1,"
       "sun_azimuth_deg,sun_zenith_deg,file\n";
+  // The previews' stops: the first and the last (one when they are the same).
+  const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
+  std::vector<PreviewStop> previews;
   for (const DofpStop& stop : sim.stops()) {
+    const std::size_t index = static_cast<std::size_t>(&stop - sim.stops().data());
     const std::string file = fmt::format("frames/stop_{:04}.exr", stop.index);
     ExrImage image;
     image.width = sim.width(), image.height = sim.height();
     const FourCameraSignal signal = sim.signal(stop);
     std::array<std::vector<std::uint16_t>, kFourCameras> raw = sim.frames(signal, 0);
     FusedImage fused = sim.fuse(raw);
+    if (options.previews && (index == 0 || index == last)) {
+      // The fused layers as the stop's EXR holds them (float), on the virtual camera 1 grid.
+      PreviewStop p;
+      p.stem = fmt::format("stop_{:04}", stop.index);
+      p.cols = grid.width, p.rows = grid.height, p.pixels = 1;
+      p.aop_deg.assign(fused.AoP.begin(), fused.AoP.end());
+      p.dop.assign(fused.DoP.begin(), fused.DoP.end());
+      p.S0.assign(fused.S0.begin(), fused.S0.end());
+      p.valid = fused.valid;
+      previews.push_back(std::move(p));
+    }
     if (options.layers == FourCameraLayers::All)
       for (std::size_t j = 0; j < 4; ++j)
         image.uints.push_back({fmt::format("cam{}", j + 1), std::vector<std::uint32_t>(raw[j].begin(), raw[j].end())});
@@ -116,12 +132,23 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
       a.vectors.push_back({"sun_camera1", sc});
     }
     write_exr_image(dir / file, image);
+    if (options.previews && (index == 0 || index == last))
+      previews.back().title = fmt::format("stop {}: {}t = {:.6g} s, θ_R = {:.6g}°{}\nthe fused image on the virtual camera 1 grid (white: not valid)",
+                                          stop.index, utc.empty() ? std::string() : fmt::format("{} UTC, ", utc),
+                                          stop.t_s, stop.theta_R_deg,
+                                          heading.empty() ? std::string() : fmt::format(", true heading {:.4f}°",
+                                                                                        std::stod(heading)));
     csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, utc, stop.t_s, stop.theta_R_deg, stop.intensity,
                        stop.polarized ? 1 : 0, heading, sun_cols, file);
     progress.advance();
   }
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
+  PreviewOptions po;
+  po.grid_text = "fused pixel";
+  po.s0_label = "S0 (fused, (f - b)/K)";
+  po.frame_text = "camera 1's X towards Y";
+  const std::vector<DatasetFile> shown = report_stop_previews(dir, previews, po);
   std::vector<DatasetFile> files;
   if (board) files = report_checkerboard_views(dir, *board, progress);
   std::vector<DatasetFile> own = {{"stops.csv", 1,
@@ -134,6 +161,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
           {"frames", 1,
            "frames/stop_NNNN.exr: raw DN of cameras 1-4 as UINT channels cam1..cam4 (layers all), the fused S0, S1, "
            "S2 (layers all, fused), AoP, DoP (float) and valid (UINT 0/1) on the virtual camera 1 grid"}};
+  own.insert(own.end(), shown.begin(), shown.end());
   own.insert(own.end(), files.begin(), files.end());
   return own;
 }

@@ -1,5 +1,6 @@
 #include "polrig/report/locate_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -8,6 +9,7 @@
 
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
+#include "polrig/io/plot.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/report/positioning_reports.h"
 #include "polrig/rig/rig.h"
@@ -111,7 +113,93 @@ DatasetLocation locate_four_camera_folder(const std::filesystem::path& dir, cons
   }
 }
 
-std::vector<DatasetFile> report_dataset_location(const std::filesystem::path& dir, const DatasetLocation& run) {
+namespace {
+
+constexpr double kKmPerDeg = 111.32;  // W16's, as positioning's km
+
+// map.csv and fix.png, heading.png: the fix among the stops' lines of position, the headings
+// against time. A stop's line of position is its circle of equal zenith angle near the fix (the
+// intercept method, for the picture only): the points where the sun's zenith angle is the measured
+// one lie `residual_deg` of arc from the fix away from the sun's azimuth β, along the line
+// perpendicular to β.
+std::vector<DatasetFile> location_plots(const std::filesystem::path& dir, const DatasetLocation& run) {
+  const PositionRoot& fix = run.location.fix.chosen;
+  if (!std::isfinite(fix.lat_deg) || !std::isfinite(fix.lon_deg)) return {};
+  const double rad = std::acos(-1.0) / 180.0;
+  // The scale of the picture: the fix's distance from the truth, its 1σ, the residuals.
+  double span = 0.01;
+  if (run.truth) span = std::max(span, great_circle_km(fix.lat_deg, fix.lon_deg, run.truth->lat_deg, run.truth->lon_deg) / kKmPerDeg);
+  if (std::isfinite(fix.sd_major_km)) span = std::max(span, 2 * fix.sd_major_km / kKmPerDeg);
+  for (const LocateSample& s : run.location.samples)
+    if (std::isfinite(s.residual_deg)) span = std::max(span, 2 * std::abs(s.residual_deg));
+  const double lat0 = run.truth ? 0.5 * (fix.lat_deg + run.truth->lat_deg) : fix.lat_deg;
+  const double lon0 = run.truth ? fix.lon_deg + 0.5 * std::remainder(run.truth->lon_deg - fix.lon_deg, 360.0) : fix.lon_deg;
+  const double site_lat = run.truth ? run.truth->lat_deg : fix.lat_deg;
+  const double cos_lat = std::max(std::cos(site_lat * rad), 0.05);
+  std::string csv = "mark,utc,lat_deg,lon_deg,dlat_deg,dlon_deg\n";
+  csv += fmt::format("fix,,{},{},0,0\n", fix.lat_deg, fix.lon_deg);
+  if (run.truth) csv += fmt::format("truth,,{},{},0,0\n", run.truth->lat_deg, run.truth->lon_deg);
+  const double half = 4 * span;  // each line's half length (degrees of arc): across the picture
+  for (const LocateSample& s : run.location.samples) {
+    if (!std::isfinite(s.residual_deg) || !std::isfinite(s.beta_deg)) continue;
+    const double b = s.beta_deg * rad;
+    const double lat = fix.lat_deg - s.residual_deg * std::cos(b);
+    const double lon = fix.lon_deg - s.residual_deg * std::sin(b) / cos_lat;
+    csv += fmt::format("line,{},{},{},{},{}\n", format_utc(s.utc), lat, lon, -half * std::sin(b),
+                       half * std::cos(b) / cos_lat);
+  }
+  write_text_file(dir / "map.csv", csv);
+
+  const double h = 1.25 * span;
+  Plot map{"fix.png",
+           fmt::format("The fix (Eq. 17) and each stop's line of position (its measured zenith angle, linearized at "
+                       "the fix)\nequal ground scale at {:.4f}°N: the square is {:.3g} km ({:.3g}° of latitude) on a side",
+                       site_lat, 2 * h * kKmPerDeg, 2 * h),
+           "longitude (°E)", "latitude (°N)"};
+  map.series = {{"map.csv", "(@mark eq 'line' ? $lon_deg - $dlon_deg : NaN):($lat_deg - $dlat_deg):(2*$dlon_deg):(2*$dlat_deg)",
+                 "each stop's line of position", "vectors nohead lw 1 lc rgb '#9ecae1'"},
+                {"map.csv", "(@mark eq 'fix' ? $lon_deg : NaN):$lat_deg", "fix", "points pt 7 ps 2 lc rgb '#1f77b4'"}};
+  if (run.truth)
+    map.series.push_back({"map.csv", "(@mark eq 'truth' ? $lon_deg : NaN):$lat_deg", "truth",
+                          "points pt 3 ps 3 lw 2 lc rgb '#d62728'"});
+  map.extra = fmt::format("set xrange [{}:{}]\nset yrange [{}:{}]\nset size ratio 1\nset format x '%.3f'\n"
+                          "set format y '%.3f'\nset xtics rotate by -30\nset key below vertical maxrows 1 samplen 2",
+                          lon0 - h / cos_lat, lon0 + h / cos_lat, lat0 - h, lat0 + h);
+  map.width = 960, map.height = 920;
+
+  const bool truth_heading = std::any_of(run.true_heading_deg.begin(), run.true_heading_deg.end(),
+                                         [](double v) { return std::isfinite(v); });
+  const std::string day = run.location.samples.empty() ? std::string() : format_utc(run.location.samples[0].utc).substr(0, 10);
+  Plot heading{"heading.png", "Heading ψ = β − α_S per stop (Eq. 18)", fmt::format("UTC ({})", day),
+               "heading (°, clockwise from north)", "heading error (°)"};
+  heading.series = {{"heading.csv", "$utc:$heading_deg", "heading", "points pt 7 ps 1 lc rgb '#1f77b4'"}};
+  if (truth_heading) {
+    heading.series.push_back({"heading.csv", "$utc:$heading_true_deg", "true heading", "lines lw 2 lc rgb '#d62728'"});
+    heading.series.push_back({"heading.csv", "$utc:$heading_error_deg", "heading error (right axis)",
+                              "points pt 6 ps 1 lc rgb 'black'", true});
+  }
+  heading.extra = "set xdata time\nset timefmt '%Y-%m-%dT%H:%M:%SZ'\nset format x '%H:%M:%S'\n"
+                  "set xtics rotate by -30\nset key below horizontal maxrows 1\nset offsets 0, 0, graph 0.1, graph 0.1";
+  // Without a usable fix every heading is NaN: nothing to draw against time.
+  const bool headings = std::any_of(run.location.samples.begin(), run.location.samples.end(),
+                                    [](const LocateSample& s) { return std::isfinite(s.heading_deg); });
+  std::vector<Plot> plots{map};
+  if (headings) plots.push_back(heading);
+  render_plots(dir, "plots.gp", plots);
+  std::vector<DatasetFile> files{
+      {"map.csv", 1, "fix.png's data: the fix, the truth (when known) and per stop its line of position: the "
+                     "point (lat_deg, lon_deg) and half the line (dlat_deg, dlon_deg)"},
+      {"fix.png", 1, "the fix, the truth and the stops' lines of position on a map"}};
+  if (headings)
+    files.push_back({"heading.png", 1, "the heading per stop against time, with the truth and the error when known"});
+  files.push_back({"plots.gp", 1, "the gnuplot script of fix.png and heading.png"});
+  return files;
+}
+
+}  // namespace
+
+std::vector<DatasetFile> report_dataset_location(const std::filesystem::path& dir, const DatasetLocation& run,
+                                                 bool plots) {
   std::vector<DatasetFile> files = report_location(dir, run.location, run.truth, run.true_heading_deg);
   std::string csv = "stop,utc,status,root,sun_az_deg,sun_el_deg,vectors_used,rms_residual\n";
   for (const StopSun& s : run.suns) {
@@ -127,6 +215,10 @@ std::vector<DatasetFile> report_dataset_location(const std::filesystem::path& di
   files.push_back({"sun.csv", 1, "per polarized stop: the eigenvector method's status and root (sun or antisun), "
                                  "the sun in camera 1's frame (azimuth from X towards Y, elevation above the "
                                  "image plane), the points used and the RMS of e·s"});
+  if (plots) {
+    const std::vector<DatasetFile> drawn = location_plots(dir, run);
+    files.insert(files.end(), drawn.begin(), drawn.end());
+  }
   return files;
 }
 

@@ -5,6 +5,8 @@
 //                             its truth layers S0, S1, S2, AoP, DoP (float); header attributes
 //   DIR/truth.exr             per-pixel K, b, k, eps_deg, alpha_deg (float); the intrinsics
 //   DIR/stops.csv             one row per stop
+//   DIR/previews/             with DofpDatasetOptions::previews: the first and last stops' AoP, DoP
+//                             and S0 (report/dataset_previews.h)
 //   DIR/manifest.yaml, DIR/rig.yaml
 #include <cstdint>
 #include <filesystem>
@@ -28,6 +30,9 @@ struct DofpDatasetOptions {
   DofpFrameStorage storage = DofpFrameStorage::Every;
   bool truth_layers = false;  // S0, S1, S2, AoP, DoP in every stop's EXR
   DofpAnalyzer analyzer = DofpAnalyzer::ImagePlane;
+  // The first and the last stop's AoP, DoP and S0 as PNGs in DIR/previews/ (gnuplot): each 2 × 2
+  // cell's polarization (calib/dofp_polarization.h, the nominal parameters) in the stop's mean frame.
+  bool previews = false;
 };
 
 // Writes the dataset's files but the manifest into `dir` (an existing, empty staging folder),

@@ -8,6 +8,8 @@
 //   DIR/truth.yaml            the cameras' truth (gains, offsets, polarizer axes and errors,
 //                             intrinsics, distortion, R_j1, positions) and the virtual camera
 //   DIR/stops.csv             one row per stop: time, table angle, true heading, the sun in camera 1
+//   DIR/previews/             with FourCameraDatasetOptions::previews: the first and last stops'
+//                             fused AoP, DoP and S0 (report/dataset_previews.h)
 //   DIR/manifest.yaml, DIR/rig.yaml
 #include <filesystem>
 #include <string>
@@ -32,6 +34,9 @@ struct FourCameraDatasetOptions {
   // The fused layers by default: a full-resolution stop with the raw frames is 21 MB (formats.md
   // §6.14a); the calibration, which needs them, asks for All.
   FourCameraLayers layers = FourCameraLayers::Fused;
+  // The first and the last stop's fused AoP, DoP and S0 as PNGs in DIR/previews/ (gnuplot;
+  // report/dataset_previews.h), whichever layers the EXRs keep.
+  bool previews = false;
 };
 
 // The truth as YAML text (truth.yaml).

@@ -49,6 +49,10 @@ DatasetLocation locate_four_camera_folder(const std::filesystem::path& dir, cons
 
 // fix.csv and heading.csv (report_location) and sun.csv: per stop, the eigenvector method's
 // status, root, the sun in camera 1's frame (azimuth from X towards Y, elevation) and its fit.
-std::vector<DatasetFile> report_dataset_location(const std::filesystem::path& dir, const DatasetLocation& run);
+// With `plots` (gnuplot) also map.csv, fix.png (the fix, the truth and each stop's line of position
+// on longitude and latitude at equal ground scale), heading.png (the heading per stop against
+// time, with the truth) and plots.gp.
+std::vector<DatasetFile> report_dataset_location(const std::filesystem::path& dir, const DatasetLocation& run,
+                                                 bool plots = false);
 
 }  // namespace polrig

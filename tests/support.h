@@ -256,9 +256,12 @@ struct RunResult {
 
 // Runs `polrig ARGS` through sh (ARGS already shell-quoted where needed), with `prefix` put
 // before the program (e.g. "cd X && " or "PATH=… "); stdout and stderr go to the two files.
+// The sphere cache is off (the user's ~/.cache untouched, each run solving) unless the test's
+// environment or `prefix` ("POLRIG_CACHE_DIR=DIR ") names one.
 inline RunResult run_polrig(const std::string& args, const std::string& prefix,
                             const fs::path& stdout_file, const fs::path& stderr_file) {
-  const std::string cmd = prefix + shell_quote(kPolrigExe) + " " + args + " >" +
+  const std::string cmd = "export POLRIG_CACHE_DIR=\"${POLRIG_CACHE_DIR:-off}\"; " + prefix +
+                          shell_quote(kPolrigExe) + " " + args + " >" +
                           shell_quote(stdout_file) + " 2>" + shell_quote(stderr_file);
   const int rc = std::system(cmd.c_str());
   RunResult r;

@@ -10,6 +10,10 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
+# The sphere cache off for the module and the CLI runs (before polrig is imported): the suite
+# never writes the user's ~/.cache, and every traced run solves, as the outputs it compares expect.
+os.environ["POLRIG_CACHE_DIR"] = "off"
+
 
 def polrig_exe() -> pathlib.Path:
     exe = os.environ.get("POLRIG_EXE")

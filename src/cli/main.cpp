@@ -10,6 +10,7 @@
 #include "polrig/calib/fit.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/output_dir.h"
+#include "polrig/io/sphere_cache.h"
 #include "polrig/ranks.h"
 #include "polrig/rig/error.h"
 #include "polrig/version.h"
@@ -68,6 +69,12 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  // The sphere cache (docs/cli.md, "The sphere cache"): rank 0 alone writes it and warns.
+  install_sphere_cache(sphere_cache_from_environment(root, [root](const std::string& warning) {
+    if (!root) return;
+    cli::end_progress_line();
+    std::cerr << "polrig: warning: " << warning << "\n";
+  }));
   std::unique_ptr<tbb::global_control> limit;
   if (threads > 0)
     limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,

@@ -336,7 +336,9 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
         throw RigError(fmt::format("--photons {}: {}", **photons, *problem));
       OutputDir dir = out->open();
       const auto t0 = std::chrono::steady_clock::now();
-      Manifest m{command_line(), nullptr, trace_scene(dir.staging(), s, out->plots(), progress()), {*scene}};
+      LightOrigin light;
+      Manifest m{command_line(), nullptr, trace_scene(dir.staging(), s, out->plots(), progress(), &light), {*scene}};
+      m.light = light;
       const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       write_manifest(dir.staging(), m);
       finish(dir);

@@ -48,6 +48,16 @@ void emit_rig_text(YAML::Emitter& out, const std::string& text) {
         << YAML::EncodeBase64(reinterpret_cast<const unsigned char*>(text.data()), text.size());
   }
 }
+// How the light's expensive part was made: the sphere solved or loaded, and its cache file.
+void emit_light(YAML::Emitter& out, const Manifest& m) {
+  std::optional<LightOrigin> light = m.light;
+  if (!light && m.rig && m.rig->rig.light) light = m.rig->rig.light->origin();
+  if (!light) return;
+  out << YAML::Key << "light" << YAML::Value << YAML::BeginMap;
+  out << YAML::Key << "sphere" << YAML::Value << light->sphere;
+  out << YAML::Key << "cache_file" << YAML::Value << (light->cache_file.empty() ? "none" : light->cache_file);
+  out << YAML::EndMap;
+}
 // UTF-8 without NUL: what an HDF5 UTF-8 string holds exactly.
 bool is_utf8_text(const std::string& t) {
   return t.find('\0') == std::string::npos && reads_back_exactly(t, YAML::DoubleQuoted);
@@ -113,6 +123,7 @@ void write_manifest(const std::filesystem::path& dir, const Manifest& m) {
     for (const RigOverride& o : m.rig->overrides) out << o.path + "=" + o.value;
     out << YAML::EndSeq;
   }
+  emit_light(out, m);
   out << YAML::Key << "files" << YAML::Value << YAML::BeginMap;
   std::vector<DatasetFile> files = m.files;
   if (std::filesystem::exists(dir / "plots.gp"))

@@ -1,9 +1,13 @@
 // The compiled part of the Python package polrig (python/polrig/__init__.py re-exports it).
 #include <pybind11/pybind11.h>
 
+#include <iostream>
+#include <string>
+
 #include "bindings.h"
 #include "polrig/calib/fit.h"
 #include "polrig/io/measured.h"
+#include "polrig/io/sphere_cache.h"
 #include "polrig/rig/error.h"
 #include "polrig/version.h"
 
@@ -24,6 +28,11 @@ void bind_errors(pybind11::module_& m) {
 }  // namespace polrig::python
 
 PYBIND11_MODULE(_polrig, m) {
+  // The sphere cache, as the CLI's (docs/cli.md): from POLRIG_CACHE_DIR at import; its warnings
+  // go to stderr as the CLI's do (they may come from a worker thread, without the GIL).
+  polrig::install_sphere_cache(polrig::sphere_cache_from_environment(true, [](const std::string& warning) {
+    std::cerr << "polrig: warning: " << warning << "\n";
+  }));
   m.doc() = "polrig: simulation and calibration of polarization-sensor calibration rigs "
             "(docs/python.md).";
   m.attr("__version__") = POLRIG_VERSION;

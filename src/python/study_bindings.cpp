@@ -788,7 +788,9 @@ void bind_studies(py::module_& m) {
       const std::string command = fmt::format("python: polrig.trace('{}', out='{}', photons={}, plots={})",
                                               scene_file.string(), out.string(), scene.trace.photons,
                                               plots ? "True" : "False");
-      Manifest manifest{command, nullptr, trace_scene(dir->staging(), scene, plots, p), {scene_file.string()}};
+      LightOrigin light;
+      Manifest manifest{command, nullptr, trace_scene(dir->staging(), scene, plots, p, &light), {scene_file.string()}};
+      manifest.light = light;
       write_manifest(dir->staging(), manifest);
       dir->commit();
       for (const DatasetFile& f : manifest.files) names.push_back(f.name);

@@ -69,14 +69,11 @@ std::string line_style(int pair, const char* extra = "") {
   return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
 }
 
-// 64-bit FNV-1a: a short, stable fingerprint of a long input (a rig's text, an axis's values,
-// the files a resumable sweep has written).
-void fnv_add(std::uint64_t& h, std::string_view bytes) {
-  for (unsigned char b : bytes) h = (h ^ b) * 1099511628211ull;
-}
+// 64-bit FNV-1a (polrig/fnv.h): a short, stable fingerprint of a long input (a rig's text, an
+// axis's values, the files a resumable sweep has written).
 std::string fnv_text(std::uint64_t h) { return fmt::format("{:016x}", h); }
 struct Fingerprint {
-  std::uint64_t h = 14695981039346656037ull;
+  std::uint64_t h = kFnvBasis;
   void add(std::string_view bytes) { fnv_add(h, bytes); }
   std::string text() const { return fnv_text(h); }
 };

@@ -12,6 +12,7 @@
 #include "polrig/io/plot.h"
 #include "polrig/io/scene_yaml.h"
 #include "polrig/statistics.h"
+#include "polrig/source/sphere_cache.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
 
@@ -22,9 +23,11 @@ constexpr double kPi = std::numbers::pi;
 }
 
 std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const SceneSpec& scene,
-                                     bool plots, const Progress& progress) {
+                                     bool plots, const Progress& progress, LightOrigin* origin) {
   const SphereTracer tracer(scene);
-  const SphereSolution sol = tracer.solve(progress);
+  LightOrigin how;
+  const SphereSolution sol = solve_sphere(tracer, false, progress, how);
+  if (origin) *origin = how;
   const EnergyLedger& L = sol.ledger;
   if (L.leaked > 0)
     throw std::runtime_error(fmt::format("the sphere leaked {} of {} photons: the geometry is not "

@@ -15,6 +15,7 @@
 #include "polrig/optics/polarized_ray.h"
 #include "polrig/units.h"
 #include "polrig/random.h"
+#include "polrig/source/sphere_cache.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
 
@@ -37,7 +38,7 @@ void TracedSource::solve(const Progress& progress) const {
       tbb::task_group_context own(tbb::task_group_context::isolated);
       tbb::this_task_arena::isolate([&] {
         tbb::parallel_for(0, 1, [&](int) {
-          auto sol = std::make_unique<SphereSolution>(tracer_->solve(progress));
+          auto sol = std::make_unique<SphereSolution>(solve_sphere(*tracer_, true, progress, origin_));
           L_ref_ = mean_port_radiance(*tracer_, *sol, scene_.sensor.L_o);
           solution_ = std::move(sol);
         }, own);
@@ -53,6 +54,12 @@ void TracedSource::solve(const Progress& progress) const {
 const SphereSolution& TracedSource::solution() const {
   solve({});
   return *solution_;
+}
+
+std::optional<LightOrigin> TracedSource::origin() const {
+  // solution_ is set once, inside call_once, by the thread that solved: read after the solve.
+  if (!solution_) return std::nullopt;
+  return origin_;
 }
 
 long long TracedSource::solve_rays() const { return solution().ledger.rays; }

@@ -24,13 +24,18 @@ struct Manifest {
   std::vector<DatasetFile> files;  // plots.gp is added when the folder holds one
   std::vector<std::string> inputs = {};  // data files read (calibrate, apply)
   std::optional<std::string> working_directory = {};  // null: the current one (a resumed run gives its first's)
+  // The traced sphere solved or loaded, and its cache file (`light:`); null: the rig's light's
+  // origin(), if any (polrig trace, which has no rig, sets it).
+  std::optional<LightOrigin> light = {};
 };
 
-// Writes DIR/manifest.yaml and, when there is a rig, DIR/rig.yaml (the effective rig).
+// Writes DIR/manifest.yaml (with `light:` when the light has an origin, source.h's LightOrigin)
+// and, when there is a rig, DIR/rig.yaml (the effective rig).
 void write_manifest(const std::filesystem::path& dir, const Manifest& manifest);
 
 // The manifest's fields as (name, text) pairs, for a file that carries its own (sweep.h5's
-// attributes): the same values as manifest.yaml but the list of files; a list (overrides,
+// attributes): the same values as manifest.yaml but the list of files and `light:` (a data file
+// holds the same bits whether its sphere was solved or loaded); a list (overrides,
 // inputs) as one line per item; the rig file's text exactly as read, or as rig_text_base64 when
 // it is not UTF-8.
 std::vector<std::pair<std::string, std::string>> manifest_fields(const Manifest& manifest);

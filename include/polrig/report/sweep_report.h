@@ -12,6 +12,7 @@
 
 #include "polrig/io/csv.h"
 #include "polrig/io/manifest.h"
+#include "polrig/fnv.h"
 #include "polrig/io/sweep_h5.h"
 #include "polrig/progress.h"
 #include "polrig/ranks.h"
@@ -61,7 +62,6 @@ class SweepReport {
   // 64-bit FNV-1a of the values written to sweep.h5 (point after point, each point's columns in
   // order) and of the bytes written to sweep.csv.
   std::uint64_t h5_hash_ = kFnvBasis, csv_hash_ = kFnvBasis;
-  static constexpr std::uint64_t kFnvBasis = 14695981039346656037ull;
 
   void check_resume(const Resume& resume, bool csv);
 };

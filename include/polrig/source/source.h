@@ -92,6 +92,14 @@ class LightAlongViews {
   virtual void along(std::span<const Vec3> views, std::span<ViewLight> out) const = 0;
 };
 
+// Where a source's once-only expensive part came from, for the manifest: the traced sphere
+// "solved" here or "loaded" from the sphere cache (sphere_cache.h), and the cache file read or
+// written ("" when none was).
+struct LightOrigin {
+  std::string sphere;
+  std::string cache_file;
+};
+
 class Source {
  public:
   // What a source can do; callers choose their path and their columns from these.
@@ -132,6 +140,9 @@ class Source {
   // Once-only expensive work (the traced sphere solve), reported to `progress`; a later call
   // returns at once. Queries do it silently if it has not been done. No-op by default.
   virtual void prepare(const Progress& progress) const;
+  // How the expensive part was made, once prepare (or a query) has made it; null before, and for
+  // a source with none. Never starts the work.
+  virtual std::optional<LightOrigin> origin() const { return std::nullopt; }
 
   // The polarization the sensor sees at the pose.
   virtual Polarization polarization(const SourceView& rig, const SourcePose& pose) const = 0;

@@ -54,6 +54,8 @@ class SphereTracer {
   // Traces scene.trace.photons photons in scene.trace.batches batches (in parallel; the result
   // does not depend on the thread count).
   // Then computes the wall field (wall_field.h) from them. Reports both stages to `progress`.
+  // Reads neither scene().sensor nor trace.plane_samples: the sphere cache's key leaves them out
+  // (io/sphere_cache.h), so a solve that came to read them must put them back there.
   SphereSolution solve(const Progress& progress = {}) const;
   // The photons alone: the solution without its wall field (for benchmarks of the tracer).
   SphereSolution trace_photons(const Progress& progress = {}) const;

@@ -55,6 +55,8 @@ class TracedSource final : public Source {
   int shifts() const override { return shifts_; }
   std::optional<double> fixed_degree_of_polarization() const override { return degree_of_polarization(); }
   void prepare(const Progress& progress) const override { solve(progress); }
+  // "solved" or "loaded" (the installed sphere cache, sphere_cache.h) and its file, once solved.
+  std::optional<LightOrigin> origin() const override;
   Polarization polarization(const SourceView& rig, const SourcePose& pose) const override;
   // channel_signal of each channel (its analyzer the film the truth's α_m and kd_m stand for,
   // turned with the table) divided by its bracket: obliquity effects included.
@@ -102,7 +104,8 @@ class TracedSource final : public Source {
   double polarizer_axis_rig_deg() const { return -scene_.port.polarizer.axis_deg; }
 
   // Solves the sphere now (once; later calls return at once), reporting to `progress`. Otherwise
-  // the first signal solves it, silently.
+  // the first signal solves it, silently. The sphere cache's solution of the same scene, when
+  // the installed cache holds one, is taken instead: the same bits (solve_sphere).
   void solve(const Progress& progress) const;
 
   // Rays traced by the sphere solve, and its time (for speed reports).
@@ -123,6 +126,7 @@ class TracedSource final : public Source {
   mutable double L_ref_ = 0;  // mean radiance seen through the port: the control variate
   mutable std::once_flag solved_;
   mutable std::exception_ptr solve_failure_;  // the solve's error, rethrown to every caller
+  mutable LightOrigin origin_;                // set with solution_
 };
 
 }  // namespace polrig

@@ -25,39 +25,16 @@ struct Curve {
   std::vector<double> x, y;
 };
 
-// plots.gp with each PNG replaced by a table file; returns the curves of all plots by title.
+// The curves of every plot of DIR/plots.gp by title, as gnuplot tabulated them (tests/support.h's
+// tabulate_script): x and y of each row.
 std::map<std::string, Curve> tabulate(const fs::path& dir) {
-  std::string script;
-  for (const std::string& line : lines_of(read_file(dir / "plots.gp"))) {
-    if (line.rfind("set terminal", 0) == 0) continue;
-    if (line.rfind("set output", 0) == 0) {
-      script += "set table 'curves.txt' append\n";
-    } else if (line == "unset output") {
-      script += "unset table\n";
-    } else {
-      script += line + "\n";
-    }
-  }
-  write_file(dir / "tabulate.gp", script);
-  const std::string cmd = "cd " + shell_quote(dir) + " && gnuplot tabulate.gp 2>/dev/null";
-  EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::map<std::string, Curve> curves;
-  Curve* current = nullptr;
-  for (const std::string& line : lines_of(read_file(dir / "curves.txt"))) {
-    const std::string tag = "# Curve title: \"";
-    if (line.rfind(tag, 0) == 0) {
-      current = &curves[line.substr(tag.size(), line.size() - tag.size() - 1)];
-      continue;
-    }
-    if (line.empty() || line[0] == '#' || current == nullptr) continue;
-    std::stringstream ss(line);
-    double x = 0, y = 0;
-    std::string y_text;
-    ss >> x >> y_text;
-    y = y_text == "NaN" ? NAN : std::stod(y_text);
-    current->x.push_back(x);
-    current->y.push_back(y);
-  }
+  for (const auto& [png, plot] : tabulate_script(dir, "plots.gp"))
+    for (const auto& [title, rows] : plot)
+      for (const std::vector<double>& row : rows) {
+        curves[title].x.push_back(row.at(0));
+        curves[title].y.push_back(row.at(1));
+      }
   return curves;
 }
 

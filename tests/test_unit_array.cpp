@@ -67,7 +67,7 @@ Rig unit_rig(const std::vector<RigOverride>& sets = {}) {
   const std::string text =
       "device:\n  kind: unit-array\n  truth: {alpha_deg: [0, 0, -120, -120, 120, 120], k_mV: [0, 0, 0], "
       "kv: [1, 1, 1], kd: [0, 0, 0, 0, 0, 0]}\n"
-      "electronics: {noise_sigma_V: 0, adc_bits: 31}\nschedule: {samples_per_stop: 1}\n";
+      "electronics: {noise_sigma_V: 0, adc_bits: 31}\nschedule: {samples_per_stop: 1}\nsource: {model: sky}\n";
   return parse_rig(text, "unitrig.yaml", sets).rig;
 }
 
@@ -274,7 +274,8 @@ TEST(UnitArrayEphemeris, TheRealSensorChainBoundsTheElevationError) {
       "device:\n  kind: unit-array\n  truth:\n    alpha_deg: [0.7813, 0.8017, -117.8128, -116.3585, 123.3667, 120.6410]\n"
       "    k_mV: [-7.4487, 8.8675, -18.5845]\n    kv: [1.0064, 1.0135, 1.0070]\n"
       "    kd: [-0.0229, -0.0074, -0.0118, -0.0255, -0.0151, -0.0137]\n"
-      "electronics: {noise_sigma_V: 1.0e-4, adc_bits: 16, vref_V: 0.6}\nschedule: {samples_per_stop: 40}\n",
+      "electronics: {noise_sigma_V: 1.0e-4, adc_bits: 16, vref_V: 0.6}\nschedule: {samples_per_stop: 40}\n"
+      "source: {model: sky}\n",
       "unitrig.yaml").rig;
   const ElevationErrors e = elevation_errors(rig, [&](const UnitArrayTruth& t, const Sky& sky, UtcTime tm,
                                                       const Axes3& C_bn, std::uint64_t k) {
@@ -413,7 +414,7 @@ TEST(UnitArrayRig, KeysSetTheLayoutAndRoundTrip) {
   const std::string text =
       "device:\n  kind: unit-array\n  units:\n    ring_tilt_deg: 45\n    ring_azimuths_deg: [10, 130, 250]\n"
       "    zenith: false\n    misalignment_deg: [0.1, 0.2, 0.3]\n    mount_error_z_deg: [0.5, -0.5, 0.25]\n"
-      "    apply: theory\n";
+      "    apply: theory\nsource: {model: sky}\n";
   const Rig rig = parse_rig(text, "unitrig.yaml").rig;
   const UnitArrayTruth t = unit_array_truth(rig.units, rig.seed);
   ASSERT_EQ(t.placements.size(), 3u);
@@ -438,9 +439,10 @@ TEST(UnitArrayRig, KeysSetTheLayoutAndRoundTrip) {
 }
 
 namespace {
+// The text under the sky a unit array reads (appended: the lines above keep their numbers).
 std::string rig_error(const std::string& text) {
   try {
-    parse_rig(text, "unitrig.yaml");
+    parse_rig(text + "source: {model: sky}\n", "unitrig.yaml");
   } catch (const RigError& e) {
     return e.what();
   }

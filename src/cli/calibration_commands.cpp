@@ -220,6 +220,15 @@ void run_calibrate(const std::string& input, const std::string& method_text,
                    const OutputOptions& out) {
   if (method_text == "four-camera")
     return run_calibrate_four_camera(input, rig_path, settings, drift, view_projection, geometry, out);
+  if (method_text == "unit-array") {
+    const std::string m = "--method unit-array";
+    if (drift.mode != "none") throw DataError(fmt::format("--drift {}: {} fits against the ephemeris sun itself", drift.mode, m));
+    if (!drift.site.empty()) throw DataError(fmt::format("--site {}: {} takes the site from the dataset's rig", drift.site, m));
+    if (settings.d_a) throw DataError(fmt::format("--d-a {}: {} reads each unit's own DoP", *settings.d_a, m));
+    if (view_projection) throw DataError(fmt::format("--view-projection: a DoFP camera's step-2 option, not {}", m));
+    if (!geometry.file.empty()) throw DataError(fmt::format("--geometry {}: the four cameras' geometry, not {}", geometry.file, m));
+    return run_calibrate_unit_array(input, rig_path, out);
+  }
   if (!geometry.file.empty())
     throw DataError(fmt::format("--geometry {}: the four cameras' geometry (--method four-camera), not --method {}",
                                 geometry.file, method_text));
@@ -237,7 +246,7 @@ void run_calibrate(const std::string& input, const std::string& method_text,
   } else if (auto m = parse_method(method_text)) {
     methods.push_back(*m);
   } else {
-    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc, all, dofp or four-camera", method_text));
+    throw DataError(fmt::format("--method {}: expected section, cs, cs-nc, nc, all, dofp, four-camera or unit-array", method_text));
   }
   if (drift.mode != "none")
     for (CalibrationMethod m : methods)
@@ -383,7 +392,8 @@ std::vector<Command> add_calibration_commands(CLI::App& root, CLI::App& study, i
     app->add_option("--method", *method, "section | cs | cs-nc | nc | all (nc: the raw stops, "
                                          "noncontinuous + section, as outdoors) | dofp (a DoFP camera "
                                          "dataset: H17's two steps) | four-camera (a four-camera dataset "
-                                         "with raw frames: W16's gains, offsets and polarizer angles)")->capture_default_str();
+                                         "with raw frames: W16's gains, offsets and polarizer angles) | unit-array (a "
+                                         "unit-array dataset: Z21's installation calibration of every unit's mounting)")->capture_default_str();
     app->add_option("--drift", drift->mode, "sun-drift correction of an outdoor run: none | angle | "
                                             "per-stop | linear (needs the stops' times and the site: a utc column and --site, or a sky rig's simulate folder)")
         ->capture_default_str();

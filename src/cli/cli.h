@@ -100,6 +100,8 @@ struct RigInput {
   void add_to(CLI::App& app, bool required);
   LoadedRig load() const;
 };
+// --set KEY=VALUE (repeatable) into `sets`, refusing a value that is not KEY=VALUE.
+void add_set_option(CLI::App& app, std::vector<std::string>& sets);
 
 void add_threads_option(CLI::App& app, int& threads);
 
@@ -140,5 +142,10 @@ std::vector<Command> add_spectral_commands(CLI::App& root);
 std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& threads);
 std::vector<Command> add_sky_commands(CLI::App& root, int& threads);
 std::vector<Command> add_position_commands(CLI::App& root, CLI::App& study, int& threads);
+std::vector<Command> add_navigation_commands(CLI::App& root, int& threads);
+// `simulate` of a unit-array rig: its navigation dataset (navigation_commands.cpp).
+void simulate_unit_array(const LoadedRig& r, const OutputOptions& out);
+// `calibrate DIR --method unit-array`: the units' installation calibration (navigation_commands.cpp).
+void run_calibrate_unit_array(const std::string& input, const std::string& rig_path, const OutputOptions& out);
 
 }  // namespace polrig::cli

@@ -109,6 +109,10 @@ OutputDir OutputOptions::open(bool plots_needed) const {
 void RigInput::add_to(CLI::App& app, bool required) {
   auto* r = app.add_option("RIG", path, "rig file (YAML), e.g. rigs/wang2019-indoor.yaml");
   if (required) r->required();
+  add_set_option(app, sets);
+}
+
+void add_set_option(CLI::App& app, std::vector<std::string>& sets) {
   // A value that is not KEY=VALUE is refused here, so `--set -o out` names --set, not a missing -o.
   const CLI::Validator key_value(
       [](const std::string& s) -> std::string {

@@ -129,6 +129,14 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
       }
       if (array_layers_opt->count() > 0)
         throw RigError(fmt::format("--layers: device.kind {} is not a camera array", r.rig.device_kind));
+      if (r.rig.instrument().has(Instrument::kUnitArray)) {
+        for (const CLI::Option* o : {frames_opt, layers_opt, analyzer_opt})
+          if (o->count() > 0)
+            throw RigError(fmt::format("{}: device.kind {} takes no frames", o->get_name(), r.rig.device_kind));
+        if (*samples) throw RigError(fmt::format("--samples: device.kind {} writes its units' mean voltages (units.csv)", r.rig.device_kind));
+        simulate_unit_array(r, *out);
+        return;
+      }
       if (r.rig.instrument().has(Instrument::kMosaic)) {
         if (*samples) throw RigError(fmt::format("--samples: device.kind {} takes frames, not samples", r.rig.device_kind));
         DofpDatasetOptions o;

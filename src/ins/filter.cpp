@@ -107,6 +107,12 @@ ScalarUpdate InsFilter::update(const SunElevation& m) {
   RowVector15 H = RowVector15::Zero();
   H[kDLat] = model.d_lat;
   H[kDLon] = model.d_lon;
+  if (settings_.tilt_in_measurement) {
+    if (!std::isfinite(m.sun_east) || !std::isfinite(m.sun_north))
+      throw std::invalid_argument("filter: tilt_in_measurement needs the sun's east and north components");
+    H[kPhi] = m.sun_north;
+    H[kPhi + 1] = -m.sun_east;
+  }
   const double z = model.sin_H - std::sin(m.elevation_rad);
   const double R_nominal = std::pow(std::cos(m.elevation_rad) * settings_.sigma_H_rad, 2);
   if (!std::isfinite(z) || !filter_.P.allFinite()) {

@@ -12,7 +12,6 @@
 namespace polrig {
 namespace {
 
-constexpr double kStandardGravity = 9.80665;
 
 // Channels of standard_normal: sensor (gyro 0, accel 1) · 16 + process · 4 + axis.
 enum Process : std::uint64_t { kWhite = 0, kGaussMarkov = 1, kRandomWalk = 2, kDrawn = 3 };

@@ -91,6 +91,11 @@ double rms_deg(const Eigen::VectorXd& r) {
 
 }  // namespace
 
+Axes3 installed_frame(const Axes3& nominal, const std::array<double, 3>& error_deg) {
+  const double d[3] = {deg2rad(error_deg[0]), deg2rad(error_deg[1]), deg2rad(error_deg[2])};
+  return with_error(nominal, d);
+}
+
 double predicted_unit_aop_rad(const Axes3& C_mb, const Vec3& sun_b) {
   const Vec3 e = vec3::cross(sun_b, C_mb[2]);
   const Vec3 k = vec3::mul(C_mb[2], -1.0);

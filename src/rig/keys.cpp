@@ -126,6 +126,173 @@ std::string instrument_kinds_text() {
 constexpr unsigned kSimulate = RigKey::kSimulate, kCs = RigKey::kCs, kAdc = RigKey::kAdc,
                    kCalibrate = RigKey::kCalibrate;
 
+// --- trajectory.*, imu.*, navigation.* (rig/ins_settings.h; spec sky-and-compasses.md §4): a unit
+// array's vehicle, its IMU and the SINS/PNS filter. Read by a unit-array rig under the sky, whose
+// site and first_stop_utc are the run's start.
+void add_ins_keys(std::vector<RigKey>& keys) {
+  const auto push = [&](RigKey k, unsigned studies) { keys.push_back(reads(only(std::move(k), kUnits), studies, "sky")); };
+  const auto list = [&](std::string_view path, std::string_view unit, std::string_view noun, RealRange r,
+                        std::string_view doc, std::string_view why, std::vector<double>& (*ref)(Rig&),
+                        bool (*valid)(double)) {
+    RigKey k{path, K::RealList, unit, expects_text(noun, r, unit), doc, why};
+    k.list = ref;
+    k.range = r;
+    k.max_items = 1000;
+    k.valid_real = valid;
+    push(k, kSimulate);
+  };
+  push(real<RealRange{0.01, 100.0}>(
+           "device.units.rate_hz", "Hz", "a rate", "the compass's output rate: every unit read once per 1/rate "
+           "(Z21 Table 1: 1 Hz) [C: 1]; the IMU's rate must be a whole multiple of it",
+           "a reading per 100 s to 100 per second; the six-photodiode chain averages its samples within one",
+           [](Rig& r) -> double& { return r.units.rate_hz; }), kSimulate);
+  // The vehicle.
+  constexpr RealRange kHeading{-360.0, 360.0}, kPitch{-80.0, 80.0}, kRoll{-180.0, 180.0};
+  push(real<kHeading>("trajectory.heading_deg", "deg", "an angle", "the start's heading (yaw), clockwise from north",
+                      kTurnWhy, [](Rig& r) -> double& { return r.trajectory.heading_deg; }), kSimulate | RigKey::kNavigate);
+  push(real<kPitch>("trajectory.pitch_deg", "deg", "an angle", "the start's pitch, nose up positive",
+                    "the Euler angles are singular at ±90°; a land vehicle climbs far less than 80°",
+                    [](Rig& r) -> double& { return r.trajectory.pitch_deg; }), kSimulate | RigKey::kNavigate);
+  push(real<kRoll>("trajectory.roll_deg", "deg", "an angle", "the start's roll, right side down positive; it stays",
+                   "half a turn either way", [](Rig& r) -> double& { return r.trajectory.roll_deg; }), kSimulate | RigKey::kNavigate);
+  push(real<RealRange{0.0, 300.0}>("trajectory.speed_mps", "m/s", "a speed", "the start's speed along the body's "
+                                   "forward axis (0: at rest)",
+                                   "at rest to an airliner's cruise", [](Rig& r) -> double& { return r.trajectory.speed_mps; }),
+       kSimulate | RigKey::kNavigate);
+  push(real<RealRange{0.0, 86400.0, true, false}>(
+           "trajectory.duration_s", "s", "a duration",
+           "the run's length when no segments are given: one static segment (a cruise when moving) [C: 1200, Z21's 20 min]",
+           "positive, at most a day", [](Rig& r) -> double& { return r.trajectory.duration_s; }), kSimulate);
+  list("trajectory.segment_s", "s", "a list of up to 1000 durations", RealRange{0.0, 86400.0, true, false},
+       "the segments' durations (replace trajectory.duration_s); each a whole number of IMU intervals",
+       "positive, at most a day each", [](Rig& r) -> std::vector<double>& { return r.trajectory.segment_s; },
+       &within<RealRange{0.0, 86400.0, true, false}>);
+  list("trajectory.segment_accel_mps2", "m/s^2", "a list of up to 1000 accelerations", RealRange{-20.0, 20.0},
+       "each segment's acceleration along the body's forward axis (one per segment, or none: 0)",
+       "a car brakes at ~10 m/s²; 2 g is beyond any land vehicle",
+       [](Rig& r) -> std::vector<double>& { return r.trajectory.segment_accel_mps2; }, &within<RealRange{-20.0, 20.0}>);
+  list("trajectory.segment_turn_deg_s", "deg/s", "a list of up to 1000 turn rates", RealRange{-90.0, 90.0},
+       "each segment's turn rate, clockwise seen from above positive (one per segment, or none: 0)",
+       "a quarter turn per second is beyond a vehicle's turns",
+       [](Rig& r) -> std::vector<double>& { return r.trajectory.segment_turn_deg_s; }, &within<RealRange{-90.0, 90.0}>);
+  list("trajectory.segment_climb_deg_s", "deg/s", "a list of up to 1000 pitch rates", RealRange{-10.0, 10.0},
+       "each segment's pitch rate, nose up positive (one per segment, or none: 0); the pitch stays within ±80°",
+       "a vehicle's pitch changes by degrees per second at most",
+       [](Rig& r) -> std::vector<double>& { return r.trajectory.segment_climb_deg_s; }, &within<RealRange{-10.0, 10.0}>);
+  // The IMU (ins/imu.h), per axis x, y, z of the body.
+  push(real<RealRange{1.0, 2000.0}>("imu.rate_hz", "Hz", "a rate", "the IMU's output rate [C: 100]",
+                                    "strapdown IMUs output 1 Hz to 2 kHz",
+                                    [](Rig& r) -> double& { return r.imu.rate_hz; }), kSimulate | RigKey::kNavigate);
+  // The accessors must be plain function pointers: one per key, so one lambda per triad and field.
+#define POLRIG_TRIAD_ARRAY(TRIAD, FIELD) \
+  +[](Rig& r) { return std::span<double>(r.imu.TRIAD.FIELD); }
+  constexpr RealRange kGyroBias{-1e4, 1e4}, kGyroSigma{0.0, 1e4}, kGyroArw{0.0, 100.0}, kAccelBias{-1e5, 1e5},
+      kAccelSigma{0.0, 1e5}, kVrw{0.0, 1e4}, kTau{1.0, 1e7}, kPpm{0.0, 1e5};
+  constexpr std::string_view gyro_why = "from navigation grade (0.001°/h) to consumer MEMS (1e4°/h = 2.8°/s)";
+  constexpr std::string_view accel_why = "from navigation grade (10 µg) to consumer MEMS (0.1 g)";
+  keys.push_back(reads(only(array<kGyroBias>("imu.gyro.bias_deg_h", "deg/h", "3 rates", "constant gyro bias per axis "
+      "(the same in every run)", gyro_why, POLRIG_TRIAD_ARRAY(gyro, bias)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kGyroSigma>("imu.gyro.turn_on_deg_h", "deg/h", "3 standard deviations",
+      "σ of the gyro's turn-on bias, drawn per seed (Z21 Table 1's 5°/h) [C: 5]", gyro_why,
+      POLRIG_TRIAD_ARRAY(gyro, turn_on_sigma)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kGyroSigma>("imu.gyro.instability_deg_h", "deg/h", "3 standard deviations",
+      "σ of the gyro's bias instability, a first-order Gauss–Markov process [C: 0]", gyro_why,
+      POLRIG_TRIAD_ARRAY(gyro, bias_instability)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kTau>("imu.gyro.correlation_time_s", "s", "3 times",
+      "the Gauss–Markov bias's correlation time [C: 3600]", "a second to four months",
+      POLRIG_TRIAD_ARRAY(gyro, correlation_time_s)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kGyroArw>("imu.gyro.arw_deg_rt_h", "deg/sqrt(h)", "3 noise densities",
+      "angle random walk (white rate noise) [C: 0.5, Z21 Table 1]", "navigation grade 0.001°/√h to MEMS 100°/√h",
+      POLRIG_TRIAD_ARRAY(gyro, white_noise)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kGyroArw>("imu.gyro.rrw_deg_h_rt_h", "deg/h/sqrt(h)", "3 noise densities",
+      "rate random walk of the gyro bias [C: 0]", "as the angle random walk",
+      POLRIG_TRIAD_ARRAY(gyro, random_walk)), kUnits), kSimulate, "sky"));
+  keys.push_back(reads(only(array<kPpm>("imu.gyro.scale_factor_ppm", "ppm", "3 standard deviations",
+      "σ of the gyro scale-factor errors, drawn per seed [C: 0]", "10 % at most",
+      POLRIG_TRIAD_ARRAY(gyro, scale_factor_ppm)), kUnits), kSimulate, "sky"));
+  keys.push_back(reads(only(array<kAccelBias>("imu.accel.bias_ug", "ug", "3 accelerations",
+      "constant accelerometer bias per axis (the same in every run)", accel_why,
+      POLRIG_TRIAD_ARRAY(accel, bias)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kAccelSigma>("imu.accel.turn_on_ug", "ug", "3 standard deviations",
+      "σ of the accelerometer's turn-on bias, drawn per seed (Z21 Table 1's 50 µg) [C: 50]", accel_why,
+      POLRIG_TRIAD_ARRAY(accel, turn_on_sigma)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kAccelSigma>("imu.accel.instability_ug", "ug", "3 standard deviations",
+      "σ of the accelerometer's bias instability (Gauss–Markov) [C: 0]", accel_why,
+      POLRIG_TRIAD_ARRAY(accel, bias_instability)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kTau>("imu.accel.correlation_time_s", "s", "3 times",
+      "the Gauss–Markov bias's correlation time [C: 3600]", "a second to four months",
+      POLRIG_TRIAD_ARRAY(accel, correlation_time_s)), kUnits), kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kVrw>("imu.accel.vrw_ug_rt_hz", "ug/sqrt(Hz)", "3 noise densities",
+      "velocity random walk (white specific-force noise) [C: 25, Z21 Table 1]",
+      "navigation grade 5 µg/√Hz to MEMS 1e4 µg/√Hz", POLRIG_TRIAD_ARRAY(accel, white_noise)), kUnits),
+      kSimulate | RigKey::kNavigate, "sky"));
+  keys.push_back(reads(only(array<kVrw>("imu.accel.rrw_ug_rt_s", "ug/sqrt(s)", "3 noise densities",
+      "random walk of the accelerometer bias [C: 0]", "as the velocity random walk",
+      POLRIG_TRIAD_ARRAY(accel, random_walk)), kUnits), kSimulate, "sky"));
+  keys.push_back(reads(only(array<kPpm>("imu.accel.scale_factor_ppm", "ppm", "3 standard deviations",
+      "σ of the accelerometer scale-factor errors, drawn per seed [C: 0]", "10 % at most",
+      POLRIG_TRIAD_ARRAY(accel, scale_factor_ppm)), kUnits), kSimulate, "sky"));
+#undef POLRIG_TRIAD_ARRAY
+  constexpr RealRange kMis{0.0, 5.0};
+  push(real<kMis>("imu.gyro.misalignment_deg", "deg", "a standard deviation",
+                  "σ of each off-diagonal element of the gyro triad's misalignment, drawn per seed [C: 0]",
+                  "a triad's axes are orthogonal to a few mrad", [](Rig& r) -> double& { return r.imu.gyro.misalignment_deg; }),
+       kSimulate);
+  push(real<kMis>("imu.accel.misalignment_deg", "deg", "a standard deviation",
+                  "σ of each off-diagonal element of the accelerometer triad's misalignment, drawn per seed [C: 0]",
+                  "a triad's axes are orthogonal to a few mrad", [](Rig& r) -> double& { return r.imu.accel.misalignment_deg; }),
+       kSimulate);
+  // The filter (ins/filter.h) and the INS's start.
+  constexpr unsigned kNav = RigKey::kNavigate;
+  push(real<RealRange{0.0, 10.0, true, false}>(
+           "navigation.sigma_H_deg", "deg", "a standard deviation",
+           "the compass' sun-elevation σ the filter assumes: R = (cos H·σ_H)² [C: 0.1, Z21 Table 1]",
+           "positive; beyond 10° the elevation tells nothing of the position",
+           [](Rig& r) -> double& { return r.navigation.sigma_H_deg; }), kNav);
+  push(boolean("navigation.adaptive", "Sage–Husa's adaptive R (spec §4.7) [C: true]",
+               [](Rig& r) -> bool& { return r.navigation.adaptive; }), kNav);
+  push(real<RealRange{0.5, 1.0, false, true}>(
+           "navigation.forgetting_factor", "", "a factor", "Sage–Husa's b: β → 1 − b (Z21: 0.98) [C: 0.98]",
+           "below 0.5 R follows the last few innovations; towards 1 it forgets ever more slowly (1 itself: never)",
+           [](Rig& r) -> double& { return r.navigation.forgetting_factor; }), kNav);
+  push(boolean("navigation.hold_height", "hold the height at the start's, as Z21's barometer does [C: true]",
+               [](Rig& r) -> bool& { return r.navigation.hold_height; }), kNav);
+  keys.push_back(reads(only(array<RealRange{-10.0, 10.0}>(
+      "navigation.initial_attitude_error_deg", "deg", "3 angles",
+      "roll, pitch and heading errors of the INS's start: added to the start attitude of trajectory.* the INS starts from [C: 0, 0, 0]",
+      "an alignment is good to degrees at worst", [](Rig& r) { return std::span<double>(r.navigation.initial_attitude_error_deg); }),
+      kUnits), kNav, "sky"));
+  keys.push_back(reads(only(array<RealRange{0.0, 30.0, true, false}>(
+      "navigation.attitude_sigma_deg", "deg", "3 standard deviations",
+      "P0's attitude errors φ_E, φ_N, φ_U [C: 0.05, 0.05, 0.5]", "positive; 30° is no alignment at all",
+      [](Rig& r) { return std::span<double>(r.navigation.attitude_sigma_deg); }), kUnits), kNav, "sky"));
+  push(real<RealRange{0.0, 100.0, true, false}>(
+           "navigation.velocity_sigma_mps", "m/s", "a standard deviation", "P0's velocity error per axis [C: 0.02]",
+           "positive; 100 m/s is no velocity at all", [](Rig& r) -> double& { return r.navigation.velocity_sigma_mps; }),
+       kNav);
+  push(real<RealRange{0.0, 1e6, true, false}>(
+           "navigation.position_sigma_m", "m", "a standard deviation", "P0's north and east position error, and the height's when navigation.hold_height is false [C: 200]",
+           "positive; 1000 km is a continent", [](Rig& r) -> double& { return r.navigation.position_sigma_m; }), kNav);
+  push(real<RealRange{2.0, 86400.0}>(
+           "navigation.pns_window_s", "s", "a duration",
+           "PNS: each fix from the sun elevations of the last window (W16's positioning fit, the vehicle assumed "
+           "still over it) [C: 300]",
+           "two readings at least; a day at most", [](Rig& r) -> double& { return r.navigation.pns_window_s; }), kNav);
+  {
+    RigKey k{"navigation.pns_level", K::Text, "", "accelerometer or sins",
+             "PNS's roll and pitch: accelerometer, the mean specific force over each reading's interval (at rest or "
+             "in steady straight motion), or sins, the free INS's attitude (drifting with the gyro biases) "
+             "[C: accelerometer]"};
+    k.text = [](Rig& r) -> std::string& { return r.navigation.pns_level; };
+    k.valid_text = [](std::string_view v) { return v == "accelerometer" || v == "sins"; };
+    push(k, kNav);
+  }
+  push(boolean("navigation.tilt_in_measurement",
+               "the integrated filter's H with the tilt columns: the INS's tilt error enters the measured H^n and is "
+               "estimated (ins/filter.h) [C: false, Z21's position-only H]",
+               [](Rig& r) -> bool& { return r.navigation.tilt_in_measurement; }), kNav);
+}
+
 std::vector<RigKey> make_keys() {
   std::vector<RigKey> keys;
   // --- device -------------------------------------------------------------------------
@@ -544,6 +711,7 @@ std::vector<RigKey> make_keys() {
     k.valid_text = [](std::string_view v) { return v == "truth" || v == "theory"; };
     keys.push_back(reads(only(k, kUnits), kSimulate, ""));
   }
+  add_ins_keys(keys);
   {
     RigKey k{"source.model", K::Text, "", kinds_text(),
              "source model: cos4 is the analytic E_0·cos⁴φ port; traced is the Embree-traced "
@@ -835,7 +1003,8 @@ bool RigKey::read_by_instrument(std::string_view kind) const { return listed(ins
 
 std::string RigKey::studies_text() const {
   std::string out;
-  for (const auto& [bit, name] : {std::pair{kSimulate, "simulate"}, {kCs, "cs"}, {kAdc, "adc"}, {kCalibrate, "calibrate"}})
+  for (const auto& [bit, name] : {std::pair{kSimulate, "simulate"}, {kCs, "cs"}, {kAdc, "adc"}, {kCalibrate, "calibrate"},
+                                                {kNavigate, "navigate"}})
     if (studies & bit) out += (out.empty() ? "" : ", ") + std::string(name);
   return out;
 }
@@ -845,6 +1014,60 @@ const RigKey* find_rig_key(std::string_view path) {
     if (k.path == path) return &k;
   return nullptr;
 }
+
+namespace {
+// Whether n is within 1e-9 (relative) of a positive whole number.
+bool whole(double n) { return n >= 0.5 && std::abs(n - std::round(n)) <= 1e-9 * std::max(1.0, n); }
+
+// A unit array's run (rig/ins_settings.h): under the sky, a whole number of IMU intervals per
+// compass reading and per segment, one motion per segment, the speed never negative and the pitch
+// within ±80° along the way, and at most 2e6 IMU samples (a run's truth and IMU are held in memory).
+std::optional<RigProblem> unit_array_run_problem(const Rig& rig) {
+  if (rig.source.model != "sky")
+    return RigProblem{"source.model", fmt::format("expected sky for device.kind unit-array (its units read the "
+                                                  "sky), got '{}'", rig.source.model), "device.kind"};
+  const double imu_hz = rig.imu.rate_hz;
+  if (!whole(imu_hz / rig.units.rate_hz))
+    return RigProblem{"device.units.rate_hz", fmt::format("expected a rate that divides imu.rate_hz ({} Hz) into a "
+                                                          "whole number of IMU samples, got {} Hz", imu_hz, rig.units.rate_hz),
+                      "imu.rate_hz"};
+  const TrajectorySettings& t = rig.trajectory;
+  const std::size_t n = t.segment_s.size();
+  for (const auto& [path, list] : {std::pair{"trajectory.segment_accel_mps2", &t.segment_accel_mps2},
+                                   {"trajectory.segment_turn_deg_s", &t.segment_turn_deg_s},
+                                   {"trajectory.segment_climb_deg_s", &t.segment_climb_deg_s}})
+    if (!list->empty() && list->size() != n)
+      return RigProblem{path, fmt::format("expected one value per segment of trajectory.segment_s ({}), got {}", n,
+                                          list->size()), "trajectory.segment_s"};
+  const auto at = [](const std::vector<double>& v, std::size_t i) { return v.empty() ? 0.0 : v[i]; };
+  double u = t.speed_mps, pitch = t.pitch_deg, total = 0;
+  for (std::size_t i = 0; i < std::max<std::size_t>(n, 1); ++i) {
+    const double d = n == 0 ? t.duration_s : t.segment_s[i];
+    const std::string path = n == 0 ? "trajectory.duration_s" : "trajectory.segment_s";
+    if (!whole(d * imu_hz))
+      return RigProblem{path, fmt::format("expected a whole number of IMU intervals (1/{} s) per segment, got {} s "
+                                          "(segment {})", imu_hz, d, i + 1), "imu.rate_hz"};
+    const double a = at(t.segment_accel_mps2, i), w = at(t.segment_turn_deg_s, i), c = at(t.segment_climb_deg_s, i);
+    if (int(a != 0) + int(w != 0) + int(c != 0) > 1)
+      return RigProblem{"trajectory.segment_accel_mps2", fmt::format("expected one motion per segment (an acceleration, "
+                                                                     "a turn or a climb), segment {} has {} m/s², {}°/s "
+                                                                     "and {}°/s", i + 1, a, w, c)};
+    u += a * d;
+    pitch += c * d;
+    total += d;
+    if (u < -1e-9)
+      return RigProblem{"trajectory.segment_accel_mps2", fmt::format("expected a speed ≥ 0 throughout, segment {} ends "
+                                                                     "at {} m/s", i + 1, u)};
+    if (std::abs(pitch) > 80)
+      return RigProblem{"trajectory.segment_climb_deg_s", fmt::format("expected the pitch within ±80°, segment {} ends "
+                                                                      "at {}°", i + 1, pitch)};
+  }
+  if (total * imu_hz > 2e6)
+    return RigProblem{"imu.rate_hz", fmt::format("expected at most 2e6 IMU samples in a run, got {:.0f} ({} s at {} Hz)",
+                                                 total * imu_hz, total, imu_hz)};
+  return std::nullopt;
+}
+}  // namespace
 
 std::optional<RigProblem> check_rig(const Rig& rig) {
   const Schedule& s = rig.schedule;
@@ -897,8 +1120,10 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
                         fmt::format("expected the white squares brighter than the black ones, got white {} and black {}",
                                     b.intensity[0], b.intensity[1])};
   }
-  if (rig.instrument().has(Instrument::kUnitArray))
+  if (rig.instrument().has(Instrument::kUnitArray)) {
     if (auto p = unit_array_problem(rig.units)) return RigProblem{p->path, p->message};
+    if (auto p = unit_array_run_problem(rig)) return p;
+  }
   for (int m = 0; m < 6 && rig.instrument().has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.
     if ((1.0 + rig.device.truth.kd[m]) * rig.device.d >= 1.0)

@@ -52,6 +52,8 @@ struct UnitArraySpec {
   // The calibration model each unit's voltages are read with: "truth" (the unit's own device.truth:
   // a perfectly calibrated sensor) or "theory" (the nominal parameters of its film axes).
   std::string apply = "truth";
+  // The compass's output rate: one reading of every unit per 1/rate_hz (Z21 Table 1: 1 Hz).
+  double rate_hz = 1.0;
 };
 
 // The units' nominal placements, the middle unit (if any) first.

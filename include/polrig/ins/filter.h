@@ -71,6 +71,10 @@ struct FilterSettings {
   double sage_husa_b = 0.98;       // Z21's forgetting factor as b (spec §4.7)
   double R_min_factor = 0.01, R_max_factor = 100;  // PSINS's clamp on R, times R0
   MechanizationOptions mechanization;  // Z21 holds the height to its barometer
+  // H^n is measured through the INS's attitude, C̃_b^n = (I − [φ×])·C_b^n, so sin H̃^n = sin H^n −
+  // φ_E·s_N + φ_N·s_E: with this on, H gains the tilt columns [s_N, −s_E] on φ_E, φ_N and the filter
+  // estimates the tilt the measurement carries; off, H is Z21's (position only, spec §4.3).
+  bool tilt_in_measurement = false;
   ErrorModelNoise noise = error_model_noise(z21_imu_errors());  // Z21's Table 1 [C]
 };
 
@@ -78,6 +82,9 @@ struct SunElevation {
   double t_s = 0;
   double elevation_rad = 0;  // H^n, measured
   double dec_rad = 0, gha_rad = 0;  // the sun's, at t_s
+  // The measured sun's east and north components in n (s^n = C_b^n·s^b): the tilt columns of H
+  // (FilterSettings::tilt_in_measurement); NaN without them.
+  double sun_east = std::numeric_limits<double>::quiet_NaN(), sun_north = std::numeric_limits<double>::quiet_NaN();
 };
 
 enum class FilterStatus {

@@ -17,6 +17,9 @@
 
 namespace polrig {
 
+// g₀ = 9.80665 m/s² (CGPM 1901): what an accelerometer's µg and µg/√Hz are counted in.
+inline constexpr double kStandardGravity = 9.80665;
+
 struct ImuSample {
   double t_s = 0;  // the end of the interval
   Eigen::Vector3d dtheta = Eigen::Vector3d::Zero();  // ∫ω_ib^b dt (rad)

@@ -47,6 +47,10 @@ std::vector<UnitInstallation> calibrate_installation(std::span<const UnitMount> 
                                                      std::span<const InstallationEpoch> epochs,
                                                      const UnitInstallationSettings& settings = {});
 
+// The frame of a unit mounted with error δ (x, y, z, degrees): C_mi^b·Rx(δx)·Ry(δy)·Rz(δz), as the fit
+// models it (UnitInstallation::C_mb), for a calibration read back from its file.
+Axes3 installed_frame(const Axes3& nominal, const std::array<double, 3>& error_deg);
+
 // The predicted reading φ̂ (spec sense, [0, π)) of a unit with frame C_mb seeing the sun s^b.
 double predicted_unit_aop_rad(const Axes3& C_mb, const Vec3& sun_b);
 

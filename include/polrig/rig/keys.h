@@ -55,8 +55,11 @@ struct RigKey {
   bool (*valid_text)(std::string_view) = nullptr;
 
   // Who reads the key. The studies: simulate (also run, study calibration), the CS study (study
-  // cs, sweep), study adc, and calibrate (a --rig or a dataset's rig.yaml).
-  enum Study : unsigned { kSimulate = 1u << 0, kCs = 1u << 1, kAdc = 1u << 2, kCalibrate = 1u << 3 };
+  // cs, sweep), study adc, calibrate (a --rig or a dataset's rig.yaml), and navigate (a unit
+  // array's dataset).
+  enum Study : unsigned {
+    kSimulate = 1u << 0, kCs = 1u << 1, kAdc = 1u << 2, kCalibrate = 1u << 3, kNavigate = 1u << 4
+  };
   unsigned studies = 0;
   // The source models that read it (source.model names, space-separated); empty: every model.
   // A rig whose model is not among them refuses the key (rig file, --set, --grid) and leaves it

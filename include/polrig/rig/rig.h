@@ -16,6 +16,7 @@
 #include "polrig/geometry/geometry.h"
 #include "polrig/geometry/schedule.h"
 #include "polrig/instrument/instrument.h"
+#include "polrig/rig/ins_settings.h"
 #include "polrig/source/source.h"
 
 namespace polrig {
@@ -33,6 +34,10 @@ struct Rig {
   // Z21's unit-array compass (device.units.* keys of device.kind unit-array); each unit is a
   // six-photodiode sensor with `device`'s true parameters and the rig's `electronics`.
   UnitArraySpec units;
+  // The unit array's vehicle, IMU and navigation filter (trajectory.*, imu.*, navigation.* keys).
+  TrajectorySettings trajectory;
+  ImuSettings imu;
+  NavigationSettings navigation;
   CheckerboardSpec checkerboard;  // the four cameras' calibration target (checkerboard.* keys)
   SourceSpec source;  // the source.* keys' settings
   // The light, made by make_source from `source` when the rig loads (cos⁴ by default) and shared

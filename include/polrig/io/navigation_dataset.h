@@ -1,0 +1,28 @@
+#pragma once
+// A unit-array navigation dataset's files (docs/formats.md §6.17): imu.csv, units.csv and, when
+// simulated, truth.csv and truth.yaml; the rig beside them (rig.yaml) gives the start (sky.* and
+// trajectory.*), the layout (device.units.*) and the filter's settings. A measured dataset is the
+// same files without the truth.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "polrig/io/manifest.h"
+#include "polrig/study/navigation.h"
+
+namespace polrig {
+
+// Writes DIR/imu.csv, DIR/units.csv and, with a truth, DIR/truth.csv and DIR/truth.yaml; returns
+// the files for the manifest. Numbers in their shortest exact form: a dataset reads back to the
+// same doubles (angles are written in degrees: within an ulp of the radians they came from).
+std::vector<DatasetFile> write_navigation_dataset(const std::filesystem::path& dir, const NavigationDataset& data);
+
+// Reads DIR's imu.csv and units.csv (and truth.csv when present) for the rig (DIR/rig.yaml, loaded by
+// the caller): the start from the rig (study/navigation.h's initial_state), the units' nominal
+// frames from its layout. Throws DataError naming the file, the line, the column and the value:
+// a missing file or column, a value that is not a finite number (a unit's aop_deg and dop may be
+// empty: no reading), a time not after the previous one, a unit index outside the layout, an
+// epoch without every unit, a DoP outside [0, 1].
+NavigationDataset read_navigation_dataset(const std::filesystem::path& dir, const Rig& rig);
+
+}  // namespace polrig

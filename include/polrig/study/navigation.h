@@ -1,0 +1,132 @@
+#pragma once
+// Z21's system end to end (Zhang et al. 2021; spec sky-and-compasses.md §4; docs/physics.md §20): a
+// unit-array polarization compass on a vehicle with a strapdown INS. simulate_navigation makes a
+// dataset from a rig (the true trajectory, the IMU with its errors, every unit's reading at the
+// compass rate); navigate runs the three modes of Z21 Figs. 8–13 on a dataset, simulated or
+// measured:
+//   SINS        the INS alone (ins/mechanization.h), height held when the rig says so;
+//   PNS         the position from the sun elevations of the last navigation.pns_window_s
+//               (nav/positioning.h's Eq. 17 fit, the vehicle assumed still over the window), each
+//               elevation H^n = asin((C_b^n s^b)_z) with the SINS's attitude;
+//   integrated  the INS with the 15-state filter (ins/filter.h) updated by H^n at every reading,
+//               with its own attitude.
+// The sun of a reading: the two highest-DoP units (nav/unit_array.h, Eqs. 3–8) with their nominal
+// frames, or a calibration's. Dec and GHA of the filter's model: one SunTrack at the start's site
+// (sky/sun.h; the parallax between the site and the vehicle is < 9″).
+#include <optional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "polrig/calib/unit_array.h"
+#include "polrig/ins/filter.h"
+#include "polrig/ins/imu.h"
+#include "polrig/ins/trajectory.h"
+#include "polrig/nav/positioning.h"
+#include "polrig/nav/unit_array.h"
+#include "polrig/progress.h"
+#include "polrig/rig/rig.h"
+
+namespace polrig {
+
+// The rig's settings as ins/ takes them (rig/ins_settings.h's units → SI).
+TrajectorySpec trajectory_spec(const Rig& rig);  // the start at the sky's site
+ImuErrorSpec imu_error_spec(const ImuSettings& imu);
+FilterSettings filter_settings(const Rig& rig);
+// The state the INS starts from: the sky's site and first_stop_utc, the trajectory's start attitude
+// plus navigation.initial_attitude_error_deg, its speed along the heading and pitch.
+InsState initial_state(const Rig& rig);
+// P0 (diagonal): the navigation.*_sigma keys and the IMU's turn-on and constant biases.
+Matrix15 initial_covariance(const Rig& rig);
+
+// One reading of every unit.
+struct CompassEpoch {
+  double t_s = 0;
+  std::vector<UnitReading> units;  // aop in the unit's frame (spec sense), dop
+  std::vector<UnitSample> samples;  // simulated only: the voltages and the truth (else empty)
+};
+
+// What a simulation knows and a measured dataset does not.
+struct NavigationTruth {
+  std::vector<TruthSample> trajectory;  // at every IMU sample, trajectory[0] at t = 0
+  UnitArrayTruth units;
+  ImuErrorsDrawn imu;
+  std::vector<double> sun_elevation_rad;  // per compass epoch: the true H^n at the true position
+};
+
+struct NavigationDataset {
+  UtcTime start;                 // t = 0
+  InsState initial;              // the vehicle at t = 0 as the user knows it (truth for a simulation)
+  std::vector<ImuSample> imu;    // IMU samples, t_s the end of each interval
+  std::vector<CompassEpoch> compass;
+  std::vector<UnitMount> mounts;  // the units' nominal frames C_mi^b (the layout the user knows)
+  std::optional<NavigationTruth> truth;
+};
+
+// Throws RigError (instrument_problem) unless the rig is a unit array, and std::invalid_argument
+// for a trajectory ins/ refuses. Deterministic for any thread count: every deviate is counter-based.
+NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress = {});
+
+enum class NavigationMode { Sins, Pns, Integrated };
+std::string_view navigation_mode_name(NavigationMode m);  // "sins", "pns", "integrated"
+// "sins", "pns", "integrated" or "all" → the modes; throws std::invalid_argument naming the text.
+std::vector<NavigationMode> parse_navigation_modes(std::string_view text);
+
+// One mode's solution at a compass epoch.
+struct NavigationFix {
+  double t_s = 0;
+  double lat_rad = 0, lon_rad = 0, h_m = 0;
+  Euler attitude;                 // PNS: the SINS's (it has none of its own)
+  std::string status = "ok";      // PNS: its fit's termination; "ok" for the INS modes
+};
+
+// The integrated filter at one compass epoch.
+struct FilterEpoch {
+  double t_s = 0;
+  UnitSun sun;                     // the two units, the angle between their E-vectors, s^b, H^b
+  double elevation_rad = 0;        // H^n measured (NaN without a sun)
+  double model_elevation_rad = 0;  // H^n of the filter's position before the update
+  ScalarUpdate update;             // innovation, S, NIS, R (NaN when skipped)
+  double sigma_north_m = 0, sigma_east_m = 0, sigma_heading_rad = 0;  // after the update
+  double corr_north_east = 0;  // the correlation of the north and east errors after the update
+};
+
+struct NavigationRun {
+  std::vector<NavigationMode> modes;
+  std::vector<std::vector<NavigationFix>> fixes;  // per mode in `modes`, one per compass epoch
+  std::vector<FilterEpoch> filter;               // integrated only
+  FilterSummary filter_summary;
+  int pns_usable = 0;                            // PNS epochs with a converged fix
+};
+
+struct NavigationOptions {
+  std::vector<NavigationMode> modes{NavigationMode::Sins, NavigationMode::Pns, NavigationMode::Integrated};
+  // The units' frames the sun is computed with (a calibration's, calibrate --method unit-array);
+  // empty: the dataset's nominal mounts.
+  std::vector<UnitMount> mounts;
+};
+
+// Throws std::invalid_argument for a dataset whose times are not increasing, whose compass epochs
+// do not fall on IMU samples (within 1 ms) or whose readings are not one per mount.
+NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const NavigationOptions& options = {},
+                       const Progress& progress = {});
+
+// The errors of a mode against the truth (north and east in metres on the ellipsoid, angles in
+// degrees), and Z21 §5's statistics of the latitude and longitude errors.
+struct PositionError {
+  double lat_deg = 0, lon_deg = 0, north_m = 0, east_m = 0;
+};
+PositionError position_error(const NavigationFix& fix, const TruthSample& truth);
+// The truth at a time (within 1 ms; its samples in increasing time), or null; truth_at throws
+// std::invalid_argument instead.
+const TruthSample* find_truth(const NavigationTruth& truth, double t_s);
+const TruthSample& truth_at(const NavigationTruth& truth, double t_s);
+
+struct ErrorStatistics {
+  double mae = 0, rmse = 0, std = 0;  // of the errors' values (deg): mean |e|, √mean e², sd about the mean
+  int count = 0;                      // finite errors (PNS: usable fixes)
+};
+ErrorStatistics error_statistics(std::span<const double> errors);
+
+}  // namespace polrig

@@ -1,0 +1,212 @@
+#include "polrig/io/navigation_dataset.h"
+
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "polrig/io/csv.h"
+#include "polrig/io/measured.h"
+#include "polrig/units.h"
+
+namespace polrig {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::string_view kSection = "Navigation dataset";
+
+// A number, or nan for a unit without a reading (docs/formats.md §5).
+std::string optional_cell(double v) { return std::isfinite(v) ? fmt::format("{}", v) : std::string("nan"); }
+
+std::string imu_csv(const std::vector<ImuSample>& imu) {
+  std::string out = "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps\n";
+  for (const ImuSample& s : imu)
+    out += fmt::format("{},{},{},{},{},{},{}\n", s.t_s, s.dtheta.x(), s.dtheta.y(), s.dtheta.z(), s.dv.x(), s.dv.y(),
+                       s.dv.z());
+  return out;
+}
+
+std::string units_csv(const std::vector<CompassEpoch>& compass, bool simulated) {
+  std::string out = simulated ? "t_s,unit,aop_deg,dop,V1,V2,V3,true_aop_deg,true_dop\n" : "t_s,unit,aop_deg,dop\n";
+  for (const CompassEpoch& e : compass)
+    for (std::size_t i = 0; i < e.units.size(); ++i) {
+      out += fmt::format("{},{},{},{}", e.t_s, i + 1, optional_cell(rad2deg(e.units[i].aop_rad)), optional_cell(e.units[i].dop));
+      if (simulated) {
+        const UnitSample& u = e.samples[i];
+        out += fmt::format(",{},{},{},{},{}", u.V[0], u.V[1], u.V[2], rad2deg(u.true_aop_rad), u.true_dop);
+      }
+      out += '\n';
+    }
+  return out;
+}
+
+std::string truth_csv(const std::vector<TruthSample>& truth) {
+  std::string out = "t_s,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,v_e,v_n,v_u\n";
+  for (const TruthSample& t : truth)
+    out += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", t.t_s, rad2deg(t.lat_rad), rad2deg(t.lon_rad), t.h_m,
+                       rad2deg(t.euler.roll_rad), rad2deg(t.euler.pitch_rad), rad2deg(t.euler.yaw_rad), t.v_n.x(),
+                       t.v_n.y(), t.v_n.z());
+  return out;
+}
+
+std::string triple(const Eigen::Vector3d& v, double scale) {
+  return fmt::format("[{}, {}, {}]", v.x() * scale, v.y() * scale, v.z() * scale);
+}
+
+std::string truth_yaml(const NavigationTruth& t) {
+  const double deg_h = rad2deg(1.0) * 3600, ug = 1e6 / kStandardGravity;
+  std::string out = "# The truth of a simulated navigation run (docs/formats.md §6.17).\n";
+  out += "units:  # each unit's mounting error δ about its own X, Y, Z (deg), and its nominal placement\n";
+  for (std::size_t i = 0; i < t.units.placements.size(); ++i) {
+    const UnitPlacement& p = t.units.placements[i];
+    const auto& d = t.units.mount_error_deg[i];
+    out += fmt::format("  - {{unit: {}, tilt_deg: {}, azimuth_deg: {}, roll_deg: {}, mount_error_deg: [{}, {}, {}]}}\n",
+                       i + 1, p.tilt_deg, p.azimuth_deg, p.roll_deg, d[0], d[1], d[2]);
+  }
+  const auto& m = t.units.misalignment_deg;
+  out += fmt::format("misalignment_deg: [{}, {}, {}]  # the compass to the body, about X_b, Y_b, Z_b\n", m[0], m[1], m[2]);
+  out += "imu:  # the constant errors this seed drew (bias + turn-on bias; scale factor and misalignment: (I + S + M))\n";
+  out += fmt::format("  gyro_bias_deg_h: {}\n", triple(t.imu.gyro_bias, deg_h));
+  out += fmt::format("  accel_bias_ug: {}\n", triple(t.imu.accel_bias, ug));
+  for (const auto& [name, M] : {std::pair{"gyro_scale_misalignment", &t.imu.gyro_scale_misalignment},
+                                {"accel_scale_misalignment", &t.imu.accel_scale_misalignment}})
+    out += fmt::format("  {}: [{}, {}, {}]\n", name, triple(M->row(0).transpose(), 1), triple(M->row(1).transpose(), 1),
+                       triple(M->row(2).transpose(), 1));
+  return out;
+}
+
+// The cell of a column that may say "no reading" (nan, or empty), else a finite number.
+double optional_number(const CsvFile& f, std::size_t row, std::size_t column) {
+  const std::string& c = f.rows[row][column];
+  return c.empty() || c == "nan" ? kNaN : f.number(row, column);
+}
+
+[[noreturn]] void refuse(const CsvFile& f, std::size_t row, std::string_view column, const std::string& problem) {
+  throw DataError(fmt::format("{}:{}: column {}: {}", f.origin, f.line[row], column, problem));
+}
+
+std::vector<ImuSample> read_imu(const std::filesystem::path& path) {
+  const CsvFile f = CsvFile::read(path);
+  const std::size_t t = f.column("t_s", kSection);
+  const std::array<std::size_t, 6> c{f.column("dtheta_x_rad", kSection), f.column("dtheta_y_rad", kSection),
+                                     f.column("dtheta_z_rad", kSection), f.column("dv_x_mps", kSection),
+                                     f.column("dv_y_mps", kSection), f.column("dv_z_mps", kSection)};
+  std::vector<ImuSample> out;
+  for (std::size_t r = 0; r < f.rows.size(); ++r) {
+    ImuSample s;
+    s.t_s = f.number(r, t);
+    if (!out.empty() && !(s.t_s > out.back().t_s))
+      refuse(f, r, "t_s", fmt::format("time {} s is not after the previous sample's {} s", s.t_s, out.back().t_s));
+    if (out.empty() && !(s.t_s > 0)) refuse(f, r, "t_s", fmt::format("the first sample ends at {} s: expected > 0 (t = 0 is the start)", s.t_s));
+    for (int i = 0; i < 3; ++i) {
+      s.dtheta[i] = f.number(r, c[static_cast<std::size_t>(i)]);
+      s.dv[i] = f.number(r, c[static_cast<std::size_t>(i) + 3]);
+    }
+    // An increment over one interval: beyond 1 rad or 1000 m/s the file is not an IMU's.
+    if (s.dtheta.cwiseAbs().maxCoeff() > 1) refuse(f, r, "dtheta", "an angle increment beyond 1 rad in one sample");
+    if (s.dv.cwiseAbs().maxCoeff() > 1000) refuse(f, r, "dv", "a velocity increment beyond 1000 m/s in one sample");
+    out.push_back(s);
+  }
+  if (out.empty()) throw DataError(fmt::format("{}: no IMU samples", path.string()));
+  return out;
+}
+
+std::vector<CompassEpoch> read_units_csv(const std::filesystem::path& path, std::size_t units) {
+  const CsvFile f = CsvFile::read(path);
+  const std::size_t t = f.column("t_s", kSection), u = f.column("unit", kSection), a = f.column("aop_deg", kSection),
+                    d = f.column("dop", kSection);
+  std::vector<CompassEpoch> out;
+  for (std::size_t r = 0; r < f.rows.size(); ++r) {
+    const double t_s = f.number(r, t);
+    if (out.empty() || t_s != out.back().t_s) {
+      if (!out.empty() && !(t_s > out.back().t_s))
+        refuse(f, r, "t_s", fmt::format("time {} s is not after the previous reading's {} s", t_s, out.back().t_s));
+      if (!out.empty() && out.back().units.size() != units)
+        refuse(f, r, "unit", fmt::format("the reading at {} s has {} units, expected {} (device.units.*)", out.back().t_s,
+                                         out.back().units.size(), units));
+      out.push_back({t_s, {}, {}});
+    }
+    const int index = csv_whole_number(f.rows[r][u], f.origin, f.line[r], "unit", 1, static_cast<int>(units));
+    if (static_cast<std::size_t>(index) != out.back().units.size() + 1)
+      refuse(f, r, "unit", fmt::format("expected unit {} next (units 1 to {} in order at each time), got {}",
+                                       out.back().units.size() + 1, units, index));
+    const double aop = optional_number(f, r, a), dop = optional_number(f, r, d);
+    if (std::isfinite(dop) && (dop < 0 || dop > 1)) refuse(f, r, "dop", fmt::format("expected a DoP in [0, 1], got {}", dop));
+    if (std::isfinite(aop) && std::abs(aop) > 360) refuse(f, r, "aop_deg", fmt::format("expected an angle within ±360°, got {}", aop));
+    out.back().units.push_back({deg2rad(aop), dop});
+  }
+  if (out.empty()) throw DataError(fmt::format("{}: no unit readings", path.string()));
+  if (out.back().units.size() != units)
+    throw DataError(fmt::format("{}: the last reading at {} s has {} units, expected {}", path.string(), out.back().t_s,
+                                out.back().units.size(), units));
+  return out;
+}
+
+std::vector<TruthSample> read_truth(const std::filesystem::path& path) {
+  const CsvFile f = CsvFile::read(path);
+  std::array<std::size_t, 10> c{};
+  const std::array<const char*, 10> names{"t_s", "lat_deg", "lon_deg", "h_m", "roll_deg", "pitch_deg", "yaw_deg", "v_e", "v_n", "v_u"};
+  for (std::size_t i = 0; i < c.size(); ++i) c[i] = f.column(names[i], kSection);
+  std::vector<TruthSample> out;
+  for (std::size_t r = 0; r < f.rows.size(); ++r) {
+    std::array<double, 10> v{};
+    for (std::size_t i = 0; i < c.size(); ++i) v[i] = f.number(r, c[i]);
+    if (std::abs(v[1]) > 90) refuse(f, r, "lat_deg", fmt::format("expected a latitude in [-90, 90], got {}", v[1]));
+    if (!out.empty() && !(v[0] > out.back().t_s))
+      refuse(f, r, "t_s", fmt::format("time {} s is not after the previous row's {} s", v[0], out.back().t_s));
+    TruthSample s;
+    s.t_s = v[0];
+    s.lat_rad = deg2rad(v[1]);
+    s.lon_rad = deg2rad(v[2]);
+    s.h_m = v[3];
+    s.euler = {deg2rad(v[4]), deg2rad(v[5]), deg2rad(v[6])};
+    s.C_bn = C_bn_from_euler(s.euler);
+    s.v_n = {v[7], v[8], v[9]};
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<DatasetFile> write_navigation_dataset(const std::filesystem::path& dir, const NavigationDataset& data) {
+  const bool simulated = data.truth.has_value();
+  write_text_file(dir / "imu.csv", imu_csv(data.imu));
+  write_text_file(dir / "units.csv", units_csv(data.compass, simulated));
+  std::vector<DatasetFile> files{
+      {"imu.csv", 1, "IMU increments over (previous t_s, t_s]: angle (rad) and velocity (m/s) about and along X_b, Y_b, Z_b"},
+      {"units.csv", 1, simulated ? "every unit's AoP (its own frame, spec sense) and DoP per compass reading; the pair "
+                                   "voltages and the true AoP and DoP"
+                                 : "every unit's AoP and DoP per compass reading"}};
+  if (simulated) {
+    write_text_file(dir / "truth.csv", truth_csv(data.truth->trajectory));
+    write_text_file(dir / "truth.yaml", truth_yaml(*data.truth));
+    files.push_back({"truth.csv", 1, "the true position, attitude and velocity at every IMU sample (t = 0 first)"});
+    files.push_back({"truth.yaml", 1, "the units' mounting errors and the IMU's drawn constant errors"});
+  }
+  return files;
+}
+
+NavigationDataset read_navigation_dataset(const std::filesystem::path& dir, const Rig& rig) {
+  NavigationDataset d;
+  d.start = rig.source.sky.resolved_sky().first_stop;
+  d.initial = initial_state(rig);
+  const UnitArrayTruth layout = unit_array_truth(rig.units, rig.seed);
+  for (const Axes3& C : layout.nominal) d.mounts.push_back({C});
+  d.imu = read_imu(dir / "imu.csv");
+  d.compass = read_units_csv(dir / "units.csv", d.mounts.size());
+  if (std::filesystem::exists(dir / "truth.csv")) {
+    NavigationTruth truth;
+    truth.trajectory = read_truth(dir / "truth.csv");
+    for (const CompassEpoch& e : d.compass)
+      if (!find_truth(truth, e.t_s))
+        throw DataError(fmt::format("{}: no row at t = {} s (the truth must hold every compass reading's time; a "
+                                    "measured dataset has no truth.csv)", (dir / "truth.csv").string(), e.t_s));
+    d.truth = std::move(truth);
+  }
+  return d;
+}
+
+}  // namespace polrig

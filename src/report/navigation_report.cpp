@@ -1,0 +1,187 @@
+#include "polrig/report/navigation_report.h"
+
+#include <cmath>
+#include <tuple>
+
+#include <fmt/format.h>
+
+#include "polrig/io/csv.h"
+#include "polrig/io/plot.h"
+#include "polrig/sky/sun.h"
+#include "polrig/units.h"
+
+namespace polrig {
+
+namespace {
+
+// An undefined value (a PNS epoch without a fix, a skipped update) as nan (docs/formats.md §5).
+std::string cell(double v) { return std::isfinite(v) ? fmt::format("{}", v) : std::string("nan"); }
+
+std::string solution_csv(const NavigationDataset& data, const NavigationRun& run) {
+  const bool truth = data.truth.has_value();
+  std::string out = "t_s,mode,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,status";
+  if (truth) out += ",err_lat_deg,err_lon_deg,err_north_m,err_east_m";
+  out += '\n';
+  for (std::size_t m = 0; m < run.modes.size(); ++m)
+    for (const NavigationFix& f : run.fixes[m]) {
+      out += fmt::format("{},{},{},{},{},{},{},{},{}", f.t_s, navigation_mode_name(run.modes[m]), cell(rad2deg(f.lat_rad)),
+                         cell(rad2deg(f.lon_rad)), cell(f.h_m), rad2deg(f.attitude.roll_rad), rad2deg(f.attitude.pitch_rad),
+                         rad2deg(f.attitude.yaw_rad), f.status);
+      if (truth) {
+        const PositionError e = position_error(f, truth_at(*data.truth, f.t_s));
+        out += fmt::format(",{},{},{},{}", cell(e.lat_deg), cell(e.lon_deg), cell(e.north_m), cell(e.east_m));
+      }
+      out += '\n';
+    }
+  return out;
+}
+
+std::string filter_csv(const NavigationDataset& data, const NavigationRun& run, const Sky& sky) {
+  const bool truth = data.truth.has_value();
+  std::string out = "t_s,unit_i,unit_j,e_angle_deg,elevation_body_deg,elevation_deg,model_elevation_deg";
+  if (truth) out += ",true_elevation_deg";
+  out += ",innovation,innovation_var,nis,R,sigma_north_m,sigma_east_m,corr_north_east,sigma_heading_deg,sun_status\n";
+  for (const FilterEpoch& f : run.filter) {
+    const bool ok = f.sun.status == UnitSunStatus::Ok;
+    out += fmt::format("{},{},{},{},{},{},{}", f.t_s, ok ? std::to_string(f.sun.i + 1) : "nan", ok ? std::to_string(f.sun.j + 1) : "nan",
+                       ok ? cell(rad2deg(f.sun.angle_rad)) : "nan", ok ? cell(rad2deg(f.sun.elevation_rad)) : "nan",
+                       cell(rad2deg(f.elevation_rad)), cell(rad2deg(f.model_elevation_rad)));
+    if (truth) {
+      const TruthSample& t = truth_at(*data.truth, f.t_s);
+      const Site site{rad2deg(t.lat_rad), rad2deg(t.lon_rad), t.h_m};
+      out += fmt::format(",{}", sun_position(data.start.plus_seconds(f.t_s), site, sky.sun).elevation_deg);
+    }
+    out += fmt::format(",{},{},{},{},{},{},{},{},{}\n", cell(f.update.innovation), cell(f.update.variance), cell(f.update.nis),
+                       cell(f.update.R), f.sigma_north_m, f.sigma_east_m, cell(f.corr_north_east), rad2deg(f.sigma_heading_rad),
+                       unit_sun_status_name(f.sun.status));
+  }
+  return out;
+}
+
+std::string summary_csv(const std::vector<ModeErrorSummary>& rows) {
+  std::string out = "mode,coordinate,mae_deg,rmse_deg,std_deg,count,final_error_m\n";
+  for (const ModeErrorSummary& r : rows) {
+    out += fmt::format("{},latitude,{},{},{},{},{}\n", navigation_mode_name(r.mode), cell(r.lat.mae), cell(r.lat.rmse),
+                       cell(r.lat.std), r.lat.count, cell(r.final_north_m));
+    out += fmt::format("{},longitude,{},{},{},{},{}\n", navigation_mode_name(r.mode), cell(r.lon.mae), cell(r.lon.rmse),
+                       cell(r.lon.std), r.lon.count, cell(r.final_east_m));
+  }
+  return out;
+}
+
+std::string filter_summary_yaml(const NavigationRun& run) {
+  const FilterSummary& s = run.filter_summary;
+  int no_sun = 0;
+  for (const FilterEpoch& f : run.filter) no_sun += f.sun.status == UnitSunStatus::Ok ? 0 : 1;
+  return fmt::format(
+      "# How the integrated filter ended (ins/filter.h FilterSummary): {}\n"
+      "status: {}\npredictions: {}\nupdates: {}\nskipped: {}\nno_sun: {}  # readings without two usable units\n"
+      "innovation_mean: {}\ninnovation_rms: {}\nmean_nis: {}\nnis_outside_95: {}\nfinal_R: {}\n",
+      s.BriefReport(), filter_status_name(s.status), s.predictions, s.updates, s.skipped, no_sun, cell(s.innovation_mean),
+      cell(s.innovation_rms), cell(s.mean_nis), cell(s.nis_outside_95), cell(s.final_R));
+}
+
+std::string mode_series(NavigationMode m, const std::string& column) {
+  return fmt::format("($t_s/60):(@mode eq '{}' ? {} : NaN)", navigation_mode_name(m), column);
+}
+
+constexpr std::string_view kModeStyle[3] = {"lines lw 2 lc rgb '#d62728'", "points pt 7 ps 0.4 lc rgb '#2ca02c'",
+                                            "lines lw 2 lc rgb '#1f77b4'"};
+constexpr std::string_view kModeTitle[3] = {"SINS", "PNS", "SINS/PNS"};
+
+std::vector<Plot> navigation_plots(const NavigationDataset& data, const NavigationRun& run) {
+  const bool truth = data.truth.has_value();
+  std::vector<Plot> plots;
+  for (const auto& [png, column, label] : {std::tuple{"latitude.png", "$lat_deg", "latitude (°N)"},
+                                           {"longitude.png", "$lon_deg", "longitude (°E)"}}) {
+    Plot p{png, fmt::format("{} per mode (Z21 Figs. 8–11)", label), "time (min)", label};
+    for (NavigationMode m : run.modes)
+      p.series.push_back({"solution.csv", mode_series(m, column), std::string(kModeTitle[static_cast<int>(m)]),
+                          std::string(kModeStyle[static_cast<int>(m)])});
+    if (truth) {  // the truth from one INS mode's rows (every row of a mode is at a compass reading)
+      NavigationMode ref = run.modes.front();
+      for (NavigationMode m : run.modes)
+        if (m != NavigationMode::Pns) ref = m;
+      p.series.push_back({"solution.csv", mode_series(ref, fmt::format("{} - $err_{}", column, std::string(column).substr(1))),
+                          "truth", "lines lw 1 dt 2 lc rgb 'black'"});
+    }
+    p.extra = "set key below horizontal maxrows 1 spacing 1.4\nset format y '%.3f'";
+    plots.push_back(p);
+  }
+  if (truth) {
+    Plot e{"position_error.png", "Position error per mode: north (solid) and east (dashed)", "time (min)", "error (km)"};
+    for (NavigationMode m : run.modes) {
+      const int i = static_cast<int>(m);
+      e.series.push_back({"solution.csv", mode_series(m, "$err_north_m/1000"), fmt::format("{} north", kModeTitle[i]),
+                          std::string(kModeStyle[i])});
+      e.series.push_back({"solution.csv", mode_series(m, "$err_east_m/1000"), fmt::format("{} east", kModeTitle[i]),
+                          std::string(kModeStyle[i]) + " dt 2"});
+    }
+    e.extra = "set key below horizontal maxrows 2 spacing 1.4";
+    plots.push_back(e);
+  }
+  if (!run.filter.empty()) {
+    Plot f{"filter.png", "The SINS/PNS filter: innovation z = sin H_c − sin H^n and its ±2σ (√S), NIS on the right",
+           "time (min)", "innovation", "NIS"};
+    f.series = {{"filter.csv", "($t_s/60):$innovation", "innovation", "points pt 7 ps 0.4 lc rgb '#1f77b4'"},
+                {"filter.csv", "($t_s/60):(2*sqrt($innovation_var))", "+2σ", "lines lw 1 lc rgb 'black'"},
+                {"filter.csv", "($t_s/60):(-2*sqrt($innovation_var))", "−2σ", "lines lw 1 lc rgb 'black'"},
+                {"filter.csv", "($t_s/60):$nis", "NIS (right axis)", "points pt 6 ps 0.4 lc rgb '#ff7f0e'", true}};
+    f.extra = "set key below horizontal maxrows 1 spacing 1.4";
+    plots.push_back(f);
+    Plot h{"elevation.png", "The sun's elevation H^n: measured (two units, the filter's attitude) and the model at the "
+                            "filter's position",
+           "time (min)", "elevation (°)"};
+    h.series = {{"filter.csv", "($t_s/60):$elevation_deg", "measured", "points pt 7 ps 0.4 lc rgb '#1f77b4'"},
+                {"filter.csv", "($t_s/60):$model_elevation_deg", "model", "lines lw 2 lc rgb '#2ca02c'"}};
+    if (truth) h.series.push_back({"filter.csv", "($t_s/60):$true_elevation_deg", "truth", "lines lw 1 dt 2 lc rgb 'black'"});
+    h.extra = "set key below horizontal maxrows 1 spacing 1.4";
+    plots.push_back(h);
+  }
+  return plots;
+}
+
+}  // namespace
+
+std::vector<ModeErrorSummary> summarize_navigation(const NavigationDataset& data, const NavigationRun& run) {
+  std::vector<ModeErrorSummary> out;
+  if (!data.truth) return out;
+  for (std::size_t m = 0; m < run.modes.size(); ++m) {
+    std::vector<double> lat, lon;
+    PositionError last{};
+    for (const NavigationFix& f : run.fixes[m]) {
+      const PositionError e = position_error(f, truth_at(*data.truth, f.t_s));
+      lat.push_back(e.lat_deg);
+      lon.push_back(e.lon_deg);
+      last = e;
+    }
+    out.push_back({run.modes[m], error_statistics(lat), error_statistics(lon), last.north_m, last.east_m});
+  }
+  return out;
+}
+
+std::vector<DatasetFile> report_navigation(const std::filesystem::path& dir, const NavigationDataset& data,
+                                           const NavigationRun& run, const Rig& rig, bool plots) {
+  write_text_file(dir / "solution.csv", solution_csv(data, run));
+  std::vector<DatasetFile> files{{"solution.csv", 1, "every mode's position and attitude per compass reading (and "
+                                                     "its errors against the truth)"}};
+  if (!run.filter.empty()) {
+    write_text_file(dir / "filter.csv", filter_csv(data, run, rig.source.sky.resolved_sky()));
+    write_text_file(dir / "filter_summary.yaml", filter_summary_yaml(run));
+    files.push_back({"filter.csv", 1, "the integrated filter per compass reading: the two units, the elevations, the "
+                                      "innovation, its variance, NIS, R and the position and heading σ"});
+    files.push_back({"filter_summary.yaml", 1, "how the integrated filter ended"});
+  }
+  if (data.truth) {
+    write_text_file(dir / "summary.csv", summary_csv(summarize_navigation(data, run)));
+    files.push_back({"summary.csv", 1, "MAE, RMSE and STD of the latitude and longitude errors per mode (Z21 §5)"});
+  }
+  if (plots) {
+    const std::vector<Plot> p = navigation_plots(data, run);
+    render_plots(dir, "plots.gp", p);
+    for (const Plot& q : p) files.push_back({q.png, 1, q.title});
+  }
+  return files;
+}
+
+}  // namespace polrig

@@ -1,0 +1,422 @@
+#include "polrig/study/navigation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include "polrig/ins/earth.h"
+#include "polrig/random.h"
+#include "polrig/rig/error.h"
+#include "polrig/sky/sun.h"
+#include "polrig/units.h"
+
+namespace polrig {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Stream indices of derive_seed: the IMU's errors and the units' noise draw from separate streams.
+constexpr std::uint64_t kImuStream = 0x494D55, kUnitStream = 0x554E4954;
+
+Eigen::Vector3d si(const std::array<double, 3>& v, double scale) {
+  return Eigen::Vector3d(v[0], v[1], v[2]) * scale;
+}
+
+SensorErrorSpec triad_spec(const TriadSettings& t, double bias_scale, double white_scale, double walk_scale) {
+  SensorErrorSpec s;
+  s.bias = si(t.bias, bias_scale);
+  s.turn_on_bias_sigma = si(t.turn_on_sigma, bias_scale);
+  s.bias_instability = si(t.bias_instability, bias_scale);
+  s.correlation_time_s = si(t.correlation_time_s, 1.0);
+  s.white_noise = si(t.white_noise, white_scale);
+  s.random_walk = si(t.random_walk, walk_scale);
+  s.scale_factor_sigma = si(t.scale_factor_ppm, 1e-6);
+  s.misalignment_sigma_rad = deg2rad(t.misalignment_deg);
+  return s;
+}
+
+Axes3 axes_of(const Eigen::Matrix3d& C) {
+  return {Vec3{C(0, 0), C(1, 0), C(2, 0)}, Vec3{C(0, 1), C(1, 1), C(2, 1)}, Vec3{C(0, 2), C(1, 2), C(2, 2)}};
+}
+
+Sky sky_of(const Rig& rig) {
+  const std::optional<Sky> sky = rig_sky(rig);
+  if (!sky) throw RigError(no_sky_message(rig, "navigation"));
+  return *sky;
+}
+
+// The measured H^n: the sun of the two highest-DoP units turned into n by the attitude C_b^n.
+double elevation_n(const UnitSun& sun, const Eigen::Matrix3d& C_bn) {
+  if (sun.status != UnitSunStatus::Ok) return kNaN;
+  return sun_in_nav(sun.s_b, axes_of(C_bn)).elevation_rad;
+}
+
+}  // namespace
+
+TrajectorySpec trajectory_spec(const Rig& rig) {
+  const Sky sky = sky_of(rig);
+  const TrajectorySettings& t = rig.trajectory;
+  TrajectorySpec spec;
+  spec.lat_rad = deg2rad(sky.site.lat_deg);
+  spec.lon_rad = deg2rad(sky.site.lon_deg);
+  spec.h_m = sky.site.height_m;
+  spec.attitude = {deg2rad(t.roll_deg), deg2rad(t.pitch_deg), deg2rad(t.heading_deg)};
+  spec.speed_mps = t.speed_mps;
+  spec.imu_rate_hz = rig.imu.rate_hz;
+  const auto at = [](const std::vector<double>& v, std::size_t i) { return v.empty() ? 0.0 : v[i]; };
+  double u = t.speed_mps;
+  const std::size_t n = t.segment_s.size();
+  for (std::size_t i = 0; i < std::max<std::size_t>(n, 1); ++i) {
+    Segment s;
+    s.duration_s = n == 0 ? t.duration_s : t.segment_s[i];
+    const double a = n == 0 ? 0 : at(t.segment_accel_mps2, i), w = n == 0 ? 0 : at(t.segment_turn_deg_s, i),
+                 c = n == 0 ? 0 : at(t.segment_climb_deg_s, i);
+    if (a != 0) s = {SegmentKind::Accelerate, s.duration_s, a};
+    else if (w != 0) s = {SegmentKind::Turn, s.duration_s, deg2rad(w)};
+    else if (c != 0) s = {SegmentKind::Climb, s.duration_s, deg2rad(c)};
+    else s = {std::abs(u) <= 1e-9 ? SegmentKind::Static : SegmentKind::Accelerate, s.duration_s, 0.0};
+    u += a * s.duration_s;
+    spec.segments.push_back(s);
+  }
+  return spec;
+}
+
+ImuErrorSpec imu_error_spec(const ImuSettings& imu) {
+  // °/h → rad/s, °/√h → rad/√s, °/h/√h → rad/s/√s; µg → m/s², µg/√Hz → m/s/√s, µg/√s → m/s²/√s.
+  const double g = 1e-6 * kStandardGravity;
+  ImuErrorSpec spec;
+  spec.rate_hz = imu.rate_hz;
+  spec.gyro = triad_spec(imu.gyro, deg2rad(1.0) / 3600, deg2rad(1.0) / 60, deg2rad(1.0) / 3600 / 60);
+  spec.accel = triad_spec(imu.accel, g, g, g);
+  return spec;
+}
+
+FilterSettings filter_settings(const Rig& rig) {
+  const NavigationSettings& n = rig.navigation;
+  FilterSettings s;
+  s.sigma_H_rad = deg2rad(n.sigma_H_deg);
+  s.adaptive = n.adaptive;
+  s.sage_husa_b = n.forgetting_factor;
+  s.tilt_in_measurement = n.tilt_in_measurement;
+  if (n.hold_height) s.mechanization.hold_height_m = sky_of(rig).site.height_m;
+  s.noise = error_model_noise(imu_error_spec(rig.imu));
+  return s;
+}
+
+InsState initial_state(const Rig& rig) {
+  const TrajectorySpec spec = trajectory_spec(rig);
+  const auto& e = rig.navigation.initial_attitude_error_deg;
+  InsState s;
+  s.q_bn = Eigen::Quaterniond(C_bn_from_euler({spec.attitude.roll_rad + deg2rad(e[0]),
+                                               spec.attitude.pitch_rad + deg2rad(e[1]),
+                                               spec.attitude.yaw_rad + deg2rad(e[2])}));
+  const double yaw = spec.attitude.yaw_rad, pitch = spec.attitude.pitch_rad;
+  s.v_n = spec.speed_mps * Eigen::Vector3d(std::sin(yaw) * std::cos(pitch), std::cos(yaw) * std::cos(pitch), std::sin(pitch));
+  s.lat_rad = spec.lat_rad;
+  s.lon_rad = spec.lon_rad;
+  s.h_m = spec.h_m;
+  return s;
+}
+
+Matrix15 initial_covariance(const Rig& rig) {
+  const NavigationSettings& n = rig.navigation;
+  const Site site = sky_of(rig).site;
+  const double L = deg2rad(site.lat_deg);
+  const EarthRadii r = earth_radii(L);
+  const ImuErrorSpec imu = imu_error_spec(rig.imu);
+  Vector15 sd;
+  for (int i = 0; i < 3; ++i) {
+    sd[kPhi + i] = deg2rad(n.attitude_sigma_deg[static_cast<std::size_t>(i)]);
+    sd[kDV + i] = n.velocity_sigma_mps;
+    sd[kGyroBias + i] = std::hypot(imu.gyro.bias[i], imu.gyro.turn_on_bias_sigma[i], imu.gyro.bias_instability[i]);
+    sd[kAccelBias + i] = std::hypot(imu.accel.bias[i], imu.accel.turn_on_bias_sigma[i], imu.accel.bias_instability[i]);
+  }
+  sd[kDLat] = n.position_sigma_m / (r.R_M + site.height_m);
+  sd[kDLon] = n.position_sigma_m / ((r.R_N + site.height_m) * std::cos(L));
+  sd[kDh] = n.hold_height ? 0.0 : n.position_sigma_m;
+  return sd.cwiseAbs2().asDiagonal();
+}
+
+NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress) {
+  require_instrument(rig, Instrument::kUnitArray, "a navigation run");
+  const Sky sky = sky_of(rig);
+  progress.begin("navigation: trajectory and IMU", 1);
+  const Trajectory tr = generate_trajectory(trajectory_spec(rig));
+  CorruptedImu imu = corrupt_imu(tr.imu, imu_error_spec(rig.imu), derive_seed(rig.seed, kImuStream));
+  progress.finish();
+
+  NavigationDataset d;
+  d.start = sky.first_stop;
+  d.initial = initial_state(rig);
+  d.imu = std::move(imu.samples);
+  NavigationTruth truth{tr.truth, unit_array_truth(rig.units, rig.seed), imu.drawn, {}};
+  for (const Axes3& C : truth.units.nominal) d.mounts.push_back({C});
+
+  const long step = std::lround(rig.imu.rate_hz / rig.units.rate_hz);
+  const std::size_t epochs = d.imu.size() / static_cast<std::size_t>(step);
+  d.compass.resize(epochs);
+  truth.sun_elevation_rad.resize(epochs);
+  const std::uint64_t unit_seed = derive_seed(rig.seed, kUnitStream);
+  progress.begin("navigation: compass readings", static_cast<long long>(epochs));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, epochs, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      const TruthSample& at = tr.truth[(k + 1) * static_cast<std::size_t>(step)];
+      Sky here = sky;
+      here.site = {rad2deg(at.lat_rad), rad2deg(at.lon_rad), at.h_m};
+      const UtcTime utc = sky.first_stop.plus_seconds(at.t_s);
+      CompassEpoch& e = d.compass[k];
+      e.t_s = at.t_s;
+      e.samples = read_units(rig, truth.units, here, utc, axes_of(at.C_bn), unit_seed, k);
+      for (const UnitSample& u : e.samples) e.units.push_back({u.aop_rad, u.dop});
+      truth.sun_elevation_rad[k] = deg2rad(sun_position(utc, here.site, here.sun).elevation_deg);
+    }
+    progress.advance(static_cast<long long>(r.size()));
+  });
+  progress.finish();
+  d.truth = std::move(truth);
+  return d;
+}
+
+std::string_view navigation_mode_name(NavigationMode m) {
+  switch (m) {
+    case NavigationMode::Sins: return "sins";
+    case NavigationMode::Pns: return "pns";
+    case NavigationMode::Integrated: return "integrated";
+  }
+  return "?";
+}
+
+std::vector<NavigationMode> parse_navigation_modes(std::string_view text) {
+  if (text == "all") return {NavigationMode::Sins, NavigationMode::Pns, NavigationMode::Integrated};
+  for (NavigationMode m : {NavigationMode::Sins, NavigationMode::Pns, NavigationMode::Integrated})
+    if (text == navigation_mode_name(m)) return {m};
+  throw std::invalid_argument(fmt::format("mode '{}': expected sins, pns, integrated or all", text));
+}
+
+namespace {
+
+// The IMU sample index each compass epoch falls on.
+std::vector<std::size_t> epoch_samples(const NavigationDataset& data, std::size_t mounts) {
+  for (std::size_t i = 1; i < data.imu.size(); ++i)
+    if (!(data.imu[i].t_s > data.imu[i - 1].t_s))
+      throw std::invalid_argument(fmt::format("IMU sample {}: time {} s is not after the previous {} s", i + 1,
+                                              data.imu[i].t_s, data.imu[i - 1].t_s));
+  std::vector<std::size_t> out;
+  std::size_t j = 0;
+  for (std::size_t k = 0; k < data.compass.size(); ++k) {
+    const CompassEpoch& e = data.compass[k];
+    if (e.units.size() != mounts)
+      throw std::invalid_argument(fmt::format("compass reading at {} s: {} units, expected {}", e.t_s, e.units.size(), mounts));
+    while (j < data.imu.size() && data.imu[j].t_s < e.t_s - 1e-3) ++j;
+    if (j == data.imu.size() || std::abs(data.imu[j].t_s - e.t_s) > 1e-3)
+      throw std::invalid_argument(fmt::format("compass reading at {} s falls on no IMU sample (within 1 ms)", e.t_s));
+    if (!out.empty() && j <= out.back())
+      throw std::invalid_argument(fmt::format("compass reading at {} s: times must increase", e.t_s));
+    out.push_back(j);
+  }
+  return out;
+}
+
+NavigationFix fix_of(const InsState& s) {
+  return {s.t_s, s.lat_rad, s.lon_rad, s.h_m, s.euler(), "ok"};
+}
+
+// The INS alone, its state at every compass epoch.
+std::vector<InsState> run_sins(const NavigationDataset& data, const std::vector<std::size_t>& at,
+                               const MechanizationOptions& options) {
+  std::vector<InsState> out;
+  InsState s = data.initial;
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < data.imu.size() && next < at.size(); ++i) {
+    s = mechanize(s, i == 0 ? data.imu[0] : data.imu[i - 1], data.imu[i], options);
+    if (i == at[next]) {
+      out.push_back(s);
+      ++next;
+    }
+  }
+  return out;
+}
+
+struct SunModel {
+  SunTrack track;
+  UtcTime start;
+  double dec_rad(double t) const { const auto h = track.hour_angle_at(start.plus_seconds(t)); return std::atan2(h.sin_dec, h.cos_dec); }
+  double gha_rad(double t) const { const auto h = track.hour_angle_at(start.plus_seconds(t)); return std::atan2(h.sin_gha, h.cos_gha); }
+};
+
+// The INS with the filter, its state and the filter's record at every compass epoch.
+void run_integrated(const NavigationDataset& data, const std::vector<std::size_t>& at,
+                    std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
+                    std::vector<NavigationFix>& fixes) {
+  InsFilter filter(data.initial, initial_covariance(rig), filter_settings(rig));
+  std::size_t next = 0;
+  for (std::size_t i = 0; i < data.imu.size() && next < at.size(); ++i) {
+    filter.predict(data.imu[i]);
+    if (i != at[next]) continue;
+    const CompassEpoch& e = data.compass[next++];
+    FilterEpoch f;
+    f.t_s = filter.state().t_s;
+    f.sun = sun_from_units(e.units, mounts);
+    f.elevation_rad = elevation_n(f.sun, filter.state().C_bn());
+    const double dec = sun.dec_rad(e.t_s), gha = sun.gha_rad(e.t_s);
+    f.model_elevation_rad =
+        std::asin(sun_elevation_model(filter.state().lat_rad, filter.state().lon_rad, dec, gha).sin_H);
+    if (std::isfinite(f.elevation_rad)) {
+      const Vec3 s_n = sun_in_nav(f.sun.s_b, axes_of(filter.state().C_bn())).s_n;
+      f.update = filter.update({f.t_s, f.elevation_rad, dec, gha, s_n[0], s_n[1]});
+    }
+    else f.update = {kNaN, kNaN, kNaN, kNaN};
+    const InsState& s = filter.state();
+    const EarthRadii r = earth_radii(s.lat_rad);
+    f.sigma_north_m = std::sqrt(filter.P()(kDLat, kDLat)) * (r.R_M + s.h_m);
+    f.sigma_east_m = std::sqrt(filter.P()(kDLon, kDLon)) * (r.R_N + s.h_m) * std::cos(s.lat_rad);
+    f.sigma_heading_rad = std::sqrt(filter.P()(kPhi + 2, kPhi + 2));
+    f.corr_north_east = filter.P()(kDLat, kDLon) / std::sqrt(filter.P()(kDLat, kDLat) * filter.P()(kDLon, kDLon));
+    run.filter.push_back(f);
+    fixes.push_back(fix_of(s));
+  }
+  run.filter_summary = filter.summary();
+}
+
+// PNS: at each epoch the positioning fit over the window's elevations (the SINS's attitude).
+// The up direction in b from the accelerometers: the mean specific force over the reading's interval
+// (the IMU samples after the previous reading), f^b = C_n^b·(0, 0, g) at rest.
+Vec3 level_up_b(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (std::size_t i = k == 0 ? 0 : at[k - 1] + 1; i <= at[k]; ++i) sum += data.imu[i].dv;
+  sum.normalize();
+  return {sum.x(), sum.y(), sum.z()};
+}
+
+std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vector<std::size_t>& at,
+                                   const std::vector<InsState>& sins,
+                                   std::span<const UnitMount> mounts, const Rig& rig, const Sky& sky,
+                                   const Progress& progress) {
+  const std::size_t n = sins.size();
+  const bool accelerometer = rig.navigation.pns_level == "accelerometer";
+  std::vector<ZenithSighting> sightings(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const UnitSun sun = sun_from_units(data.compass[k].units, mounts);
+    double H = kNaN;
+    if (sun.status == UnitSunStatus::Ok)
+      H = accelerometer ? std::asin(std::clamp(vec3::dot(level_up_b(data, at, k), sun.s_b), -1.0, 1.0))
+                        : elevation_n(sun, sins[k].C_bn());
+    sightings[k] = {data.start.plus_seconds(data.compass[k].t_s), std::isfinite(H) ? 90 - rad2deg(H) : 90.0,
+                    std::isfinite(H) ? 1.0 : 0.0};
+  }
+  PositionOptions options;
+  options.sun = sky.sun;
+  const Site prior{rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m};
+  const double window = rig.navigation.pns_window_s;
+  const double period = n > 1 ? data.compass[1].t_s - data.compass[0].t_s : 0.0;
+  std::vector<NavigationFix> out(n);
+  progress.begin("navigate: PNS fixes", static_cast<long long>(n));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      NavigationFix& f = out[k];
+      f = {data.compass[k].t_s, kNaN, kNaN, data.initial.h_m, sins[k].euler(), "window_filling"};
+      // A fix once the window is full (its readings span window − one period): a shorter arc of the
+      // sun fixes the position along its azimuth only, and the fit's second coordinate is noise.
+      if (data.compass[k].t_s - data.compass[0].t_s < window - period - 1e-9) continue;
+      std::size_t first = k;
+      while (first > 0 && data.compass[k].t_s - data.compass[first - 1].t_s < window - 1e-9) --first;
+      const PositionFix fix = fix_position(std::span(sightings).subspan(first, k + 1 - first), prior, options);
+      f.status = std::string(position_termination_name(fix.chosen.summary.termination));
+      if (fix.usable()) {
+        f.lat_rad = deg2rad(fix.chosen.lat_deg);
+        f.lon_rad = deg2rad(fix.chosen.lon_deg);
+      }
+    }
+    progress.advance(static_cast<long long>(r.size()));
+  });
+  progress.finish();
+  return out;
+}
+
+}  // namespace
+
+NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const NavigationOptions& options,
+                       const Progress& progress) {
+  const std::span<const UnitMount> mounts = options.mounts.empty() ? data.mounts : options.mounts;
+  if (options.mounts.size() > 0 && options.mounts.size() != data.mounts.size())
+    throw std::invalid_argument(fmt::format("navigate: {} calibrated units for a compass of {}", options.mounts.size(),
+                                            data.mounts.size()));
+  const std::vector<std::size_t> at = epoch_samples(data, mounts.size());
+  const Sky sky = sky_of(rig);
+  NavigationRun run;
+  run.modes = options.modes;
+  const auto wants = [&](NavigationMode m) { return std::find(run.modes.begin(), run.modes.end(), m) != run.modes.end(); };
+  std::vector<InsState> sins;
+  if (wants(NavigationMode::Sins) || wants(NavigationMode::Pns)) {
+    progress.begin("navigate: SINS", 1);
+    sins = run_sins(data, at, filter_settings(rig).mechanization);
+    progress.finish();
+  }
+  for (NavigationMode m : run.modes) {
+    std::vector<NavigationFix> fixes;
+    if (m == NavigationMode::Sins) {
+      for (const InsState& s : sins) fixes.push_back(fix_of(s));
+    } else if (m == NavigationMode::Pns) {
+      fixes = run_pns(data, at, sins, mounts, rig, sky, progress);
+      for (const NavigationFix& f : fixes) run.pns_usable += std::isfinite(f.lat_rad) ? 1 : 0;
+    } else {
+      const double end = data.imu.empty() ? 1.0 : data.imu.back().t_s + 1.0;
+      const SunModel sun{SunTrack(data.start, data.start.plus_seconds(end),
+                                  {rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m},
+                                  sky.sun),
+                         data.start};
+      progress.begin("navigate: SINS/PNS filter", 1);
+      run_integrated(data, at, mounts, rig, sun, run, fixes);
+      progress.finish();
+    }
+    run.fixes.push_back(std::move(fixes));
+  }
+  return run;
+}
+
+PositionError position_error(const NavigationFix& fix, const TruthSample& truth) {
+  const EarthRadii r = earth_radii(truth.lat_rad);
+  const double dL = fix.lat_rad - truth.lat_rad;
+  const double dlon = std::remainder(fix.lon_rad - truth.lon_rad, 2 * std::numbers::pi);
+  return {rad2deg(dL), rad2deg(dlon), dL * (r.R_M + truth.h_m), dlon * (r.R_N + truth.h_m) * std::cos(truth.lat_rad)};
+}
+
+const TruthSample* find_truth(const NavigationTruth& truth, double t_s) {
+  const auto& v = truth.trajectory;
+  auto it = std::lower_bound(v.begin(), v.end(), t_s - 1e-3, [](const TruthSample& s, double t) { return s.t_s < t; });
+  return it != v.end() && std::abs(it->t_s - t_s) <= 1e-3 ? &*it : nullptr;
+}
+
+const TruthSample& truth_at(const NavigationTruth& truth, double t_s) {
+  if (const TruthSample* s = find_truth(truth, t_s)) return *s;
+  throw std::invalid_argument(fmt::format("no truth at {} s", t_s));
+}
+
+ErrorStatistics error_statistics(std::span<const double> errors) {
+  ErrorStatistics s;
+  double sum = 0, sum_abs = 0, sum2 = 0;
+  for (double e : errors) {
+    if (!std::isfinite(e)) continue;
+    ++s.count;
+    sum += e;
+    sum_abs += std::abs(e);
+    sum2 += e * e;
+  }
+  if (s.count == 0) return {kNaN, kNaN, kNaN, 0};
+  const double n = s.count, mean = sum / n;
+  double dev2 = 0;  // about the mean in a second pass: no cancellation
+  for (double e : errors)
+    if (std::isfinite(e)) dev2 += (e - mean) * (e - mean);
+  s.mae = sum_abs / n;
+  s.rmse = std::sqrt(sum2 / n);
+  s.std = std::sqrt(dev2 / n);
+  return s;
+}
+
+}  // namespace polrig

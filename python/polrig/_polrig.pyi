@@ -78,6 +78,9 @@ class Rig:
     def simulate_four_camera(self, out: str | os.PathLike[str], *, layers: str = "fused", force: bool = False,
                              plots: bool = False, threads: int | None = None,
                              progress: Progress = None) -> pathlib.Path: ...
+    # ---- Z21's unit array with an INS (navigation_bindings.cpp)
+    def simulate_navigation(self, out: str | os.PathLike[str] | None = None, *, force: bool = False,
+                            threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
     # ---- navigation on a rig (nav_bindings.cpp)
     def study_heading(self, *, trials: int = 1000, site: Sequence[float] | None = None, utc: Any = None,
                       refraction: bool | None = None, ut1_minus_utc_s: float | None = None,
@@ -956,3 +959,12 @@ def locate_dataset(dir: str, prior: Sequence[float], *, dop_weighting: bool = Fa
 def calibrate_four_camera(dir: str | os.PathLike[str], geometry: str | os.PathLike[str] | None = None, *,
                           distortion_terms: int = 4, threads: int | None = None,
                           progress: Progress = None) -> dict[str, Any]: ...
+
+# ---- Z21's unit-array compass with a strapdown INS (navigation_bindings.cpp)
+def read_navigation_dataset(dir: str | os.PathLike[str], *, rig: Rig | None = None) -> dict[str, Any]: ...
+def navigate(dir: str | os.PathLike[str], *, mode: str = "all", out: str | os.PathLike[str] | None = None,
+             rig: Rig | None = None, calibration: str | os.PathLike[str] | None = None, force: bool = False,
+             plots: bool = False, threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
+def calibrate_unit_array(dir: str | os.PathLike[str], *, out: str | os.PathLike[str] | None = None,
+                         rig: Rig | None = None, force: bool = False, plots: bool = False,
+                         threads: int | None = None) -> dict[str, Any]: ...

@@ -98,7 +98,9 @@ std::vector<UnitMount> read_installation(const std::filesystem::path& file, cons
         refuse(file, e[a], key, fmt::format("expected a number, got '{}'", quoted_value(e[a].Scalar())));
       }
       if (!(std::abs(d[a]) <= 10))
-        refuse(file, e[a], key, fmt::format("expected a mounting error within ±10°, got {}", quoted_value(e[a].Scalar())));
+        refuse(file, e[a], key, fmt::format("expected a mounting error within ±10°, got {} (a fit the sequence did not "
+                                            "determine: its termination says so; turn the body during it)",
+                                            quoted_value(e[a].Scalar())));
     }
     out.push_back({installed_frame(nominal[i].C_mb, d)});
   }

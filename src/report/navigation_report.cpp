@@ -109,13 +109,16 @@ std::vector<Plot> navigation_plots(const NavigationDataset& data, const Navigati
     plots.push_back(p);
   }
   if (truth) {
-    Plot e{"position_error.png", "Position error per mode: north (solid) and east (dashed)", "time (min)", "error (km)"};
+    Plot e{"position_error.png", "Position error per mode: north (solid, filled) and east (dashed, open)", "time (min)", "error (km)"};
     for (NavigationMode m : run.modes) {
       const int i = static_cast<int>(m);
       e.series.push_back({"solution.csv", mode_series(m, "$err_north_m/1000"), fmt::format("{} north", kModeTitle[i]),
                           std::string(kModeStyle[i])});
-      e.series.push_back({"solution.csv", mode_series(m, "$err_east_m/1000"), fmt::format("{} east", kModeTitle[i]),
-                          std::string(kModeStyle[i]) + " dt 2"});
+      // East dashed, or for PNS's points open circles.
+      std::string east = std::string(kModeStyle[i]);
+      if (east.starts_with("points")) east.replace(east.find("pt 7"), 4, "pt 6");
+      else east += " dt 2";
+      e.series.push_back({"solution.csv", mode_series(m, "$err_east_m/1000"), fmt::format("{} east", kModeTitle[i]), east});
     }
     e.extra = "set key below horizontal maxrows 2 spacing 1.4";
     plots.push_back(e);

@@ -66,6 +66,16 @@ InstallationRun calibrate_unit_array(const NavigationDataset& data, const Rig& r
   for (std::size_t k = 0; k < epochs.size(); ++k) fit.push_back({epochs[k].C_bn, epochs[k].sun_enu, data.compass[k].units});
   run.units = calibrate_installation(data.mounts, fit, settings);
   run.epochs = static_cast<int>(fit.size());
+  // A mounting error beyond 10° is no mounting error (the rig keys' range): the sequence did not
+  // determine the unit (one attitude confounds its tilt and roll errors); said, not used.
+  for (std::size_t i = 0; i < run.units.size(); ++i) {
+    UnitInstallation& u = run.units[i];
+    if (std::abs(u.error_deg[0]) > 10 || std::abs(u.error_deg[1]) > 10 || std::abs(u.error_deg[2]) > 10) {
+      u.converged = false;
+      u.termination = "beyond-10-deg";
+      u.C_mb = data.mounts[i].C_mb;  // mounts() keeps the nominal frame
+    }
+  }
   const std::vector<UnitMount> after = run.mounts();
   double sum_b = 0, sum_a = 0, abs_b = 0, abs_a = 0;
   for (std::size_t k = 0; k < epochs.size(); ++k) {

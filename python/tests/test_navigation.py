@@ -1,0 +1,66 @@
+"""Z21's unit-array compass with a strapdown INS from Python (docs/python.md): the dataset, the three
+modes and the installation calibration give the CLI's files and numbers, bit for bit."""
+import numpy as np
+import pytest
+
+import polrig
+from conftest import ROOT, read_csv, run_cli
+
+RIG = ROOT / "rigs" / "zhang2021-static.yaml"
+SHORT = {"trajectory.duration_s": 120}
+
+
+def short_rig():
+    return polrig.Rig.load(str(RIG), set=SHORT)
+
+
+def test_simulate_writes_the_cli_dataset_and_its_arrays(tmp_path):
+    rig = short_rig()
+    d = rig.simulate_navigation(tmp_path / "py")
+    run_cli("simulate", RIG, "--set", "trajectory.duration_s=120", "-o", tmp_path / "cli", "--quiet")
+    for f in ("imu.csv", "units.csv", "truth.csv", "truth.yaml"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+    assert d["dtheta_rad"].shape == (12000, 3)
+    assert d["aop_deg"].shape == (120, 9)
+    imu = read_csv(tmp_path / "cli" / "imu.csv")
+    np.testing.assert_array_equal(d["dv_mps"][:, 2], imu["dv_z_mps"])
+    np.testing.assert_array_equal(d["truth"]["lat_deg"], read_csv(tmp_path / "cli" / "truth.csv")["lat_deg"])
+    # The dataset read back: the files' numbers.
+    back = polrig.read_navigation_dataset(tmp_path / "py")
+    np.testing.assert_array_equal(back["dtheta_rad"], d["dtheta_rad"])
+
+
+def test_navigate_equals_the_cli(tmp_path):
+    run_cli("simulate", RIG, "--set", "trajectory.duration_s=120", "-o", tmp_path / "d", "--quiet")
+    r = polrig.navigate(tmp_path / "d", out=tmp_path / "py")
+    run_cli("navigate", tmp_path / "d", "-o", tmp_path / "cli", "--no-plots", "--quiet")
+    for f in ("solution.csv", "filter.csv", "summary.csv", "filter_summary.yaml"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+    sol = read_csv(tmp_path / "cli" / "solution.csv")
+    sins = sol["mode"] == "sins"
+    np.testing.assert_array_equal(r["sins"]["lat_deg"], sol["lat_deg"][sins])
+    np.testing.assert_array_equal(r["integrated"]["err_north_m"], sol["err_north_m"][sol["mode"] == "integrated"])
+    assert r["filter"]["summary"]["updates"] == 120
+    assert set(r["summary"]) == {"sins", "pns", "integrated"}
+    assert r["pns"]["status"][0] == "window_filling"
+    with pytest.raises(ValueError, match="mode 'best': expected sins, pns, integrated or all"):
+        polrig.navigate(tmp_path / "d", mode="best")
+    with pytest.raises(ValueError, match="no rig.yaml"):
+        polrig.navigate(tmp_path)
+
+
+def test_calibrate_unit_array_equals_the_cli(tmp_path):
+    # The vehicle run: its turns determine each unit's three errors (a static run leaves them confounded).
+    run_cli("simulate", ROOT / "rigs" / "zhang2021-vehicle.yaml", "--set", "device.units.mount_error_sd_deg=1",
+            "-o", tmp_path / "d", "--quiet")
+    r = polrig.calibrate_unit_array(tmp_path / "d", out=tmp_path / "py")
+    run_cli("calibrate", tmp_path / "d", "--method", "unit-array", "-o", tmp_path / "cli", "--no-plots", "--quiet")
+    for f in ("calibration.yaml", "installation.csv"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+    assert r["error_deg"].shape == (9, 3)
+    assert r["attitude_from"] == "truth"
+    n = polrig.navigate(tmp_path / "d", mode="integrated", calibration=tmp_path / "py" / "calibration.yaml")
+    assert n["filter"]["summary"]["updates"] == 1200
+    assert np.all(np.abs(r["error_deg"] - polrig.Rig.load(str(ROOT / "rigs" / "zhang2021-vehicle.yaml"),
+                                                         set={"device.units.mount_error_sd_deg": 1})
+                         .simulate_navigation()["truth"]["mount_error_deg"]) < 4 * r["standard_error_deg"] + 0.01)

@@ -1,0 +1,304 @@
+// Z21's unit-array compass with a strapdown INS (study/navigation.h, study/installation.h):
+// Rig.simulate_navigation, polrig.read_navigation_dataset, polrig.navigate and
+// polrig.calibrate_unit_array. Thin: each reads or writes the same folders as `polrig simulate`,
+// `polrig navigate` and `polrig calibrate --method unit-array` (the same library calls), runs with the
+// GIL released and hands its vectors to NumPy.
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include <fmt/format.h>
+#include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
+
+#include "bindings.h"
+#include "convert.h"
+#include "polrig/io/navigation_dataset.h"
+#include "polrig/io/output_dir.h"
+#include "polrig/io/plot.h"
+#include "polrig/report/installation_report.h"
+#include "polrig/report/navigation_report.h"
+#include "polrig/units.h"
+#include "rig_handle.h"
+
+namespace polrig::python {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A matrix of rows × columns from a function of (row, column).
+template <class F>
+py::array_t<double> matrix(std::size_t rows, std::size_t columns, F value) {
+  std::vector<double> v(rows * columns);
+  for (std::size_t r = 0; r < rows; ++r)
+    for (std::size_t c = 0; c < columns; ++c) v[r * columns + c] = value(r, c);
+  return take(std::move(v), {static_cast<py::ssize_t>(rows), static_cast<py::ssize_t>(columns)});
+}
+
+template <class T, class F>
+py::array_t<double> column(const std::vector<T>& rows, F value) {
+  std::vector<double> v;
+  v.reserve(rows.size());
+  for (const T& r : rows) v.push_back(value(r));
+  return take(std::move(v));
+}
+
+py::dict dataset_dict(const NavigationDataset& d) {
+  py::dict out;
+  const std::size_t n = d.imu.size(), k = d.compass.size(), u = d.mounts.size();
+  out["imu_t_s"] = column(d.imu, [](const ImuSample& s) { return s.t_s; });
+  out["dtheta_rad"] = matrix(n, 3, [&](std::size_t r, std::size_t c) { return d.imu[r].dtheta[static_cast<int>(c)]; });
+  out["dv_mps"] = matrix(n, 3, [&](std::size_t r, std::size_t c) { return d.imu[r].dv[static_cast<int>(c)]; });
+  out["units_t_s"] = column(d.compass, [](const CompassEpoch& e) { return e.t_s; });
+  out["aop_deg"] = matrix(k, u, [&](std::size_t r, std::size_t c) { return rad2deg(d.compass[r].units[c].aop_rad); });
+  out["dop"] = matrix(k, u, [&](std::size_t r, std::size_t c) { return d.compass[r].units[c].dop; });
+  if (d.truth) {
+    const NavigationTruth& t = *d.truth;
+    const bool samples = k > 0 && d.compass[0].samples.size() == u;
+    if (samples) {
+      out["true_aop_deg"] = matrix(k, u, [&](std::size_t r, std::size_t c) { return rad2deg(d.compass[r].samples[c].true_aop_rad); });
+      out["true_dop"] = matrix(k, u, [&](std::size_t r, std::size_t c) { return d.compass[r].samples[c].true_dop; });
+      std::vector<double> V(k * u * 3);
+      for (std::size_t r = 0; r < k; ++r)
+        for (std::size_t c = 0; c < u; ++c)
+          for (std::size_t p = 0; p < 3; ++p) V[(r * u + c) * 3 + p] = d.compass[r].samples[c].V[p];
+      out["V"] = take(std::move(V), {static_cast<py::ssize_t>(k), static_cast<py::ssize_t>(u), 3});
+    }
+    py::dict truth;
+    truth["t_s"] = column(t.trajectory, [](const TruthSample& s) { return s.t_s; });
+    truth["lat_deg"] = column(t.trajectory, [](const TruthSample& s) { return rad2deg(s.lat_rad); });
+    truth["lon_deg"] = column(t.trajectory, [](const TruthSample& s) { return rad2deg(s.lon_rad); });
+    truth["h_m"] = column(t.trajectory, [](const TruthSample& s) { return s.h_m; });
+    truth["roll_deg"] = column(t.trajectory, [](const TruthSample& s) { return rad2deg(s.euler.roll_rad); });
+    truth["pitch_deg"] = column(t.trajectory, [](const TruthSample& s) { return rad2deg(s.euler.pitch_rad); });
+    truth["yaw_deg"] = column(t.trajectory, [](const TruthSample& s) { return rad2deg(s.euler.yaw_rad); });
+    truth["v_enu"] = matrix(t.trajectory.size(), 3, [&](std::size_t r, std::size_t c) {
+      return t.trajectory[r].v_n[static_cast<int>(c)];
+    });
+    if (!t.sun_elevation_rad.empty())
+      truth["sun_elevation_deg"] = column(t.sun_elevation_rad, [](double h) { return rad2deg(h); });
+    if (!t.units.mount_error_deg.empty())
+      truth["mount_error_deg"] = matrix(u, 3, [&](std::size_t r, std::size_t c) { return t.units.mount_error_deg[r][c]; });
+    out["truth"] = truth;
+  }
+  return out;
+}
+
+py::dict fixes_dict(const NavigationDataset& data, const std::vector<NavigationFix>& fixes) {
+  py::dict out;
+  out["t_s"] = column(fixes, [](const NavigationFix& f) { return f.t_s; });
+  out["lat_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.lat_rad); });
+  out["lon_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.lon_rad); });
+  out["h_m"] = column(fixes, [](const NavigationFix& f) { return f.h_m; });
+  out["roll_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.attitude.roll_rad); });
+  out["pitch_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.attitude.pitch_rad); });
+  out["yaw_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.attitude.yaw_rad); });
+  py::list status;
+  for (const NavigationFix& f : fixes) status.append(f.status);
+  out["status"] = status;
+  if (data.truth) {
+    std::vector<PositionError> e;
+    for (const NavigationFix& f : fixes) e.push_back(position_error(f, truth_at(*data.truth, f.t_s)));
+    out["err_lat_deg"] = column(e, [](const PositionError& x) { return x.lat_deg; });
+    out["err_lon_deg"] = column(e, [](const PositionError& x) { return x.lon_deg; });
+    out["err_north_m"] = column(e, [](const PositionError& x) { return x.north_m; });
+    out["err_east_m"] = column(e, [](const PositionError& x) { return x.east_m; });
+  }
+  return out;
+}
+
+py::dict filter_dict(const NavigationRun& run) {
+  py::dict out;
+  const auto& f = run.filter;
+  out["t_s"] = column(f, [](const FilterEpoch& e) { return e.t_s; });
+  out["unit_i"] = column(f, [](const FilterEpoch& e) { return e.sun.status == UnitSunStatus::Ok ? e.sun.i + 1.0 : NAN; });
+  out["unit_j"] = column(f, [](const FilterEpoch& e) { return e.sun.status == UnitSunStatus::Ok ? e.sun.j + 1.0 : NAN; });
+  out["e_angle_deg"] = column(f, [](const FilterEpoch& e) { return e.sun.status == UnitSunStatus::Ok ? rad2deg(e.sun.angle_rad) : NAN; });
+  out["elevation_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.elevation_rad); });
+  out["model_elevation_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.model_elevation_rad); });
+  out["innovation"] = column(f, [](const FilterEpoch& e) { return e.update.innovation; });
+  out["innovation_var"] = column(f, [](const FilterEpoch& e) { return e.update.variance; });
+  out["nis"] = column(f, [](const FilterEpoch& e) { return e.update.nis; });
+  out["R"] = column(f, [](const FilterEpoch& e) { return e.update.R; });
+  out["sigma_north_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_north_m; });
+  out["sigma_east_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_east_m; });
+  out["corr_north_east"] = column(f, [](const FilterEpoch& e) { return e.corr_north_east; });
+  out["sigma_heading_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.sigma_heading_rad); });
+  const FilterSummary& s = run.filter_summary;
+  py::dict summary;
+  summary["status"] = std::string(filter_status_name(s.status));
+  summary["predictions"] = s.predictions;
+  summary["updates"] = s.updates;
+  summary["skipped"] = s.skipped;
+  summary["innovation_mean"] = s.innovation_mean;
+  summary["innovation_rms"] = s.innovation_rms;
+  summary["mean_nis"] = s.mean_nis;
+  summary["nis_outside_95"] = s.nis_outside_95;
+  summary["final_R"] = s.final_R;
+  summary["brief_report"] = s.BriefReport();
+  out["summary"] = summary;
+  return out;
+}
+
+// The dataset's rig (DIR/rig.yaml), or the one given: a unit array.
+LoadedRig dataset_rig(const fs::path& dataset, const std::optional<PyRig>& rig, const char* what) {
+  if (!fs::is_directory(dataset)) throw py::value_error(fmt::format("{}: not a folder (expected a unit-array dataset)", dataset.string()));
+  LoadedRig r;
+  if (rig) {
+    r = rig->loaded;
+  } else {
+    if (!fs::exists(dataset / "rig.yaml"))
+      throw py::value_error(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else pass rig=)", dataset.string()));
+    r = load_rig(dataset / "rig.yaml");
+  }
+  require_instrument(r.rig, Instrument::kUnitArray, what, r.origin);
+  return r;
+}
+
+void check_plots(bool plots) {
+  if (plots && !gnuplot_available())
+    throw std::runtime_error("plots=True needs gnuplot, which was not found; install it (scripts/setup-deps.sh) or pass plots=False");
+}
+
+}  // namespace
+
+void bind_navigation(py::module_& m) {
+  auto rig = rig_class(m);
+  rig.def("simulate_navigation", [](const PyRig& self, std::optional<fs::path> out, bool force, std::optional<int> threads,
+                                    const py::object& progress) {
+    require(self, Instrument::kUnitArray, "simulate_navigation");
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    NavigationDataset d;
+    {
+      py::gil_scoped_release release;
+      std::optional<OutputDir> dir;
+      if (out) dir.emplace(*out, force);
+      d = simulate_navigation(self.rig(), p);
+      if (dir) {
+        const std::string command = fmt::format("python: polrig.Rig({}).simulate_navigation(out='{}')", self.loaded.origin, out->string());
+        write_manifest(dir->staging(), {command, &self.loaded, write_navigation_dataset(dir->staging(), d)});
+        dir->commit();
+      }
+    }
+    return dataset_dict(d);
+  }, "A unit-array rig's navigation run (Z21): the true trajectory, the IMU with its errors and every unit's reading "
+     "at the compass rate, as arrays; with out=, also the dataset folder `polrig simulate` writes (imu.csv, units.csv, "
+     "truth.csv, truth.yaml, manifest.yaml, rig.yaml). Keys: imu_t_s, dtheta_rad (N, 3), dv_mps (N, 3), units_t_s, "
+     "aop_deg and dop (K, units), true_aop_deg, true_dop, V (K, units, 3), truth (a dict: t_s, lat_deg, lon_deg, h_m, "
+     "roll_deg, pitch_deg, yaw_deg, v_enu, sun_elevation_deg, mount_error_deg).",
+     py::arg("out") = py::none(), py::kw_only(), py::arg("force") = false, py::arg("threads") = py::none(),
+     py::arg("progress") = py::none());
+
+  m.def("read_navigation_dataset", [](const fs::path& dir, std::optional<PyRig> rig) {
+    const LoadedRig r = dataset_rig(dir, rig, "read_navigation_dataset");
+    NavigationDataset d;
+    {
+      py::gil_scoped_release release;
+      d = read_navigation_dataset(dir, r.rig);
+    }
+    return dataset_dict(d);
+  }, "A unit-array dataset's files (simulated or measured) as arrays, the keys of Rig.simulate_navigation (truth: "
+     "truth.csv's columns only).", py::arg("dir"), py::kw_only(), py::arg("rig") = py::none());
+
+  m.def("navigate", [](const fs::path& dir, const std::string& mode, std::optional<fs::path> out, std::optional<PyRig> rig,
+                       std::optional<fs::path> calibration, bool force, bool plots, std::optional<int> threads,
+                       const py::object& progress) {
+    check_plots(plots && out.has_value());
+    const LoadedRig r = dataset_rig(dir, rig, "navigate");
+    NavigationOptions options;
+    try {
+      options.modes = parse_navigation_modes(mode);
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(fmt::format("mode: {}", e.what()));
+    }
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    NavigationDataset data;
+    NavigationRun run;
+    {
+      py::gil_scoped_release release;
+      data = read_navigation_dataset(dir, r.rig);
+      if (calibration) options.mounts = read_installation(*calibration, data.mounts);
+      std::optional<OutputDir> d;
+      if (out) d.emplace(*out, force);
+      run = navigate(data, r.rig, options, p);
+      if (d) {
+        const std::string command = fmt::format("python: polrig.navigate('{}', mode='{}', out='{}')", dir.string(), mode, out->string());
+        std::vector<std::string> inputs{(dir / "imu.csv").string(), (dir / "units.csv").string()};
+        if (data.truth) inputs.push_back((dir / "truth.csv").string());
+        if (calibration) inputs.push_back(calibration->string());
+        write_manifest(d->staging(), {command, &r, report_navigation(d->staging(), data, run, r.rig, plots), inputs});
+        d->commit();
+      }
+    }
+    py::dict result;
+    for (std::size_t i = 0; i < run.modes.size(); ++i)
+      result[py::str(std::string(navigation_mode_name(run.modes[i])))] = fixes_dict(data, run.fixes[i]);
+    if (!run.filter.empty()) result["filter"] = filter_dict(run);
+    py::dict summary;
+    for (const ModeErrorSummary& s : summarize_navigation(data, run)) {
+      py::dict row;
+      for (const auto& [name, e] : {std::pair{"lat", &s.lat}, {"lon", &s.lon}}) {
+        row[py::str(fmt::format("{}_mae_deg", name))] = e->mae;
+        row[py::str(fmt::format("{}_rmse_deg", name))] = e->rmse;
+        row[py::str(fmt::format("{}_std_deg", name))] = e->std;
+      }
+      row["count"] = s.lat.count;
+      row["final_north_m"] = s.final_north_m;
+      row["final_east_m"] = s.final_east_m;
+      summary[py::str(std::string(navigation_mode_name(s.mode)))] = row;
+    }
+    result["summary"] = summary;
+    return result;
+  }, "SINS, PNS and SINS/PNS on a unit-array dataset (`polrig navigate`): per mode a dict of solution.csv's columns "
+     "(t_s, lat_deg, lon_deg, h_m, roll_deg, pitch_deg, yaw_deg, status, and err_* against a truth), 'filter' (filter.csv's "
+     "columns and its 'summary'), 'summary' (summary.csv: MAE, RMSE, STD per mode; empty without a truth). With out=, the "
+     "folder `polrig navigate` writes.",
+     py::arg("dir"), py::kw_only(), py::arg("mode") = "all", py::arg("out") = py::none(), py::arg("rig") = py::none(),
+     py::arg("calibration") = py::none(), py::arg("force") = false, py::arg("plots") = false,
+     py::arg("threads") = py::none(), py::arg("progress") = py::none());
+
+  m.def("calibrate_unit_array", [](const fs::path& dir, std::optional<fs::path> out, std::optional<PyRig> rig, bool force,
+                                   bool plots, std::optional<int> threads) {
+    check_plots(plots && out.has_value());
+    const LoadedRig r = dataset_rig(dir, rig, "calibrate --method unit-array");
+    const ThreadLimit limit(threads);
+    InstallationRun run;
+    {
+      py::gil_scoped_release release;
+      const NavigationDataset data = read_navigation_dataset(dir, r.rig);
+      std::optional<OutputDir> d;
+      if (out) d.emplace(*out, force);
+      run = calibrate_unit_array(data, r.rig);
+      if (d) {
+        const std::string command = fmt::format("python: polrig.calibrate_unit_array('{}', out='{}')", dir.string(), out->string());
+        write_manifest(d->staging(), {command, &r, report_installation(d->staging(), run, plots), {dir.string()}});
+        d->commit();
+      }
+    }
+    py::dict result;
+    const std::size_t n = run.units.size();
+    result["error_deg"] = matrix(n, 3, [&](std::size_t i, std::size_t a) { return run.units[i].error_deg[a]; });
+    result["standard_error_deg"] = matrix(n, 3, [&](std::size_t i, std::size_t a) { return run.units[i].standard_error_deg[a]; });
+    result["rms_before_deg"] = column(run.units, [](const UnitInstallation& u) { return u.rms_before_deg; });
+    result["rms_after_deg"] = column(run.units, [](const UnitInstallation& u) { return u.rms_after_deg; });
+    result["used"] = column(run.units, [](const UnitInstallation& u) { return static_cast<double>(u.used); });
+    py::list termination;
+    for (const UnitInstallation& u : run.units) termination.append(u.termination);
+    result["termination"] = termination;
+    result["attitude_from"] = run.attitude_from;
+    result["elevation_mean_before_deg"] = run.elevation_mean_before_deg;
+    result["elevation_mean_after_deg"] = run.elevation_mean_after_deg;
+    result["elevation_mae_before_deg"] = run.elevation_mae_before_deg;
+    result["elevation_mae_after_deg"] = run.elevation_mae_after_deg;
+    return result;
+  }, "Z21's installation calibration of a unit-array dataset (`polrig calibrate --method unit-array`): each unit's "
+     "mounting errors δ (units × 3, degrees about its own X, Y, Z), their standard errors, the AoP residual RMS before "
+     "and after, and the sun-elevation error before and after. With out=, the folder the CLI writes (calibration.yaml "
+     "is what navigate(calibration=) reads).",
+     py::arg("dir"), py::kw_only(), py::arg("out") = py::none(), py::arg("rig") = py::none(), py::arg("force") = false,
+     py::arg("plots") = false, py::arg("threads") = py::none());
+}
+
+}  // namespace polrig::python

@@ -92,15 +92,30 @@ void InsFilter::predict(const ImuSample& raw) {
   const ImuSample& prev = has_prev_ ? prev_ : cur;
   const Eigen::Vector3d f_n = specific_force_n(state_, cur, dt);
   state_ = mechanize(state_, prev, cur, settings_.mechanization);
-  const Matrix15 F = error_dynamics(state_, f_n, settings_.noise);
-  const Discretized d = discretize_first_order(F, process_noise_density(state_, settings_.noise), dt);
-  filter_.predict(d.Phi, d.Q);
+  if (settings_.covariance_step == FilterSettings::CovarianceStep::AtUpdates) {
+    f_dt_sum_ += f_n * dt;
+    pending_s_ += dt;
+  } else {
+    const Matrix15 F = error_dynamics(state_, f_n, settings_.noise);
+    const Discretized d = discretize_first_order(F, process_noise_density(state_, settings_.noise), dt);
+    filter_.predict(d.Phi, d.Q);
+  }
   prev_ = cur;
   has_prev_ = true;
   ++predictions_;
 }
 
+void InsFilter::propagate_covariance() {
+  if (!(pending_s_ > 0)) return;
+  const Matrix15 F = error_dynamics(state_, f_dt_sum_ / pending_s_, settings_.noise);
+  const Discretized d = discretize_van_loan(F, process_noise_density(state_, settings_.noise), pending_s_);
+  filter_.predict(d.Phi, d.Q);
+  f_dt_sum_.setZero();
+  pending_s_ = 0;
+}
+
 ScalarUpdate InsFilter::update(const SunElevation& m) {
+  propagate_covariance();
   if (!(std::abs(m.t_s - state_.t_s) <= 1e-3))
     throw std::invalid_argument(fmt::format("filter: a measurement at {} s for the state at {} s", m.t_s, state_.t_s));
   const SunElevationModel model = sun_elevation_model(state_.lat_rad, state_.lon_rad, m.dec_rad, m.gha_rad);

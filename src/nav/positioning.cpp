@@ -71,7 +71,9 @@ struct Linearization {
 Linearization linearize(const Data& d, double lat_deg, double lon_deg, double height_m,
                         const PositionOptions& o) {
   const Site site{lat_deg, lon_deg, height_m};
-  const SunTrack track(d.first, d.last, site, o.sun, o.track_node_spacing_s);
+  const std::shared_ptr<const SunTrack> own =
+      o.ephemeris ? nullptr : std::make_shared<const SunTrack>(d.first, d.last, site, o.sun, o.track_node_spacing_s);
+  const SunTrack& track = o.ephemeris ? *o.ephemeris : *own;
   Linearization lin;
   const std::size_t n = d.utc.size();
   for (auto* v : {&lin.sin_dec, &lin.cos_dec, &lin.sin_gha, &lin.cos_gha}) v->resize(n);
@@ -201,7 +203,7 @@ PositionRoot fit_root(const Data& d, Eigen::Vector2d x, const Site& prior, const
     // The move on the sphere in metres.
     const double moved_m = vec3::norm(vec3::sub(unit_vector(x(0), x(1)), unit_vector(before(0), before(1)))) *
                            kEarthMeanRadiusKm * 1e3;
-    if (moved_m < o.site_tolerance_m) {
+    if (moved_m < o.site_tolerance_m || o.ephemeris) {  // a given ephemeris: nothing to re-linearize
       settled = true;
       break;
     }

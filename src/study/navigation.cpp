@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numbers>
 #include <stdexcept>
 
@@ -104,6 +105,8 @@ FilterSettings filter_settings(const Rig& rig) {
   s.adaptive = n.adaptive;
   s.sage_husa_b = n.forgetting_factor;
   s.tilt_in_measurement = n.tilt_in_measurement;
+  // P once per compass reading by van Loan (ins/filter.h): the state is mechanized at the IMU rate.
+  s.covariance_step = FilterSettings::CovarianceStep::AtUpdates;
   if (n.hold_height) s.mechanization.hold_height_m = sky_of(rig).site.height_m;
   s.noise = error_model_noise(imu_error_spec(rig.imu));
   return s;
@@ -270,8 +273,10 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
     if (std::isfinite(f.elevation_rad)) {
       const Vec3 s_n = sun_in_nav(f.sun.s_b, axes_of(filter.state().C_bn())).s_n;
       f.update = filter.update({f.t_s, f.elevation_rad, dec, gha, s_n[0], s_n[1]});
+    } else {
+      f.update = {kNaN, kNaN, kNaN, kNaN};
+      filter.propagate_covariance();
     }
-    else f.update = {kNaN, kNaN, kNaN, kNaN};
     const InsState& s = filter.state();
     const EarthRadii r = earth_radii(s.lat_rad);
     f.sigma_north_m = std::sqrt(filter.P()(kDLat, kDLat)) * (r.R_M + s.h_m);
@@ -312,6 +317,13 @@ std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vec
   }
   PositionOptions options;
   options.sun = sky.sun;
+  // One track for every window, at the start's site (nav/positioning.h: the parallax over the PNS's
+  // few km is far below its noise), and the root nearest the prior only: a fix per reading.
+  const double end = data.compass.empty() ? 1.0 : data.compass.back().t_s + 1.0;
+  options.ephemeris = std::make_shared<const SunTrack>(
+      data.start, data.start.plus_seconds(end),
+      Site{rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m}, sky.sun);
+  options.second_root = false;
   const Site prior{rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m};
   const double window = rig.navigation.pns_window_s;
   const double period = n > 1 ? data.compass[1].t_s - data.compass[0].t_s : 0.0;

@@ -25,7 +25,7 @@ Euler euler_from_C_bn(const Eigen::Matrix3d& C_bn);
 Eigen::Matrix3d skew(const Eigen::Vector3d& v);
 
 // The rotation of rotation vector φ (angle |φ| about φ/|φ|) as a unit quaternion, exact at every
-// angle (its Taylor series below 1e-4 rad).
+// angle (its Taylor series below 1e-2 rad, exact there to rounding).
 Eigen::Quaterniond quaternion_from_rotation_vector(const Eigen::Vector3d& phi);
 
 }  // namespace polrig

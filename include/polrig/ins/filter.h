@@ -75,6 +75,12 @@ struct FilterSettings {
   // φ_E·s_N + φ_N·s_E: with this on, H gains the tilt columns [s_N, −s_E] on φ_E, φ_N and the filter
   // estimates the tilt the measurement carries; off, H is Z21's (position only, spec §4.3).
   bool tilt_in_measurement = false;
+  // When P is propagated: at every IMU sample with Φ = I + F·Δt (PSINS's form, Z21's), or once per
+  // update interval T with van Loan's exact Φ = e^{F̄T} and Q, F̄ at the interval's end state and its
+  // mean specific force (F changes little over T at rest or in steady motion; 100× less work at
+  // 100 Hz with 1 Hz updates). The state is mechanized at every sample either way.
+  enum class CovarianceStep { EverySample, AtUpdates };
+  CovarianceStep covariance_step = CovarianceStep::EverySample;
   ErrorModelNoise noise = error_model_noise(z21_imu_errors());  // Z21's Table 1 [C]
 };
 
@@ -117,6 +123,9 @@ class InsFilter {
   // Mechanizes one raw sample (the bias estimates removed) over Δt = cur.t_s − state().t_s and
   // predicts x, P with Φ = I + FΔt, F at the new state and f^n of the sample.
   void predict(const ImuSample& cur);
+  // Brings P to the current state's time (with CovarianceStep::AtUpdates; otherwise it already is).
+  // update() calls it first; call it before reading P() between updates.
+  void propagate_covariance();
   // A sun-elevation update at the current state, with feedback. Throws std::invalid_argument when
   // m.t_s is more than 1 ms from the state's time (a programming error); a non-finite measurement
   // is data: skipped and counted in the summary.
@@ -139,6 +148,8 @@ class InsFilter {
   FilterSettings settings_;
   std::optional<SageHusaR> sage_husa_;  // started at the first update's (cos H^n σ_H)²
   double last_R_ = std::numeric_limits<double>::quiet_NaN();
+  Eigen::Vector3d f_dt_sum_ = Eigen::Vector3d::Zero();  // ∫f^n dt since P was last propagated (AtUpdates)
+  double pending_s_ = 0;                               // and that interval's length
   int predictions_ = 0, updates_ = 0, skipped_ = 0, nis_outside_ = 0;
   double sum_r_ = 0, sum_r2_ = 0, sum_nis_ = 0;
 };

@@ -18,6 +18,7 @@
 // ephemeris at the fix (< 1e-6° from sun_position, a SunTrack's bound), the Jacobian analytic.
 #include <array>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -50,6 +51,11 @@ struct PositionOptions {
   double min_singular_ratio = 1e-7;
   double track_node_spacing_s = 1800;  // the SunTrack's nodes (sky/sun.h)
   bool second_root = true;  // look for the mirror root (a start reflected about the sun's track)
+  // The sun's δ and GHA from this track for every linearization, instead of a track at each estimate:
+  // one linearization, no re-linearizing. For many fits near one site (navigate's PNS, a fix per
+  // reading): the topocentric δ and GHA move with the site by the parallax, 8.8″·(distance/R), so a
+  // track at a site 100 km away changes θ_S by < 0.14″. Must cover the sightings' times.
+  std::shared_ptr<const SunTrack> ephemeris;
 };
 // Throws std::invalid_argument naming the option and its value.
 void check_position_options(const PositionOptions& options);

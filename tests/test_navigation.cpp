@@ -368,7 +368,7 @@ TEST_F(NavigationCli, BadInputIsNamedAndNothingIsWritten) {
   test::write_file(tmp / "B/units.csv", units);
   r = polrig("navigate B -o N", cd());
   EXPECT_NE(r.status, 0);
-  EXPECT_HAS(r.err, "units.csv:5: column unit: expected unit 4 next");
+  EXPECT_HAS(r.err, "units.csv:5: column 'unit': expected unit 4 next");
   // A DoP outside [0, 1]: the first reading's unit 1 (line 2), its fourth column.
   units = test::read_file(tmp / "D/units.csv");
   const std::size_t row = units.find('\n') + 1;
@@ -377,7 +377,36 @@ TEST_F(NavigationCli, BadInputIsNamedAndNothingIsWritten) {
   units.replace(c, units.find(',', c) - c, "1.5");
   test::write_file(tmp / "B/units.csv", units);
   r = polrig("navigate B -o N", cd());
-  EXPECT_HAS(r.err, "units.csv:2: column dop: expected a DoP in [0, 1], got 1.5");
+  EXPECT_HAS(r.err, "units.csv:2: column 'dop': expected a DoP in [0, 1], got 1.5");
+  // imu.csv: a gap (a sample missing), a NaN, a rate beyond the gyro's range.
+  const std::string imu = test::read_file(tmp / "D/imu.csv");
+  const auto line_start = [&](const std::string& text, int line) {
+    std::size_t p = 0;
+    for (int i = 1; i < line; ++i) p = text.find('\n', p) + 1;
+    return p;
+  };
+  for (const char* f : {"units.csv"}) fs::copy_file(tmp / "D" / f, tmp / "B" / f, fs::copy_options::overwrite_existing);
+  std::string gap = imu;
+  gap.erase(line_start(gap, 11), line_start(gap, 12) - line_start(gap, 11));  // drops the 10th sample
+  test::write_file(tmp / "B/imu.csv", gap);
+  r = polrig("navigate B -o N", cd());
+  EXPECT_HAS(r.err, "imu.csv:11: column 't_s': time ");
+  EXPECT_HAS(r.err, "expected one IMU period, 0.01 s (imu.rate_hz 100 Hz), within 10 %");
+  std::string bad = imu;
+  std::size_t p = line_start(bad, 3);
+  p = bad.find(',', p) + 1;  // dtheta_x of the second sample
+  bad.replace(p, bad.find(',', p) - p, "nan");
+  test::write_file(tmp / "B/imu.csv", bad);
+  r = polrig("navigate B -o N", cd());
+  EXPECT_HAS(r.err, "imu.csv:3: column 'dtheta_x_rad': expected a finite number, got 'nan'");
+  bad = imu;
+  p = bad.find(',', line_start(bad, 3)) + 1;
+  bad.replace(p, bad.find(',', p) - p, "0.5");
+  test::write_file(tmp / "B/imu.csv", bad);
+  r = polrig("navigate B -o N", cd());
+  EXPECT_HAS(r.err, "imu.csv:3: column 'dtheta_x_rad': 0.5 rad over 0.01");
+  EXPECT_HAS(r.err, "beyond a gyro's 2000°/s");
+  EXPECT_FALSE(fs::exists(tmp / "N"));
   // Not a unit array's dataset.
   ok("simulate " + rig("wang2019-outdoor1.yaml") + " -o W --no-plots", cd());
   r = polrig("navigate W -o N", cd());

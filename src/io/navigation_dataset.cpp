@@ -84,29 +84,46 @@ double optional_number(const CsvFile& f, std::size_t row, std::size_t column) {
 }
 
 [[noreturn]] void refuse(const CsvFile& f, std::size_t row, std::string_view column, const std::string& problem) {
-  throw DataError(fmt::format("{}:{}: column {}: {}", f.origin, f.line[row], column, problem));
+  throw DataError(fmt::format("{}:{}: column '{}': {}", f.origin, f.line[row], column, problem));
 }
 
-std::vector<ImuSample> read_imu(const std::filesystem::path& path) {
+// The sensor's range [C]: a gyro's 2000°/s and an accelerometer's 50 g bound what strapdown IMUs
+// measure (tactical and MEMS grades alike); beyond them a sample is not an IMU's.
+constexpr double kMaxRate_rad_s = 2000.0 * 3.14159265358979323846 / 180.0;
+constexpr double kMaxSpecificForce_mps2 = 50 * kStandardGravity;
+
+std::vector<ImuSample> read_imu(const std::filesystem::path& path, double rate_hz) {
   const CsvFile f = CsvFile::read(path);
   const std::size_t t = f.column("t_s", kSection);
-  const std::array<std::size_t, 6> c{f.column("dtheta_x_rad", kSection), f.column("dtheta_y_rad", kSection),
-                                     f.column("dtheta_z_rad", kSection), f.column("dv_x_mps", kSection),
-                                     f.column("dv_y_mps", kSection), f.column("dv_z_mps", kSection)};
+  const std::array<const char*, 6> names{"dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_mps", "dv_y_mps", "dv_z_mps"};
+  std::array<std::size_t, 6> c{};
+  for (std::size_t i = 0; i < 6; ++i) c[i] = f.column(names[i], kSection);
+  const double period = 1 / rate_hz;
   std::vector<ImuSample> out;
   for (std::size_t r = 0; r < f.rows.size(); ++r) {
     ImuSample s;
     s.t_s = f.number(r, t);
-    if (!out.empty() && !(s.t_s > out.back().t_s))
-      refuse(f, r, "t_s", fmt::format("time {} s is not after the previous sample's {} s", s.t_s, out.back().t_s));
-    if (out.empty() && !(s.t_s > 0)) refuse(f, r, "t_s", fmt::format("the first sample ends at {} s: expected > 0 (t = 0 is the start)", s.t_s));
-    for (int i = 0; i < 3; ++i) {
-      s.dtheta[i] = f.number(r, c[static_cast<std::size_t>(i)]);
-      s.dv[i] = f.number(r, c[static_cast<std::size_t>(i) + 3]);
+    const double dt = s.t_s - (out.empty() ? 0.0 : out.back().t_s);
+    // Every interval one IMU period (imu.rate_hz) within 10 %: a gap or a doubled sample is refused.
+    if (!(std::abs(dt - period) <= 0.1 * period))
+      refuse(f, r, "t_s", out.empty() ? fmt::format("the first sample ends at {} s: expected one IMU period after "
+                                                    "the start (t = 0), {} s (imu.rate_hz {} Hz)", s.t_s, period, rate_hz)
+                                      : fmt::format("time {} s is {} s after the previous sample's: expected one IMU "
+                                                    "period, {} s (imu.rate_hz {} Hz), within 10 %", s.t_s, dt, period,
+                                                    rate_hz));
+    for (std::size_t i = 0; i < 3; ++i) {
+      s.dtheta[static_cast<int>(i)] = f.number(r, c[i]);
+      s.dv[static_cast<int>(i)] = f.number(r, c[i + 3]);
     }
-    // An increment over one interval: beyond 1 rad or 1000 m/s the file is not an IMU's.
-    if (s.dtheta.cwiseAbs().maxCoeff() > 1) refuse(f, r, "dtheta", "an angle increment beyond 1 rad in one sample");
-    if (s.dv.cwiseAbs().maxCoeff() > 1000) refuse(f, r, "dv", "a velocity increment beyond 1000 m/s in one sample");
+    for (std::size_t i = 0; i < 3; ++i) {
+      const double w = s.dtheta[static_cast<int>(i)] / dt, a = s.dv[static_cast<int>(i)] / dt;
+      if (std::abs(w) > kMaxRate_rad_s)
+        refuse(f, r, names[i], fmt::format("{} rad over {} s is {:.4g}°/s, beyond a gyro's 2000°/s", s.dtheta[static_cast<int>(i)],
+                                           dt, w * 180 / 3.14159265358979323846));
+      if (std::abs(a) > kMaxSpecificForce_mps2)
+        refuse(f, r, names[i + 3], fmt::format("{} m/s over {} s is {:.4g} m/s², beyond an accelerometer's 50 g",
+                                               s.dv[static_cast<int>(i)], dt, a));
+    }
     out.push_back(s);
   }
   if (out.empty()) throw DataError(fmt::format("{}: no IMU samples", path.string()));
@@ -195,7 +212,7 @@ NavigationDataset read_navigation_dataset(const std::filesystem::path& dir, cons
   d.initial = initial_state(rig);
   const UnitArrayTruth layout = unit_array_truth(rig.units, rig.seed);
   for (const Axes3& C : layout.nominal) d.mounts.push_back({C});
-  d.imu = read_imu(dir / "imu.csv");
+  d.imu = read_imu(dir / "imu.csv", rig.imu.rate_hz);
   d.compass = read_units_csv(dir / "units.csv", d.mounts.size());
   if (std::filesystem::exists(dir / "truth.csv")) {
     NavigationTruth truth;

@@ -21,8 +21,10 @@ std::vector<DatasetFile> write_navigation_dataset(const std::filesystem::path& d
 // the caller): the start from the rig (study/navigation.h's initial_state), the units' nominal
 // frames from its layout. Throws DataError naming the file, the line, the column and the value:
 // a missing file or column, a value that is not a finite number (a unit's aop_deg and dop may be
-// empty: no reading), a time not after the previous one, a unit index outside the layout, an
-// epoch without every unit, a DoP outside [0, 1].
+// nan or empty: no reading), an IMU interval other than 1/imu.rate_hz within 10 % (a gap, time going
+// backwards), a rate beyond a gyro's 2000°/s or a specific force beyond an accelerometer's 50 g, a
+// reading's time not after the previous one, a unit index outside the layout, a reading without every
+// unit, a DoP outside [0, 1], an AoP beyond ±360°; a truth.csv without a row at every reading's time.
 NavigationDataset read_navigation_dataset(const std::filesystem::path& dir, const Rig& rig);
 
 }  // namespace polrig

@@ -4,6 +4,8 @@
 // (tests/almanac_sun.h, not ERFA) and the spec's closed forms (§4.7).
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -136,6 +138,21 @@ TEST(NavigationRig, TheVehicleDriveEndsWhereItsSegmentsSay) {
   EXPECT_EQ(tr.imu.size(), 120000u);
 }
 
+// ins/'s attitude (Eigen, C_b^n = Rz(−yaw)·Rx(pitch)·Ry(roll)) and nav/'s (Axes3, body_axes_enu from
+// nav/heading.h's body_to_enu) are one convention: the same matrix for the same angles, to rounding.
+TEST(NavigationAttitude, InsAndNavGiveTheSameBodyAxes) {
+  double worst = 0;
+  for (double yaw : {0.0, 30.0, 135.0, 251.0, 359.0})
+    for (double pitch : {-40.0, 0.0, 12.5})
+      for (double roll : {-170.0, -3.0, 0.0, 25.0}) {
+        const Axes3 a = axes_of(C_bn_from_euler({deg2rad(roll), deg2rad(pitch), deg2rad(yaw)}));
+        const Axes3 b = body_axes_enu(yaw, roll, pitch);
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r) worst = std::max(worst, std::abs(a[c][r] - b[c][r]));
+      }
+  EXPECT_LT(worst, 1e-15);
+}
+
 // ---- the dataset ----------------------------------------------------------------------------
 
 // Noise-free, the two highest-DoP units with their nominal frames and the true attitude give the
@@ -150,9 +167,7 @@ TEST(NavigationDataset, TheUnitsSeeTheSunsElevation) {
     const UnitSun sun = sun_from_units(d.compass[k].units, d.mounts);
     ASSERT_EQ(sun.status, UnitSunStatus::Ok);
     const TruthSample& t = truth_at(*d.truth, d.compass[k].t_s);
-    Axes3 C;
-    for (int c = 0; c < 3; ++c) C[c] = {t.C_bn(0, c), t.C_bn(1, c), t.C_bn(2, c)};
-    const double H = rad2deg(sun_in_nav(sun.s_b, C).elevation_rad);
+    const double H = rad2deg(sun_in_nav(sun.s_b, axes_of(t.C_bn)).elevation_rad);
     const test::AlmanacSun a = test::almanac_sun(start.unix_s + d.compass[k].t_s, 39.979, 116.339);
     EXPECT_NEAR(H, 90 - a.zenith_deg, 0.02) << k;
     EXPECT_NEAR(H, rad2deg(d.truth->sun_elevation_rad[k]), 1e-6) << k;
@@ -416,11 +431,20 @@ TEST_F(NavigationCli, BadInputIsNamedAndNothingIsWritten) {
   ok("calibrate D --method unit-array -o C --no-plots", cd());
   EXPECT_HAS(test::read_file(tmp / "C/calibration.yaml"), "units:\n  - unit: 1\n    error_deg: [");
   ok("navigate D --calibration C/calibration.yaml -o K --no-plots", cd());
-  std::string cal = test::read_file(tmp / "C/calibration.yaml");
-  cal.replace(cal.find("error_deg: [") + 12, 1, "12");
+  // A calibration whose unit 2 is 12° off (converged: a converged unit must be within ±10°); one
+  // whose unit 1 did not converge keeps its nominal frame; one that says neither is refused.
+  std::string cal = "units:\n";
+  for (int u = 1; u <= 9; ++u)
+    cal += fmt::format("  - unit: {}\n    error_deg: [{}, 0, 0]\n    converged: {}\n", u, u == 2 ? 12 : 0.1,
+                       u == 1 ? "false" : "true");
   test::write_file(tmp / "C/bad.yaml", cal);
   r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
-  EXPECT_HAS(r.err, "C/bad.yaml:5: key 'units[0].error_deg': expected a mounting error within ±10°");
+  EXPECT_HAS(r.err, "C/bad.yaml:6: key 'units[1].error_deg (unit 2)': expected a mounting error within ±10°, got 12");
+  cal.replace(cal.find("[12,"), 4, "[0.2,");
+  cal.replace(cal.find("converged: true"), 15, "converged: maybe");
+  test::write_file(tmp / "C/bad.yaml", cal);
+  r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
+  EXPECT_HAS(r.err, "key 'units[1].converged (unit 2)': expected true or false");
   r = polrig("navigate D --mode best -o N", cd());
   EXPECT_EQ(r.status, 2);
   EXPECT_FALSE(fs::exists(tmp / "N"));

@@ -227,6 +227,14 @@ void run_calibrate(const std::string& input, const std::string& method_text,
     if (settings.d_a) throw DataError(fmt::format("--d-a {}: {} reads each unit's own DoP", *settings.d_a, m));
     if (view_projection) throw DataError(fmt::format("--view-projection: a DoFP camera's step-2 option, not {}", m));
     if (!geometry.file.empty()) throw DataError(fmt::format("--geometry {}: the four cameras' geometry, not {}", geometry.file, m));
+    if (geometry.given(geometry.distortion_terms_option))
+      throw DataError(fmt::format("--distortion-terms {}: the four cameras' geometric calibration, not {}",
+                                  geometry.distortion_terms, m));
+    for (const auto& [name, option] : {std::pair{"--nc-threshold", settings.nc_threshold_option},
+                                       std::pair{"--nc-min-points", settings.nc_min_points_option}})
+      if (option && option->count() > 0)
+        throw DataError(fmt::format("{} {}: {} has no noncontinuous rule (it applies to nc and cs-nc)", name,
+                                    option->as<std::string>(), m));
     return run_calibrate_unit_array(input, rig_path, out);
   }
   if (!geometry.file.empty())

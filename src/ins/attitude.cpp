@@ -31,6 +31,10 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return m;
 }
 
+Axes3 axes_of(const Eigen::Matrix3d& C) {
+  return {Vec3{C(0, 0), C(1, 0), C(2, 0)}, Vec3{C(0, 1), C(1, 1), C(2, 1)}, Vec3{C(0, 2), C(1, 2), C(2, 2)}};
+}
+
 Eigen::Quaterniond quaternion_from_rotation_vector(const Eigen::Vector3d& phi) {
   const double a2 = phi.squaredNorm();
   double c, s;  // cos(|φ|/2) and sin(|φ|/2)/|φ|

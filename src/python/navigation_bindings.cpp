@@ -114,6 +114,9 @@ py::dict filter_dict(const NavigationRun& run) {
   out["unit_i"] = column(f, [](const FilterEpoch& e) { return e.sun.status == UnitSunStatus::Ok ? e.sun.i + 1.0 : NAN; });
   out["unit_j"] = column(f, [](const FilterEpoch& e) { return e.sun.status == UnitSunStatus::Ok ? e.sun.j + 1.0 : NAN; });
   out["e_angle_deg"] = column(f, [](const FilterEpoch& e) { return e.sun.status == UnitSunStatus::Ok ? rad2deg(e.sun.angle_rad) : NAN; });
+  out["elevation_body_deg"] = column(f, [](const FilterEpoch& e) {
+    return e.sun.status == UnitSunStatus::Ok ? rad2deg(e.sun.elevation_rad) : NAN;
+  });
   out["elevation_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.elevation_rad); });
   out["model_elevation_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.model_elevation_rad); });
   out["innovation"] = column(f, [](const FilterEpoch& e) { return e.update.innovation; });
@@ -124,12 +127,20 @@ py::dict filter_dict(const NavigationRun& run) {
   out["sigma_east_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_east_m; });
   out["corr_north_east"] = column(f, [](const FilterEpoch& e) { return e.corr_north_east; });
   out["sigma_heading_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.sigma_heading_rad); });
+  py::list sun_status;
+  int no_sun = 0;
+  for (const FilterEpoch& e : f) {
+    sun_status.append(std::string(unit_sun_status_name(e.sun.status)));
+    no_sun += e.sun.status == UnitSunStatus::Ok ? 0 : 1;
+  }
+  out["sun_status"] = sun_status;
   const FilterSummary& s = run.filter_summary;
   py::dict summary;
   summary["status"] = std::string(filter_status_name(s.status));
   summary["predictions"] = s.predictions;
   summary["updates"] = s.updates;
   summary["skipped"] = s.skipped;
+  summary["no_sun"] = no_sun;
   summary["innovation_mean"] = s.innovation_mean;
   summary["innovation_rms"] = s.innovation_rms;
   summary["mean_nis"] = s.mean_nis;
@@ -284,6 +295,12 @@ void bind_navigation(py::module_& m) {
     result["rms_before_deg"] = column(run.units, [](const UnitInstallation& u) { return u.rms_before_deg; });
     result["rms_after_deg"] = column(run.units, [](const UnitInstallation& u) { return u.rms_after_deg; });
     result["used"] = column(run.units, [](const UnitInstallation& u) { return static_cast<double>(u.used); });
+    result["iterations"] = column(run.units, [](const UnitInstallation& u) { return static_cast<double>(u.iterations); });
+    py::list converged;
+    for (const UnitInstallation& u : run.units) converged.append(u.converged);
+    result["converged"] = converged;
+    result["epochs"] = run.epochs;
+    result["elevation_readings"] = run.elevation_epochs;
     py::list termination;
     for (const UnitInstallation& u : run.units) termination.append(u.termination);
     result["termination"] = termination;

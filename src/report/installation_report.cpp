@@ -87,8 +87,17 @@ std::vector<UnitMount> read_installation(const std::filesystem::path& file, cons
     refuse(file, units, "units", fmt::format("expected {} units (the dataset's layout), got {}", nominal.size(), units.size()));
   std::vector<UnitMount> out;
   for (std::size_t i = 0; i < units.size(); ++i) {
+    // A unit its fit did not determine (converged: false) keeps its nominal frame, as
+    // InstallationRun::mounts() does.
+    const YAML::Node converged = units[i]["converged"];
+    if (!converged || !converged.IsScalar() || (converged.Scalar() != "true" && converged.Scalar() != "false"))
+      refuse(file, units[i], fmt::format("units[{}].converged (unit {})", i, i + 1), "expected true or false");
+    if (converged.Scalar() == "false") {
+      out.push_back(nominal[i]);
+      continue;
+    }
     const YAML::Node e = units[i]["error_deg"];
-    const std::string key = fmt::format("units[{}].error_deg", i);
+    const std::string key = fmt::format("units[{}].error_deg (unit {})", i, i + 1);
     if (!e || !e.IsSequence() || e.size() != 3) refuse(file, units[i], key, "expected three angles in degrees");
     std::array<double, 3> d{};
     for (std::size_t a = 0; a < 3; ++a) {
@@ -98,9 +107,7 @@ std::vector<UnitMount> read_installation(const std::filesystem::path& file, cons
         refuse(file, e[a], key, fmt::format("expected a number, got '{}'", quoted_value(e[a].Scalar())));
       }
       if (!(std::abs(d[a]) <= 10))
-        refuse(file, e[a], key, fmt::format("expected a mounting error within ±10°, got {} (a fit the sequence did not "
-                                            "determine: its termination says so; turn the body during it)",
-                                            quoted_value(e[a].Scalar())));
+        refuse(file, e[a], key, fmt::format("expected a mounting error within ±10°, got {}", quoted_value(e[a].Scalar())));
     }
     out.push_back({installed_frame(nominal[i].C_mb, d)});
   }

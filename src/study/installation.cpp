@@ -9,9 +9,6 @@ namespace polrig {
 
 namespace {
 
-Axes3 axes_of(const Eigen::Matrix3d& C) {
-  return {Vec3{C(0, 0), C(1, 0), C(2, 0)}, Vec3{C(0, 1), C(1, 1), C(2, 1)}, Vec3{C(0, 2), C(1, 2), C(2, 2)}};
-}
 
 struct Epoch {
   Axes3 C_bn;

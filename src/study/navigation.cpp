@@ -42,9 +42,6 @@ SensorErrorSpec triad_spec(const TriadSettings& t, double bias_scale, double whi
   return s;
 }
 
-Axes3 axes_of(const Eigen::Matrix3d& C) {
-  return {Vec3{C(0, 0), C(1, 0), C(2, 0)}, Vec3{C(0, 1), C(1, 1), C(2, 1)}, Vec3{C(0, 2), C(1, 2), C(2, 2)}};
-}
 
 Sky sky_of(const Rig& rig) {
   const std::optional<Sky> sky = rig_sky(rig);

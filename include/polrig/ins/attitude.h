@@ -10,6 +10,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "polrig/vec3.h"
+
 namespace polrig {
 
 struct Euler {
@@ -20,6 +22,10 @@ struct Euler {
 
 Eigen::Matrix3d C_bn_from_euler(const Euler& e);
 Euler euler_from_C_bn(const Eigen::Matrix3d& C_bn);
+
+// C_b^n by its columns (vec3.h's Axes3, the form nav/ takes attitudes in: nav/unit_array.h's
+// body_axes_enu gives the same matrix for the same angles, tests/test_navigation.cpp).
+Axes3 axes_of(const Eigen::Matrix3d& C);
 
 // [v×]: the matrix of the cross product v × ·.
 Eigen::Matrix3d skew(const Eigen::Vector3d& v);

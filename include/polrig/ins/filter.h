@@ -1,6 +1,7 @@
 #pragma once
 // Z21's filter (docs/physics.md §18.6; spec sky-and-compasses.md §4.3, §4.4, §4.7): the 15-state
-// error Kalman filter of ins/error_model.h, predicted at the IMU rate with Φ = I + F·Δt, updated
+// error Kalman filter of ins/error_model.h, its state mechanized at the IMU rate and P predicted
+// there with Φ = I + F·Δt or once per update by van Loan (FilterSettings::covariance_step), updated
 // by the sun's elevation,
 //   z = sin H_c − sin H^n,   sin H_c = sin L̃ sin Dec + cos L̃ cos Dec cos LHA,   LHA = GHA + λ̃,
 //   H = [0₁ₓ₆, ∂sinH/∂L, ∂sinH/∂λ, 0₁ₓ₇]  (spec §4.3's corrected Eq. 15),
@@ -121,7 +122,8 @@ class InsFilter {
   InsFilter(const InsState& initial, const Matrix15& P0, const FilterSettings& settings = {});
 
   // Mechanizes one raw sample (the bias estimates removed) over Δt = cur.t_s − state().t_s and
-  // predicts x, P with Φ = I + FΔt, F at the new state and f^n of the sample.
+  // predicts P with Φ = I + FΔt, F at the new state and f^n of the sample (CovarianceStep::
+  // EverySample), or keeps f^n·Δt for propagate_covariance (AtUpdates). x stays 0 (closed loop).
   void predict(const ImuSample& cur);
   // Brings P to the current state's time (with CovarianceStep::AtUpdates; otherwise it already is).
   // update() calls it first; call it before reading P() between updates.

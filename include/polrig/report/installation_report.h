@@ -14,8 +14,9 @@ namespace polrig {
 std::vector<DatasetFile> report_installation(const std::filesystem::path& dir, const InstallationRun& run, bool plots);
 
 // The calibrated frames from a calibration.yaml, for the units of `nominal` (the dataset's layout):
-// installed_frame(nominal_i, δ_i). Throws DataError naming the file, the line and the key: a missing
-// or extra unit, a δ that is not three numbers within ±10°.
+// installed_frame(nominal_i, δ_i), or nominal_i for a unit whose fit did not converge. Throws
+// DataError naming the file, the line and the key: a missing or extra unit, a `converged` that is
+// not true or false, a converged unit's δ that is not three numbers within ±10°.
 std::vector<UnitMount> read_installation(const std::filesystem::path& file, const std::vector<UnitMount>& nominal);
 
 }  // namespace polrig

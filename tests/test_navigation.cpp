@@ -3,10 +3,13 @@
 // written here: the closed-form displacement of a drive on a plane, the Astronomical Almanac's sun
 // (tests/almanac_sun.h, not ERFA) and the spec's closed forms (§4.7).
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <fmt/format.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <numbers>
 #include <string>
@@ -203,6 +206,30 @@ TEST(NavigationDataset, FilesReadBackToTheSameRun) {
         EXPECT_NEAR(a.fixes[m][k].lat_rad, b.fixes[m][k].lat_rad, 1e-12);
       }
     }
+}
+
+// Same rig and seed, the same bits whatever the thread count (the readings and the PNS fits run
+// in parallel; every deviate is counter-based).
+TEST(NavigationDataset, BitIdenticalForAnyThreadCount) {
+  const Rig rig = load("zhang2021-static.yaml", {{"trajectory.duration_s", "400"}});
+  const auto run = [&](int threads) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    const NavigationDataset d = simulate_navigation(rig);
+    return std::pair{d, navigate(d, rig)};
+  };
+  const auto [d1, r1] = run(1);
+  const auto [d2, r2] = run(2);
+  for (std::size_t k = 0; k < d1.compass.size(); ++k)
+    for (std::size_t u = 0; u < d1.mounts.size(); ++u) {
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(d1.compass[k].units[u].aop_rad),
+                std::bit_cast<std::uint64_t>(d2.compass[k].units[u].aop_rad));
+    }
+  for (std::size_t m = 0; m < r1.modes.size(); ++m)
+    for (std::size_t k = 0; k < r1.fixes[m].size(); ++k) {
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(r1.fixes[m][k].lat_rad), std::bit_cast<std::uint64_t>(r2.fixes[m][k].lat_rad));
+      EXPECT_EQ(std::bit_cast<std::uint64_t>(r1.fixes[m][k].lon_rad), std::bit_cast<std::uint64_t>(r2.fixes[m][k].lon_rad));
+    }
+  EXPECT_EQ(r1.fixes[1].back().status, "converged");  // the PNS window (300 s) filled
 }
 
 // ---- the three modes ------------------------------------------------------------------------

@@ -280,9 +280,9 @@ void add_ins_keys(std::vector<RigKey>& keys) {
            "two readings at least; a day at most", [](Rig& r) -> double& { return r.navigation.pns_window_s; }), kNav);
   {
     RigKey k{"navigation.pns_level", K::Text, "", "accelerometer or sins",
-             "PNS's roll and pitch: accelerometer, the mean specific force over each reading's interval (at rest or "
-             "in steady straight motion), or sins, the free INS's attitude (drifting with the gyro biases) "
-             "[C: accelerometer]"};
+             "PNS's roll and pitch: accelerometer, the mean specific force over each reading's interval (readings "
+             "while the vehicle accelerates or turns are left out), or sins, the free INS's attitude (drifting with "
+             "the gyro biases) [C: accelerometer]"};
     k.text = [](Rig& r) -> std::string& { return r.navigation.pns_level; };
     k.valid_text = [](std::string_view v) { return v == "accelerometer" || v == "sins"; };
     push(k, kNav);

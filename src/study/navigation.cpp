@@ -287,13 +287,24 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
 }
 
 // PNS: at each epoch the positioning fit over the window's elevations (the SINS's attitude).
-// The up direction in b from the accelerometers: the mean specific force over the reading's interval
-// (the IMU samples after the previous reading), f^b = C_n^b·(0, 0, g) at rest.
-Vec3 level_up_b(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  for (std::size_t i = k == 0 ? 0 : at[k - 1] + 1; i <= at[k]; ++i) sum += data.imu[i].dv;
-  sum.normalize();
-  return {sum.x(), sum.y(), sum.z()};
+// The accelerometers' level over a reading's interval (the IMU samples after the previous reading):
+// the up direction in b, the mean specific force normalized (f^b = C_n^b·(0, 0, g) when the vehicle
+// neither accelerates nor turns), and whether it was steady enough to trust [C]: the mean |f| within
+// 5e-3 m/s² (500 µg) of g and the mean rate below 0.05°/s (the Earth's is 0.004°/s). A 0.5 m/s²
+// acceleration changes |f| by 0.013 m/s², a 3°/s turn exceeds the rate; a 0.5° level error then
+// corrupts H^n by up to 0.5°, worth ~55 km of PNS.
+struct Level {
+  Vec3 up_b{};
+  bool steady = false;
+};
+Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k, double g) {
+  Eigen::Vector3d dv = Eigen::Vector3d::Zero(), dtheta = Eigen::Vector3d::Zero();
+  const std::size_t first = k == 0 ? 0 : at[k - 1] + 1;
+  for (std::size_t i = first; i <= at[k]; ++i) dv += data.imu[i].dv, dtheta += data.imu[i].dtheta;
+  const double T = data.imu[at[k]].t_s - (first == 0 ? 0.0 : data.imu[first - 1].t_s);
+  const bool steady = std::abs(dv.norm() / T - g) <= 5e-3 && dtheta.norm() / T <= deg2rad(0.05);
+  dv.normalize();
+  return {{dv.x(), dv.y(), dv.z()}, steady};
 }
 
 std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vector<std::size_t>& at,
@@ -302,13 +313,17 @@ std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vec
                                    const Progress& progress) {
   const std::size_t n = sins.size();
   const bool accelerometer = rig.navigation.pns_level == "accelerometer";
+  const double g = normal_gravity(data.initial.lat_rad, data.initial.h_m);
   std::vector<ZenithSighting> sightings(n);
   for (std::size_t k = 0; k < n; ++k) {
     const UnitSun sun = sun_from_units(data.compass[k].units, mounts);
     double H = kNaN;
-    if (sun.status == UnitSunStatus::Ok)
-      H = accelerometer ? std::asin(std::clamp(vec3::dot(level_up_b(data, at, k), sun.s_b), -1.0, 1.0))
-                        : elevation_n(sun, sins[k].C_bn());
+    if (sun.status == UnitSunStatus::Ok && accelerometer) {
+      const Level level = level_of(data, at, k, g);
+      if (level.steady) H = std::asin(std::clamp(vec3::dot(level.up_b, sun.s_b), -1.0, 1.0));
+    } else if (sun.status == UnitSunStatus::Ok) {
+      H = elevation_n(sun, sins[k].C_bn());
+    }
     sightings[k] = {data.start.plus_seconds(data.compass[k].t_s), std::isfinite(H) ? 90 - rad2deg(H) : 90.0,
                     std::isfinite(H) ? 1.0 : 0.0};
   }

@@ -25,12 +25,11 @@ struct UnitView {
   SkyLight light;
 };
 
-std::vector<UnitView> views(const UnitArrayTruth& truth, const Sky& sky, UtcTime t, const Axes3& C_bn) {
-  const Vec3 s = sun_direction_enu(sun_position(t, sky.site, sky.sun));
+std::vector<UnitView> views(const UnitArrayTruth& truth, const Vec3& s, const SkyModel& model, const Axes3& C_bn) {
   std::vector<UnitView> out;
   for (const Axes3& C_mb : truth.actual) {
     const Axes3 C_mn = vec3::compose(C_bn, C_mb);
-    UnitView v{C_mn[0], C_mn[1], C_mn[2], sky_light(s, C_mn[2], sky.model)};
+    UnitView v{C_mn[0], C_mn[1], C_mn[2], sky_light(s, C_mn[2], model)};
     out.push_back(v);
   }
   return out;
@@ -47,7 +46,7 @@ double spec_angle_rad(const UnitView& v) {
 std::vector<UnitSample> read_units_truth(const UnitArrayTruth& truth, const Sky& sky, UtcTime t,
                                          const Axes3& C_bn) {
   std::vector<UnitSample> out;
-  for (const UnitView& v : views(truth, sky, t, C_bn)) {
+  for (const UnitView& v : views(truth, sun_direction_enu(sun_position(t, sky.site, sky.sun)), sky.model, C_bn)) {
     UnitSample u;
     u.true_aop_rad = u.aop_rad = spec_angle_rad(v);
     u.true_dop = u.dop = v.light.dop;
@@ -59,6 +58,13 @@ std::vector<UnitSample> read_units_truth(const UnitArrayTruth& truth, const Sky&
 
 std::vector<UnitSample> read_units(const Rig& rig, const UnitArrayTruth& truth, const Sky& sky, UtcTime t,
                                    const Axes3& C_bn, std::uint64_t seed, std::uint64_t sample_index) {
+  return read_units(rig, truth, sun_direction_enu(sun_position(t, sky.site, sky.sun)), sky.model, C_bn, seed,
+                    sample_index);
+}
+
+std::vector<UnitSample> read_units(const Rig& rig, const UnitArrayTruth& truth, const Vec3& sun_enu,
+                                   const SkyModel& sky_model, const Axes3& C_bn, std::uint64_t seed,
+                                   std::uint64_t sample_index) {
   const CalibrationParams& device = rig.device.truth;
   const CalibrationParams model = rig.units.apply == "theory" ? rig.device.theory() : device;
   const Electronics& el = rig.electronics;
@@ -66,7 +72,7 @@ std::vector<UnitSample> read_units(const Rig& rig, const UnitArrayTruth& truth, 
   const std::array<double, 6> E{1, 1, 1, 1, 1, 1};  // the sky at infinity: equal irradiance
   std::vector<UnitSample> out;
   std::uint64_t unit = 0;
-  for (const UnitView& v : views(truth, sky, t, C_bn)) {
+  for (const UnitView& v : views(truth, sun_enu, sky_model, C_bn)) {
     UnitSample u;
     u.true_aop_rad = spec_angle_rad(v);
     u.true_dop = v.light.dop;

@@ -140,6 +140,20 @@ Trajectory generate_trajectory(const TrajectorySpec& spec) {
         throw std::invalid_argument(fmt::format("trajectory: segment {} is static while moving at {} m/s", si, seg_start.u));
       seg_start.u = 0;
     }
+    if (s.kind == SegmentKind::Static) {
+      // At rest ω_ib^b and f^b are constants (the position does not move): every interval's
+      // increment is the same value·Δt, and the truth the same state at a later time.
+      const Motion rest = motion_at(seg_start, s, 0);  // the previous segment's rates cleared
+      const BodyRates r = body_rates(rest, p);
+      TruthSample still = truth_of(t, rest, p);
+      for (long k = 0; k < n; ++k) {
+        t += dt;
+        out.imu.push_back({t, r.omega_ib_b * dt, r.f_b * dt});
+        still.t_s = t;
+        out.truth.push_back(still);
+      }
+      continue;
+    }
     for (long k = 0; k < n; ++k) {
       // Simpson over M substeps of the interval; RK4 carries the position between the nodes.
       const double tau0 = static_cast<double>(k) * dt;

@@ -172,9 +172,10 @@ NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress) 
       const UtcTime utc = sky.first_stop.plus_seconds(at.t_s);
       CompassEpoch& e = d.compass[k];
       e.t_s = at.t_s;
-      e.samples = read_units(rig, truth.units, here, utc, axes_of(at.C_bn), unit_seed, k);
+      const SunPosition sun = sun_position(utc, here.site, here.sun);
+      e.samples = read_units(rig, truth.units, sun_direction_enu(sun), here.model, axes_of(at.C_bn), unit_seed, k);
       for (const UnitSample& u : e.samples) e.units.push_back({u.aop_rad, u.dop});
-      truth.sun_elevation_rad[k] = deg2rad(sun_position(utc, here.site, here.sun).elevation_deg);
+      truth.sun_elevation_rad[k] = deg2rad(sun.elevation_deg);
     }
     progress.advance(static_cast<long long>(r.size()));
   });

@@ -40,6 +40,11 @@ struct UnitSample {
 // electronics, schedule.samples_per_stop and device.units.apply.
 std::vector<UnitSample> read_units(const Rig& rig, const UnitArrayTruth& truth, const Sky& sky, UtcTime t,
                                    const Axes3& C_bn, std::uint64_t seed, std::uint64_t sample_index);
+// The same with the sun's direction in n (unit ENU vector) given, from an ephemeris computed once
+// by the caller, and the sky's model.
+std::vector<UnitSample> read_units(const Rig& rig, const UnitArrayTruth& truth, const Vec3& sun_enu,
+                                   const SkyModel& model, const Axes3& C_bn, std::uint64_t seed,
+                                   std::uint64_t sample_index);
 // The same with the rig's compass: unit_array_truth(rig.units, rig.seed).
 std::vector<UnitSample> read_units(const Rig& rig, const Sky& sky, UtcTime t, const Axes3& C_bn,
                                    std::uint64_t seed, std::uint64_t sample_index);

@@ -323,8 +323,8 @@ NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& 
     }
   for (std::size_t b = 0; b < bins; ++b) {
     DopBin bin;
-    bin.lo = static_cast<double>(b) * kDopBinWidth;
-    bin.hi = static_cast<double>(b + 1) * kDopBinWidth;
+    bin.lo = static_cast<double>(b) * 5 / 100;  // kDopBinWidth, printed as 0.15, not 0.15000000000000002
+    bin.hi = static_cast<double>(b + 1) * 5 / 100;
     bin.count = static_cast<long long>(err[b].size());
     if (!err[b].empty()) {
       const double n = static_cast<double>(err[b].size());

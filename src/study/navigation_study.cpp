@@ -13,6 +13,7 @@
 #include "polrig/random.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/keys.h"
+#include "polrig/source/source.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -138,6 +139,17 @@ TrialOutput run_trial(const Rig& cell_rig, int cell, int trial, const Navigation
   return out;
 }
 
+// The DoP bins' edges b·5/100 (0.15, not 0.15000000000000002), and the bin of d: the b with
+// edge(b) ≤ d < edge(b + 1) (a negative d in bin 0).
+double dop_bin_edge(std::size_t b) { return static_cast<double>(b) * 5 / 100; }
+std::size_t dop_bin(double d) {
+  if (!(d > 0)) return 0;
+  auto b = static_cast<std::size_t>(std::floor(d * 20));
+  while (b > 0 && d < dop_bin_edge(b)) --b;
+  while (d >= dop_bin_edge(b + 1)) ++b;
+  return b;
+}
+
 std::string value_text(double v) { return fmt::format("{}", v); }
 
 }  // namespace
@@ -173,6 +185,9 @@ Rig rig_with_value(const Rig& rig, std::string_view path, double value) {
   key->real(out) = value;
   if (const std::optional<RigProblem> p = check_rig(out))
     fail(fmt::format("{}: {}", p->path, p->message));
+  // As the parser's last step: a source that sets the rig's d (the sky's at the first stop, which
+  // sky.p_max changes) gives device.d.
+  if (const std::optional<double> d = out.light->rig_degree_of_polarization(out.source_view())) out.device.d = *d;
   return out;
 }
 
@@ -312,19 +327,18 @@ NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& 
   double max_dop = 0;
   for (std::size_t t = 0; t < trials; ++t)
     for (double d : outputs[t].dop) max_dop = std::max(max_dop, d);
-  const std::size_t bins = static_cast<std::size_t>(std::floor(max_dop / kDopBinWidth)) + 1;
+  const std::size_t bins = dop_bin(max_dop) + 1;
   std::vector<std::vector<double>> err(bins), tdop(bins);
   for (std::size_t t = 0; t < trials; ++t)
     for (std::size_t j = 0; j < outputs[t].dop.size(); ++j) {
-      const double d = std::max(outputs[t].dop[j], 0.0);
-      const std::size_t b = std::min(bins - 1, static_cast<std::size_t>(std::floor(d / kDopBinWidth)));
+      const std::size_t b = dop_bin(outputs[t].dop[j]);
       err[b].push_back(outputs[t].aop_error_deg[j]);
       tdop[b].push_back(outputs[t].true_dop[j]);
     }
   for (std::size_t b = 0; b < bins; ++b) {
     DopBin bin;
-    bin.lo = static_cast<double>(b) * 5 / 100;  // kDopBinWidth, printed as 0.15, not 0.15000000000000002
-    bin.hi = static_cast<double>(b + 1) * 5 / 100;
+    bin.lo = dop_bin_edge(b);
+    bin.hi = dop_bin_edge(b + 1);
     bin.count = static_cast<long long>(err[b].size());
     if (!err[b].empty()) {
       const double n = static_cast<double>(err[b].size());

@@ -1,6 +1,7 @@
 // study navigation: Monte-Carlo of Z21's unit-array compass with its INS (spec sky-and-compasses.md
 // §4.5–4.6): trials, sweeps, Fig. 17's tilt study and Fig. 16's DoP bins.
 #include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -113,9 +114,11 @@ std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App&
                                std::isnan(t.z21_deg) ? std::string() : fmt::format("; Z21 {}°", t.z21_deg));
     for (const DopBin& b : result.dop)
       if (!std::isnan(b.z21_mean_deg))
-        std::cout << fmt::format("DoP {:.0f}–{:.0f} %: |E-vector error| {:.3f}° ± {:.3f}° ({} readings; Z21 {}° ± {}°)\n",
-                                 100 * b.lo, 100 * b.hi, b.mean_abs_deg, b.sd_abs_deg, b.count, b.z21_mean_deg,
-                                 b.z21_sd_deg);
+        std::cout << fmt::format("DoP {:.0f}–{:.0f} %: {} (Z21 {}° ± {}°)\n", 100 * b.lo, 100 * b.hi,
+                                 b.count == 0 ? std::string("no readings")
+                                              : fmt::format("|E-vector error| {:.4f}° ± {:.4f}° over {} readings",
+                                                            b.mean_abs_deg, b.sd_abs_deg, b.count),
+                                 b.z21_mean_deg, b.z21_sd_deg);
   }});
   return commands;
 }

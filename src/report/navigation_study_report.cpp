@@ -166,7 +166,7 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
     t.series.push_back({"error_vs_time.csv", fmt::format("($t_s/60):${}_p50_m", m), m + " (median)",
                         fmt::format("lines lw 2 lc rgb '{}'", c)});
   }
-  t.extra = "set logscale y\nset format y '%g'\nset key top left";
+  t.extra = "set logscale y\nset format y '%g'\nset key inside top left opaque";
   figures.push_back(t);
 
   for (const NavigationSweep& sw : navigation_sweeps()) {
@@ -191,8 +191,13 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
     figures.push_back(p);
   }
 
+  // A figure only with something to draw (gnuplot refuses a plot whose every point is undefined).
+  bool tilt_points = false, dop_points = false;
+  for (const TiltErrorRow& r : study.tilt) tilt_points = tilt_points || r.draws > 0;
+  for (const DopBin& b : study.dop) dop_points = dop_points || b.count > 0;
+  if (epochs == 0) figures.clear();
   Plot tp{"tilt.png",
-          fmt::format("Sun-elevation error against a horizontal-attitude error (Z21 Fig. 17; {} trials, mean H = {:.1f}°)",
+          fmt::format("Sun-elevation error against a tilt error (Z21 Fig. 17; {} trials, mean H = {:.1f}°)",
                       n, study.tilt_mean_elevation_deg),
           "horizontal-attitude error τ (°), towards a uniformly random direction", "mean |elevation error| (°)"};
   tp.series = {{"tilt.csv", "$tilt_deg:$mean_abs_deg:(2*$se_mean_deg)", "polrig (± 2 standard errors)",
@@ -200,8 +205,8 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
                {"tilt.csv", "$tilt_deg:$exact_deg", "exact expectation", "lines lw 2 lc rgb 'black'"},
                {"tilt.csv", "$tilt_deg:$first_order_deg", "(2/π)·τ", "lines lw 1 dt 2 lc rgb 'black'"},
                {"tilt.csv", "$tilt_deg:$z21_deg", "Z21 Fig. 17", "points pt 5 ps 1.5 lc rgb '#d62728'"}};
-  tp.extra = "set key top left\nset xrange [0:*]\nset yrange [0:*]\nset offsets 0, graph 0.05, graph 0.05, 0";
-  figures.push_back(tp);
+  tp.extra = "set key inside top left\nset xrange [0:*]\nset yrange [0:*]\nset offsets 0, graph 0.05, graph 0.05, 0";
+  if (tilt_points) figures.push_back(tp);
 
   Plot dp{"dop.png", fmt::format("E-vector error against DoP (Z21 Fig. 16; every unit reading of {} trials)", n),
           "DoP (%)", "|aop − true aop| (°)"};
@@ -210,17 +215,18 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
                {"dop.csv", "(50*($dop_lo+$dop_hi)):($count > 0 ? $mean_abs_deg : NaN)", "", "lines lc rgb '#1f77b4'"},
                {"dop.csv", "(50*($dop_lo+$dop_hi)+0.6):$z21_mean_deg:$z21_sd_deg", "Z21 Fig. 16: mean ± SD",
                 "yerrorbars pt 5 ps 1.2 lc rgb '#d62728'"}};
-  dp.extra = "set key top right\nset logscale y\nset format y '%g'";
-  figures.push_back(dp);
+  dp.extra = "set key inside top right\nset logscale y\nset format y '%g'";
+  if (dop_points) figures.push_back(dp);
 
+  if (figures.empty()) return files;
   render_plots(dir, "plots.gp", figures);
-  files.push_back({"error_vs_time.png", 1, "each mode's horizontal error against time, median and percentile bands"});
-  for (const NavigationSweep& sw : navigation_sweeps())
-    if (!(study.settings.*sw.values).empty())
-      files.push_back({fmt::format("final_error_vs_{}.png", sw.factor), 1,
-                       fmt::format("the final horizontal error's percentiles against {}, per mode", sw.key)});
-  files.push_back({"tilt.png", 1, "Fig. 17: mean sun-elevation error against the tilt, with the closed form and Z21's"});
-  files.push_back({"dop.png", 1, "Fig. 16: E-vector error against DoP, with Z21's two bins"});
+  for (const Plot& p : figures) {
+    std::string what = "Fig. 16: E-vector error against DoP, with Z21's two bins";
+    if (p.png == "error_vs_time.png") what = "each mode's horizontal error against time, median and percentile bands";
+    else if (p.png == "tilt.png") what = "Fig. 17: mean sun-elevation error against the tilt, with the closed form and Z21's";
+    else if (p.png != "dop.png") what = "the final horizontal error's percentiles against the swept key, per mode";
+    files.push_back({p.png, 1, what});
+  }
   return files;
 }
 

@@ -106,7 +106,7 @@ TEST(NavigationStudy, BitIdenticalForAnyThreadCount) {
   s.trials = 2;
   s.durations_s = {30};
   s.p_max = {0.45};
-  s.noise_sigma_V = {3e-4};
+  s.noise_sigma_V = {1e-4};  // the rig's own value: its cell is the baseline's, bit for bit
   s.ring_tilts_deg = {40};
   NavigationStudy one, two;
   {
@@ -131,6 +131,11 @@ TEST(NavigationStudy, BitIdenticalForAnyThreadCount) {
   EXPECT_EQ(one.trials[0].seed, derive_seed(rig.seed, 0));
   EXPECT_EQ(one.trials[3].seed, derive_seed(rig.seed, 1));
   EXPECT_EQ(one.trials[6].seed, derive_seed(rig.seed, 0));
+  // Cell 3 (noise = the rig's 1e-4 V) repeats cell 0: the same seeds and the same rig.
+  for (std::size_t i = 0; i < 6; ++i) {
+    EXPECT_EQ(bits(one.trials[18 + i].final_north_m), bits(one.trials[i].final_north_m)) << i;
+    EXPECT_EQ(bits(one.trials[18 + i].lon_deg.mae), bits(one.trials[i].lon_deg.mae)) << i;
+  }
   // The 30 s cell ends at 30 s.
   EXPECT_NEAR(one.trials[6].final_t_s, 30, 1e-6);
   TempDir dir("polrig_test_navigation_study_");

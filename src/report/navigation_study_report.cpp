@@ -180,12 +180,12 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
       const std::string c = colour(mode);
       const std::string on = fmt::format("(@factor eq '{}' && @mode eq '{}' ? ", sw.factor, m);
       p.series.push_back({"summary.csv",
-                          fmt::format("$value:{0}$final_p25_m : NaN):{0}$final_p05_m : NaN):{0}$final_p95_m : NaN):"
-                                      "{0}$final_p75_m : NaN)",
+                          fmt::format("{0}$value : NaN):{0}$final_p25_m : NaN):{0}$final_p05_m : NaN):"
+                                      "{0}$final_p95_m : NaN):{0}$final_p75_m : NaN)",
                                       on),
                           "", fmt::format("candlesticks whiskerbars lc rgb '{}' lw 1.5", c)});
-      p.series.push_back({"summary.csv", fmt::format("$value:{}$final_p50_m : NaN)", on), m + " (median)",
-                          fmt::format("linespoints pt 7 lw 2 lc rgb '{}'", c)});
+      p.series.push_back({"summary.csv", fmt::format("{0}$value : NaN):{0}$final_p50_m : NaN)", on), m + " (median)",
+                          fmt::format("points pt 7 ps 1.2 lc rgb '{}'", c)});
     }
     p.extra = "set logscale y\nset format y '%g'\nset key below horizontal\nset offsets graph 0.05, graph 0.05, 0, 0";
     figures.push_back(p);

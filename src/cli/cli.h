@@ -143,6 +143,7 @@ std::vector<Command> add_nav_commands(CLI::App& root, CLI::App& study, int& thre
 std::vector<Command> add_sky_commands(CLI::App& root, int& threads);
 std::vector<Command> add_position_commands(CLI::App& root, CLI::App& study, int& threads);
 std::vector<Command> add_navigation_commands(CLI::App& root, int& threads);
+std::vector<Command> add_navigation_study_commands(CLI::App& root, CLI::App& study, int& threads);
 // `simulate` of a unit-array rig: its navigation dataset (navigation_commands.cpp).
 void simulate_unit_array(const LoadedRig& r, const OutputOptions& out);
 // `calibrate DIR --method unit-array`: the units' installation calibration (navigation_commands.cpp).

@@ -1,0 +1,126 @@
+// study navigation: Monte-Carlo of Z21's unit-array compass with its INS (spec sky-and-compasses.md
+// §4.5–4.6): trials, sweeps, Fig. 17's tilt study and Fig. 16's DoP bins.
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+#include <fmt/format.h>
+
+#include "cli.h"
+#include "polrig/io/measured.h"
+#include "polrig/report/navigation_study_report.h"
+#include "polrig/rig/error.h"
+#include "polrig/study/navigation_study.h"
+
+namespace polrig::cli {
+
+namespace {
+
+// The option of `polrig study navigation` that sets a NavigationStudySettings field.
+std::string study_navigation_option(std::string_view field) {
+  static const std::pair<std::string_view, const char*> options[] = {
+      {"trials", "--trials"}, {"durations_s", "--durations"}, {"p_max", "--p-max"},
+      {"noise_sigma_V", "--noise"}, {"ring_tilts_deg", "--ring-tilts"}, {"tilts_deg", "--tilts"}};
+  for (const auto& [f, option] : options)
+    if (f == field) return option;
+  return std::string(field);
+}
+
+// "a,b,c": finite numbers; DataError naming the option otherwise. Empty text: no values.
+std::vector<double> parse_list(const std::string& text, const char* option) {
+  std::vector<double> values;
+  if (text.empty()) return values;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', pos), text.size());
+    try {
+      values.push_back(parse_finite_number(std::string_view(text).substr(pos, comma - pos), "value"));
+    } catch (const RigError& e) {
+      throw DataError(fmt::format("{} {}: {} (expected a comma-separated list of numbers)", option, text, e.what()));
+    }
+    pos = comma + 1;
+  }
+  return values;
+}
+
+}  // namespace
+
+std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App& study, int& threads) {
+  std::vector<Command> commands;
+  auto* app = study.add_subcommand(
+      "navigation",
+      "Monte-Carlo of a unit-array rig's SINS, PNS and SINS/PNS (Z21): trials, sweeps of the run's length, "
+      "P_max, noise and ring tilt, Fig. 17's tilt study and Fig. 16's DoP bins");
+  auto rig = std::make_shared<RigInput>();
+  auto out = std::make_shared<OutputOptions>();
+  auto s = std::make_shared<NavigationStudySettings>();
+  auto durations = std::make_shared<std::string>();
+  auto p_max = std::make_shared<std::string>();
+  auto noise = std::make_shared<std::string>();
+  auto ring_tilts = std::make_shared<std::string>();
+  auto tilts = std::make_shared<std::string>("0.5,1,2");
+  rig->add_to(*app, true);
+  out->add_to(*app);
+  app->add_option("--trials", s->trials, "trials per cell (trial k: seed derive_seed(rig seed, k))")
+      ->check(CLI::Range(1, 100000))->capture_default_str();
+  app->add_option("--durations", *durations, "sweep trajectory.duration_s: run lengths, s, comma-separated");
+  app->add_option("--p-max", *p_max, "sweep sky.p_max: the sky's P_max values, comma-separated");
+  app->add_option("--noise", *noise, "sweep electronics.noise_sigma_V: compass noise per sample, V, comma-separated");
+  app->add_option("--ring-tilts", *ring_tilts, "sweep device.units.ring_tilt_deg: ring tilts, degrees, comma-separated");
+  app->add_option("--tilts", *tilts,
+                  "Fig. 17: horizontal-attitude errors, degrees, comma-separated (a random direction per reading)")
+      ->capture_default_str();
+  add_threads_option(*app, threads);
+  commands.push_back({app, [=] {
+    NavigationStudySettings settings = *s;
+    const LoadedRig r = rig->load();
+    settings.durations_s = parse_list(*durations, "--durations");
+    settings.p_max = parse_list(*p_max, "--p-max");
+    settings.noise_sigma_V = parse_list(*noise, "--noise");
+    settings.ring_tilts_deg = parse_list(*ring_tilts, "--ring-tilts");
+    settings.tilts_deg = parse_list(*tilts, "--tilts");
+    const auto named = [](std::string_view field) { return study_navigation_option(field); };
+    try {
+      check_navigation_study_settings(r.rig, settings, named);
+    } catch (const std::invalid_argument& e) {
+      throw DataError(fmt::format("{}: {}", r.origin, e.what()));
+    } catch (const RigError& e) {
+      throw RigError(fmt::format("{}: {}", r.origin, e.what()));
+    }
+    OutputDir dir = out->open();
+    const NavigationStudy result = navigation_study(r.rig, settings, progress());
+    write_manifest(dir.staging(), {command_line(), &r, report_navigation_study(dir.staging(), result, out->plots())});
+    finish(dir);
+    for (const NavigationStudySummary& st : result.summary) {
+      const NavigationStudyCell& c = result.cells[static_cast<std::size_t>(st.cell)];
+      const std::string cell = c.index == 0 ? "rig" : fmt::format("{}={}", c.key, c.value);
+      std::cout << fmt::format("{} {:>10}: final error median {:.0f} m (25–75 % {:.0f}–{:.0f} m, {}/{} trials), "
+                               "latitude MAE median {:.4f}°, longitude {:.4f}°\n",
+                               cell, navigation_mode_name(st.mode), st.final_error_m.p50, st.final_error_m.p25,
+                               st.final_error_m.p75, st.final_error_m.count, st.trials, st.lat_mae_deg.p50,
+                               st.lon_mae_deg.p50);
+    }
+    for (const TiltErrorRow& t : result.tilt)
+      std::cout << fmt::format("tilt {}°: mean |elevation error| {:.3f}° ± {:.3f}° ({} readings; (2/π)·τ = {:.3f}°, "
+                               "exact at H = {:.1f}°: {:.3f}°{})\n",
+                               t.tilt_deg, t.mean_abs_deg, t.sd_abs_deg / std::sqrt(static_cast<double>(std::max(1LL, t.draws))),
+                               t.draws, t.first_order_deg, result.tilt_mean_elevation_deg, t.exact_deg,
+                               std::isnan(t.z21_deg) ? std::string() : fmt::format("; Z21 {}°", t.z21_deg));
+    for (const DopBin& b : result.dop)
+      if (!std::isnan(b.z21_mean_deg))
+        std::cout << fmt::format("DoP {:.0f}–{:.0f} %: {} (Z21 {}° ± {}°)\n", 100 * b.lo, 100 * b.hi,
+                                 b.count == 0 ? std::string("no readings")
+                                              : fmt::format("|E-vector error| {:.4f}° ± {:.4f}° over {} readings",
+                                                            b.mean_abs_deg, b.sd_abs_deg, b.count),
+                                 b.z21_mean_deg, b.z21_sd_deg);
+  }});
+  return commands;
+}
+
+}  // namespace polrig::cli

@@ -81,6 +81,11 @@ class Rig:
     # ---- Z21's unit array with an INS (navigation_bindings.cpp)
     def simulate_navigation(self, out: str | os.PathLike[str] | None = None, *, force: bool = False,
                             threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
+    def study_navigation(self, *, trials: int = 20, durations_s: ArrayLike | None = None,
+                         p_max: ArrayLike | None = None, noise_sigma_V: ArrayLike | None = None,
+                         ring_tilts_deg: ArrayLike | None = None, tilts_deg: ArrayLike | None = None,
+                         out: str | os.PathLike[str] | None = None, force: bool = False, plots: bool = False,
+                         threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
     # ---- navigation on a rig (nav_bindings.cpp)
     def study_heading(self, *, trials: int = 1000, site: Sequence[float] | None = None, utc: Any = None,
                       refraction: bool | None = None, ut1_minus_utc_s: float | None = None,

@@ -64,3 +64,17 @@ def test_calibrate_unit_array_equals_the_cli(tmp_path):
     assert np.all(np.abs(r["error_deg"] - polrig.Rig.load(str(ROOT / "rigs" / "zhang2021-vehicle.yaml"),
                                                          set={"device.units.mount_error_sd_deg": 1})
                          .simulate_navigation()["truth"]["mount_error_deg"]) < 4 * r["standard_error_deg"] + 0.01)
+
+
+def test_study_navigation_equals_the_cli(tmp_path):
+    rig = polrig.Rig.load(str(RIG), set={"trajectory.duration_s": 360})
+    r = rig.study_navigation(trials=2, p_max=[0.5], out=tmp_path / "py")
+    run_cli("study", "navigation", RIG, "--set", "trajectory.duration_s=360", "--trials", "2", "--p-max", "0.5",
+            "-o", tmp_path / "cli", "--no-plots", "--quiet")
+    for f in ("trials.csv", "summary.csv", "tilt.csv", "dop.csv"):
+        assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+    trials = read_csv(tmp_path / "cli" / "trials.csv")
+    np.testing.assert_array_equal(r["trials"]["final_error_m"], trials["final_error_m"])
+    assert len(r["cells"]) == 2
+    with pytest.raises(ValueError):
+        rig.study_navigation(trials=0)

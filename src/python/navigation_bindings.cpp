@@ -18,6 +18,8 @@
 #include "polrig/io/plot.h"
 #include "polrig/report/installation_report.h"
 #include "polrig/report/navigation_report.h"
+#include "polrig/report/navigation_study_report.h"
+#include "polrig/study/navigation_study.h"
 #include "polrig/units.h"
 #include "rig_handle.h"
 
@@ -171,6 +173,95 @@ void check_plots(bool plots) {
     throw std::runtime_error("plots=True needs gnuplot, which was not found; install it (scripts/setup-deps.sh) or pass plots=False");
 }
 
+
+py::dict percentiles_dict(const std::vector<Percentiles>& p) {
+  py::dict out;
+  out["p05"] = column(p, [](const Percentiles& x) { return x.p05; });
+  out["p25"] = column(p, [](const Percentiles& x) { return x.p25; });
+  out["p50"] = column(p, [](const Percentiles& x) { return x.p50; });
+  out["p75"] = column(p, [](const Percentiles& x) { return x.p75; });
+  out["p95"] = column(p, [](const Percentiles& x) { return x.p95; });
+  return out;
+}
+
+template <class T>
+py::list names(const std::vector<T>& rows, std::string (*name)(const T&)) {
+  py::list out;
+  for (const T& r : rows) out.append(name(r));
+  return out;
+}
+
+py::dict study_dict(const NavigationStudy& st) {
+  py::dict out;
+  const auto mode_of = +[](const NavigationTrialResult& t) { return std::string(navigation_mode_name(t.mode)); };
+  py::dict trials;
+  const auto& tr = st.trials;
+  trials["cell"] = column(tr, [](const NavigationTrialResult& t) { return static_cast<double>(t.cell); });
+  trials["trial"] = column(tr, [](const NavigationTrialResult& t) { return static_cast<double>(t.trial); });
+  trials["mode"] = names(tr, mode_of);
+  trials["final_north_m"] = column(tr, [](const NavigationTrialResult& t) { return t.final_north_m; });
+  trials["final_east_m"] = column(tr, [](const NavigationTrialResult& t) { return t.final_east_m; });
+  trials["final_error_m"] = column(tr, [](const NavigationTrialResult& t) { return t.final_error_m; });
+  trials["lat_mae_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lat_deg.mae; });
+  trials["lat_rmse_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lat_deg.rmse; });
+  trials["lat_std_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lat_deg.std; });
+  trials["lon_mae_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lon_deg.mae; });
+  trials["lon_rmse_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lon_deg.rmse; });
+  trials["lon_std_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lon_deg.std; });
+  trials["filter_nis_mean"] = column(tr, [](const NavigationTrialResult& t) { return t.filter_nis_mean; });
+  out["trials"] = trials;
+  py::list cells;
+  for (const NavigationStudyCell& c : st.cells) {
+    py::dict d;
+    d["index"] = c.index;
+    d["factor"] = c.factor;
+    d["key"] = c.key;
+    d["value"] = c.value;
+    d["duration_s"] = c.duration_s;
+    cells.append(d);
+  }
+  out["cells"] = cells;
+  py::dict summary;
+  const auto& sm = st.summary;
+  summary["cell"] = column(sm, [](const NavigationStudySummary& x) { return static_cast<double>(x.cell); });
+  summary["mode"] = names(sm, +[](const NavigationStudySummary& x) { return std::string(navigation_mode_name(x.mode)); });
+  std::vector<Percentiles> fe, la, lo;
+  for (const NavigationStudySummary& x : sm) fe.push_back(x.final_error_m), la.push_back(x.lat_mae_deg), lo.push_back(x.lon_mae_deg);
+  summary["final_error_m"] = percentiles_dict(fe);
+  summary["lat_mae_deg"] = percentiles_dict(la);
+  summary["lon_mae_deg"] = percentiles_dict(lo);
+  out["summary"] = summary;
+  py::dict tilt;
+  tilt["tilt_deg"] = column(st.tilt, [](const TiltErrorRow& r) { return r.tilt_deg; });
+  tilt["mean_abs_deg"] = column(st.tilt, [](const TiltErrorRow& r) { return r.mean_abs_deg; });
+  tilt["sd_abs_deg"] = column(st.tilt, [](const TiltErrorRow& r) { return r.sd_abs_deg; });
+  tilt["first_order_deg"] = column(st.tilt, [](const TiltErrorRow& r) { return r.first_order_deg; });
+  tilt["exact_deg"] = column(st.tilt, [](const TiltErrorRow& r) { return r.exact_deg; });
+  tilt["z21_deg"] = column(st.tilt, [](const TiltErrorRow& r) { return r.z21_deg; });
+  out["tilt"] = tilt;
+  py::dict dop;
+  dop["lo"] = column(st.dop, [](const DopBin& b) { return b.lo; });
+  dop["hi"] = column(st.dop, [](const DopBin& b) { return b.hi; });
+  dop["count"] = column(st.dop, [](const DopBin& b) { return static_cast<double>(b.count); });
+  dop["mean_abs_deg"] = column(st.dop, [](const DopBin& b) { return b.mean_abs_deg; });
+  dop["sd_abs_deg"] = column(st.dop, [](const DopBin& b) { return b.sd_abs_deg; });
+  dop["mean_true_dop"] = column(st.dop, [](const DopBin& b) { return b.mean_true_dop; });
+  out["dop"] = dop;
+  py::dict bands;
+  for (const NavigationErrorBand& b : st.bands) {
+    py::dict d = percentiles_dict(b.error_m);
+    d["t_s"] = column(b.t_s, [](double t) { return t; });
+    bands[py::str(std::string(navigation_mode_name(b.mode)))] = d;
+  }
+  out["error_vs_time"] = bands;
+  return out;
+}
+
+// A list argument: empty without one.
+std::vector<double> values_of(const std::optional<py::object>& o, const char* name) {
+  return o ? finite_values(as_array(*o, name), name) : std::vector<double>{};
+}
+
 }  // namespace
 
 void bind_navigation(py::module_& m) {
@@ -199,6 +290,52 @@ void bind_navigation(py::module_& m) {
      "aop_deg and dop (K, units), true_aop_deg, true_dop, V (K, units, 3), truth (a dict: t_s, lat_deg, lon_deg, h_m, "
      "roll_deg, pitch_deg, yaw_deg, v_enu, sun_elevation_deg, mount_error_deg).",
      py::arg("out") = py::none(), py::kw_only(), py::arg("force") = false, py::arg("threads") = py::none(),
+     py::arg("progress") = py::none());
+
+
+  rig.def("study_navigation", [](const PyRig& self, int trials, std::optional<py::object> durations_s,
+                                 std::optional<py::object> p_max, std::optional<py::object> noise_sigma_V,
+                                 std::optional<py::object> ring_tilts_deg, std::optional<py::object> tilts_deg,
+                                 std::optional<fs::path> out, bool force, bool plots, std::optional<int> threads,
+                                 const py::object& progress) {
+    require(self, Instrument::kUnitArray, "study_navigation");
+    check_plots(plots && out.has_value());
+    NavigationStudySettings settings;
+    settings.trials = trials;
+    settings.durations_s = values_of(durations_s, "durations_s");
+    settings.p_max = values_of(p_max, "p_max");
+    settings.noise_sigma_V = values_of(noise_sigma_V, "noise_sigma_V");
+    settings.ring_tilts_deg = values_of(ring_tilts_deg, "ring_tilts_deg");
+    if (tilts_deg) settings.tilts_deg = values_of(tilts_deg, "tilts_deg");
+    try {
+      check_navigation_study_settings(self.rig(), settings);
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
+    }
+    const ThreadLimit limit(threads);
+    const Progress p = progress_from(progress);
+    NavigationStudy st;
+    {
+      py::gil_scoped_release release;
+      std::optional<OutputDir> d;
+      if (out) d.emplace(*out, force);
+      st = navigation_study(self.rig(), settings, p);
+      if (d) {
+        const std::string command = fmt::format("python: polrig.Rig({}).study_navigation(trials={}, out='{}')",
+                                                self.loaded.origin, trials, out->string());
+        write_manifest(d->staging(), {command, &self.loaded, report_navigation_study(d->staging(), st, plots)});
+        d->commit();
+      }
+    }
+    return study_dict(st);
+  }, "`polrig study navigation`: Monte-Carlo trials of a unit-array rig (each simulate + SINS, PNS, SINS/PNS), "
+     "optional sweeps (durations_s, p_max, noise_sigma_V, ring_tilts_deg: each value × trials), Z21's Fig. 17 "
+     "(tilts_deg) and Fig. 16 (DoP bins). Returns a dict: trials (trials.csv's columns), cells, summary (percentiles "
+     "per cell and mode), tilt, dop, error_vs_time (per mode, percentiles of the horizontal error per reading). With "
+     "out=, the folder the CLI writes.",
+     py::kw_only(), py::arg("trials") = 20, py::arg("durations_s") = py::none(), py::arg("p_max") = py::none(),
+     py::arg("noise_sigma_V") = py::none(), py::arg("ring_tilts_deg") = py::none(), py::arg("tilts_deg") = py::none(),
+     py::arg("out") = py::none(), py::arg("force") = false, py::arg("plots") = false, py::arg("threads") = py::none(),
      py::arg("progress") = py::none());
 
   m.def("read_navigation_dataset", [](const fs::path& dir, std::optional<PyRig> rig) {

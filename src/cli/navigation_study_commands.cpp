@@ -107,16 +107,16 @@ std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App&
                                st.lon_mae_deg.p50);
     }
     for (const TiltErrorRow& t : result.tilt)
-      std::cout << fmt::format("tilt {}°: mean |elevation error| {:.3f}° ± {:.3f}° ({} readings; (2/π)·τ = {:.3f}°, "
+      std::cout << fmt::format("tilt {}°: mean |elevation error| {:.3f}° (standard error {:.3f}°, {} readings; (2/π)·τ = {:.3f}°, "
                                "exact at H = {:.1f}°: {:.3f}°{})\n",
                                t.tilt_deg, t.mean_abs_deg, t.sd_abs_deg / std::sqrt(static_cast<double>(std::max(1LL, t.draws))),
                                t.draws, t.first_order_deg, result.tilt_mean_elevation_deg, t.exact_deg,
                                std::isnan(t.z21_deg) ? std::string() : fmt::format("; Z21 {}°", t.z21_deg));
     for (const DopBin& b : result.dop)
       if (!std::isnan(b.z21_mean_deg))
-        std::cout << fmt::format("DoP {:.0f}–{:.0f} %: {} (Z21 {}° ± {}°)\n", 100 * b.lo, 100 * b.hi,
+        std::cout << fmt::format("DoP {:.0f}–{:.0f} %: {} (Z21 {}°, SD {}°)\n", 100 * b.lo, 100 * b.hi,
                                  b.count == 0 ? std::string("no readings")
-                                              : fmt::format("|E-vector error| {:.4f}° ± {:.4f}° over {} readings",
+                                              : fmt::format("|E-vector error| mean {:.4f}°, SD {:.4f}°, over {} readings",
                                                             b.mean_abs_deg, b.sd_abs_deg, b.count),
                                  b.z21_mean_deg, b.z21_sd_deg);
   }});

@@ -1137,6 +1137,11 @@ bool written_for(const RigKey& key, const Rig& rig_in) {
   if (!key.read_by_source(rig_in.source.model)) return false;
   if (!key.read_by_instrument(rig_in.device_kind)) return false;
   if (key.path == "device.kind" && rig_in.device_kind == kDefaultDeviceKind) return false;
+  // A source that sets the light's d itself (the traced port film, the sky at its first stop): the
+  // file leaves device.d out and the parser derives it again, so that a --set of the source's keys
+  // on a written rig.yaml (navigate --set sky.p_max=…) derives the new d instead of clashing.
+  if (key.path == "device.d" && rig_in.light && rig_in.light->rig_degree_of_polarization(rig_in.source_view()))
+    return false;
   // A rig without checkerboard views writes none of the board's keys.
   if (key.path.starts_with("checkerboard.") && rig_in.checkerboard.views == 0) return false;
   Rig rig = rig_in;  // accessors hand out references into a mutable Rig

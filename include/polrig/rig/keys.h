@@ -78,7 +78,8 @@ const RigKey* find_rig_key(std::string_view path);
 
 // Whether a rig file of `rig` writes the key (rig_to_yaml, Python's Rig.to_dict): not when the
 // rig's source or instrument does not read it, not device.kind when it is the default
-// (six-photodiode: a rig.yaml written before the camera stays byte-identical), not an empty optional text or list (unset), and not
+// (six-photodiode: a rig.yaml written before the camera stays byte-identical), not device.d when the
+// source derives it (traced, sky: the parser derives it again), not an empty optional text or list (unset), and not
 // schedule.start/step/stop_deg when an explicit list of stops replaces them. What it writes reads
 // back to the same rig.
 bool written_for(const RigKey& key, const Rig& rig);

@@ -104,6 +104,8 @@ TEST(NavigationRig, ARunThatCannotBeFlownIsRefusedByItsKey) {
   }
   EXPECT_HAS(rig_error(r, {{"imu.gyro.arw_deg_rt_h", "[0.5, -1, 0.5]"}}), "key 'imu.gyro.arw_deg_rt_h'");
   EXPECT_HAS(rig_error(r, {{"trajectory.pitch_deg", "85"}}), "key 'trajectory.pitch_deg'");
+  EXPECT_HAS(rig_error(r, {{"navigation.tilt_in_measurement", "true"}, {"navigation.integrated_level", "accelerometer"}}),
+             "key 'navigation.tilt_in_measurement': expected false with navigation.integrated_level accelerometer");
 }
 
 // The vehicle rig's drive against its displacement on a plane, written here segment by segment
@@ -274,21 +276,23 @@ TEST(SlowNavigation, Z21sStaticRunBoundsTheDriftAlongTheSun) {
     const double cn = std::cos(a.azimuth_rad) * f.sigma_north_m, ce = std::sin(a.azimuth_rad) * f.sigma_east_m;
     return std::sqrt(cn * cn + ce * ce + 2 * f.corr_north_east * cn * ce);
   };
-  for (const char* tilt : {"false", "true"}) {
-    const Rig rig = load("zhang2021-static.yaml", {{"navigation.tilt_in_measurement", tilt}});
+  // Z21's H; with the tilt columns; Z21's H with the accelerometers' level (no INS tilt in H^n).
+  for (const auto& [tilt, level] : {std::pair{"false", "ins"}, {"true", "ins"}, {"false", "accelerometer"}}) {
+    const Rig rig = load("zhang2021-static.yaml", {{"navigation.tilt_in_measurement", tilt},
+                                                   {"navigation.integrated_level", level}});
     const NavigationRun run = navigate(d, rig);
     const PositionError sins = position_error(run.fixes[0].back(), t), pns = position_error(run.fixes[1].back(), t),
                         both = position_error(run.fixes[2].back(), t);
     const double sigma = sigma_along(run.filter.back());
-    std::printf("Z21 static, 1200 s, tilt columns %s: SINS %.1f km (along the sun %.2f km); integrated along the sun "
-                "%.2f km (σ %.2f km), across %.1f km; PNS %.2f km; %s\n", tilt,
+    std::printf("Z21 static, 1200 s, tilt columns %s, level %s: SINS %.1f km (along the sun %.2f km); integrated along the sun "
+                "%.2f km (σ %.2f km), across %.1f km; PNS %.2f km; %s\n", tilt, level,
                 std::hypot(sins.north_m, sins.east_m) / 1000, along(sins) / 1000, along(both) / 1000, sigma / 1000,
                 std::hypot(both.north_m, both.east_m) / 1000, std::hypot(pns.north_m, pns.east_m) / 1000,
                 run.filter_summary.BriefReport().c_str());
     EXPECT_GT(std::hypot(sins.north_m, sins.east_m), 5e3);
     EXPECT_LT(std::abs(along(both)), std::abs(along(sins)) / 10);
     EXPECT_LT(sigma, 11e3);
-    if (std::string(tilt) == "true") {
+    if (std::string(tilt) == "true" || std::string(level) == "accelerometer") {
       EXPECT_LT(std::abs(along(both)), 4 * sigma);
     }
     EXPECT_EQ(run.fixes[1].back().status, "converged");

@@ -287,6 +287,15 @@ void add_ins_keys(std::vector<RigKey>& keys) {
     k.valid_text = [](std::string_view v) { return v == "accelerometer" || v == "sins"; };
     push(k, kNav);
   }
+  {
+    RigKey k{"navigation.integrated_level", K::Text, "", "ins or accelerometer",
+             "the SINS/PNS filter's roll and pitch for the measured elevation: ins, its own attitude (Z21), or "
+             "accelerometer, the mean specific force over each reading's interval as PNS's (unsteady readings give no "
+             "update) [C: ins]"};
+    k.text = [](Rig& r) -> std::string& { return r.navigation.integrated_level; };
+    k.valid_text = [](std::string_view v) { return v == "ins" || v == "accelerometer"; };
+    push(k, kNav);
+  }
   push(boolean("navigation.tilt_in_measurement",
                "the integrated filter's H with the tilt columns: the INS's tilt error enters the measured H^n and is "
                "estimated (ins/filter.h) [C: false, Z21's position-only H]",
@@ -1062,6 +1071,11 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig) {
       return RigProblem{"trajectory.segment_climb_deg_s", fmt::format("expected the pitch within ±80°, segment {} ends "
                                                                       "at {}°", i + 1, pitch)};
   }
+  if (rig.navigation.tilt_in_measurement && rig.navigation.integrated_level == "accelerometer")
+    return RigProblem{"navigation.tilt_in_measurement",
+                      "expected false with navigation.integrated_level accelerometer (the tilt columns model the "
+                      "filter's attitude in the measured elevation, which the accelerometers' level leaves out)",
+                      "navigation.integrated_level"};
   if (total * imu_hz > 2e6)
     return RigProblem{"imu.rate_hz", fmt::format("expected at most 2e6 IMU samples in a run, got {:.0f} ({} s at {} Hz)",
                                                  total * imu_hz, total, imu_hz)};

@@ -251,11 +251,34 @@ struct SunModel {
   double gha_rad(double t) const { const auto h = track.hour_angle_at(start.plus_seconds(t)); return std::atan2(h.sin_gha, h.cos_gha); }
 };
 
+// The accelerometers' level over a reading's interval (the IMU samples after the previous reading):
+// the up direction in b, the mean specific force normalized (f^b = C_n^b·(0, 0, g) when the vehicle
+// neither accelerates nor turns), and whether it was steady enough to trust [C]: the mean |f| within
+// 5e-3 m/s² (500 µg) of g and the mean rate below 0.05°/s (the Earth's is 0.004°/s). A 0.5 m/s²
+// acceleration changes |f| by 0.013 m/s², a 3°/s turn exceeds the rate; a 0.5° level error then
+// corrupts H^n by up to 0.5°, worth ~55 km of PNS.
+struct Level {
+  Vec3 up_b{};
+  bool steady = false;
+};
+Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k, double g) {
+  Eigen::Vector3d dv = Eigen::Vector3d::Zero(), dtheta = Eigen::Vector3d::Zero();
+  const std::size_t first = k == 0 ? 0 : at[k - 1] + 1;
+  for (std::size_t i = first; i <= at[k]; ++i) dv += data.imu[i].dv, dtheta += data.imu[i].dtheta;
+  const double T = data.imu[at[k]].t_s - (first == 0 ? 0.0 : data.imu[first - 1].t_s);
+  const bool steady = std::abs(dv.norm() / T - g) <= 5e-3 && dtheta.norm() / T <= deg2rad(0.05);
+  dv.normalize();
+  return {{dv.x(), dv.y(), dv.z()}, steady};
+}
+
 // The INS with the filter, its state and the filter's record at every compass epoch.
 void run_integrated(const NavigationDataset& data, const std::vector<std::size_t>& at,
                     std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
                     std::vector<NavigationFix>& fixes) {
   InsFilter filter(data.initial, initial_covariance(rig), filter_settings(rig));
+  // H^n's level: the filter's attitude (Z21) or the accelerometers (navigation.integrated_level).
+  const bool accelerometer = rig.navigation.integrated_level == "accelerometer";
+  const double g = normal_gravity(data.initial.lat_rad, data.initial.h_m);
   std::size_t next = 0;
   for (std::size_t i = 0; i < data.imu.size() && next < at.size(); ++i) {
     filter.predict(data.imu[i]);
@@ -264,7 +287,14 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
     FilterEpoch f;
     f.t_s = filter.state().t_s;
     f.sun = sun_from_units(e.units, mounts);
-    f.elevation_rad = elevation_n(f.sun, filter.state().C_bn());
+    if (!accelerometer) {
+      f.elevation_rad = elevation_n(f.sun, filter.state().C_bn());
+    } else if (f.sun.status == UnitSunStatus::Ok) {  // unsteady readings: no measurement
+      const Level level = level_of(data, at, next - 1, g);
+      f.elevation_rad = level.steady ? std::asin(std::clamp(vec3::dot(level.up_b, f.sun.s_b), -1.0, 1.0)) : kNaN;
+    } else {
+      f.elevation_rad = kNaN;
+    }
     const double dec = sun.dec_rad(e.t_s), gha = sun.gha_rad(e.t_s);
     f.model_elevation_rad =
         std::asin(sun_elevation_model(filter.state().lat_rad, filter.state().lon_rad, dec, gha).sin_H);
@@ -288,26 +318,6 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
 }
 
 // PNS: at each epoch the positioning fit over the window's elevations (the SINS's attitude).
-// The accelerometers' level over a reading's interval (the IMU samples after the previous reading):
-// the up direction in b, the mean specific force normalized (f^b = C_n^b·(0, 0, g) when the vehicle
-// neither accelerates nor turns), and whether it was steady enough to trust [C]: the mean |f| within
-// 5e-3 m/s² (500 µg) of g and the mean rate below 0.05°/s (the Earth's is 0.004°/s). A 0.5 m/s²
-// acceleration changes |f| by 0.013 m/s², a 3°/s turn exceeds the rate; a 0.5° level error then
-// corrupts H^n by up to 0.5°, worth ~55 km of PNS.
-struct Level {
-  Vec3 up_b{};
-  bool steady = false;
-};
-Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k, double g) {
-  Eigen::Vector3d dv = Eigen::Vector3d::Zero(), dtheta = Eigen::Vector3d::Zero();
-  const std::size_t first = k == 0 ? 0 : at[k - 1] + 1;
-  for (std::size_t i = first; i <= at[k]; ++i) dv += data.imu[i].dv, dtheta += data.imu[i].dtheta;
-  const double T = data.imu[at[k]].t_s - (first == 0 ? 0.0 : data.imu[first - 1].t_s);
-  const bool steady = std::abs(dv.norm() / T - g) <= 5e-3 && dtheta.norm() / T <= deg2rad(0.05);
-  dv.normalize();
-  return {{dv.x(), dv.y(), dv.z()}, steady};
-}
-
 std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vector<std::size_t>& at,
                                    const std::vector<InsState>& sins,
                                    std::span<const UnitMount> mounts, const Rig& rig, const Sky& sky,

@@ -68,6 +68,9 @@ struct NavigationSettings {
   std::string pns_level = "accelerometer";
   // The integrated filter's H with the tilt columns (ins/filter.h FilterSettings) [C: false, Z21's H].
   bool tilt_in_measurement = false;
+  // The integrated filter's level for H^n: "ins", its own attitude (Z21, spec §4.2), or
+  // "accelerometer", as PNS's (unsteady readings give no update) [C: ins].
+  std::string integrated_level = "ins";
 };
 
 }  // namespace polrig

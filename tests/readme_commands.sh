@@ -57,6 +57,7 @@ simulate rigs/han2017-indoor.yaml
 simulate rigs/han2017-outdoor.yaml
                             || + --set device.width_px=160 --set device.height_px=120
 study positioning           || + --set schedule.count=61 --set schedule.dwell_s=60 --trials 10
+study navigation            || --trials 20 => --trials 2
 # W16's cameras at a quarter of their resolution, as docs/cli.md's "practical runs" (every size
 # and intrinsic divided by 4); the calibration's fisheye fit needs about 10 checkerboard views there
 simulate rigs/wang2016-rotation.yaml

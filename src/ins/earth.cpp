@@ -19,10 +19,19 @@ EarthRadii earth_radii(double lat_rad) {
   return {a * (1.0 - e2) / (w2 * w), a / w};
 }
 
+// GeographicLib's exact normal gravity on the ellipsoid (Somigliana's closed form,
+// SurfaceGravity) carried to height h by NIMA TR8350.2's series (Eq. 4-3),
+//   γ_h = γ·(1 − 2h/a·(1 + f + m − 2f·sin²L) + 3h²/a²),   m = ω²a²b/GM,
+// within 5e-9 m/s² of GeographicLib's exact Gravity() at 50 m and 7e-7 m/s² at 10 km (tests/
+// test_ins.cpp; 0.07 µg, against an accelerometer's 50 µg bias), at a tenth of its cost (the
+// mechanization calls it every step).
 double normal_gravity(double lat_rad, double h_m) {
-  double gamma_y = 0, gamma_z = 0;
-  GeographicLib::NormalGravity::WGS84().Gravity(rad2deg(lat_rad), h_m, gamma_y, gamma_z);
-  return -gamma_z;
+  static const GeographicLib::NormalGravity& wgs84 = GeographicLib::NormalGravity::WGS84();
+  static const double a = wgs84.EquatorialRadius(), f = wgs84.Flattening();
+  static const double m = wgs84.AngularVelocity() * wgs84.AngularVelocity() * a * a * a * (1 - f) / wgs84.MassConstant();
+  const double s = std::sin(lat_rad);
+  const double gamma = wgs84.SurfaceGravity(rad2deg(lat_rad));
+  return gamma * (1 - 2 * h_m / a * (1 + f + m - 2 * f * s * s) + 3 * h_m * h_m / (a * a));
 }
 
 Eigen::Vector3d gravity_n(double lat_rad, double h_m) {

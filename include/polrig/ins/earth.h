@@ -21,8 +21,10 @@ struct EarthRadii {
 EarthRadii earth_radii(double lat_rad);
 
 // WGS-84 normal gravity's magnitude g(L, h) (m/s²): gravitation plus the centrifugal term,
-// GeographicLib's NormalGravity::WGS84(), its up component. The northward component it also has
-// off the ellipsoid (≈ 8e-9 m/s² per metre of height at 45°) is dropped: g^n = (0, 0, −g).
+// GeographicLib's NormalGravity::WGS84() on the ellipsoid (SurfaceGravity: Somigliana, exact)
+// carried to h by TR8350.2's series (within 1.1e-10 m/s² per metre of h of its exact Gravity()).
+// The northward component off the ellipsoid (≈ 8e-9 m/s² per metre of height at 45°) is dropped:
+// g^n = (0, 0, −g).
 double normal_gravity(double lat_rad, double h_m);
 Eigen::Vector3d gravity_n(double lat_rad, double h_m);
 

@@ -603,7 +603,7 @@ TEST_F(CliCalibration, UnknownMethodIsRefused) {
   const fs::path sim = simulate();
   expect_refused("calibrate " + shell_quote(sim) + " --method bogus -o " +
                      shell_quote(tmp / "out") + " --no-plots",
-                 tmp / "out", 2, {"--method bogus: expected section, cs, cs-nc, nc, all, dofp or four-camera"});
+                 tmp / "out", 2, {"--method bogus: expected section, cs, cs-nc, nc, all, dofp, four-camera or unit-array"});
 }
 
 TEST_F(CliCalibration, ApplyWithParamsMissingKdIsRefused) {

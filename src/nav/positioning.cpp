@@ -26,7 +26,7 @@ struct Outcome {
   bool converged;
   const char* message;
 };
-Outcome outcome_of(Eigen::LevenbergMarquardtSpace::Status s) {
+Outcome termination_of(Eigen::LevenbergMarquardtSpace::Status s) {
   using S = Eigen::LevenbergMarquardtSpace::Status;
   switch (s) {
     case S::NotStarted: return {"NotStarted", false, "the iteration did not start"};
@@ -193,7 +193,7 @@ PositionRoot fit_root(const Data& d, Eigen::Vector2d x, const Site& prior, const
     }
     s.iterations += static_cast<int>(lm.njev());
     s.evaluations += static_cast<int>(lm.nfev());
-    outcome = outcome_of(status);
+    outcome = termination_of(status);
     x = xv;
     if (!outcome.converged) break;
     // The move on the sphere in metres.

@@ -26,8 +26,6 @@
 
 namespace {
 using namespace polrig;
-
-constexpr double kPi = std::numbers::pi;
 double rad(double deg) { return deg * kPi / 180.0; }
 
 // A per-pixel truth of Eq. 18. j = (row % 2)·2 + col % 2 indexes TL, TR, BL, BR.

@@ -24,11 +24,10 @@
 #include "polrig/ins/mechanization.h"
 #include "polrig/ins/trajectory.h"
 #include "polrig/random.h"
+#include "polrig/units.h"
 
 namespace {
 using namespace polrig;
-
-constexpr double kPi = std::numbers::pi;
 double rad(double deg) { return deg * kPi / 180.0; }
 double deg(double r) { return r * 180.0 / kPi; }
 

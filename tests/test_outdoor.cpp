@@ -24,6 +24,7 @@
 #include "polrig/rig/error.h"
 #include "polrig/sky/drift.h"
 #include "polrig/sky/sensor_view.h"
+#include "polrig/units.h"
 #include "almanac_sun.h"
 #include "support.h"
 
@@ -31,7 +32,6 @@ namespace polrig {
 namespace {
 
 namespace fs = std::filesystem;
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // The sun: the Astronomical Almanac's formula (tests/almanac_sun.h), independent of sky/sun.
 using AaSun = test::AlmanacSun;

@@ -18,13 +18,13 @@
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
 #include "polrig/sky/sun_rows.h"
+#include "polrig/units.h"
 #include "almanac_sun.h"
 #include "support.h"
 
 namespace polrig {
 namespace {
 
-constexpr double kDeg = M_PI / 180;
 namespace fs = std::filesystem;
 
 const Site kDalian{38.0 + 52.0 / 60 + 45.0 / 3600, 121.0 + 32.0 / 60 + 38.0 / 3600, 0};

@@ -22,12 +22,11 @@
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
 #include "polrig/source/traced_source.h"
+#include "polrig/units.h"
 #include "support.h"
 
 namespace polrig {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 // A point lamp at the centre and no baffles: every quantity of sphere theory is exact.
 SceneSpec theory_sphere(long long photons) {

@@ -30,8 +30,6 @@ using namespace polrig;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 // The spec's angle (§1.3) of a unit with axes X, Z (in any one frame) seeing e: right-hand about
 // k = −Z, from X: atan2(e·(k × X), e·X) mod π. Written out here, independently of calib/.
 double spec_angle(const Vec3& e, const Vec3& X, const Vec3& Z) {

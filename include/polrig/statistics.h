@@ -1,5 +1,6 @@
 #pragma once
 // The two summaries of a sample that polrig reports, computed in two passes (no cancellation).
+#include <algorithm>
 #include <cmath>
 #include <span>
 
@@ -29,6 +30,16 @@ inline MeanAndSpread mean_and_standard_error(std::span<const double> x) {
   double ss = 0;
   for (double v : x) ss += (v - mean) * (v - mean);
   return {mean, std::sqrt(ss / (n - 1) / n)};
+}
+
+// The q-quantile of a sorted sample by linear interpolation between order statistics (type 7, as
+// R's and NumPy's default); NaN for an empty sample.
+inline double quantile_of_sorted(std::span<const double> sorted, double q) {
+  if (sorted.empty()) return std::nan("");
+  const double pos = q * static_cast<double>(sorted.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
+  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
 }
 
 }  // namespace polrig

@@ -5,6 +5,10 @@
 
 namespace polrig {
 
+// π and one degree in radians, for formulas written with them (one copy for every file).
+inline constexpr double kPi = std::numbers::pi;
+inline constexpr double kDeg = std::numbers::pi / 180.0;
+
 constexpr double deg2rad(double deg) { return deg * (std::numbers::pi / 180.0); }
 constexpr double rad2deg(double rad) { return rad * (180.0 / std::numbers::pi); }
 

@@ -16,8 +16,6 @@ namespace polrig {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 // How well the polarized stops' table angles separate the analyzers' axes from the DoP: σ_min/σ_max of
 // the design [1, cos 2θ_R, sin 2θ_R]. Each camera sees 1 + d·cos 2(β − a_j) with β = ψ_0 + s_R·θ_R; with
 // only two polarizer orientations (stops 90° apart: 2θ_R on one line) it gives one number per camera,

@@ -86,7 +86,7 @@ struct DriftSettings {
   std::string site;  // "LAT,LON" in degrees, north and east positive
 };
 
-Site parse_site(const std::string& text) {
+Site parse_drift_site(const std::string& text) {
   const auto comma = text.find(',');
   Site s;
   if (comma == std::string::npos || !CLI::detail::lexical_cast(text.substr(0, comma), s.lat_deg) ||
@@ -116,7 +116,7 @@ StopCorrections drift_of(const MeasuredData& data, const Rig& rig, const DriftSe
   try {
     const StopTimes times = drift_stop_times(request, rig);
     std::optional<Site> site;
-    if (!drift.site.empty()) site = parse_site(drift.site);
+    if (!drift.site.empty()) site = parse_drift_site(drift.site);
     return sun_drift_corrections(request, times, site, "--site " + drift.site, rig);
   } catch (const std::invalid_argument& e) {
     throw DataError(e.what());

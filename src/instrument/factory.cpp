@@ -38,7 +38,7 @@ class UnitArray final : public Instrument {
   unsigned flags() const override { return kUnitArray; }
 };
 
-constexpr std::array<std::string_view, 4> kKinds = {"six-photodiode", "dofp-camera", "four-camera", "unit-array"};
+constexpr std::array<std::string_view, 4> kInstrumentKinds = {"six-photodiode", "dofp-camera", "four-camera", "unit-array"};
 
 constexpr std::array<InstrumentFlagInfo, 5> kFlags = {{
     {Instrument::kPairVoltages, "pair_voltages", "pair voltages"},
@@ -50,13 +50,13 @@ constexpr std::array<InstrumentFlagInfo, 5> kFlags = {{
 
 }  // namespace
 
-std::span<const std::string_view> instrument_kinds() { return kKinds; }
+std::span<const std::string_view> instrument_kinds() { return kInstrumentKinds; }
 
 std::span<const InstrumentFlagInfo> instrument_flags() { return kFlags; }
 
 std::string kinds_with(Instrument::Flag flag) {
   std::string out;
-  for (std::string_view kind : kKinds)
+  for (std::string_view kind : kInstrumentKinds)
     if (make_instrument(kind)->has(flag)) {
       if (!out.empty()) out += ' ';
       out += kind;

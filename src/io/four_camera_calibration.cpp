@@ -24,7 +24,7 @@ struct Range {
 };
 constexpr Range kSize{2, 16384, "an integer number of pixels in [2, 16384]"};
 constexpr Range kGain{1e-6, 1e6, "a gain in (0, 1e6] DN per unit intensity"};
-constexpr Range kOffset{-65535, 65535, "an offset within ±65535 DN (16 bits)"};
+constexpr Range kOffsetDn{-65535, 65535, "an offset within ±65535 DN (16 bits)"};
 constexpr Range kPolarizer{-180, 180, "a polarizer axis in [-180, 180] deg"};
 constexpr Range kEps{-45, 45, "a mounting error within ±45 deg (beyond, it is another nominal axis)"};
 constexpr Range kAxis{-225, 225, "an axis in [-225, 225] deg (polarizer_deg + eps_deg)"};
@@ -73,7 +73,7 @@ YAML::Node child(const std::filesystem::path& path, const YAML::Node& parent, co
 }
 
 // A YAML double-quoted scalar.
-std::string quoted(const std::string& text) {
+std::string yaml_quoted(const std::string& text) {
   std::string q = "\"";
   for (char ch : text) {
     if (ch == '"' || ch == '\\') q += '\\';
@@ -133,8 +133,8 @@ std::string four_camera_calibration_yaml(const FourCameraCalibrationFile& f) {
       "# Eq. 1: f_j = K_j I [1 + d cos(2 phi - 2 axis_j)] + b_j, axis_j = polarizer_j + eps_j (camera j's frame);\n"
       "# gauge eps_1 = 0: the fused AoP's zero is camera 1's polarizer axis.\n";
   y += fmt::format("width_px: {}\nheight_px: {}\n", m.width, m.height);
-  y += fmt::format("sources:\n  radiometric: {}\n  polarizer: {}\n  geometry: {}\n", quoted(f.radiometric_from),
-                   quoted(f.polarizer_from), quoted(f.geometry_from));
+  y += fmt::format("sources:\n  radiometric: {}\n  polarizer: {}\n  geometry: {}\n", yaml_quoted(f.radiometric_from),
+                   yaml_quoted(f.polarizer_from), yaml_quoted(f.geometry_from));
   y += "cameras:\n";
   for (std::size_t j = 0; j < 4; ++j) {
     const CameraGeometry& c = m.camera[j];
@@ -222,7 +222,7 @@ FourCameraCalibrationFile read_four_camera_calibration(const std::filesystem::pa
     has_K[j] = c["K_DN"] || c["b_DN"];
     if (has_K[j]) {
       m.K[j] = req("K_DN", kGain);
-      m.b[j] = req("b_DN", kOffset);
+      m.b[j] = req("b_DN", kOffsetDn);
     }
     has_axis[j] = c["polarizer_deg"] || c["eps_deg"] || c["axis_deg"];
     if (has_axis[j]) {

@@ -16,7 +16,7 @@ namespace polrig {
 namespace fs = std::filesystem;
 
 namespace {
-std::string quoted(const std::string& s) {
+std::string gnuplot_quoted(const std::string& s) {
   std::string q = "\"";
   for (char c : s) {
     if (c == '\n') {  // a line break in a title: gnuplot's escape
@@ -72,7 +72,7 @@ std::string resolve_field(const std::string& field, const std::vector<std::strin
     if (std::find(header.begin(), header.end(), name) == header.end())
       throw std::logic_error(fmt::format("plot of {}: no column '{}'", file, name));
     const bool whole = i == 0 && end == field.size() && c == '$';
-    out += whole ? quoted(name) : fmt::format("{}({})", c == '$' ? "column" : "strcol", quoted(name));
+    out += whole ? gnuplot_quoted(name) : fmt::format("{}({})", c == '$' ? "column" : "strcol", gnuplot_quoted(name));
     i = end - 1;
   }
   const bool number = !out.empty() && out.find_first_not_of("0123456789") == std::string::npos;
@@ -105,21 +105,21 @@ std::string script_for(const fs::path& dir, const Plot& p) {
   std::string s;
   s += fmt::format("set terminal pngcairo size {},{} enhanced font 'DejaVu Sans,11'\n", p.width,
                    p.height);
-  s += fmt::format("set output {}\n", quoted(p.png));
+  s += fmt::format("set output {}\n", gnuplot_quoted(p.png));
   s += "set datafile separator ','\nset datafile columnheaders\nset grid\nset key outside right top\n";
   // Axis labels and legends may hold rig key paths (eccentricity.L_IS): no enhanced text there.
-  s += fmt::format("set title {} noenhanced\nset xlabel {} noenhanced\nset ylabel {}\n", quoted(p.title),
-                   quoted(p.xlabel), quoted(p.ylabel));
+  s += fmt::format("set title {} noenhanced\nset xlabel {} noenhanced\nset ylabel {}\n", gnuplot_quoted(p.title),
+                   gnuplot_quoted(p.xlabel), gnuplot_quoted(p.ylabel));
   bool any_y2 = false;
   for (const PlotSeries& ps : p.series) any_y2 |= ps.y2;
-  if (any_y2) s += fmt::format("set y2label {}\nset y2tics\nset ytics nomirror\n", quoted(p.y2label));
+  if (any_y2) s += fmt::format("set y2label {}\nset y2tics\nset ytics nomirror\n", gnuplot_quoted(p.y2label));
   if (!p.extra.empty()) s += p.extra + "\n";
   s += "plot ";
   for (std::size_t i = 0; i < p.series.size(); ++i) {
     const PlotSeries& ps = p.series[i];
     const std::string using_ = resolve_columns(ps.using_, header_of(dir / ps.file), ps.file);
     s += fmt::format("{}{} using {} axes {} title {} noenhanced with {}", i ? ", \\\n     " : "",
-                     quoted(ps.file), using_, ps.y2 ? "x1y2" : "x1y1", quoted(ps.title),
+                     gnuplot_quoted(ps.file), using_, ps.y2 ? "x1y2" : "x1y1", gnuplot_quoted(ps.title),
                      ps.style);
   }
   return s + "\nunset output\n";

@@ -11,6 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "polrig/rig/keys.h"
+#include "polrig/vec3.h"
 #include "yaml_load.h"
 
 namespace polrig {
@@ -140,13 +141,11 @@ constexpr RealRange kPortDiameter{1, 10000};     // and smaller than the sphere
 constexpr RealRange kReflectance{0, 0.999};      // a photon makes ~1/(1 − ρ) bounces
 constexpr RealRange kTransmittance{0, 1};
 constexpr RealRange kFilmTransmittance{0.01, 1};  // at 0 no light reaches the sensor
-constexpr RealRange kTurn{-360, 360};
+constexpr RealRange kAxisRange{-360, 360};
 constexpr RealRange kLampPower{1e-3, 1e4};        // 1 mW to 10 kW
 constexpr RealRange kBaffleRadius{0.1, 10000};    // its irradiance divides by its area
 
 bool lamp_radius(double v) { return v == 0 || (v >= 0.1 && v <= 10000); }
-
-double norm(const Vec3& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); }
 
 }  // namespace
 
@@ -171,7 +170,7 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
                                           s.sphere.diameter, s.port.diameter));
   {
     MapReader film(file, port.section("polarizer"), "port.polarizer");
-    s.port.polarizer.axis_deg = film.real("axis_deg", s.port.polarizer.axis_deg, kTurn, "an angle", "deg");
+    s.port.polarizer.axis_deg = film.real("axis_deg", s.port.polarizer.axis_deg, kAxisRange, "an angle", "deg");
     s.port.polarizer.tau_M = film.real("tau_M", s.port.polarizer.tau_M, kFilmTransmittance, "a transmittance", "");
     s.port.polarizer.tau_m = film.real("tau_m", s.port.polarizer.tau_m, kTransmittance, "a transmittance", "");
     if (!(s.port.polarizer.tau_m < s.port.polarizer.tau_M))
@@ -205,7 +204,7 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
     l.radius = r.real("radius", l.radius, lamp_radius, "a length of 0 (a point lamp) or in [0.1, 10000] mm");
     l.power = r.real("power", l.power, kLampPower, "a power", "W");
     l.reflectance = r.real("reflectance", l.reflectance, kReflectance, "a reflectance", "");
-    if (norm(l.position) + l.radius >= R)
+    if (vec3::norm(l.position) + l.radius >= R)
       r.fail_key("position", fmt::format("expected a lamp inside the sphere (|position| + radius < {} mm)", R));
     return l;
   });
@@ -223,7 +222,7 @@ SceneSpec parse_scene(std::string_view text, std::string_view origin) {
       r.fail_key("normal", fmt::format("expected a direction of length in [1e-6, 1e6] (only its "
                                        "direction counts), got [{}, {}, {}] of length {}",
                                        b.normal[0], b.normal[1], b.normal[2], length));
-    if (norm(b.centre) + b.radius >= R)
+    if (vec3::norm(b.centre) + b.radius >= R)
       r.fail_key("centre", fmt::format("expected a baffle inside the sphere (|centre| + radius < {} mm)", R));
     return b;
   });

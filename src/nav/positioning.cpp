@@ -19,8 +19,6 @@ namespace polrig {
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
 // Eigen's Levenberg–Marquardt statuses as terminations (as calib/fit.cpp; MINPACK's 6–8 say no
 // further improvement is possible in double precision: converged as far as it can).
 struct Outcome {
@@ -28,7 +26,7 @@ struct Outcome {
   bool converged;
   const char* message;
 };
-Outcome outcome_of(Eigen::LevenbergMarquardtSpace::Status s) {
+Outcome termination_of(Eigen::LevenbergMarquardtSpace::Status s) {
   using S = Eigen::LevenbergMarquardtSpace::Status;
   switch (s) {
     case S::NotStarted: return {"NotStarted", false, "the iteration did not start"};
@@ -98,8 +96,8 @@ Linearization linearize(const Data& d, double lat_deg, double lon_deg, double he
 // Eq. 17's residuals r_k = √w_k·(θ_meas − θ_S) and their Jacobian, as zenith_model computes them
 // (tests/test_positioning.cpp checks both against it), from the linearization's sines and cosines:
 // cos(GHA + λ) by the addition theorem, one acos and one square root per sighting.
-struct Residuals : Eigen::DenseFunctor<double> {
-  Residuals(const Data& data, const Linearization& lin)
+struct Eq17Residuals : Eigen::DenseFunctor<double> {
+  Eq17Residuals(const Data& data, const Linearization& lin)
       : Eigen::DenseFunctor<double>(2, static_cast<int>(data.utc.size())), d(data), l(lin) {}
   template <class Row>
   void each(const InputType& x, Row&& row) const {
@@ -180,8 +178,8 @@ PositionRoot fit_root(const Data& d, Eigen::Vector2d x, const Site& prior, const
     x = normalized(x);
     lin = linearize(d, rad2deg(x(0)), rad2deg(x(1)), prior.height_m, o);
     ++s.relinearizations;
-    Residuals f(d, lin);
-    Eigen::LevenbergMarquardt<Residuals> lm(f);
+    Eq17Residuals f(d, lin);
+    Eigen::LevenbergMarquardt<Eq17Residuals> lm(f);
     lm.setXtol(o.parameter_tolerance);
     lm.setFtol(o.function_tolerance);
     lm.setGtol(0);
@@ -197,7 +195,7 @@ PositionRoot fit_root(const Data& d, Eigen::Vector2d x, const Site& prior, const
     }
     s.iterations += static_cast<int>(lm.njev());
     s.evaluations += static_cast<int>(lm.nfev());
-    outcome = outcome_of(status);
+    outcome = termination_of(status);
     x = xv;
     if (!outcome.converged) break;
     // The move on the sphere in metres.
@@ -213,7 +211,7 @@ PositionRoot fit_root(const Data& d, Eigen::Vector2d x, const Site& prior, const
 
   // Cost, conditioning and the covariance at the end (the last linearization: the exact sun at a
   // site within site_tolerance_m of the estimate).
-  Residuals f(d, lin);
+  Eq17Residuals f(d, lin);
   const auto n = static_cast<Eigen::Index>(d.utc.size());
   Eigen::VectorXd r(n);
   Eigen::MatrixXd J(n, 2);

@@ -36,8 +36,8 @@ struct Sample {
   double aop_rad;
 };
 
-struct Residuals : Eigen::DenseFunctor<double> {
-  Residuals(const Axes3& C, const std::vector<Sample>& s)
+struct InstallationResiduals : Eigen::DenseFunctor<double> {
+  InstallationResiduals(const Axes3& C, const std::vector<Sample>& s)
       : Eigen::DenseFunctor<double>(3, static_cast<int>(s.size())), C_nom(C), samples(s) {}
   int operator()(const InputType& x, ValueType& r) const {
     const double d[3] = {x(0), x(1), x(2)};
@@ -127,11 +127,11 @@ std::vector<UnitInstallation> calibrate_installation(std::span<const UnitMount> 
       u.termination = "too-few-readings";
       continue;
     }
-    Residuals f(nominal[i].C_mb, samples);
+    InstallationResiduals f(nominal[i].C_mb, samples);
     Eigen::VectorXd x = Eigen::VectorXd::Zero(3), r(f.values());
     f(x, r);
     u.rms_before_deg = rms_deg(r);
-    Eigen::LevenbergMarquardt<Residuals> lm(f);
+    Eigen::LevenbergMarquardt<InstallationResiduals> lm(f);
     lm.setMaxfev(settings.max_iterations * 10);
     lm.setXtol(1e-14);
     lm.setFtol(1e-14);

@@ -18,24 +18,11 @@
 #include "polrig/io/exr.h"
 #include "polrig/io/plot.h"
 #include "polrig/units.h"
+#include "csv_cells.h"
 
 namespace polrig {
 
 namespace {
-
-// A number for a CSV cell: shortest round trip, empty for NaN (a quantity that does not exist,
-// e.g. the DoP of a fit without the DoP residual); never "nan" or "inf".
-std::string num(double v) {
-  if (std::isnan(v)) return "";
-  if (!std::isfinite(v)) throw std::runtime_error("DoFP report: a non-finite value");
-  return fmt::format("{}", v);
-}
-
-std::string quoted(const std::string& s) {
-  std::string q = "\"";
-  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return q + "\"";
-}
 
 std::vector<float> as_float(const std::vector<double>& v) {
   return std::vector<float>(v.begin(), v.end());
@@ -78,14 +65,14 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
 
   std::string t1 = "row,max_deg,mean_deg,std_deg\n";
   for (const DofpOrientationRow& r : c.table1.rows)
-    t1 += fmt::format("{},{},{},{}\n", r.name, num(r.max_deg), num(r.mean_deg), num(r.std_deg));
+    t1 += fmt::format("{},{},{},{}\n", r.name, csv_number(r.max_deg), csv_number(r.mean_deg), csv_number(r.std_deg));
   write_text_file(dir / "table1.csv", t1);
 
   std::string err = "theta_R_deg,raw_deg,step1_deg,step2_deg\n";
   for (std::size_t m = 0; m < c.table1.theta_R_deg.size(); ++m)
-    err += fmt::format("{},{},{},{}\n", num(c.table1.theta_R_deg[m]),
-                       num(c.table1.rows[0].error_deg[m]), num(c.table1.rows[1].error_deg[m]),
-                       num(c.table1.rows[2].error_deg[m]));
+    err += fmt::format("{},{},{},{}\n", csv_number(c.table1.theta_R_deg[m]),
+                       csv_number(c.table1.rows[0].error_deg[m]), csv_number(c.table1.rows[1].error_deg[m]),
+                       csv_number(c.table1.rows[2].error_deg[m]));
   write_text_file(dir / "errors.csv", err);
 
   // With the view's projection ε_1 is fitted too (no gauge): its column only then, so that the
@@ -101,32 +88,32 @@ std::vector<DatasetFile> report_dofp_calibration(const std::filesystem::path& di
     const std::string y = global ? "" : fmt::format("{}", i / c.step2.cells_x);
     cells += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{}{},{},{},{}\n", x, y,
                          termination_name(f.termination), f.iterations, f.rank, f.observations,
-                         num(f.initial_rms_deg), num(f.final_rms_deg), num(f.psi0_deg),
-                         num(f.dop), num(f.k[1]), num(f.k[2]), num(f.k[3]),
-                         eps1 ? num(f.eps_deg[0]) + "," : "", num(f.eps_deg[1]),
-                         num(f.eps_deg[2]), num(f.eps_deg[3]), quoted(f.message));
+                         csv_number(f.initial_rms_deg), csv_number(f.final_rms_deg), csv_number(f.psi0_deg),
+                         csv_number(f.dop), csv_number(f.k[1]), csv_number(f.k[2]), csv_number(f.k[3]),
+                         eps1 ? csv_number(f.eps_deg[0]) + "," : "", csv_number(f.eps_deg[1]),
+                         csv_number(f.eps_deg[2]), csv_number(f.eps_deg[3]), csv_quoted(f.message));
   }
   write_text_file(dir / "cells.csv", cells);
 
   std::string summary = "quantity,value\n";
   summary += fmt::format("scope,{}\n", dofp_scope_name(c.step2.scope));
-  summary += fmt::format("table_sense,{}\n", num(c.options.step2.table_sense));
+  summary += fmt::format("table_sense,{}\n", csv_number(c.options.step2.table_sense));
   if (c.options.step2.view_projection) {  // only when on: the default's file is unchanged
     const FitSummary& f = c.step2.psi0_fit;
-    summary += fmt::format("view_projection_focal_px,{}\n", num(c.options.step2.focal_px));
-    summary += fmt::format("psi0_deg,{}\n", num(c.step2.psi0_deg));
+    summary += fmt::format("view_projection_focal_px,{}\n", csv_number(c.options.step2.focal_px));
+    summary += fmt::format("psi0_deg,{}\n", csv_number(c.step2.psi0_deg));
     summary += fmt::format("psi0_termination,{}\n", termination_name(f.termination));
     summary += fmt::format("psi0_iterations,{}\n", f.iterations);
     summary += fmt::format("psi0_passes,{}\n", f.evaluations);
-    summary += fmt::format("psi0_initial_cost_rad2,{}\n", num(f.initial_cost));
-    summary += fmt::format("psi0_final_cost_rad2,{}\n", num(f.final_cost));
-    summary += fmt::format("psi0_message,{}\n", quoted(f.message));
+    summary += fmt::format("psi0_initial_cost_rad2,{}\n", csv_number(f.initial_cost));
+    summary += fmt::format("psi0_final_cost_rad2,{}\n", csv_number(f.final_cost));
+    summary += fmt::format("psi0_message,{}\n", csv_quoted(f.message));
   }
   summary += fmt::format("pixels,{}\n", static_cast<long long>(W) * H);
   summary += fmt::format("step1_rank_deficient_pixels,{}\n", c.step1.rank_deficient_pixels);
   summary += fmt::format("step2_fits,{}\n", c.step2.cells.size());
   summary += fmt::format("step2_usable_fits,{}\n", c.step2.usable_cells);
-  summary += fmt::format("table1_intensity,{}\n", num(c.table1.intensity));
+  summary += fmt::format("table1_intensity,{}\n", csv_number(c.table1.intensity));
   summary += fmt::format("table1_cells_used,{}\n", c.table1.cells_used);
   write_text_file(dir / "summary.csv", summary);
 

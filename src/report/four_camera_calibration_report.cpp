@@ -12,22 +12,11 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
 #include "polrig/units.h"
+#include "csv_cells.h"
 
 namespace polrig {
 
 namespace {
-
-// A CSV number: shortest round trip, empty for NaN (a quantity that does not exist); never inf.
-std::string num(double v) {
-  if (std::isnan(v)) return "";
-  if (!std::isfinite(v)) throw std::runtime_error("four-camera calibration report: a non-finite value");
-  return fmt::format("{}", v);
-}
-std::string quoted(const std::string& s) {
-  std::string q = "\"";
-  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return q + "\"";
-}
 
 // The number of checkerboard views DIR holds (0 without checkerboard/).
 std::size_t dataset_views(const std::filesystem::path& dir) {
@@ -186,9 +175,9 @@ std::vector<DatasetFile> report_four_camera_calibration(const std::filesystem::p
     const CameraRadiometry& r = c.radiometry.camera[j];
     for (const RadiometricLevel& l : r.levels) {
       const double fit = r.K * l.intensity + r.b;
-      rad += fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", j + 1, l.stop, num(l.level), num(l.intensity),
-                         num(l.mean_DN), num(l.sd_DN), l.pixels, l.clipped, l.used ? 1 : 0, num(fit),
-                         num(l.mean_DN - fit));
+      rad += fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", j + 1, l.stop, csv_number(l.level), csv_number(l.intensity),
+                         csv_number(l.mean_DN), csv_number(l.sd_DN), l.pixels, l.clipped, l.used ? 1 : 0, csv_number(fit),
+                         csv_number(l.mean_DN - fit));
     }
   }
   write_text_file(dir / "radiometric.csv", rad);
@@ -196,23 +185,23 @@ std::vector<DatasetFile> report_four_camera_calibration(const std::filesystem::p
   std::string pol =
       "stop,theta_R_deg,aop_before_deg,aop_after_deg,residual_before_deg,residual_after_deg,dop_before,dop_after\n";
   for (const PolarizerStopRow& s : c.polarizer.stops)
-    pol += fmt::format("{},{},{},{},{},{},{},{}\n", s.stop, num(s.theta_R_deg), num(s.aop_before_deg),
-                       num(s.aop_after_deg), num(s.residual_before_deg), num(s.residual_after_deg), num(s.dop_before),
-                       num(s.dop_after));
+    pol += fmt::format("{},{},{},{},{},{},{},{}\n", s.stop, csv_number(s.theta_R_deg), csv_number(s.aop_before_deg),
+                       csv_number(s.aop_after_deg), csv_number(s.residual_before_deg), csv_number(s.residual_after_deg), csv_number(s.dop_before),
+                       csv_number(s.dop_after));
   write_text_file(dir / "polarizer.csv", pol);
 
   std::string sum = "fit,camera,termination,iterations,rank,unknowns,observations,residual_rms,residual_unit,usable,message\n";
   for (std::size_t j = 0; j < 4; ++j) {
     const CameraRadiometry& r = c.radiometry.camera[j];
     sum += fmt::format("radiometric,{},{},0,{},2,{},{},DN,{},{}\n", j + 1, r.usable() ? "converged" : "rank_deficient",
-                       r.rank, r.levels_used, num(r.residual_rms_DN), r.usable() ? 1 : 0, quoted(r.message));
+                       r.rank, r.levels_used, csv_number(r.residual_rms_DN), r.usable() ? 1 : 0, csv_quoted(r.message));
   }
   const PolarizerFit& p = c.polarizer;
   sum += fmt::format("polarizer,,{},{},{},{},{},{},deg,{},{}\n", termination_name(p.summary.termination),
-                     p.summary.iterations, p.rank, p.unknowns, p.summary.observations, num(p.residual_rms_deg),
-                     p.usable() ? 1 : 0, quoted(p.summary.message));
+                     p.summary.iterations, p.rank, p.unknowns, p.summary.observations, csv_number(p.residual_rms_deg),
+                     p.usable() ? 1 : 0, csv_quoted(p.summary.message));
   sum += fmt::format("polarizer_nominal_axes,,,,,,{},{},deg,,\"the nominal axes, psi_0 refitted\"\n",
-                     p.summary.observations, num(p.residual_rms_before_deg));
+                     p.summary.observations, csv_number(p.residual_rms_before_deg));
   write_text_file(dir / "summary.csv", sum);
 
   std::vector<DatasetFile> files{
@@ -230,8 +219,8 @@ std::vector<DatasetFile> report_four_camera_calibration(const std::filesystem::p
     const FourCameraCalibrationFile& t = *run.truth;
     std::string err = "quantity,camera,fitted,standard_error,truth,error,error_over_se\n";
     const auto row = [&](const char* q, int camera, double fit, double se, double truth) {
-      err += fmt::format("{},{},{},{},{},{},{}\n", q, camera, num(fit), num(se), num(truth), num(fit - truth),
-                         num(se > 0 ? (fit - truth) / se : std::nan("")));
+      err += fmt::format("{},{},{},{},{},{},{}\n", q, camera, csv_number(fit), csv_number(se), csv_number(truth), csv_number(fit - truth),
+                         csv_number(se > 0 ? (fit - truth) / se : std::nan("")));
     };
     for (std::size_t j = 0; j < 4; ++j)
       row("K_DN", static_cast<int>(j + 1), c.radiometry.camera[j].K, c.radiometry.camera[j].K_se, t.model.K[j]);

@@ -9,16 +9,9 @@
 #include "polrig/io/csv.h"
 #include "polrig/io/dataset.h"
 #include "polrig/io/plot.h"
+#include "pair_style.h"
 
 namespace polrig {
-
-namespace {
-const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
-
-std::string line_style(int pair, const char* extra = "") {
-  return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
-}
-}  // namespace
 
 std::vector<DatasetFile> report_simulation(const std::filesystem::path& dir,
                                            const Simulation& sim, bool plots) {

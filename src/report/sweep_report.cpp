@@ -19,13 +19,12 @@
 #include "polrig/io/sweep_state.h"
 #include "polrig/study/rank_failure.h"
 #include "polrig/version.h"
+#include "pair_style.h"
 
 namespace polrig {
 namespace fs = std::filesystem;
 
 namespace {
-const char* const kPairColour[3] = {"#1f77b4", "#d62728", "#2ca02c"};
-
 struct PairColumn {
   const char* name;
   const char* unit;
@@ -63,10 +62,6 @@ std::vector<std::string> csv_header(const std::vector<GridAxis>& axes) {
 
 std::string axis_label(const GridAxis& a) {
   return a.key->unit.empty() ? std::string(a.key->path) : fmt::format("{} ({})", a.key->path, a.key->unit);
-}
-
-std::string line_style(int pair, const char* extra = "") {
-  return fmt::format("lines lw 2 lc rgb '{}' {}", kPairColour[pair], extra);
 }
 
 // 64-bit FNV-1a (polrig/fnv.h): a short, stable fingerprint of a long input (a rig's text, an

@@ -15,12 +15,9 @@
 #include "polrig/source/sphere_cache.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/source/traced_port.h"
+#include "polrig/units.h"
 
 namespace polrig {
-
-namespace {
-constexpr double kPi = std::numbers::pi;
-}
 
 std::vector<DatasetFile> trace_scene(const std::filesystem::path& dir, const SceneSpec& scene,
                                      bool plots, const Progress& progress, LightOrigin* origin) {

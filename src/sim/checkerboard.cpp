@@ -15,7 +15,7 @@ namespace polrig {
 
 namespace {
 
-constexpr std::uint64_t kPoseStream = 6, kNoiseStream = 7;  // derive_seed indices (2: the frames' noise)
+constexpr std::uint64_t kBoardPoseStream = 6, kBoardNoiseStream = 7;  // derive_seed indices (2: the frames' noise)
 constexpr int kMaxDraws = 1000;
 constexpr double kInsidePx = 3.0;
 
@@ -62,7 +62,7 @@ std::array<double, 2> project_from_camera1(const FourCameraModel& m, const FourC
 std::vector<BoardPose> checkerboard_poses(const Rig& rig) {
   const CheckerboardSpec& b = rig.checkerboard;
   const FourCameraModel m = four_camera_truth(rig.four_camera);
-  const std::uint64_t seed = derive_seed(rig.seed, kPoseStream);
+  const std::uint64_t seed = derive_seed(rig.seed, kBoardPoseStream);
   const double half_x = 0.5 * deg2rad(four_camera_fov_x_deg(m, 0)), half_y = 0.5 * deg2rad(four_camera_fov_y_deg(m, 0));
   const double cx = 0.5 * (b.inner_corners[0] - 1) * b.square_mm, cy = 0.5 * (b.inner_corners[1] - 1) * b.square_mm;
   std::vector<BoardPose> poses;
@@ -102,7 +102,7 @@ CheckerboardRenderer::CheckerboardRenderer(const Rig& rig) : rig_(rig) {
         fmt::format("checkerboard views need a camera array (device.kind four-camera), not {}", rig.device_kind));
   truth_ = four_camera_truth(rig.four_camera);
   poses_ = checkerboard_poses(rig);
-  noise_seed_ = derive_seed(rig.seed, kNoiseStream);
+  noise_seed_ = derive_seed(rig.seed, kBoardNoiseStream);
 }
 
 std::array<std::vector<double>, kFourCameras> CheckerboardRenderer::signal(int view) const {

@@ -1,5 +1,6 @@
 // The single-scattering Rayleigh sky (spec sky-and-compasses.md §1.2).
 #include "polrig/sky/rayleigh.h"
+#include "polrig/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,8 +26,6 @@ std::optional<SkyRadiance> parse_sky_radiance(std::string_view name) {
 }
 
 namespace {
-
-constexpr double kDeg = M_PI / 180;
 
 // CIE S 011/E:2003 type 12 (see rayleigh.h).
 constexpr double kCieA = -1, kCieB = -0.32, kCieC = 10, kCieD = -3, kCieE = 0.45;

@@ -12,6 +12,7 @@
 // the deflecting body), and the sun's barycentric motion during the 8.3 min light time (≈ 6 km)
 // moves it by 3e-6°: both are left out.
 #include "polrig/sky/sun.h"
+#include "polrig/units.h"
 
 #include <erfa.h>
 
@@ -28,7 +29,6 @@
 namespace polrig {
 namespace {
 
-constexpr double kDeg = M_PI / 180;
 constexpr double kUnixEpochJd = 2440587.5;
 constexpr double kDay = 86400;
 constexpr int kFirstYear = 1900, kLastYear = 2100;  // eraEpv00's range; parse_utc's years

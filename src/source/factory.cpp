@@ -9,10 +9,10 @@
 namespace polrig {
 
 namespace {
-constexpr std::array<std::string_view, 3> kKinds{"cos4", "traced", "sky"};
+constexpr std::array<std::string_view, 3> kSourceModels{"cos4", "traced", "sky"};
 }  // namespace
 
-std::span<const std::string_view> source_kinds() { return kKinds; }
+std::span<const std::string_view> source_kinds() { return kSourceModels; }
 
 std::shared_ptr<const Source> cos4_source() {
   static const std::shared_ptr<const Source> source = std::make_shared<const Cos4PortSource>();

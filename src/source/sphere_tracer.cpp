@@ -17,11 +17,10 @@
 #include "polrig/random.h"
 #include "polrig/vec3.h"
 #include "polrig/statistics.h"
+#include "polrig/units.h"
 
 namespace polrig {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 using namespace vec3;
 
@@ -55,14 +54,13 @@ double sphere_near_root(const Vec3& o, const Vec3& d, const Vec3& centre, double
   return (-b - std::sqrt(disc)) / a;
 }
 
-struct GeomData {
-  SphereTracer::Impl* impl;
-  unsigned geom;
-};
-
 }  // namespace
 
 struct SphereTracer::Impl {
+  struct GeomData {
+    Impl* impl;
+    unsigned geom;
+  };
   std::mutex embree_error_mutex;
   std::string embree_error;  // the first error Embree reported, empty if none
   void throw_on_embree_error() {
@@ -189,7 +187,7 @@ RTCRayHit ray_hit(const Vec3& o, const Vec3& d, float tnear) {
 }
 
 void bounds_cb(const RTCBoundsFunctionArguments* args) {
-  const GeomData* g = static_cast<const GeomData*>(args->geometryUserPtr);
+  const auto* g = static_cast<const SphereTracer::Impl::GeomData*>(args->geometryUserPtr);
   const SphereTracer::Impl& m = *g->impl;
   RTCBounds* b = args->bounds_o;
   Vec3 lo, hi;
@@ -216,7 +214,7 @@ void bounds_cb(const RTCBoundsFunctionArguments* args) {
 
 void intersect_cb(const RTCIntersectFunctionNArguments* args) {
   if (args->N != 1 || !args->valid[0]) return;
-  const GeomData* g = static_cast<const GeomData*>(args->geometryUserPtr);
+  const auto* g = static_cast<const SphereTracer::Impl::GeomData*>(args->geometryUserPtr);
   RayContext* ctx = reinterpret_cast<RayContext*>(args->context);
   RTCRayHit* rh = reinterpret_cast<RTCRayHit*>(args->rayhit);
   const double t = g->impl->intersect(g->geom, args->primID, ctx->o, ctx->d, ctx->t_min);
@@ -229,7 +227,8 @@ void intersect_cb(const RTCIntersectFunctionNArguments* args) {
   rh->hit.Ng_x = rh->hit.Ng_y = rh->hit.Ng_z = 0;
 }
 
-unsigned add_user_geometry(SphereTracer::Impl& m, unsigned prims, std::vector<GeomData>& data) {
+unsigned add_user_geometry(SphereTracer::Impl& m, unsigned prims,
+                           std::vector<SphereTracer::Impl::GeomData>& data) {
   RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_USER);
   rtcSetGeometryUserPrimitiveCount(geom, prims);
   const unsigned id = rtcAttachGeometry(m.scene, geom);

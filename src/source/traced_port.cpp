@@ -16,7 +16,6 @@
 namespace polrig {
 
 namespace {
-constexpr double kPi = std::numbers::pi;
 // The R2 sequence (a rank-1 lattice from the plastic number): low discrepancy in 2-D.
 constexpr double kR2a = 0.7548776662466927, kR2b = 0.5698402909980532;
 

@@ -66,7 +66,6 @@ long long TracedSource::solve_rays() const { return solution().ledger.rays; }
 double TracedSource::solve_seconds() const { return solution().seconds; }
 
 namespace {
-constexpr double kPi = std::numbers::pi;
 // The R4 sequence (generalised golden ratio in 4-D): a rank-1 lattice for the lensed integral.
 constexpr double kPhi4 = 1.1673039782614187;
 

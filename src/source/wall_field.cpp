@@ -9,11 +9,10 @@
 #include "polrig/quadrature.h"
 #include "polrig/source/sphere_tracer.h"
 #include "polrig/vec3.h"
+#include "polrig/units.h"
 
 namespace polrig {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
 
 using namespace vec3;
 

@@ -17,6 +17,7 @@
 #include "polrig/rig/error.h"
 #include "polrig/sim/simulate.h"
 #include "polrig/study/rank_failure.h"
+#include "polrig/statistics.h"
 
 namespace polrig {
 
@@ -66,14 +67,6 @@ Trial run_trial(const Rig& base, const TrialSettings& s, int index) {
                                    : std::numeric_limits<double>::quiet_NaN();
   }
   return t;
-}
-
-double quantile(std::vector<double> sorted, double q) {
-  // Linear interpolation between order statistics (type 7, as R's and NumPy's default).
-  const double pos = q * static_cast<double>(sorted.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
-  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
 }
 
 }  // namespace
@@ -217,9 +210,9 @@ std::vector<TrialSummary> summarize_trials(const std::vector<Trial>& trials) {
     s.succeeded = static_cast<int>(acc.size());
     if (!acc.empty()) {
       std::sort(acc.begin(), acc.end());
-      s.median_deg = quantile(acc, 0.5);
-      s.p05_deg = quantile(acc, 0.05);
-      s.p95_deg = quantile(acc, 0.95);
+      s.median_deg = quantile_of_sorted(acc, 0.5);
+      s.p05_deg = quantile_of_sorted(acc, 0.05);
+      s.p95_deg = quantile_of_sorted(acc, 0.95);
       double sum = 0;
       for (double a : acc) sum += a;
       s.mean_deg = sum / static_cast<double>(acc.size());

@@ -18,6 +18,7 @@
 #include "polrig/sky/rayleigh.h"
 #include "polrig/sky/sensor_view.h"
 #include "polrig/units.h"
+#include "polrig/statistics.h"
 
 namespace polrig {
 
@@ -145,14 +146,6 @@ HeadingTrial run_trial(const Rig& rig, const HeadingStudySettings& s, const Vec3
 
 namespace {
 
-double quantile(const std::vector<double>& sorted, double q) {  // type 7, as NumPy's default
-  if (sorted.empty()) return std::nan("");
-  const double pos = q * static_cast<double>(sorted.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(pos));
-  const std::size_t hi = std::min(lo + 1, sorted.size() - 1);
-  return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
-}
-
 HeadingErrorStats stats_of(std::string factor, std::string error, double lo, double hi,
                            const std::vector<double>& errors) {
   HeadingErrorStats s{std::move(factor), std::move(error), lo, hi};
@@ -171,8 +164,8 @@ HeadingErrorStats stats_of(std::string factor, std::string error, double lo, dou
   const double n = static_cast<double>(a.size());
   s.mean_deg = sum / n;
   s.rms_deg = std::sqrt(sum_sq / n);
-  s.p50_abs_deg = quantile(a, 0.5);
-  s.p95_abs_deg = quantile(a, 0.95);
+  s.p50_abs_deg = quantile_of_sorted(a, 0.5);
+  s.p95_abs_deg = quantile_of_sorted(a, 0.95);
   s.max_abs_deg = a.back();
   return s;
 }

@@ -10,6 +10,7 @@
 
 #include "polrig/random.h"
 #include "polrig/units.h"
+#include "polrig/statistics.h"
 
 namespace polrig {
 
@@ -80,14 +81,6 @@ Site moved(const Site& from, double km, double bearing_rad) {
   const double p2 = std::asin(std::sin(p1) * std::cos(d) + std::cos(p1) * std::sin(d) * std::cos(bearing_rad));
   const double dl = std::atan2(std::sin(bearing_rad) * std::sin(d) * std::cos(p1), std::cos(d) - std::sin(p1) * std::sin(p2));
   return {rad2deg(p2), std::remainder(from.lon_deg + rad2deg(dl), 360.0), from.height_m};
-}
-
-double quantile(std::vector<double> v, double q) {  // v sorted here; nearest-rank, interpolated
-  std::sort(v.begin(), v.end());
-  const double pos = q * static_cast<double>(v.size() - 1);
-  const auto i = static_cast<std::size_t>(pos);
-  if (i + 1 >= v.size()) return v.back();
-  return v[i] + (pos - static_cast<double>(i)) * (v[i + 1] - v[i]);
 }
 
 }  // namespace
@@ -254,9 +247,10 @@ PositioningStudy positioning_study(const PositioningStudySettings& settings, con
       const double m = static_cast<double>(err.size());
       st.rms_km = std::sqrt(ss / m);
       st.mean_km = sum / m;
-      st.p50_km = quantile(err, 0.5);
-      st.p95_km = quantile(err, 0.95);
-      st.max_km = *std::max_element(err.begin(), err.end());
+      std::sort(err.begin(), err.end());
+      st.p50_km = quantile_of_sorted(err, 0.5);
+      st.p95_km = quantile_of_sorted(err, 0.95);
+      st.max_km = err.back();
       st.mean_north_km = north / m;
       st.mean_east_km = east / m;
     }

@@ -1,12 +1,15 @@
 #pragma once
 // Units: millimetres, degrees at every interface (radians inside), volts.
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 namespace polrig {
 
 // π and one degree in radians, for formulas written with them (one copy for every file).
 inline constexpr double kPi = std::numbers::pi;
+// A value that is not defined (a PNS reading without a fix, a skipped update): formats.md's nan.
+inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline constexpr double kDeg = std::numbers::pi / 180.0;
 
 constexpr double deg2rad(double deg) { return deg * (std::numbers::pi / 180.0); }

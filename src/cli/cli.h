@@ -100,6 +100,9 @@ struct RigInput {
   void add_to(CLI::App& app, bool required);
   LoadedRig load() const;
 };
+// "a,b,c": finite numbers, or DataError naming `option` and the text (the studies' sweep lists);
+// an empty text is no values when `empty_ok`, else refused.
+std::vector<double> parse_number_list(const std::string& text, const char* option, bool empty_ok = false);
 // --set KEY=VALUE (repeatable) into `sets`, refusing a value that is not KEY=VALUE.
 void add_set_option(CLI::App& app, std::vector<std::string>& sets);
 

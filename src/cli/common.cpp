@@ -16,6 +16,7 @@
 #include "polrig/io/plot.h"
 #include "polrig/calib/fit.h"
 #include "polrig/rig/error.h"
+#include "polrig/rig/keys.h"
 
 namespace polrig::cli {
 namespace {
@@ -110,6 +111,22 @@ void RigInput::add_to(CLI::App& app, bool required) {
   auto* r = app.add_option("RIG", path, "rig file (YAML), e.g. rigs/wang2019-indoor.yaml");
   if (required) r->required();
   add_set_option(app, sets);
+}
+
+std::vector<double> parse_number_list(const std::string& text, const char* option, bool empty_ok) {
+  std::vector<double> values;
+  if (text.empty() && empty_ok) return values;
+  std::size_t pos = 0;
+  while (pos <= text.size()) {
+    const std::size_t comma = std::min(text.find(',', pos), text.size());
+    try {
+      values.push_back(parse_finite_number(std::string_view(text).substr(pos, comma - pos), "value"));
+    } catch (const RigError& e) {
+      throw DataError(fmt::format("{} {}: {} (expected a comma-separated list of numbers)", option, text, e.what()));
+    }
+    pos = comma + 1;
+  }
+  return values;
 }
 
 void add_set_option(CLI::App& app, std::vector<std::string>& sets) {

@@ -32,23 +32,6 @@ std::string study_navigation_option(std::string_view field) {
   return std::string(field);
 }
 
-// "a,b,c": finite numbers; DataError naming the option otherwise. Empty text: no values.
-std::vector<double> parse_list(const std::string& text, const char* option) {
-  std::vector<double> values;
-  if (text.empty()) return values;
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', pos), text.size());
-    try {
-      values.push_back(parse_finite_number(std::string_view(text).substr(pos, comma - pos), "value"));
-    } catch (const RigError& e) {
-      throw DataError(fmt::format("{} {}: {} (expected a comma-separated list of numbers)", option, text, e.what()));
-    }
-    pos = comma + 1;
-  }
-  return values;
-}
-
 }  // namespace
 
 std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App& study, int& threads) {
@@ -80,11 +63,11 @@ std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App&
   commands.push_back({app, [=] {
     NavigationStudySettings settings = *s;
     const LoadedRig r = rig->load();
-    settings.durations_s = parse_list(*durations, "--durations");
-    settings.p_max = parse_list(*p_max, "--p-max");
-    settings.noise_sigma_V = parse_list(*noise, "--noise");
-    settings.ring_tilts_deg = parse_list(*ring_tilts, "--ring-tilts");
-    settings.tilts_deg = parse_list(*tilts, "--tilts");
+    settings.durations_s = parse_number_list(*durations, "--durations", true);
+    settings.p_max = parse_number_list(*p_max, "--p-max", true);
+    settings.noise_sigma_V = parse_number_list(*noise, "--noise", true);
+    settings.ring_tilts_deg = parse_number_list(*ring_tilts, "--ring-tilts", true);
+    settings.tilts_deg = parse_number_list(*tilts, "--tilts", true);
     const auto named = [](std::string_view field) { return study_navigation_option(field); };
     try {
       check_navigation_study_settings(r.rig, settings, named);

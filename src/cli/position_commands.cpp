@@ -34,22 +34,6 @@ std::string study_positioning_option(std::string_view field) {
   return std::string(field);
 }
 
-// "a,b,c": finite numbers; DataError naming the option otherwise.
-std::vector<double> parse_list(const std::string& text, const char* option) {
-  std::vector<double> values;
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', pos), text.size());
-    try {
-      values.push_back(parse_finite_number(std::string_view(text).substr(pos, comma - pos), "value"));
-    } catch (const RigError& e) {
-      throw DataError(fmt::format("{} {}: {} (expected a comma-separated list of numbers)", option, text, e.what()));
-    }
-    pos = comma + 1;
-  }
-  return values;
-}
-
 }  // namespace
 
 std::vector<Command> add_position_commands(CLI::App& /*root*/, CLI::App& study, int& threads) {
@@ -97,9 +81,9 @@ std::vector<Command> add_position_commands(CLI::App& /*root*/, CLI::App& study, 
     settings.sun = sky->sun;
     settings.times_s = r.rig.schedule.stop_times_s();
     settings.seed = app->count("--seed") > 0 ? *seed : r.rig.seed;
-    if (!windows->empty()) settings.windows_s = parse_list(*windows, "--windows");
-    settings.noise_sd_deg = parse_list(*noise, "--noise");
-    settings.tilt_deg = parse_list(*tilts, "--tilts");
+    if (!windows->empty()) settings.windows_s = parse_number_list(*windows, "--windows");
+    settings.noise_sd_deg = parse_number_list(*noise, "--noise");
+    settings.tilt_deg = parse_number_list(*tilts, "--tilts");
     try {
       check_positioning_study_settings(settings, [](std::string_view field) { return study_positioning_option(field); });
     } catch (const std::invalid_argument& e) {

@@ -14,7 +14,6 @@ namespace polrig {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::string_view kSection = "Navigation dataset";
 
 // A number, or nan for a unit without a reading (docs/formats.md §5).
@@ -83,7 +82,7 @@ double optional_number(const CsvFile& f, std::size_t row, std::size_t column) {
   return c.empty() || c == "nan" ? kNaN : f.number(row, column);
 }
 
-[[noreturn]] void refuse(const CsvFile& f, std::size_t row, std::string_view column, const std::string& problem) {
+[[noreturn]] void refuse_cell(const CsvFile& f, std::size_t row, std::string_view column, const std::string& problem) {
   throw DataError(fmt::format("{}:{}: column '{}': {}", f.origin, f.line[row], column, problem));
 }
 
@@ -106,7 +105,7 @@ std::vector<ImuSample> read_imu(const std::filesystem::path& path, double rate_h
     const double dt = s.t_s - (out.empty() ? 0.0 : out.back().t_s);
     // Every interval one IMU period (imu.rate_hz) within 10 %: a gap or a doubled sample is refused.
     if (!(std::abs(dt - period) <= 0.1 * period))
-      refuse(f, r, "t_s", out.empty() ? fmt::format("the first sample ends at {} s: expected one IMU period after "
+      refuse_cell(f, r, "t_s", out.empty() ? fmt::format("the first sample ends at {} s: expected one IMU period after "
                                                     "the start (t = 0), {} s (imu.rate_hz {} Hz)", s.t_s, period, rate_hz)
                                       : fmt::format("time {} s is {} s after the previous sample's: expected one IMU "
                                                     "period, {} s (imu.rate_hz {} Hz), within 10 %", s.t_s, dt, period,
@@ -118,10 +117,10 @@ std::vector<ImuSample> read_imu(const std::filesystem::path& path, double rate_h
     for (std::size_t i = 0; i < 3; ++i) {
       const double w = s.dtheta[static_cast<int>(i)] / dt, a = s.dv[static_cast<int>(i)] / dt;
       if (std::abs(w) > kMaxRate_rad_s)
-        refuse(f, r, names[i], fmt::format("{} rad over {} s is {:.4g}°/s, beyond a gyro's 2000°/s", s.dtheta[static_cast<int>(i)],
+        refuse_cell(f, r, names[i], fmt::format("{} rad over {} s is {:.4g}°/s, beyond a gyro's 2000°/s", s.dtheta[static_cast<int>(i)],
                                            dt, w * 180 / 3.14159265358979323846));
       if (std::abs(a) > kMaxSpecificForce_mps2)
-        refuse(f, r, names[i + 3], fmt::format("{} m/s over {} s is {:.4g} m/s², beyond an accelerometer's 50 g",
+        refuse_cell(f, r, names[i + 3], fmt::format("{} m/s over {} s is {:.4g} m/s², beyond an accelerometer's 50 g",
                                                s.dv[static_cast<int>(i)], dt, a));
     }
     out.push_back(s);
@@ -139,19 +138,19 @@ std::vector<CompassEpoch> read_units_csv(const std::filesystem::path& path, std:
     const double t_s = f.number(r, t);
     if (out.empty() || t_s != out.back().t_s) {
       if (!out.empty() && !(t_s > out.back().t_s))
-        refuse(f, r, "t_s", fmt::format("time {} s is not after the previous reading's {} s", t_s, out.back().t_s));
+        refuse_cell(f, r, "t_s", fmt::format("time {} s is not after the previous reading's {} s", t_s, out.back().t_s));
       if (!out.empty() && out.back().units.size() != units)
-        refuse(f, r, "unit", fmt::format("the reading at {} s has {} units, expected {} (device.units.*)", out.back().t_s,
+        refuse_cell(f, r, "unit", fmt::format("the reading at {} s has {} units, expected {} (device.units.*)", out.back().t_s,
                                          out.back().units.size(), units));
       out.push_back({t_s, {}, {}});
     }
     const int index = csv_whole_number(f.rows[r][u], f.origin, f.line[r], "unit", 1, static_cast<int>(units));
     if (static_cast<std::size_t>(index) != out.back().units.size() + 1)
-      refuse(f, r, "unit", fmt::format("expected unit {} next (units 1 to {} in order at each time), got {}",
+      refuse_cell(f, r, "unit", fmt::format("expected unit {} next (units 1 to {} in order at each time), got {}",
                                        out.back().units.size() + 1, units, index));
     const double aop = optional_number(f, r, a), dop = optional_number(f, r, d);
-    if (std::isfinite(dop) && (dop < 0 || dop > 1)) refuse(f, r, "dop", fmt::format("expected a DoP in [0, 1], got {}", dop));
-    if (std::isfinite(aop) && std::abs(aop) > 360) refuse(f, r, "aop_deg", fmt::format("expected an angle within ±360°, got {}", aop));
+    if (std::isfinite(dop) && (dop < 0 || dop > 1)) refuse_cell(f, r, "dop", fmt::format("expected a DoP in [0, 1], got {}", dop));
+    if (std::isfinite(aop) && std::abs(aop) > 360) refuse_cell(f, r, "aop_deg", fmt::format("expected an angle within ±360°, got {}", aop));
     out.back().units.push_back({deg2rad(aop), dop});
   }
   if (out.empty()) throw DataError(fmt::format("{}: no unit readings", path.string()));
@@ -170,9 +169,9 @@ std::vector<TruthSample> read_truth(const std::filesystem::path& path) {
   for (std::size_t r = 0; r < f.rows.size(); ++r) {
     std::array<double, 10> v{};
     for (std::size_t i = 0; i < c.size(); ++i) v[i] = f.number(r, c[i]);
-    if (std::abs(v[1]) > 90) refuse(f, r, "lat_deg", fmt::format("expected a latitude in [-90, 90], got {}", v[1]));
+    if (std::abs(v[1]) > 90) refuse_cell(f, r, "lat_deg", fmt::format("expected a latitude in [-90, 90], got {}", v[1]));
     if (!out.empty() && !(v[0] > out.back().t_s))
-      refuse(f, r, "t_s", fmt::format("time {} s is not after the previous row's {} s", v[0], out.back().t_s));
+      refuse_cell(f, r, "t_s", fmt::format("time {} s is not after the previous row's {} s", v[0], out.back().t_s));
     TruthSample s;
     s.t_s = v[0];
     s.lat_rad = deg2rad(v[1]);

@@ -3,6 +3,7 @@
 // round trip, empty for NaN (a quantity that does not exist, e.g. the DoP of a fit without the DoP
 // residual), never "nan" or "inf"; a text quoted as CSV quotes it.
 #include <cmath>
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +14,15 @@ namespace polrig {
 inline std::string csv_number(double v) {
   if (std::isnan(v)) return "";
   if (!std::isfinite(v)) throw std::runtime_error("calibration report: a non-finite value");
+  return fmt::format("{}", v);
+}
+
+// A number for the studies' CSV cells: finite, or NaN where `undefined_ok` (formats.md: `nan`); else
+// std::runtime_error naming the column and the row, before anything is written.
+inline std::string checked_cell(double v, const char* column, std::size_t row, bool undefined_ok = false) {
+  if (!std::isfinite(v) && !(std::isnan(v) && undefined_ok))
+    throw std::runtime_error(fmt::format("a result is not finite: column '{}' of row {} is {}; "
+                                         "nothing was written", column, row, v));
   return fmt::format("{}", v);
 }
 

@@ -47,7 +47,7 @@ std::string installation_csv(const InstallationRun& run) {
   return out;
 }
 
-[[noreturn]] void refuse(const std::filesystem::path& file, const YAML::Node& node, const std::string& key,
+[[noreturn]] void refuse_key(const std::filesystem::path& file, const YAML::Node& node, const std::string& key,
                          const std::string& problem) {
   const std::string where = node.Mark().is_null() ? file.string() : fmt::format("{}:{}", file.string(), node.Mark().line + 1);
   throw DataError(fmt::format("{}: key '{}': {}", where, key, problem));
@@ -82,32 +82,32 @@ std::vector<UnitMount> read_installation(const std::filesystem::path& file, cons
     throw DataError(fmt::format("{}: {}", file.string(), e.what()));
   }
   const YAML::Node units = root["units"];
-  if (!units || !units.IsSequence()) refuse(file, root, "units", "expected a list of units (polrig calibrate --method unit-array)");
+  if (!units || !units.IsSequence()) refuse_key(file, root, "units", "expected a list of units (polrig calibrate --method unit-array)");
   if (units.size() != nominal.size())
-    refuse(file, units, "units", fmt::format("expected {} units (the dataset's layout), got {}", nominal.size(), units.size()));
+    refuse_key(file, units, "units", fmt::format("expected {} units (the dataset's layout), got {}", nominal.size(), units.size()));
   std::vector<UnitMount> out;
   for (std::size_t i = 0; i < units.size(); ++i) {
     // A unit its fit did not determine (converged: false) keeps its nominal frame, as
     // InstallationRun::mounts() does.
     const YAML::Node converged = units[i]["converged"];
     if (!converged || !converged.IsScalar() || (converged.Scalar() != "true" && converged.Scalar() != "false"))
-      refuse(file, units[i], fmt::format("units[{}].converged (unit {})", i, i + 1), "expected true or false");
+      refuse_key(file, units[i], fmt::format("units[{}].converged (unit {})", i, i + 1), "expected true or false");
     if (converged.Scalar() == "false") {
       out.push_back(nominal[i]);
       continue;
     }
     const YAML::Node e = units[i]["error_deg"];
     const std::string key = fmt::format("units[{}].error_deg (unit {})", i, i + 1);
-    if (!e || !e.IsSequence() || e.size() != 3) refuse(file, units[i], key, "expected three angles in degrees");
+    if (!e || !e.IsSequence() || e.size() != 3) refuse_key(file, units[i], key, "expected three angles in degrees");
     std::array<double, 3> d{};
     for (std::size_t a = 0; a < 3; ++a) {
       try {
         d[a] = e[a].as<double>();
       } catch (const YAML::Exception&) {
-        refuse(file, e[a], key, fmt::format("expected a number, got '{}'", quoted_value(e[a].Scalar())));
+        refuse_key(file, e[a], key, fmt::format("expected a number, got '{}'", quoted_value(e[a].Scalar())));
       }
       if (!(std::abs(d[a]) <= 10))
-        refuse(file, e[a], key, fmt::format("expected a mounting error within ±10°, got {}", quoted_value(e[a].Scalar())));
+        refuse_key(file, e[a], key, fmt::format("expected a mounting error within ±10°, got {}", quoted_value(e[a].Scalar())));
     }
     out.push_back({installed_frame(nominal[i].C_mb, d)});
   }

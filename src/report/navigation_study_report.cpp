@@ -9,18 +9,11 @@
 
 #include "polrig/io/csv.h"
 #include "polrig/io/plot.h"
+#include "csv_cells.h"
 
 namespace polrig {
 
 namespace {
-
-// A number for a CSV cell: finite, or NaN where `undefined_ok` (formats.md: `nan`).
-std::string num(double v, const char* column, std::size_t row, bool undefined_ok = false) {
-  if (!std::isfinite(v) && !(std::isnan(v) && undefined_ok))
-    throw std::runtime_error(fmt::format("a result is not finite: column '{}' of row {} is {}; "
-                                         "nothing was written", column, row, v));
-  return fmt::format("{}", v);
-}
 
 constexpr const char* kQuantiles[] = {"p05", "p25", "p50", "p75", "p95"};
 
@@ -29,7 +22,7 @@ std::string percentile_cells(const Percentiles& p, const char* prefix, const cha
   const double v[] = {p.p05, p.p25, p.p50, p.p75, p.p95};
   for (int i = 0; i < 5; ++i) {
     const std::string column = fmt::format("{}_{}_{}", prefix, kQuantiles[i], unit);
-    (out += ',') += num(v[i], column.c_str(), row, true);
+    (out += ',') += checked_cell(v[i], column.c_str(), row, true);
   }
   return out;
 }
@@ -55,8 +48,8 @@ const char* colour(NavigationMode m) {
 std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& dir, const NavigationStudy& study,
                                                  bool plots) {
   const auto cell_cells = [&](const NavigationStudyCell& c, std::size_t row) {
-    return fmt::format("{},{},{},{},{}", c.index, c.factor, c.key, num(c.value, "value", row, true),
-                       num(c.duration_s, "duration_s", row));
+    return fmt::format("{},{},{},{},{}", c.index, c.factor, c.key, checked_cell(c.value, "value", row, true),
+                       checked_cell(c.duration_s, "duration_s", row));
   };
 
   std::string trials =
@@ -71,8 +64,8 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
                            {t.lat_deg.mae, "lat_mae_deg"}, {t.lat_deg.rmse, "lat_rmse_deg"},
                            {t.lat_deg.std, "lat_std_deg"}, {t.lon_deg.mae, "lon_mae_deg"},
                            {t.lon_deg.rmse, "lon_rmse_deg"}, {t.lon_deg.std, "lon_std_deg"}})
-      (trials += ',') += num(v, name, i, true);
-    trials += fmt::format(",{},{}\n", t.lat_deg.count, num(t.filter_nis_mean, "mean_nis", i, true));
+      (trials += ',') += checked_cell(v, name, i, true);
+    trials += fmt::format(",{},{}\n", t.lat_deg.count, checked_cell(t.filter_nis_mean, "mean_nis", i, true));
   }
 
   std::string summary = "cell,factor,key,value,duration_s,mode,trials,finite" +
@@ -94,7 +87,7 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
   time += "\n";
   const std::size_t epochs = study.bands.empty() ? 0 : study.bands[0].t_s.size();
   for (std::size_t k = 0; k < epochs; ++k) {
-    time += num(study.bands[0].t_s[k], "t_s", k);
+    time += checked_cell(study.bands[0].t_s[k], "t_s", k);
     for (const NavigationErrorBand& b : study.bands) {
       const std::string prefix(navigation_mode_name(b.mode));
       time += percentile_cells(b.error_m[k], prefix.c_str(), "m", k);
@@ -108,23 +101,23 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
   for (std::size_t i = 0; i < study.tilt.size(); ++i) {
     const TiltErrorRow& r = study.tilt[i];
     const double se = r.draws > 0 ? r.sd_abs_deg / std::sqrt(static_cast<double>(r.draws)) : NAN;
-    tilt += fmt::format("{},{}", num(r.tilt_deg, "tilt_deg", i), r.draws);
+    tilt += fmt::format("{},{}", checked_cell(r.tilt_deg, "tilt_deg", i), r.draws);
     for (auto [v, name] : {std::pair{r.mean_abs_deg, "mean_abs_deg"}, {r.sd_abs_deg, "sd_abs_deg"},
                            {se, "se_mean_deg"}, {r.rms_deg, "rms_deg"}, {r.max_abs_deg, "max_abs_deg"},
                            {r.first_order_deg, "first_order_deg"}, {r.exact_deg, "exact_deg"},
                            {study.tilt_mean_elevation_deg, "mean_elevation_deg"}, {r.z21_deg, "z21_deg"}})
-      (tilt += ',') += num(v, name, i, true);
+      (tilt += ',') += checked_cell(v, name, i, true);
     tilt += "\n";
   }
 
   std::string dop = "dop_lo,dop_hi,count,mean_abs_deg,sd_abs_deg,mean_true_dop,z21_mean_deg,z21_sd_deg\n";
   for (std::size_t i = 0; i < study.dop.size(); ++i) {
     const DopBin& b = study.dop[i];
-    dop += fmt::format("{},{},{}", num(b.lo, "dop_lo", i), num(b.hi, "dop_hi", i), b.count);
+    dop += fmt::format("{},{},{}", checked_cell(b.lo, "dop_lo", i), checked_cell(b.hi, "dop_hi", i), b.count);
     for (auto [v, name] : {std::pair{b.mean_abs_deg, "mean_abs_deg"}, {b.sd_abs_deg, "sd_abs_deg"},
                            {b.mean_true_dop, "mean_true_dop"}, {b.z21_mean_deg, "z21_mean_deg"},
                            {b.z21_sd_deg, "z21_sd_deg"}})
-      (dop += ',') += num(v, name, i, true);
+      (dop += ',') += checked_cell(v, name, i, true);
     dop += "\n";
   }
 

@@ -8,32 +8,25 @@
 
 #include "polrig/io/csv.h"
 #include "polrig/io/plot.h"
+#include "csv_cells.h"
 
 namespace polrig {
 
 namespace {
-
-// A number for a CSV cell: finite, or NaN where `undefined_ok` (formats.md: `nan`).
-std::string num(double v, const char* column, std::size_t row, bool undefined_ok = false) {
-  if (!std::isfinite(v) && !(std::isnan(v) && undefined_ok))
-    throw std::runtime_error(fmt::format("a result is not finite: column '{}' of row {} is {}; "
-                                         "nothing was written", column, row, v));
-  return fmt::format("{}", v);
-}
 
 std::string root_row(const char* which, const PositionRoot& r, const std::optional<Site>& truth) {
   const PositionSummary& s = r.summary;
   const double error = truth ? great_circle_km(r.lat_deg, r.lon_deg, truth->lat_deg, truth->lon_deg) : NAN;
   const std::size_t row = which[0] == 'c' ? 1 : 2;
   return fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", which,
-                     num(r.lat_deg, "lat_deg", row), num(r.lon_deg, "lon_deg", row),
-                     num(error, "error_km", row, true), num(r.prior_distance_km, "prior_distance_km", row),
+                     checked_cell(r.lat_deg, "lat_deg", row), checked_cell(r.lon_deg, "lon_deg", row),
+                     checked_cell(error, "error_km", row, true), checked_cell(r.prior_distance_km, "prior_distance_km", row),
                      position_termination_name(s.termination), s.iterations, s.evaluations,
-                     s.relinearizations, s.sightings, s.rank, num(s.singular_ratio, "singular_ratio", row, true),
-                     num(s.final_cost_deg2, "cost_deg2", row, true),
-                     num(s.residual_rms_deg, "residual_rms_deg", row, true),
-                     num(r.sd_north_km, "sd_north_km", row, true), num(r.sd_east_km, "sd_east_km", row, true),
-                     num(r.sd_major_km, "sd_major_km", row, true));
+                     s.relinearizations, s.sightings, s.rank, checked_cell(s.singular_ratio, "singular_ratio", row, true),
+                     checked_cell(s.final_cost_deg2, "cost_deg2", row, true),
+                     checked_cell(s.residual_rms_deg, "residual_rms_deg", row, true),
+                     checked_cell(r.sd_north_km, "sd_north_km", row, true), checked_cell(r.sd_east_km, "sd_east_km", row, true),
+                     checked_cell(r.sd_major_km, "sd_major_km", row, true));
 }
 
 }  // namespace
@@ -48,16 +41,16 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
   for (std::size_t i = 0; i < study.cells.size(); ++i) {
     const PositioningCell& c = study.cells[i];
     const PositioningStats& st = study.stats[i];
-    summary += fmt::format("{},{},{},{},{},{},{},{},{},{}", c.index, c.factor, num(c.window_s, "window_s", i),
-                           num(c.noise_sd_deg, "noise_sd_deg", i), num(c.tilt_deg, "tilt_deg", i),
-                           num(s.correlation_s, "correlation_s", i), c.sightings,
-                           num(c.delta_beta_deg, "delta_beta_deg", i), st.trials, st.converged);
+    summary += fmt::format("{},{},{},{},{},{},{},{},{},{}", c.index, c.factor, checked_cell(c.window_s, "window_s", i),
+                           checked_cell(c.noise_sd_deg, "noise_sd_deg", i), checked_cell(c.tilt_deg, "tilt_deg", i),
+                           checked_cell(s.correlation_s, "correlation_s", i), c.sightings,
+                           checked_cell(c.delta_beta_deg, "delta_beta_deg", i), st.trials, st.converged);
     for (auto [v, name] : {std::pair{st.rms_km, "rms_km"}, {st.mean_km, "mean_km"}, {st.p50_km, "p50_km"},
                            {st.p95_km, "p95_km"}, {st.max_km, "max_km"}, {st.mean_north_km, "mean_north_km"},
                            {st.mean_east_km, "mean_east_km"}})
-      (summary += ',') += num(v, name, i, true);
-    summary += fmt::format(",{},{},{},{}\n", num(c.eq15_km, "eq15_km", i), num(c.linear_rms_km, "linear_rms_km", i),
-                           num(c.mirror_km, "mirror_km", i, true), st.wrong_root);
+      (summary += ',') += checked_cell(v, name, i, true);
+    summary += fmt::format(",{},{},{},{}\n", checked_cell(c.eq15_km, "eq15_km", i), checked_cell(c.linear_rms_km, "linear_rms_km", i),
+                           checked_cell(c.mirror_km, "mirror_km", i, true), st.wrong_root);
   }
   write_text_file(dir / "summary.csv", summary);
 
@@ -71,10 +64,10 @@ std::vector<DatasetFile> report_positioning_study(const std::filesystem::path& d
     for (auto [v, name] : {std::pair{t.tilt_azimuth_deg, "tilt_azimuth_deg"}, {t.prior_lat_deg, "prior_lat_deg"},
                            {t.prior_lon_deg, "prior_lon_deg"}, {t.lat_deg, "lat_deg"}, {t.lon_deg, "lon_deg"},
                            {t.error_km, "error_km"}, {t.north_km, "north_km"}, {t.east_km, "east_km"}})
-      (trials += ',') += num(v, name, i);
+      (trials += ',') += checked_cell(v, name, i);
     trials += fmt::format(",{},{},{},{}\n", position_termination_name(t.termination), t.iterations,
-                          num(t.residual_rms_deg, "residual_rms_deg", i, true),
-                          num(t.sd_major_km, "sd_major_km", i, true));
+                          checked_cell(t.residual_rms_deg, "residual_rms_deg", i, true),
+                          checked_cell(t.sd_major_km, "sd_major_km", i, true));
   }
   write_text_file(dir / "trials.csv", trials);
 
@@ -173,11 +166,11 @@ std::vector<DatasetFile> report_location(const std::filesystem::path& dir, const
     const double error = std::isnan(truth_deg) || std::isnan(s.heading_deg)
                              ? NAN
                              : std::remainder(s.heading_deg - truth_deg, 360.0);
-    heading += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", format_utc(s.utc), num(s.weight, "weight", k),
-                           num(s.zenith_deg, "zenith_deg", k), num(s.zenith_fix_deg, "zenith_fix_deg", k, true),
-                           num(s.residual_deg, "residual_deg", k, true), num(s.alpha_s_deg, "alpha_s_deg", k),
-                           num(s.beta_deg, "beta_deg", k, true), num(s.heading_deg, "heading_deg", k, true),
-                           num(truth_deg, "heading_true_deg", k, true), num(error, "heading_error_deg", k, true));
+    heading += fmt::format("{},{},{},{},{},{},{},{},{},{}\n", format_utc(s.utc), checked_cell(s.weight, "weight", k),
+                           checked_cell(s.zenith_deg, "zenith_deg", k), checked_cell(s.zenith_fix_deg, "zenith_fix_deg", k, true),
+                           checked_cell(s.residual_deg, "residual_deg", k, true), checked_cell(s.alpha_s_deg, "alpha_s_deg", k),
+                           checked_cell(s.beta_deg, "beta_deg", k, true), checked_cell(s.heading_deg, "heading_deg", k, true),
+                           checked_cell(truth_deg, "heading_true_deg", k, true), checked_cell(error, "heading_error_deg", k, true));
   }
   write_text_file(dir / "heading.csv", heading);
   return {{"fix.csv", 1, "the position fix from the sun's zenith angles (Eq. 17): the chosen root (nearest "

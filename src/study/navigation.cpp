@@ -20,7 +20,6 @@ namespace polrig {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Stream indices of derive_seed: the IMU's errors and the units' noise draw from separate streams.
 constexpr std::uint64_t kImuStream = 0x494D55, kUnitStream = 0x554E4954;

@@ -20,11 +20,9 @@ namespace polrig {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kPi = std::numbers::pi;
 // The stream of derive_seed the tilt directions draw from (study/navigation.cpp's IMU and unit
 // streams are 0x494D55 and 0x554E4954): "TILT".
-constexpr std::uint64_t kTiltStream = 0x54494C54;
+constexpr std::uint64_t kFig17TiltStream = 0x54494C54;
 
 Axes3 axes_of(const Eigen::Matrix3d& C) {
   return {Vec3{C(0, 0), C(1, 0), C(2, 0)}, Vec3{C(0, 1), C(1, 1), C(2, 1)}, Vec3{C(0, 2), C(1, 2), C(2, 2)}};
@@ -112,7 +110,7 @@ TrialOutput run_trial(const Rig& cell_rig, int cell, int trial, const Navigation
 
   // Fig. 17: the same s^b turned into n by the true and by the tilted attitude.
   out.tilt_error_rad.resize(settings.tilts_deg.size());
-  const std::uint64_t tilt_seed = derive_seed(rig.seed, kTiltStream);
+  const std::uint64_t tilt_seed = derive_seed(rig.seed, kFig17TiltStream);
   for (std::size_t k = 0; k < data.compass.size(); ++k) {
     const CompassEpoch& e = data.compass[k];
     const UnitSun sun = sun_from_units(e.units, data.mounts);

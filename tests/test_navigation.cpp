@@ -32,7 +32,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 
 Rig load(const std::string& name, const std::vector<RigOverride>& sets = {}) {
   return load_rig(std::string(POLRIG_SOURCE_DIR) + "/rigs/" + name, sets).rig;

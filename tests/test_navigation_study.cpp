@@ -27,7 +27,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kPi = std::numbers::pi;
 const std::string kStatic = POLRIG_SOURCE_DIR "/rigs/zhang2021-static.yaml";
 const std::string kVehicle = POLRIG_SOURCE_DIR "/rigs/zhang2021-vehicle.yaml";
 

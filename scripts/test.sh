@@ -39,10 +39,13 @@ export ASAN_OPTIONS="detect_leaks=1:check_initialization_order=1:strict_init_ord
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 export LSAN_OPTIONS="suppressions=$PWD/scripts/lsan.supp:print_suppressions=0"
 
+# The sanitizer build compiles file by file, without the batches and the precompiled header of
+# the normal build (docs/architecture.md "Build options"): one file a translation unit, as the
+# sanitizers and the fuzzers were proven with, and a check that no file leans on another's includes.
 san_build() {
   cmake -S . -B build-san -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
     -DPOLRIG_FUZZ=ON -DPOLRIG_SANITIZERS='address;undefined' -DPOLRIG_BUILD_BENCH=OFF \
-    -DPOLRIG_OPENCV=OFF "${launcher[@]}" >/dev/null
+    -DPOLRIG_OPENCV=OFF -DPOLRIG_UNITY_BUILD=OFF -DCMAKE_DISABLE_PRECOMPILE_HEADERS=ON "${launcher[@]}" >/dev/null
   cmake --build build-san -j2
 }
 san_tests() { ctest --test-dir build-san -L fast --output-on-failure -j2; }

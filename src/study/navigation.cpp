@@ -6,6 +6,7 @@
 #include <memory>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -246,8 +247,11 @@ std::vector<InsState> run_sins(const NavigationDataset& data, const std::vector<
 struct SunModel {
   SunTrack track;
   UtcTime start;
-  double dec_rad(double t) const { const auto h = track.hour_angle_at(start.plus_seconds(t)); return std::atan2(h.sin_dec, h.cos_dec); }
-  double gha_rad(double t) const { const auto h = track.hour_angle_at(start.plus_seconds(t)); return std::atan2(h.sin_gha, h.cos_gha); }
+  // δ and GHA at t (one interpolation of the track for both).
+  std::pair<double, double> dec_gha_rad(double t) const {
+    const SunTrack::HourAngle h = track.hour_angle_at(start.plus_seconds(t));
+    return {std::atan2(h.sin_dec, h.cos_dec), std::atan2(h.sin_gha, h.cos_gha)};
+  }
 };
 
 // The accelerometers' level over a reading's interval (the IMU samples after the previous reading):
@@ -294,7 +298,7 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
     } else {
       f.elevation_rad = kNaN;
     }
-    const double dec = sun.dec_rad(e.t_s), gha = sun.gha_rad(e.t_s);
+    const auto [dec, gha] = sun.dec_gha_rad(e.t_s);
     f.model_elevation_rad =
         std::asin(sun_elevation_model(filter.state().lat_rad, filter.state().lon_rad, dec, gha).sin_H);
     if (std::isfinite(f.elevation_rad)) {

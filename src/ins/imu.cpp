@@ -49,12 +49,16 @@ TriadState draw(const SensorErrorSpec& s, std::uint64_t seed, int sensor) {
 Eigen::Vector3d step(TriadState& t, const SensorErrorSpec& s, const Eigen::Vector3d& ideal,
                      double dt, std::uint64_t seed, std::uint64_t k, int sensor, Eigen::Vector3d& bias) {
   Eigen::Vector3d error;
+  // A process whose σ is 0 draws no deviate (0·w adds nothing): Z21's IMU has white noise only,
+  // and the deviates are most of a run's simulation.
   for (int i = 0; i < 3; ++i) {
     const auto n = [&](Process p) { return standard_normal(seed, k, channel(sensor, p, i), 0); };
     bias[i] = t.constant_bias[i] + t.gm[i] + t.rw[i];
-    error[i] = bias[i] * dt + s.white_noise[i] * std::sqrt(dt) * n(kWhite);
-    t.gm[i] = gauss_markov_step(t.gm[i], dt, s.bias_instability[i], s.correlation_time_s[i], n(kGaussMarkov));
-    t.rw[i] += s.random_walk[i] * std::sqrt(dt) * n(kRandomWalk);
+    error[i] = bias[i] * dt;
+    if (s.white_noise[i] != 0) error[i] += s.white_noise[i] * std::sqrt(dt) * n(kWhite);
+    if (s.bias_instability[i] != 0)
+      t.gm[i] = gauss_markov_step(t.gm[i], dt, s.bias_instability[i], s.correlation_time_s[i], n(kGaussMarkov));
+    if (s.random_walk[i] != 0) t.rw[i] += s.random_walk[i] * std::sqrt(dt) * n(kRandomWalk);
   }
   return t.SM * ideal + error;
 }

@@ -143,11 +143,44 @@ Matrix15 initial_covariance(const Rig& rig) {
   return sd.cwiseAbs2().asDiagonal();
 }
 
-NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress) {
+NavigationScene navigation_scene(const Rig& rig, const Progress& progress) {
   require_instrument(rig, Instrument::kUnitArray, "a navigation run");
   const Sky sky = sky_of(rig);
-  progress.begin("navigation: trajectory and IMU", 1);
-  const Trajectory tr = generate_trajectory(trajectory_spec(rig));
+  progress.begin("navigation: trajectory", 1);
+  NavigationScene scene{generate_trajectory(trajectory_spec(rig)), {}};
+  progress.finish();
+  const std::vector<TruthSample>& truth = scene.trajectory.truth;
+  const std::size_t step = static_cast<std::size_t>(std::lround(rig.imu.rate_hz / rig.units.rate_hz));
+  scene.sun.resize(scene.trajectory.imu.size() / step);
+  progress.begin("navigation: the sun along the trajectory", static_cast<long long>(scene.sun.size()));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, scene.sun.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      const TruthSample& at = truth[(k + 1) * step];
+      scene.sun[k] = sun_position(sky.first_stop.plus_seconds(at.t_s),
+                                  {rad2deg(at.lat_rad), rad2deg(at.lon_rad), at.h_m}, sky.sun);
+    }
+    progress.advance(static_cast<long long>(r.size()));
+  });
+  progress.finish();
+  return scene;
+}
+
+NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress) {
+  return simulate_navigation(rig, navigation_scene(rig, progress), progress);
+}
+
+NavigationDataset simulate_navigation(const Rig& rig, const NavigationScene& scene, const Progress& progress) {
+  require_instrument(rig, Instrument::kUnitArray, "a navigation run");
+  const Sky sky = sky_of(rig);
+  const Trajectory& tr = scene.trajectory;
+  const std::size_t step = static_cast<std::size_t>(std::lround(rig.imu.rate_hz / rig.units.rate_hz));
+  double duration_s = 0;
+  for (const Segment& g : trajectory_spec(rig).segments) duration_s += g.duration_s;
+  const std::size_t samples = static_cast<std::size_t>(std::llround(duration_s * rig.imu.rate_hz)) + 1;
+  if (tr.truth.size() != samples || scene.sun.size() != tr.imu.size() / step)
+    throw std::invalid_argument(fmt::format("navigation scene: {} samples and {} compass epochs, the rig's run has {} and {}",
+                                            tr.truth.size(), scene.sun.size(), samples, tr.imu.size() / step));
+  progress.begin("navigation: IMU errors", 1);
   CorruptedImu imu = corrupt_imu(tr.imu, imu_error_spec(rig.imu), derive_seed(rig.seed, kImuStream));
   progress.finish();
 
@@ -158,24 +191,18 @@ NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress) 
   NavigationTruth truth{tr.truth, unit_array_truth(rig.units, rig.seed), imu.drawn, {}};
   for (const Axes3& C : truth.units.nominal) d.mounts.push_back({C});
 
-  const long step = std::lround(rig.imu.rate_hz / rig.units.rate_hz);
-  const std::size_t epochs = d.imu.size() / static_cast<std::size_t>(step);
-  d.compass.resize(epochs);
-  truth.sun_elevation_rad.resize(epochs);
+  d.compass.resize(scene.sun.size());
+  truth.sun_elevation_rad.resize(scene.sun.size());
   const std::uint64_t unit_seed = derive_seed(rig.seed, kUnitStream);
-  progress.begin("navigation: compass readings", static_cast<long long>(epochs));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, epochs, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+  progress.begin("navigation: compass readings", static_cast<long long>(scene.sun.size()));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, scene.sun.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k < r.end(); ++k) {
-      const TruthSample& at = tr.truth[(k + 1) * static_cast<std::size_t>(step)];
-      Sky here = sky;
-      here.site = {rad2deg(at.lat_rad), rad2deg(at.lon_rad), at.h_m};
-      const UtcTime utc = sky.first_stop.plus_seconds(at.t_s);
+      const TruthSample& at = tr.truth[(k + 1) * step];
       CompassEpoch& e = d.compass[k];
       e.t_s = at.t_s;
-      const SunPosition sun = sun_position(utc, here.site, here.sun);
-      e.samples = read_units(rig, truth.units, sun_direction_enu(sun), here.model, axes_of(at.C_bn), unit_seed, k);
+      e.samples = read_units(rig, truth.units, sun_direction_enu(scene.sun[k]), sky.model, axes_of(at.C_bn), unit_seed, k);
       for (const UnitSample& u : e.samples) e.units.push_back({u.aop_rad, u.dop});
-      truth.sun_elevation_rad[k] = deg2rad(sun.elevation_deg);
+      truth.sun_elevation_rad[k] = deg2rad(scene.sun[k].elevation_deg);
     }
     progress.advance(static_cast<long long>(r.size()));
   });

@@ -69,10 +69,11 @@ struct TrialOutput {
   std::vector<double> dop, true_dop, aop_error_deg;     // cell 0: every unit reading with an angle
 };
 
-TrialOutput run_trial(const Rig& cell_rig, int cell, int trial, const NavigationStudySettings& settings) {
+TrialOutput run_trial(const Rig& cell_rig, const NavigationScene& scene, int cell, int trial,
+                      const NavigationStudySettings& settings) {
   Rig rig = cell_rig;
   rig.seed = derive_seed(cell_rig.seed, static_cast<std::uint64_t>(trial));
-  const NavigationDataset data = simulate_navigation(rig);
+  const NavigationDataset data = simulate_navigation(rig, scene);
   const NavigationRun run = navigate(data, rig);
   const NavigationTruth& truth = *data.truth;
   const bool detail = cell == 0;
@@ -245,15 +246,20 @@ NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& 
     for (const Segment& s : spec.segments) study.cells[c].duration_s += s.duration_s;
   }
 
+  // A cell at a time: its scene (the trajectory and the sun, the same for every seed) once, then its
+  // trials in parallel.
   const std::size_t trials = static_cast<std::size_t>(settings.trials), tasks = rigs.size() * trials;
   std::vector<TrialOutput> outputs(tasks);
   progress.begin("study navigation: trials", static_cast<long long>(tasks));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, tasks, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      outputs[i] = run_trial(rigs[i / trials], static_cast<int>(i / trials), static_cast<int>(i % trials), settings);
-      progress.advance(1);
-    }
-  });
+  for (std::size_t c = 0; c < rigs.size(); ++c) {
+    const NavigationScene scene = navigation_scene(rigs[c]);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, trials, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        outputs[c * trials + i] = run_trial(rigs[c], scene, static_cast<int>(c), static_cast<int>(i), settings);
+        progress.advance(1);
+      }
+    });
+  }
   progress.finish();
 
   // Everything below in index order: the same sums for any thread count.

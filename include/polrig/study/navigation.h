@@ -27,6 +27,7 @@
 #include "polrig/nav/unit_array.h"
 #include "polrig/progress.h"
 #include "polrig/rig/rig.h"
+#include "polrig/sky/sun.h"
 
 namespace polrig {
 
@@ -64,9 +65,22 @@ struct NavigationDataset {
   std::optional<NavigationTruth> truth;
 };
 
+// What a run's simulation owes to the rig's trajectory, site and time alone, not to its seed or
+// its sensors: the true trajectory (and the ideal IMU along it) and the sun at every compass epoch
+// at the true position. A Monte-Carlo study makes it once and draws every trial from it.
+struct NavigationScene {
+  Trajectory trajectory;
+  std::vector<SunPosition> sun;  // per compass epoch k, at t = (k + 1)/units.rate_hz
+};
+NavigationScene navigation_scene(const Rig& rig, const Progress& progress = {});
+
 // Throws RigError (instrument_problem) unless the rig is a unit array, and std::invalid_argument
 // for a trajectory ins/ refuses. Deterministic for any thread count: every deviate is counter-based.
 NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress = {});
+// The same from a scene of this rig or of one that differs only in seed, sky radiance and
+// polarization, sensors and noise (not trajectory, site, time or rates): bit-identical to the
+// above. Throws std::invalid_argument when the scene's sample or epoch count is not the rig's.
+NavigationDataset simulate_navigation(const Rig& rig, const NavigationScene& scene, const Progress& progress = {});
 
 enum class NavigationMode { Sins, Pns, Integrated };
 std::string_view navigation_mode_name(NavigationMode m);  // "sins", "pns", "integrated"

@@ -14,19 +14,22 @@ struct Rates {
   Eigen::Vector3d w_ie, w_en, g;
 };
 
-// The Earth at one point of the step: its radii and normal gravity (one GeographicLib call), held
-// for the step's rates: over 10 ms they change by ~1e-10 of themselves.
+// The Earth at one point of the step: its radii, normal gravity (one GeographicLib call), rate and
+// tan L, held for the step's three rate evaluations: over 10 ms they change by ~1e-10 of themselves.
 struct EarthPoint {
   double L = 0, h = 0;
   EarthRadii r;
-  Eigen::Vector3d g;
+  Eigen::Vector3d g, w_ie;
+  double tan_L = 0;
 };
 
-EarthPoint earth_at(double L, double h) { return {L, h, earth_radii(L), gravity_n(L, h)}; }
+EarthPoint earth_at(double L, double h) {
+  return {L, h, earth_radii(L), gravity_n(L, h), omega_ie_n(L), std::tan(L)};
+}
 
 Rates rates_at(const EarthPoint& e, const Eigen::Vector3d& v) {
   const double RNh = e.r.R_N + e.h;
-  return {omega_ie_n(e.L), {-v.y() / (e.r.R_M + e.h), v.x() / RNh, v.x() * std::tan(e.L) / RNh}, e.g};
+  return {e.w_ie, {-v.y() / (e.r.R_M + e.h), v.x() / RNh, v.x() * e.tan_L / RNh}, e.g};
 }
 
 // The velocity increment over dt from the state's velocity v and the rates r.
@@ -46,8 +49,9 @@ InsState mechanize(const InsState& s, const ImuSample& prev, const ImuSample& cu
   const Eigen::Matrix3d C_bn = s.C_bn();
 
   // Velocity: a first pass (the start's velocity in the transport rate and Coriolis) gives the
-  // midpoint's velocity, the second pass uses it; the Earth at the midpoint in both. The rotation compensation as half-angle rotations in b and in n (not I ± ½[·×]): for a static
-  // IMU they cancel exactly, where the first-order forms leave ¼[ζ×]²g·Δt per step.
+  // midpoint's velocity, the second pass uses it; the Earth at the midpoint in both. The rotation
+  // compensation as half-angle rotations in b and in n (not I ± ½[·×]): for a static IMU they
+  // cancel exactly, where the first-order forms leave ¼[ζ×]²g·Δt per step.
   const Eigen::Vector3d dv_f_b = quaternion_from_rotation_vector(0.5 * cur.dtheta) * cur.dv +
                                  (prev.dtheta.cross(cur.dv) + prev.dv.cross(cur.dtheta)) / 12.0;
   // The Earth at the step's midpoint, extrapolated with the start's velocity (ω_en^n of that

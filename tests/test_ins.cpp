@@ -650,6 +650,59 @@ TEST(InsErrorModel, FirstOrderAndVanLoanDiscretizations) {
   for (int i = 0; i < 6; ++i) EXPECT_NEAR(first.Q(i, i) / exact.Q(i, i), 1.0, 2 * a) << i;
 }
 
+TEST(InsErrorModel, VanLoanAgainstPadeOfTheBlockMatrix) {
+  // discretize_van_loan sums Taylor series with scaling and squaring; the reference is Van Loan's
+  // own statement, Eigen's Padé exponential of the 30 × 30 [[−F, Q_c], [0, Fᵀ]]Δt in long double
+  // (64-bit mantissa). Cases: the filter's 1 s at Z21's noise with Gauss–Markov biases on a moving
+  // vehicle, the IMU's 10 ms and a 60 s gap. Bound from rounding: each of the s doublings can double
+  // the relative error of the sums (~1e-16 of the scale each), so 64·2^s·ε; Φ_ij against 1 + |Φ_ij|,
+  // Q_ij against √(Q_ii Q_jj) (its Cauchy–Schwarz scale).
+  InsState s = static_state(30);
+  s.v_n << 15, 8, 0.5;
+  ErrorModelNoise noise;
+  noise.arw.setConstant(rad(0.5) / 60);
+  noise.vrw.setConstant(25e-6 * kStandardG);
+  noise.gyro_tau_s.setConstant(300);
+  noise.gyro_bias_sigma.setConstant(rad(1) / 3600);
+  noise.accel_tau_s.setConstant(600);
+  noise.accel_bias_sigma.setConstant(20e-6 * kStandardG);
+  using MatrixL = Eigen::Matrix<long double, 30, 30>;
+  for (const double dt : {1.0, 0.01, 60.0}) {
+    const Matrix15 F = error_dynamics(s, {0.3, -0.2, 9.9}, noise), Qc = process_noise_density(s, noise);
+    MatrixL A = MatrixL::Zero();
+    A.block<15, 15>(0, 0) = (-F * dt).cast<long double>();
+    A.block<15, 15>(0, 15) = (Qc * dt).cast<long double>();
+    A.block<15, 15>(15, 15) = (F.transpose() * dt).cast<long double>();
+    const MatrixL E = A.exp();
+    const Eigen::Matrix<long double, 15, 15> Phi = E.block<15, 15>(15, 15).transpose();
+    const Eigen::Matrix<long double, 15, 15> Q = Phi * E.block<15, 15>(0, 15);
+    const Discretized d = discretize_van_loan(F, Qc, dt);
+    double worst_phi = 0, worst_q = 0;
+    for (int i = 0; i < 15; ++i)
+      for (int j = 0; j < 15; ++j) {
+        worst_phi = std::max(worst_phi, static_cast<double>(std::abs(d.Phi(i, j) - Phi(i, j)) / (1 + std::abs(Phi(i, j)))));
+        worst_q = std::max(worst_q, static_cast<double>(std::abs(d.Q(i, j) - 0.5L * (Q(i, j) + Q(j, i))) /
+                                                        std::sqrt(Q(i, i) * Q(j, j))));
+      }
+    const double norm = (F * dt).cwiseAbs().colwise().sum().maxCoeff();
+    const double bound = 64 * std::exp2(std::max(0.0, std::ceil(std::log2(norm / 0.125)))) * 0x1p-52;
+    std::printf("Δt %g s, ‖FΔt‖₁ %.3g: Φ within %.2g, Q within %.2g of its scale (bound %.2g)\n", dt, norm,
+                worst_phi, worst_q, bound);
+    EXPECT_LT(worst_phi, bound) << dt;
+    EXPECT_LT(worst_q, bound) << dt;
+  }
+  // A stiff Gauss–Markov bias (τ = 0.02 s over 1 s, ‖FΔt‖ = 50), where the 30 × 30 exponential
+  // loses Q to cancellation (its −F block grows as e^50): the bias states alone against their
+  // closed forms, Φ = e^{−Δt/τ} and Q = σ²(1 − e^{−2Δt/τ}).
+  noise.accel_tau_s.setConstant(0.02);
+  const Discretized d = discretize_van_loan(error_dynamics(s, {0.3, -0.2, 9.9}, noise), process_noise_density(s, noise), 1.0);
+  const double sigma2 = std::pow(noise.accel_bias_sigma.x(), 2);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(d.Phi(kAccelBias + i, kAccelBias + i), std::exp(-50.0), 1e-30);
+    EXPECT_NEAR(d.Q(kAccelBias + i, kAccelBias + i) / (sigma2 * -std::expm1(-100.0)), 1.0, 1e-13);
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The filter
 // ---------------------------------------------------------------------------------------------

@@ -37,7 +37,21 @@ inline double uniform_unit(std::uint64_t seed, std::uint64_t a, std::uint64_t b,
   return UniformStream(seed, a, b)(c);
 }
 
-// A standard normal deviate; the noise of (stop, channel, sample) under a rig's seed.
+// The standard normal deviates of (stop, channel) under a seed for sample = 0, 1, 2 …, with the
+// part of the hash that depends on (seed, stop, channel) computed once: a sensor's samples of one
+// reading. Box–Muller on two uniforms in (0, 1].
+class NormalStream {
+ public:
+  constexpr NormalStream(std::uint64_t seed, std::uint64_t stop, std::uint64_t channel)
+      : prefix_(detail::splitmix64(detail::splitmix64(detail::splitmix64(seed) ^ stop) ^ (channel + 0x632BE59BD9B4E019ull))) {}
+  double operator()(std::uint64_t sample) const;
+
+ private:
+  std::uint64_t prefix_;
+};
+
+// A standard normal deviate; the noise of (stop, channel, sample) under a rig's seed:
+// NormalStream(seed, stop, channel)(sample).
 double standard_normal(std::uint64_t seed, std::uint64_t stop, std::uint64_t channel,
                        std::uint64_t sample);
 

@@ -82,10 +82,9 @@ std::vector<UnitSample> read_units(const Rig& rig, const UnitArrayTruth& truth, 
     const std::array<double, 3> V0 = pair_voltages(device, el, E, theta_deg, v.light.dop);
     for (std::size_t i = 0; i < 3; ++i) {
       double sum = 0;
+      const NormalStream noise(seed, sample_index, 3 * unit + i);
       for (int k = 0; k < samples; ++k)
-        sum += adc_quantize(V0[i] + el.noise_sigma_V * standard_normal(seed, sample_index, 3 * unit + i,
-                                                                       static_cast<std::uint64_t>(k)),
-                            el);
+        sum += adc_quantize(V0[i] + el.noise_sigma_V * noise(static_cast<std::uint64_t>(k)), el);
       u.V[i] = sum / samples;
     }
     const MeasuredAngles m = measured_angles(model, el, u.V);

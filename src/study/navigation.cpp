@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "polrig/ins/earth.h"
 #include "polrig/random.h"
@@ -304,7 +305,7 @@ Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at
 // The INS with the filter, its state and the filter's record at every compass epoch.
 void run_integrated(const NavigationDataset& data, const std::vector<std::size_t>& at,
                     std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
-                    std::vector<NavigationFix>& fixes) {
+                    std::vector<NavigationFix>& fixes, const Progress& progress) {
   InsFilter filter(data.initial, initial_covariance(rig), filter_settings(rig));
   // H^n's level: the filter's attitude (Z21) or the accelerometers (navigation.integrated_level).
   const bool accelerometer = rig.navigation.integrated_level == "accelerometer";
@@ -343,6 +344,7 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
     f.corr_north_east = filter.P()(kDLat, kDLon) / std::sqrt(filter.P()(kDLat, kDLat) * filter.P()(kDLon, kDLon));
     run.filter.push_back(f);
     fixes.push_back(fix_of(s));
+    progress.advance(1);
   }
   run.filter_summary = filter.summary();
 }
@@ -381,7 +383,6 @@ std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vec
   const double window = rig.navigation.pns_window_s;
   const double period = n > 1 ? data.compass[1].t_s - data.compass[0].t_s : 0.0;
   std::vector<NavigationFix> out(n);
-  progress.begin("navigate: PNS fixes", static_cast<long long>(n));
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t k = r.begin(); k < r.end(); ++k) {
       NavigationFix& f = out[k];
@@ -400,7 +401,6 @@ std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vec
     }
     progress.advance(static_cast<long long>(r.size()));
   });
-  progress.finish();
   return out;
 }
 
@@ -417,30 +417,39 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   NavigationRun run;
   run.modes = options.modes;
   const auto wants = [&](NavigationMode m) { return std::find(run.modes.begin(), run.modes.end(), m) != run.modes.end(); };
+  std::string stage = "navigate:";
+  for (NavigationMode m : run.modes) stage += fmt::format(" {}", navigation_mode_name(m));
+  progress.begin(stage, static_cast<long long>(at.size() * run.modes.size()));
+  // The filter beside the SINS and the PNS (which takes the SINS's attitude): independent
+  // computations, each the same whichever thread runs it.
   std::vector<InsState> sins;
-  if (wants(NavigationMode::Sins) || wants(NavigationMode::Pns)) {
-    progress.begin("navigate: SINS", 1);
-    sins = run_sins(data, at, filter_settings(rig).mechanization);
-    progress.finish();
-  }
+  std::vector<NavigationFix> pns, integrated;
+  tbb::parallel_invoke(
+      [&] {
+        if (!wants(NavigationMode::Sins) && !wants(NavigationMode::Pns)) return;
+        sins = run_sins(data, at, filter_settings(rig).mechanization);
+        if (wants(NavigationMode::Sins)) progress.advance(static_cast<long long>(at.size()));
+        if (wants(NavigationMode::Pns)) pns = run_pns(data, at, sins, mounts, rig, sky, progress);
+      },
+      [&] {
+        if (!wants(NavigationMode::Integrated)) return;
+        const double end = data.imu.empty() ? 1.0 : data.imu.back().t_s + 1.0;
+        const SunModel sun{SunTrack(data.start, data.start.plus_seconds(end),
+                                    {rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m},
+                                    sky.sun),
+                           data.start};
+        run_integrated(data, at, mounts, rig, sun, run, integrated, progress);
+      });
+  progress.finish();
+  for (const NavigationFix& f : pns) run.pns_usable += std::isfinite(f.lat_rad) ? 1 : 0;
   for (NavigationMode m : run.modes) {
-    std::vector<NavigationFix> fixes;
     if (m == NavigationMode::Sins) {
-      for (const InsState& s : sins) fixes.push_back(fix_of(s));
-    } else if (m == NavigationMode::Pns) {
-      fixes = run_pns(data, at, sins, mounts, rig, sky, progress);
-      for (const NavigationFix& f : fixes) run.pns_usable += std::isfinite(f.lat_rad) ? 1 : 0;
+      std::vector<NavigationFix> fixes;
+      for (const InsState& st : sins) fixes.push_back(fix_of(st));
+      run.fixes.push_back(std::move(fixes));
     } else {
-      const double end = data.imu.empty() ? 1.0 : data.imu.back().t_s + 1.0;
-      const SunModel sun{SunTrack(data.start, data.start.plus_seconds(end),
-                                  {rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m},
-                                  sky.sun),
-                         data.start};
-      progress.begin("navigate: SINS/PNS filter", 1);
-      run_integrated(data, at, mounts, rig, sun, run, fixes);
-      progress.finish();
+      run.fixes.push_back(m == NavigationMode::Pns ? pns : integrated);
     }
-    run.fixes.push_back(std::move(fixes));
   }
   return run;
 }

@@ -54,6 +54,7 @@ struct Discretized {
 // Φ = I + F·Δt and Q = ½(Φ·Q_c + Q_c·Φᵀ)·Δt: PSINS's form at the IMU rate, ‖F‖Δt ≲ 1e-4.
 Discretized discretize_first_order(const Matrix15& F, const Matrix15& Qc, double dt_s);
 // Van Loan: exp([[−F, Q_c], [0, Fᵀ]]·Δt) = [[·, Φ⁻¹Q], [0, Φᵀ]]; exact for constant F over Δt.
+// Computed by the Taylor series of Φ and of Q's integral with scaling and squaring (error_model.cpp).
 Discretized discretize_van_loan(const Matrix15& F, const Matrix15& Qc, double dt_s);
 
 // Applies x to the state (closed loop): C_b^n ← q(φ)·C̃_b^n, v ← ṽ − δV, L, λ, h ← minus δp, and

@@ -651,12 +651,13 @@ TEST(InsErrorModel, FirstOrderAndVanLoanDiscretizations) {
 }
 
 TEST(InsErrorModel, VanLoanAgainstPadeOfTheBlockMatrix) {
-  // discretize_van_loan sums Taylor series with scaling and squaring; the reference is Van Loan's
-  // own statement, Eigen's Padé exponential of the 30 × 30 [[−F, Q_c], [0, Fᵀ]]Δt in long double
-  // (64-bit mantissa). Cases: the filter's 1 s at Z21's noise with Gauss–Markov biases on a moving
-  // vehicle, the IMU's 10 ms and a 60 s gap. Bound from rounding: each of the s doublings can double
-  // the relative error of the sums (~1e-16 of the scale each), so 64·2^s·ε; Φ_ij against 1 + |Φ_ij|,
-  // Q_ij against √(Q_ii Q_jj) (its Cauchy–Schwarz scale).
+  // discretize_van_loan sums Taylor series on a balanced F with scaling and squaring; the reference
+  // is Van Loan's own statement, Eigen's Padé exponential of the 30 × 30 [[−F, Q_c], [0, Fᵀ]]Δt in
+  // long double (64-bit mantissa). Cases: the filter's 1 s at Z21's noise with Gauss–Markov biases
+  // on a moving vehicle, the IMU's 10 ms and a 60 s gap. Bound from rounding: each doubling can
+  // double the relative error of the sums (~1e-16 of the scale each), so 64·2^s·ε with s the
+  // doublings the unbalanced norm would need (balancing needs fewer); Φ_ij against 1 + |Φ_ij|, Q_ij
+  // against √(Q_ii Q_jj) (its Cauchy–Schwarz scale).
   InsState s = static_state(30);
   s.v_n << 15, 8, 0.5;
   ErrorModelNoise noise;

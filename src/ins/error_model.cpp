@@ -89,36 +89,103 @@ Discretized discretize_first_order(const Matrix15& F, const Matrix15& Qc, double
   return d;
 }
 
-// Van Loan's pair by the Taylor series of the integral it stands for, at Δt/2^s, then doubled s
-// times: with τ = Δt/2^s,
-//   Φ(τ) = Σ_k (Fτ)^k/k!,   Q(τ) = ∫₀^τ e^{Fu} Q_c e^{Fᵀu} du = Σ_{k≥1} τ^k/k! · L^{k−1}(Q_c),
-// L(X) = F·X + X·Fᵀ (the integrand's own series, integrated term by term; L(X) of a symmetric X is
-// F·X plus its transpose), and Φ(2τ) = Φ(τ)², Q(2τ) = Φ(τ)·Q(τ)·Φ(τ)ᵀ + Q(τ). s makes ‖F‖₁τ ≤ 1/8;
-// the first terms left out, Φ's 12th and Q's 13th, are below (1/8)^12/12! ≈ 3e-20 and
-// (1/4)^12/13! ≈ 1e-17 of the sums' scale (‖L‖ ≤ 2‖F‖). Fifteen-by-fifteen products only: a third
-// of the cost of Padé on the 30 × 30 exp([[−F, Q_c], [0, Fᵀ]]Δt), which tests/test_ins.cpp computes
-// as the reference.
-Discretized discretize_van_loan(const Matrix15& F, const Matrix15& Qc, double dt_s) {
-  const double norm = (F * dt_s).cwiseAbs().colwise().sum().maxCoeff();
-  const int s = norm > 0.125 ? static_cast<int>(std::ceil(std::log2(norm / 0.125))) : 0;
-  const double tau = std::ldexp(dt_s, -s);
-  constexpr int kTerms = 11;
-  Matrix15 Phi = Matrix15::Identity(), Q = Qc * tau;
-  Matrix15 phi_term = Matrix15::Identity(), q_term = Q;
-  // lazyProduct: at 15 × 15 Eigen's coefficient loops beat its blocked GEMM (no packing).
-  for (int k = 1; k <= kTerms; ++k) {
+namespace {
+
+// Power-of-two scales d with D⁻¹·F·D balanced, D = diag(d) (Parlett & Reinsch 1969, LAPACK's
+// dgebal): each state's off-diagonal row and column sums brought within a factor of 2 of each
+// other, and a column whose row is empty (a bias: ε drives φ, nothing drives ε) shrunk below 1/64.
+// Powers of two scale without rounding. F's norm is ~10 s⁻¹ from f^n × φ and C_b^n alone (units
+// of rad against m/s); balanced it is a few hundredths, and 1 s needs no doubling.
+Vector15 balancing_scales(const Matrix15& F) {
+  Vector15 d = Vector15::Ones();
+  Matrix15 A = F.cwiseAbs();
+  A.diagonal().setZero();
+  for (int sweep = 0; sweep < 64; ++sweep) {
+    bool changed = false;
+    for (int i = 0; i < 15; ++i) {
+      double c = A.col(i).sum(), r = A.row(i).sum(), f = 1;
+      if (c == 0) continue;
+      if (r == 0) {
+        while (c > 1.0 / 64) c /= 2, f /= 2;
+      } else {
+        const double sum = c + r;
+        while (c < r / 2) c *= 2, r /= 2, f *= 2;
+        while (c >= 2 * r) c /= 2, r *= 2, f /= 2;
+        if (c + r >= 0.95 * sum) continue;
+      }
+      if (f == 1) continue;
+      d[i] *= f;
+      A.col(i) *= f;
+      A.row(i) /= f;
+      changed = true;
+    }
+    if (!changed) break;
+  }
+  return d;
+}
+
+// K: the fewest terms with θ^{K+1}/(K+1)! and (2θ)^{K+1}/(K+2)! below 2^-60.
+int norm_terms(double theta) {
+  int K = 1;
+  double phi_left = theta * theta / 2, q_left = 4 * theta * theta / 6;  // K = 1's
+  for (; (phi_left > 0x1p-60 || q_left > 0x1p-60) && K < 30; ++K) {
+    phi_left *= theta / (K + 2);
+    q_left *= 2 * theta / (K + 3);
+  }
+  return K;
+}
+
+// Φ(τ) and Q(τ) by their series: K terms, then on while a term still moves an entry by more than
+// 2^-55 of its scale (Φ: its row's largest; Q: √(Q_ii·Q_jj)). Q' spans many orders (a bias's noise
+// scaled up, the position's down) and the norm bound speaks for the largest entries only.
+// lazyProduct: at 15 × 15 Eigen's coefficient loops beat its blocked GEMM.
+Discretized taylor_pair(const Matrix15& F, const Matrix15& Qc, double tau, int K) {
+  const auto phi_moves = [](const Matrix15& term, const Matrix15& sum) {
+    const Vector15 row_max = sum.cwiseAbs().rowwise().maxCoeff();
+    return (term.cwiseAbs().array() > 0x1p-55 * row_max.replicate<1, 15>().array()).any();
+  };
+  const auto q_moves = [](const Matrix15& term, const Matrix15& sum) {
+    const Vector15 sd = sum.diagonal().cwiseAbs().cwiseSqrt();
+    return (term.cwiseAbs().array() > 0x1p-55 * (sd * sd.transpose()).array()).any();
+  };
+  Discretized d{Matrix15::Identity(), Qc * tau};
+  Matrix15 phi_term = Matrix15::Identity(), q_term = d.Q;
+  for (int k = 1; k <= K || (k <= 30 && (phi_moves(phi_term, d.Phi) || q_moves(q_term, d.Q))); ++k) {
     phi_term = ((tau / k) * F.lazyProduct(phi_term)).eval();
-    Phi += phi_term;
+    d.Phi += phi_term;
     const Matrix15 Fq = F.lazyProduct(q_term);
     q_term = (tau / (k + 1)) * (Fq + Fq.transpose());
-    Q += q_term;
+    d.Q += q_term;
   }
+  return d;
+}
+
+}  // namespace
+
+// Van Loan's pair by the Taylor series of the integral it stands for, on the balanced F' = D⁻¹FD
+// (Φ = D·Φ'·D⁻¹, Q = D·Q'·D with Q_c' = D⁻¹Q_cD⁻¹), at Δt/2^s, then doubled s times: with τ = Δt/2^s,
+//   Φ(τ) = Σ_k (Fτ)^k/k!,   Q(τ) = ∫₀^τ e^{Fu} Q_c e^{Fᵀu} du = Σ_{k≥1} τ^k/k! · L^{k−1}(Q_c),
+// L(X) = F·X + X·Fᵀ (the integrand's own series, integrated term by term; L(X) of a symmetric X is
+// F·X plus its transpose), and Φ(2τ) = Φ(τ)², Q(2τ) = Φ(τ)·Q(τ)·Φ(τ)ᵀ + Q(τ). s makes θ = ‖F'‖₁τ ≤ 1/8
+// (s = 0 for the filter's 1 s unless a bias's correlation time is under ~8 s), and the series stop
+// where the first terms left out, θ^{K+1}/(K+1)! for Φ and (2θ)^{K+1}/(K+2)! for Q (‖L‖ ≤ 2‖F'‖),
+// are below 2^-60 of the sums' scale, and then on while a term still moves an entry. At the
+// filter's 1 s: s = 0, K = 6 and 9 terms, 18 products of 15 × 15 (Padé on the 30 × 30 block matrix
+// costs ~3× more); tests/test_ins.cpp checks the result against that Padé in long double.
+Discretized discretize_van_loan(const Matrix15& F, const Matrix15& Qc, double dt_s) {
+  const Vector15 d = balancing_scales(F), d_inv = d.cwiseInverse();
+  const Matrix15 Fb = d_inv.asDiagonal() * F * d.asDiagonal();
+  const double norm = (Fb * dt_s).cwiseAbs().colwise().sum().maxCoeff();
+  const int s = norm > 0.125 ? static_cast<int>(std::ceil(std::log2(norm / 0.125))) : 0;
+  Discretized x = taylor_pair(Fb, d_inv.asDiagonal() * Qc * d_inv.asDiagonal(), std::ldexp(dt_s, -s),
+                              norm_terms(std::ldexp(norm, -s)));
   for (int i = 0; i < s; ++i) {
-    const Matrix15 PhiQ = Phi.lazyProduct(Q);
-    Q += PhiQ.lazyProduct(Phi.transpose());
-    Phi = Phi.lazyProduct(Phi).eval();
+    const Matrix15 PhiQ = x.Phi.lazyProduct(x.Q);
+    x.Q += PhiQ.lazyProduct(x.Phi.transpose());
+    x.Phi = x.Phi.lazyProduct(x.Phi).eval();
   }
-  return {Phi, 0.5 * (Q + Q.transpose())};
+  const Matrix15 Q = d.asDiagonal() * x.Q * d.asDiagonal();
+  return {d.asDiagonal() * x.Phi * d_inv.asDiagonal(), 0.5 * (Q + Q.transpose())};
 }
 
 void feed_back(const Vector15& x, InsState& s, Eigen::Vector3d& gyro_bias, Eigen::Vector3d& accel_bias) {

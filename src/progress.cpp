@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <mutex>
 
 #include <fmt/format.h>
@@ -25,8 +26,16 @@ std::string format_progress(const ProgressReport& r) {
 
 using Clock = std::chrono::steady_clock;
 
+namespace {
+// The process's CPU time, every thread's (std::clock is CLOCK_PROCESS_CPUTIME_ID on Linux).
+double process_cpu_s() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
+}  // namespace
+
 struct Progress::State {
   ProgressSink sink;
+  StageLog log;
+  bool open = false;  // a stage begun and not yet logged
+  double cpu_start = 0;
   double interval_s = 0.2;
   std::mutex report_mutex;  // one report at a time; advance() skips a report rather than wait
   std::string stage;
@@ -35,7 +44,14 @@ struct Progress::State {
   Clock::time_point start, last;
   bool shown = false;  // a stage that ends before its first report stays silent
 
+  void close_stage() {
+    if (!open || !log) return;
+    open = false;
+    log({stage, std::chrono::duration<double>(Clock::now() - start).count(), process_cpu_s() - cpu_start});
+  }
+
   void report(bool final) {
+    if (!sink) return;
     // A stage's 100 % is said once, by finish().
     if (!final && done.load(std::memory_order_relaxed) >= total) return;
     const Clock::time_point now = Clock::now();
@@ -58,14 +74,21 @@ Progress::Progress(ProgressSink sink, double interval_s) : state_(std::make_shar
   state_->interval_s = interval_s;
 }
 
+Progress::Progress(ProgressSink sink, double interval_s, StageLog log) : Progress(std::move(sink), interval_s) {
+  state_->log = std::move(log);
+}
+
 void Progress::begin(std::string stage, long long total) const {
   if (!state_) return;
   const std::lock_guard lock(state_->report_mutex);
+  state_->close_stage();
   state_->stage = std::move(stage);
   state_->total = total;
   state_->done.store(0);
   state_->start = state_->last = Clock::now();
   state_->shown = false;
+  state_->open = true;
+  state_->cpu_start = state_->log ? process_cpu_s() : 0.0;
 }
 
 void Progress::advance(long long units) const {
@@ -79,6 +102,7 @@ void Progress::finish() const {
   if (!state_) return;
   const std::lock_guard lock(state_->report_mutex);
   state_->report(true);
+  state_->close_stage();
 }
 
 }  // namespace polrig

@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <cstdlib>
@@ -426,6 +427,32 @@ TEST_F(Cli, ProgressLineOnATerminalUnlessQuiet) {
   EXPECT_EQ(quiet.find("polrig: sweep"), std::string::npos) << quiet;
   EXPECT_HAS(quiet, "wrote " + (tmp / "b").string());
   expect_same_sweep_columns(tmp / "a" / "sweep.h5", tmp / "b" / "sweep.h5", 200000);
+}
+
+TEST_F(Cli, StageTimesWhenAsked) {
+  // POLRIG_STAGE_TIMES: the sweep's stage, then the command's total, which contains it; on one
+  // thread the stage's CPU time cannot exceed its wall time (by more than the clocks' ticks).
+  const fs::path log = tmp / "stages.csv";
+  ::setenv("POLRIG_STAGE_TIMES", log.c_str(), 1);
+  const Result r = ok("sweep " + shell_quote(kRig) + kLongSweep + " -o " + dir_arg(tmp / "sw"));
+  ::unsetenv("POLRIG_STAGE_TIMES");
+  EXPECT_EQ(r.err, "");
+  const Csv csv = read_csv(log);
+  EXPECT_EQ(csv.header, (std::vector<std::string>{"stage", "wall_s", "cpu_s"}));
+  ASSERT_GE(csv.rows.size(), 2u);
+  EXPECT_EQ(csv.rows.back()[0], "(total)");
+  const auto stage = std::find_if(csv.rows.begin(), csv.rows.end(),
+                                  [](const std::vector<std::string>& row) { return row[0] == "sweep: grid points"; });
+  ASSERT_NE(stage, csv.rows.end());
+  const double wall = std::stod((*stage)[1]), cpu = std::stod((*stage)[2]);
+  EXPECT_GT(wall, 0.1);  // 200,000 points on one thread
+  EXPECT_LE(wall, std::stod(csv.rows.back()[1]));
+  EXPECT_LE(cpu, 1.02 * wall + 0.01);
+  EXPECT_GT(cpu, 0.5 * wall);
+  // Without the variable, no file.
+  fs::remove(log);
+  ok("sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0.001:1:5 --no-plots -o " + dir_arg(tmp / "sw2"));
+  EXPECT_FALSE(fs::exists(log));
 }
 
 TEST_F(Cli, StudyAdcWritesAccuracyLimits) {

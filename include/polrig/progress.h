@@ -23,6 +23,15 @@ std::string format_progress(const ProgressReport& r);
 
 using ProgressSink = std::function<void(const ProgressReport&)>;
 
+// One stage's cost, for a stage log: the wall time from begin() to finish() (or to the next
+// begin()), and the process's CPU time over it (every thread's). bench/serial_fraction.py reads
+// them (through the CLI's POLRIG_STAGE_TIMES) to find the serial parts of a command.
+struct StageTime {
+  std::string stage;
+  double wall_s = 0, cpu_s = 0;
+};
+using StageLog = std::function<void(const StageTime&)>;
+
 // A shared handle (copies report to the same sink). advance() may be called from any thread;
 // begin() and finish() from the thread that runs the stage. The first report comes `interval_s`
 // after begin(), then at most one per `interval_s`, and a last one at finish(); a stage that
@@ -31,6 +40,9 @@ class Progress {
  public:
   Progress() = default;
   explicit Progress(ProgressSink sink, double interval_s = 0.2);
+  // Also every stage's time to `log` (called by finish(), or by the next begin()). sink may be
+  // empty: a stage log alone.
+  Progress(ProgressSink sink, double interval_s, StageLog log);
 
   explicit operator bool() const { return state_ != nullptr; }
   void begin(std::string stage, long long total) const;

@@ -125,8 +125,13 @@ void add_sun_options(CLI::App& app, SunSettings& sun);
 // --quiet on `app` and every command below it: no progress line.
 void add_quiet_option(CLI::App& app);
 // Where the library reports progress: a line on stderr, rewritten in place, when stderr is a
-// terminal, --quiet was not given and this is rank 0; otherwise nowhere.
+// terminal, --quiet was not given and this is rank 0; otherwise nowhere. With POLRIG_STAGE_TIMES
+// set (rank 0), every stage's wall and CPU time is also kept for write_stage_times.
 Progress progress();
+// POLRIG_STAGE_TIMES=FILE: writes FILE (stage,wall_s,cpu_s: one row per stage in the order they
+// ended, and a last row "(total)" with the command's own wall and CPU time since main began) after
+// a command that succeeded; a warning on stderr if it cannot. Nothing without the variable.
+void write_stage_times(double total_wall_s, double total_cpu_s);
 // Ends an unfinished progress line, so that the next message starts on its own line.
 void end_progress_line();
 void finish(OutputDir& out);

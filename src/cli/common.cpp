@@ -3,6 +3,9 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <mutex>
+#include <vector>
 #include <iostream>
 #include <optional>
 #include <stdexcept>
@@ -215,14 +218,55 @@ void add_quiet_option(CLI::App& app) {
   for (CLI::App* sub : app.get_subcommands({})) add_quiet_option(*sub);
 }
 
+namespace {
+std::mutex g_stage_mutex;
+std::vector<StageTime> g_stage_times;
+
+const char* stage_times_path() {
+  const char* path = std::getenv("POLRIG_STAGE_TIMES");
+  return path && *path && ranks().is_root() ? path : nullptr;
+}
+}  // namespace
+
 Progress progress() {
-  if (g_quiet || !::isatty(2) || !ranks().is_root()) return {};
-  return Progress([](const ProgressReport& r) {
-    const bool done = r.fraction >= 1;
-    std::fprintf(stderr, "\rpolrig: %s\033[K%s", format_progress(r).c_str(), done ? "\n" : "");
-    std::fflush(stderr);
-    g_line_open = !done;
-  }, 0.5);
+  const bool show = !g_quiet && ::isatty(2) && ranks().is_root();
+  ProgressSink line;
+  if (show)
+    line = [](const ProgressReport& r) {
+      const bool done = r.fraction >= 1;
+      std::fprintf(stderr, "\rpolrig: %s\033[K%s", format_progress(r).c_str(), done ? "\n" : "");
+      std::fflush(stderr);
+      g_line_open = !done;
+    };
+  if (!stage_times_path()) return show ? Progress(line, 0.5) : Progress();
+  return Progress(line, 0.5, [](const StageTime& t) {
+    const std::lock_guard lock(g_stage_mutex);
+    g_stage_times.push_back(t);
+  });
+}
+
+void write_stage_times(double total_wall_s, double total_cpu_s) {
+  const char* path = stage_times_path();
+  if (!path) return;
+  const std::lock_guard lock(g_stage_mutex);
+  std::FILE* f = std::fopen(path, "w");
+  if (!f) {
+    end_progress_line();
+    std::cerr << "polrig: warning: POLRIG_STAGE_TIMES: cannot write " << path << "\n";
+    return;
+  }
+  std::fputs("stage,wall_s,cpu_s\n", f);
+  for (const StageTime& t : g_stage_times) {
+    std::string name = t.stage;  // quoted (RFC 4180) only when it must be
+    if (name.find_first_of(",\"\n") != std::string::npos) {
+      std::string q = "\"";
+      for (char c : name) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+      name = q + "\"";
+    }
+    std::fputs(fmt::format("{},{:.6f},{:.6f}\n", name, t.wall_s, t.cpu_s).c_str(), f);
+  }
+  std::fputs(fmt::format("(total),{:.6f},{:.6f}\n", total_wall_s, total_cpu_s).c_str(), f);
+  if (std::fclose(f) != 0) std::cerr << "polrig: warning: POLRIG_STAGE_TIMES: cannot write " << path << "\n";
 }
 
 void end_progress_line() {

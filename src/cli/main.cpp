@@ -1,4 +1,6 @@
 // polrig: the command-line front end.
+#include <chrono>
+#include <ctime>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -28,6 +30,7 @@ std::string command_name(const CLI::App* app) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const auto started = std::chrono::steady_clock::now();
   clean_up_outputs_on_signals();  // first: before any other thread exists (MPI starts some)
   // MPI starts only under a launcher (mpirun, srun), and ends when `job` goes, after everything.
   std::unique_ptr<Ranks> job;
@@ -91,6 +94,8 @@ int main(int argc, char** argv) {
               "docs/scale.md). Run it without mpirun/srun, or with -np 1",
               command_name(c.app), cli::ranks().size()));
         c.run();
+        cli::write_stage_times(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),
+                               static_cast<double>(std::clock()) / CLOCKS_PER_SEC);
         break;
       }
   } catch (...) {

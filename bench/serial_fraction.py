@@ -40,7 +40,8 @@ COMMANDS = [
 def run(polrig, args, threads, scratch, log):
     out = os.path.join(scratch, "out")
     shutil.rmtree(out, ignore_errors=True)
-    env = dict(os.environ, POLRIG_STAGE_TIMES=log)
+    # The sphere cache off: a traced rig's first run would solve the sphere and the second load it.
+    env = dict(os.environ, POLRIG_STAGE_TIMES=log, POLRIG_CACHE_DIR="off")
     cmd = [polrig] + args.split() + ["-o", out, "--threads", str(threads), "--quiet", "--force"]
     if not args.startswith(("locate", "navigate")):
         cmd.append("--no-plots")
@@ -78,7 +79,7 @@ def main():
                 continue
             if setup:
                 subprocess.run([a.polrig] + setup.format(d=scratch).split() + ["--quiet", "--force", "--no-plots"],
-                               check=True, stdout=subprocess.DEVNULL)
+                               check=True, stdout=subprocess.DEVNULL, env=dict(os.environ, POLRIG_CACHE_DIR="off"))
             t1, _, s1 = run(a.polrig, args.format(d=scratch), 1, scratch, log)
             tn, _, sn = run(a.polrig, args.format(d=scratch), n, scratch, log)
             f = (n * tn / t1 - 1) / (n - 1)

@@ -1,12 +1,14 @@
 #include "polrig/study/sweep.h"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <cstdint>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <future>
 #include <optional>
 #include <type_traits>
 #include <limits>
@@ -271,6 +273,40 @@ std::size_t sweep_block_size(std::size_t total_points) {
 }
 
 
+namespace {
+
+// One process: block b + 1 is computed while a writer thread hands block b to the sink, so the
+// sink's writing (sweep.h5's chunks, sweep.csv, the resume state) never stalls the computation.
+// Two buffers: memory for two blocks. The sink still sees every block once, in grid order, one
+// call at a time; an error is the first in grid order (a failed write before a bad point after it).
+void sweep_alone(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn, const SweepSink& sink,
+                 const SweepProgress& progress, std::size_t first_point, std::size_t block) {
+  const std::size_t total = grid_points(axes);
+  std::array<std::vector<CsSummary>, 2> buffers;
+  for (std::vector<CsSummary>& b : buffers) b.resize(std::min(block, total));
+  tbb::enumerable_thread_specific<std::vector<double>> scratch;
+  std::future<void> writing;
+  std::size_t current = 0;
+  try {
+    for (std::size_t begin = first_point; begin < total; begin += block) {
+      const std::size_t end = std::min(total, begin + block);
+      compute_block(base, axes, turn, begin, end, buffers[current].data(), scratch);
+      if (writing.valid()) writing.get();
+      writing = std::async(std::launch::async, [&sink, &progress, &buffers, current, begin, end, total] {
+        sink(begin, std::span<const CsSummary>(buffers[current].data(), end - begin));
+        if (progress) progress(end, total);
+      });
+      current ^= 1;
+    }
+    if (writing.valid()) writing.get();
+  } catch (...) {
+    if (writing.valid()) writing.get();  // never leave the writer on the buffers; its error first
+    throw;
+  }
+}
+
+}  // namespace
+
 void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
            const SweepSink& sink, const SweepProgress& progress, const SweepOptions& options) {
   check_grid(base, axes);
@@ -281,6 +317,7 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
     throw std::invalid_argument(fmt::format("sweep: resuming at point {}, not a block boundary "
                                             "(blocks of {} of {} points)", options.first_point, block, total));
   const Ranks& ranks = options.ranks ? *options.ranks : this_process_only();
+  if (ranks.size() == 1) return sweep_alone(base, axes, turn, sink, progress, options.first_point, block);
   const auto size = static_cast<std::size_t>(ranks.size());
   const auto rank = static_cast<std::size_t>(ranks.rank());
   // Every block is shared: rank k computes the k-th of `size` consecutive shards of its points,
@@ -300,18 +337,12 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
       try {
         compute_block(base, axes, turn, mine_begin, mine_end, summaries.data(), scratch);
       } catch (const std::exception& e) {
-        if (size == 1) throw;  // alone: the error as it is
         failure = rank_failure_text(e);
       }
     }
     // Every shard is computed before anything of the block is written: a rank that failed (the
     // lowest, whose bad point comes first in grid order, as one process finds it) stops all.
     if (const auto first = ranks.first_failure(failure)) throw_rank_failure(*first);
-    if (size == 1) {
-      sink(begin, std::span<const CsSummary>(summaries.data(), end - begin));
-      if (progress) progress(end, total);
-      continue;
-    }
     static_assert(std::is_trivially_copyable_v<CsSummary>, "CsSummary travels between ranks as bytes");
     const std::vector<std::byte> gathered =
         ranks.gather(std::as_bytes(std::span<const CsSummary>(summaries.data(), mine_end - mine_begin)));

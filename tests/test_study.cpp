@@ -509,6 +509,24 @@ TEST(Sweep, ResumingAtABlockComputesOnlyTheRestAndTheSameValues) {
                std::invalid_argument);
 }
 
+TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
+  // The sink runs on a writer thread beside the next block's computation (study/sweep.cpp): its
+  // error must still reach the caller, and the blocks after the failed one must not be written.
+  const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:50")};  // 4 blocks
+  std::size_t calls = 0;
+  try {
+    sweep(Rig{}, axes, CsTurn(8), [&](std::size_t first, std::span<const CsSummary>) {
+      ++calls;
+      if (first > 0) throw std::runtime_error("sweep.h5: disk full");
+    });
+    FAIL() << "expected the sink's error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "sweep.h5: disk full");
+  }
+  EXPECT_EQ(calls, 2u);
+}
+
 TEST(Sweep, AnInteriorPointThatBreaksARuleIsNamedBeforeItIsComputed) {
   // Thirteen varying axes: too many corners to check up front, so the rule is found while
   // sweeping, at the first bad point in grid order.

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <mutex>
 #include <span>
 #include <stdexcept>
 
@@ -19,6 +20,7 @@
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
+#include <ImfThreading.h>
 #include <ImfStdIO.h>
 #include <ImfVersion.h>
 #include <fmt/format.h>
@@ -28,6 +30,16 @@
 namespace polrig {
 
 namespace {
+// OpenEXR compresses and decompresses a file's line blocks on its global thread pool, which has
+// no threads until told (OutputFile's thread count alone only sizes its line buffers: the
+// compression then ran on the calling thread, one core busy with PIZ while H17's simulation
+// waited). Sized to the threads polrig may use (--threads).
+void use_exr_threads(int threads) {
+  static std::mutex mutex;
+  const std::lock_guard lock(mutex);
+  if (Imf::globalThreadCount() != threads) Imf::setGlobalThreadCount(threads);
+}
+
 // OpenEXR's own file stream does not check its writes, and OutputFile writes its offset table
 // in its destructor, where errors are swallowed: this stream remembers the first error (a full
 // disk…) so that close() can report it with the system's reason.
@@ -169,8 +181,10 @@ void write_channels(const std::filesystem::path& path, int width, int height, st
     CheckedOStream stream(path);
     {
       // Compression runs per block of lines on the threads polrig may use (--threads); the
-      // file is the same for any count.
-      Imf::OutputFile file(stream, header, tbb::this_task_arena::max_concurrency());
+      // file is the same for any count (its blocks are written in line order).
+      const int threads = tbb::this_task_arena::max_concurrency();
+      use_exr_threads(threads);
+      Imf::OutputFile file(stream, header, threads);
       file.setFrameBuffer(fb);
       file.writePixels(height);
     }
@@ -198,7 +212,9 @@ ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, i
                    const std::optional<ExrSize>& expected) {
   try {
     check_header_size(path, expected);
-    Imf::InputFile file(path.string().c_str());
+    const int threads = tbb::this_task_arena::max_concurrency();
+    use_exr_threads(threads);
+    Imf::InputFile file(path.string().c_str(), threads);
     const Imf::Header& h = file.header();
     const Imath::Box2i dw = h.dataWindow();
     const ExrSize size = claimed_size(path, dw, expected);

@@ -29,6 +29,7 @@ COMMANDS = [
     ("simulate H17 indoor", "simulate rigs/han2017-indoor.yaml", None),
     ("calibrate H17 (dofp)", "calibrate {d}/h17 --method dofp",
      "simulate rigs/han2017-indoor.yaml -o {d}/h17"),
+    ("simulate W16 rotation", "simulate rigs/wang2016-rotation.yaml", None),
     ("simulate W16 static hour", "simulate rigs/wang2016-static.yaml", None),
     ("locate W16 static hour", "locate {d}/w16", "simulate rigs/wang2016-static.yaml -o {d}/w16"),
     ("simulate Z21 static", "simulate rigs/zhang2021-static.yaml", None),

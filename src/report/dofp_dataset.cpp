@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "polrig/background_writer.h"
 #include "polrig/calib/dofp_polarization.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
@@ -57,6 +58,7 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
   const DofpTruth nominal = nominal_dofp_parameters(sim.width(), sim.height(), rig.camera.mosaic_deg);
+  BackgroundWriter writer;
   for (const DofpStop& stop : sim.stops()) {
     const std::size_t index = static_cast<std::size_t>(&stop - sim.stops().data());
     const bool preview = options.previews && (index == 0 || index == last);
@@ -111,7 +113,8 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
       a.vectors.push_back({"sun_camera", {vec3::dot(s, axes.x), vec3::dot(s, axes.y), vec3::dot(s, axes.z)}});
     }
     // PIZ: the smallest lossless form of noisy frames, 0.79× ZIP's bytes (docs/formats.md §6.14).
-    write_exr_image(dir / file, image, ExrCompression::Piz);
+    // Compressed and written while the next stop's frames are computed.
+    writer.submit([path = dir / file, image = std::move(image)] { write_exr_image(path, image, ExrCompression::Piz); });
     csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc, stop.intensity,
                        stop.polarized ? 1 : 0, heading, stop.frames, file);
     if (preview && stop.frames > 0) {
@@ -132,6 +135,7 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
       previews.push_back(std::move(p));
     }
   }
+  writer.finish();
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
   PreviewOptions po;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "polrig/background_writer.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/output_dir.h"
@@ -74,6 +75,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
   // The previews' stops: the first and the last (one when they are the same).
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
+  BackgroundWriter writer;
   for (const DofpStop& stop : sim.stops()) {
     const std::size_t index = static_cast<std::size_t>(&stop - sim.stops().data());
     const std::string file = fmt::format("frames/stop_{:04}.exr", stop.index);
@@ -131,7 +133,8 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
       a.vectors.push_back({"sun_enu", s});
       a.vectors.push_back({"sun_camera1", sc});
     }
-    write_exr_image(dir / file, image);
+    // Compressed and written while the next stop is computed.
+    writer.submit([path = dir / file, image = std::move(image)] { write_exr_image(path, image); });
     if (options.previews && (index == 0 || index == last))
       previews.back().title = fmt::format("stop {}: {}t = {:.6g} s, θ_R = {:.6g}°{}\nthe fused image on the virtual camera 1 grid (white: not valid)",
                                           stop.index, utc.empty() ? std::string() : fmt::format("{} UTC, ", utc),
@@ -142,6 +145,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
                        stop.polarized ? 1 : 0, heading, sun_cols, file);
     progress.advance();
   }
+  writer.finish();
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
   PreviewOptions po;

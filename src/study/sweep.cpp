@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <future>
 #include <optional>
 #include <type_traits>
 #include <limits>
@@ -19,6 +18,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
+#include "polrig/background_writer.h"
 #include "polrig/rig/error.h"
 #include "polrig/study/rank_failure.h"
 
@@ -285,22 +285,22 @@ void sweep_alone(const Rig& base, const std::vector<GridAxis>& axes, const CsTur
   std::array<std::vector<CsSummary>, 2> buffers;
   for (std::vector<CsSummary>& b : buffers) b.resize(std::min(block, total));
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
-  std::future<void> writing;
+  BackgroundWriter writer;
   std::size_t current = 0;
   try {
     for (std::size_t begin = first_point; begin < total; begin += block) {
       const std::size_t end = std::min(total, begin + block);
       compute_block(base, axes, turn, begin, end, buffers[current].data(), scratch);
-      if (writing.valid()) writing.get();
-      writing = std::async(std::launch::async, [&sink, &progress, &buffers, current, begin, end, total] {
+      // submit() waits for block b − 1's write: the buffer computed next is free.
+      writer.submit([&sink, &progress, &buffers, current, begin, end, total] {
         sink(begin, std::span<const CsSummary>(buffers[current].data(), end - begin));
         if (progress) progress(end, total);
       });
       current ^= 1;
     }
-    if (writing.valid()) writing.get();
+    writer.finish();
   } catch (...) {
-    if (writing.valid()) writing.get();  // never leave the writer on the buffers; its error first
+    writer.finish();  // a failed write of the block before is said first
     throw;
   }
 }

@@ -8,8 +8,10 @@ outside every stage (start-up, reading, writing the outputs).
 
     python3 bench/serial_fraction.py [--polrig build/polrig] [--threads 2] [--only sweep,navigate]
 
-Run it on an idle machine: another process on the cores reads as serial time. Inputs are made
-under a scratch folder (the datasets the calibrations read are simulated first, untimed).
+Run it on an idle machine: another process on the cores reads as serial time. The one-thread run
+is pinned to one core (taskset), since a command's writer thread (background_writer.h) would
+otherwise overlap its output with one TBB thread. Inputs are made under a scratch folder (the
+datasets the calibrations read are simulated first, untimed).
 """
 import argparse
 import csv
@@ -44,6 +46,8 @@ def run(polrig, args, threads, scratch, log):
     # The sphere cache off: a traced rig's first run would solve the sphere and the second load it.
     env = dict(os.environ, POLRIG_STAGE_TIMES=log, POLRIG_CACHE_DIR="off")
     cmd = [polrig] + args.split() + ["-o", out, "--threads", str(threads), "--quiet", "--force"]
+    if threads == 1:  # one core, not one TBB thread: a writer thread would run beside it otherwise
+        cmd = ["taskset", "-c", str(min(os.sched_getaffinity(0)))] + cmd
     if not args.startswith(("locate", "navigate")):
         cmd.append("--no-plots")
     t0 = time.monotonic()

@@ -5,6 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <fcntl.h>
+#include <sched.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -431,11 +432,22 @@ TEST_F(Cli, ProgressLineOnATerminalUnlessQuiet) {
 
 TEST_F(Cli, StageTimesWhenAsked) {
   // POLRIG_STAGE_TIMES: the sweep's stage, then the command's total, which contains it; on one
-  // thread the stage's CPU time cannot exceed its wall time (by more than the clocks' ticks).
+  // core the stage's CPU time cannot exceed its wall time (by more than the clocks' ticks).
+  // The command on one core (the affinity is inherited): its sink's writer thread shares it.
   const fs::path log = tmp / "stages.csv";
+  cpu_set_t all, one;
+  ASSERT_EQ(::sched_getaffinity(0, sizeof all, &all), 0);
+  CPU_ZERO(&one);
+  for (int c = 0; c < CPU_SETSIZE; ++c)
+    if (CPU_ISSET(c, &all)) {
+      CPU_SET(c, &one);
+      break;
+    }
+  ASSERT_EQ(::sched_setaffinity(0, sizeof one, &one), 0);
   ::setenv("POLRIG_STAGE_TIMES", log.c_str(), 1);
   const Result r = ok("sweep " + shell_quote(kRig) + kLongSweep + " -o " + dir_arg(tmp / "sw"));
   ::unsetenv("POLRIG_STAGE_TIMES");
+  ASSERT_EQ(::sched_setaffinity(0, sizeof all, &all), 0);
   EXPECT_EQ(r.err, "");
   const Csv csv = read_csv(log);
   EXPECT_EQ(csv.header, (std::vector<std::string>{"stage", "wall_s", "cpu_s"}));

@@ -180,6 +180,37 @@ TEST(NavigationDataset, TheUnitsSeeTheSunsElevation) {
   EXPECT_NEAR(rad2deg(d.truth->sun_elevation_rad.front()), 22.9, 0.05);
 }
 
+TEST(NavigationDataset, AScenesRunIsTheRigsRunForAnySeed) {
+  // navigation_scene (trajectory and sun) made from one seed and reused for another, as the study
+  // reuses it across trials: the same bits as simulate_navigation(rig) of that seed, noise and all.
+  const Rig a = load("zhang2021-static.yaml", {{"trajectory.duration_s", "120"}, {"seed", "1"}});
+  const Rig b = load("zhang2021-static.yaml", {{"trajectory.duration_s", "120"}, {"seed", "2"}});
+  const NavigationScene scene = navigation_scene(a);
+  const NavigationDataset direct = simulate_navigation(b), shared = simulate_navigation(b, scene);
+  ASSERT_EQ(shared.imu.size(), direct.imu.size());
+  ASSERT_EQ(shared.compass.size(), direct.compass.size());
+  for (std::size_t i = 0; i < direct.imu.size(); ++i) {
+    ASSERT_EQ(shared.imu[i].dtheta, direct.imu[i].dtheta) << i;
+    ASSERT_EQ(shared.imu[i].dv, direct.imu[i].dv) << i;
+  }
+  for (std::size_t k = 0; k < direct.compass.size(); ++k)
+    for (std::size_t u = 0; u < direct.mounts.size(); ++u) {
+      EXPECT_EQ(shared.compass[k].units[u].aop_rad, direct.compass[k].units[u].aop_rad) << k;
+      EXPECT_EQ(shared.compass[k].units[u].dop, direct.compass[k].units[u].dop) << k;
+    }
+  EXPECT_EQ(shared.truth->sun_elevation_rad, direct.truth->sun_elevation_rad);
+  EXPECT_NE(simulate_navigation(a, scene).imu[500].dtheta, shared.imu[500].dtheta);  // the seeds differ
+  // A scene of another run length is refused, naming both.
+  const Rig longer = load("zhang2021-static.yaml", {{"trajectory.duration_s", "180"}});
+  try {
+    simulate_navigation(longer, scene);
+    FAIL() << "expected std::invalid_argument";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("12001 samples and 120 compass epochs, the rig's run has 18001 and 180"),
+              std::string::npos) << e.what();
+  }
+}
+
 TEST(NavigationDataset, FilesReadBackToTheSameRun) {
   test::TempDir dir("polrig-nav-files");
   const Rig rig = load("zhang2021-static.yaml", {{"trajectory.duration_s", "120"}});

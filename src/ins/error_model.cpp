@@ -1,6 +1,8 @@
 #include "polrig/ins/error_model.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 
 #include "polrig/ins/earth.h"
@@ -94,7 +96,7 @@ namespace {
 // Power-of-two scales d with D⁻¹·F·D balanced, D = diag(d) (Parlett & Reinsch 1969, LAPACK's
 // dgebal): each state's off-diagonal row and column sums brought within a factor of 2 of each
 // other, and a column whose row is empty (a bias: ε drives φ, nothing drives ε) shrunk below 1/64.
-// Powers of two scale without rounding. F's norm is ~10 s⁻¹ from f^n × φ and C_b^n alone (units
+// Powers of two scale without rounding. F must be finite (an infinite sum would never halve). F's norm is ~10 s⁻¹ from f^n × φ and C_b^n alone (units
 // of rad against m/s); balanced it is a few hundredths, and 1 s needs no doubling.
 Vector15 balancing_scales(const Matrix15& F) {
   Vector15 d = Vector15::Ones();
@@ -166,16 +168,22 @@ Discretized taylor_pair(const Matrix15& F, const Matrix15& Qc, double tau, int K
 // (Φ = D·Φ'·D⁻¹, Q = D·Q'·D with Q_c' = D⁻¹Q_cD⁻¹), at Δt/2^s, then doubled s times: with τ = Δt/2^s,
 //   Φ(τ) = Σ_k (Fτ)^k/k!,   Q(τ) = ∫₀^τ e^{Fu} Q_c e^{Fᵀu} du = Σ_{k≥1} τ^k/k! · L^{k−1}(Q_c),
 // L(X) = F·X + X·Fᵀ (the integrand's own series, integrated term by term; L(X) of a symmetric X is
-// F·X plus its transpose), and Φ(2τ) = Φ(τ)², Q(2τ) = Φ(τ)·Q(τ)·Φ(τ)ᵀ + Q(τ). s makes θ = ‖F'‖₁τ ≤ 1/8
+// F·X plus its transpose), and Φ(2τ) = Φ(τ)², Q(2τ) = Φ(τ)·Q(τ)·Φ(τ)ᵀ + Q(τ). With θ the larger of
+// ‖F'‖₁τ and ‖F'‖∞τ, ‖Fτ‖₁ ≤ θ and ‖L(X)τ‖₁ ≤ (‖F'‖₁ + ‖F'‖∞)τ‖X‖₁ ≤ 2θ‖X‖₁; s makes θ ≤ 1/8
 // (s = 0 for the filter's 1 s unless a bias's correlation time is under ~8 s), and the series stop
-// where the first terms left out, θ^{K+1}/(K+1)! for Φ and (2θ)^{K+1}/(K+2)! for Q (‖L‖ ≤ 2‖F'‖),
-// are below 2^-60 of the sums' scale, and then on while a term still moves an entry. At the
-// filter's 1 s: s = 0, K = 6 and 9 terms, 18 products of 15 × 15 (Padé on the 30 × 30 block matrix
-// costs ~3× more); tests/test_ins.cpp checks the result against that Padé in long double.
+// where the first terms left out, θ^{K+1}/(K+1)! for Φ and (2θ)^{K+1}/(K+2)! for Q, are below 2^-60
+// of the sums' scale, and then on while a term still moves an entry. At the filter's 1 s: s = 0,
+// 9 terms, 18 products of 15 × 15 (Padé on the 30 × 30 block matrix costs 2.4× more,
+// bench `Navigation_CovarianceStep`); tests/test_ins.cpp checks the result against that Padé in long
+// double. A non-finite F or Q_c (a diverged state) gives NaN, as an exponential of it would.
 Discretized discretize_van_loan(const Matrix15& F, const Matrix15& Qc, double dt_s) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  if (!F.allFinite() || !Qc.allFinite() || !std::isfinite(dt_s))
+    return {Matrix15::Constant(nan), Matrix15::Constant(nan)};
   const Vector15 d = balancing_scales(F), d_inv = d.cwiseInverse();
   const Matrix15 Fb = d_inv.asDiagonal() * F * d.asDiagonal();
-  const double norm = (Fb * dt_s).cwiseAbs().colwise().sum().maxCoeff();
+  const double norm = std::max((Fb * dt_s).cwiseAbs().colwise().sum().maxCoeff(),
+                               (Fb * dt_s).cwiseAbs().rowwise().sum().maxCoeff());
   const int s = norm > 0.125 ? static_cast<int>(std::ceil(std::log2(norm / 0.125))) : 0;
   Discretized x = taylor_pair(Fb, d_inv.asDiagonal() * Qc * d_inv.asDiagonal(), std::ldexp(dt_s, -s),
                               norm_terms(std::ldexp(norm, -s)));

@@ -1,5 +1,6 @@
 #include "polrig/io/exr.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -16,6 +17,7 @@
 #include <ImfVecAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
+#include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 #include <ImfIO.h>
 #include <ImfInputFile.h>
@@ -34,10 +36,20 @@ namespace {
 // no threads until told (OutputFile's thread count alone only sizes its line buffers: the
 // compression then ran on the calling thread, one core busy with PIZ while H17's simulation
 // waited). Sized to the threads polrig may use (--threads).
-void use_exr_threads(int threads) {
+// TBB's arena says the machine's concurrency whatever --threads set (tbb::global_control limits
+// the workers only, and a writer thread is in no arena): the smaller of the two.
+int exr_threads() {
+  return static_cast<int>(std::min<std::size_t>(
+      static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()),
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+}
+
+int use_exr_threads() {
   static std::mutex mutex;
   const std::lock_guard lock(mutex);
+  const int threads = exr_threads();
   if (Imf::globalThreadCount() != threads) Imf::setGlobalThreadCount(threads);
+  return threads;
 }
 
 // OpenEXR's own file stream does not check its writes, and OutputFile writes its offset table
@@ -182,9 +194,7 @@ void write_channels(const std::filesystem::path& path, int width, int height, st
     {
       // Compression runs per block of lines on the threads polrig may use (--threads); the
       // file is the same for any count (its blocks are written in line order).
-      const int threads = tbb::this_task_arena::max_concurrency();
-      use_exr_threads(threads);
-      Imf::OutputFile file(stream, header, threads);
+      Imf::OutputFile file(stream, header, use_exr_threads());
       file.setFrameBuffer(fb);
       file.writePixels(height);
     }
@@ -212,9 +222,7 @@ ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, i
                    const std::optional<ExrSize>& expected) {
   try {
     check_header_size(path, expected);
-    const int threads = tbb::this_task_arena::max_concurrency();
-    use_exr_threads(threads);
-    Imf::InputFile file(path.string().c_str(), threads);
+    Imf::InputFile file(path.string().c_str(), use_exr_threads());
     const Imf::Header& h = file.header();
     const Imath::Box2i dw = h.dataWindow();
     const ExrSize size = claimed_size(path, dw, expected);

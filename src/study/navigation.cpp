@@ -178,9 +178,10 @@ NavigationDataset simulate_navigation(const Rig& rig, const NavigationScene& sce
   double duration_s = 0;
   for (const Segment& g : trajectory_spec(rig).segments) duration_s += g.duration_s;
   const std::size_t samples = static_cast<std::size_t>(std::llround(duration_s * rig.imu.rate_hz)) + 1;
-  if (tr.truth.size() != samples || scene.sun.size() != tr.imu.size() / step)
+  const std::size_t epochs = (samples - 1) / step;
+  if (tr.truth.size() != samples || scene.sun.size() != epochs)
     throw std::invalid_argument(fmt::format("navigation scene: {} samples and {} compass epochs, the rig's run has {} and {}",
-                                            tr.truth.size(), scene.sun.size(), samples, tr.imu.size() / step));
+                                            tr.truth.size(), scene.sun.size(), samples, epochs));
   progress.begin("navigation: IMU errors", 1);
   CorruptedImu imu = corrupt_imu(tr.imu, imu_error_spec(rig.imu), derive_seed(rig.seed, kImuStream));
   progress.finish();

@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "polrig/nav/unit_array.h"
 #include "polrig/random.h"
@@ -246,20 +247,25 @@ NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& 
     for (const Segment& s : spec.segments) study.cells[c].duration_s += s.duration_s;
   }
 
-  // A cell at a time: its scene (the trajectory and the sun, the same for every seed) once, then its
-  // trials in parallel.
+  // Cells in parallel, each making its scene (the trajectory and the sun, the same for every seed)
+  // once and running its trials in parallel. The trials are isolated: a thread waiting for them
+  // takes no other cell, so at most one scene per thread is alive.
   const std::size_t trials = static_cast<std::size_t>(settings.trials), tasks = rigs.size() * trials;
   std::vector<TrialOutput> outputs(tasks);
   progress.begin("study navigation: trials", static_cast<long long>(tasks));
-  for (std::size_t c = 0; c < rigs.size(); ++c) {
-    const NavigationScene scene = navigation_scene(rigs[c]);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, trials, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        outputs[c * trials + i] = run_trial(rigs[c], scene, static_cast<int>(c), static_cast<int>(i), settings);
-        progress.advance(1);
-      }
-    });
-  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rigs.size(), 1), [&](const tbb::blocked_range<std::size_t>& cells) {
+    for (std::size_t c = cells.begin(); c < cells.end(); ++c) {
+      const NavigationScene scene = navigation_scene(rigs[c]);
+      tbb::this_task_arena::isolate([&] {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, trials, 1), [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t i = r.begin(); i < r.end(); ++i) {
+            outputs[c * trials + i] = run_trial(rigs[c], scene, static_cast<int>(c), static_cast<int>(i), settings);
+            progress.advance(1);
+          }
+        });
+      });
+    }
+  });
   progress.finish();
 
   // Everything below in index order: the same sums for any thread count.

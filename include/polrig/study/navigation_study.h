@@ -137,8 +137,8 @@ struct NavigationStudy {
   std::vector<DopBin> dop;                       // the bins from 0 to the largest DoP seen, in order
 };
 
-// Trials in parallel (TBB over cells × trials), each a pure function of (rig, cell, trial) stored by
-// index: identical for any thread count. Progress: "study navigation: trials" by trial. Throws as
+// Trials in parallel (TBB over cells, each cell's scene made once, and over its trials), each a pure
+// function of (rig, cell, trial) stored by index: identical for any thread count. Progress: "study navigation: trials" by trial. Throws as
 // check_navigation_study_settings.
 NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& settings,
                                  const Progress& progress = {});

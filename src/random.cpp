@@ -16,7 +16,7 @@ double unit_interval(std::uint64_t bits) {
 }  // namespace
 
 double NormalStream::operator()(std::uint64_t sample) const {
-  const std::uint64_t h = splitmix64(prefix_ ^ (sample + 0x8CB92BA72F3D8DD7ull));
+  const std::uint64_t h = splitmix64(prefix_ ^ (sample + detail::kDrawOffset));
   const double u1 = unit_interval(h);
   const double u2 = unit_interval(splitmix64(h));
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);

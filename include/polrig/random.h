@@ -14,6 +14,12 @@ constexpr std::uint64_t splitmix64(std::uint64_t x) {
   x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
   return x ^ (x >> 31);
 }
+// The part of a draw's hash that depends on (seed, a, b); the draw c is then
+// splitmix64(prefix ^ (c + kDrawOffset)).
+constexpr std::uint64_t stream_prefix(std::uint64_t seed, std::uint64_t a, std::uint64_t b) {
+  return splitmix64(splitmix64(splitmix64(seed) ^ a) ^ (b + 0x632BE59BD9B4E019ull));
+}
+constexpr std::uint64_t kDrawOffset = 0x8CB92BA72F3D8DD7ull;
 }  // namespace detail
 
 // The uniform deviates uniform_unit(seed, a, b, c) for c = 0, 1, 2 …, with the part of the hash
@@ -21,10 +27,10 @@ constexpr std::uint64_t splitmix64(std::uint64_t x) {
 class UniformStream {
  public:
   constexpr UniformStream(std::uint64_t seed, std::uint64_t a, std::uint64_t b)
-      : prefix_(detail::splitmix64(detail::splitmix64(detail::splitmix64(seed) ^ a) ^ (b + 0x632BE59BD9B4E019ull))) {}
+      : prefix_(detail::stream_prefix(seed, a, b)) {}
   // (0, 1]: never 0, so log() is finite.
   constexpr double operator()(std::uint64_t c) const {
-    const std::uint64_t bits = detail::splitmix64(prefix_ ^ (c + 0x8CB92BA72F3D8DD7ull));
+    const std::uint64_t bits = detail::splitmix64(prefix_ ^ (c + detail::kDrawOffset));
     return static_cast<double>((bits >> 11) + 1) * 0x1.0p-53;
   }
 
@@ -43,7 +49,7 @@ inline double uniform_unit(std::uint64_t seed, std::uint64_t a, std::uint64_t b,
 class NormalStream {
  public:
   constexpr NormalStream(std::uint64_t seed, std::uint64_t stop, std::uint64_t channel)
-      : prefix_(detail::splitmix64(detail::splitmix64(detail::splitmix64(seed) ^ stop) ^ (channel + 0x632BE59BD9B4E019ull))) {}
+      : prefix_(detail::stream_prefix(seed, stop, channel)) {}
   double operator()(std::uint64_t sample) const;
 
  private:

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 
-
 #include "polrig/ins/earth.h"
 
 namespace polrig {
@@ -96,8 +95,9 @@ namespace {
 // Power-of-two scales d with D⁻¹·F·D balanced, D = diag(d) (Parlett & Reinsch 1969, LAPACK's
 // dgebal): each state's off-diagonal row and column sums brought within a factor of 2 of each
 // other, and a column whose row is empty (a bias: ε drives φ, nothing drives ε) shrunk below 1/64.
-// Powers of two scale without rounding. F must be finite (an infinite sum would never halve). F's norm is ~10 s⁻¹ from f^n × φ and C_b^n alone (units
-// of rad against m/s); balanced it is a few hundredths, and 1 s needs no doubling.
+// Powers of two scale without rounding. F must be finite (an infinite sum would never halve).
+// F's norm is ~10 s⁻¹ from f^n × φ and C_b^n alone (units of rad against m/s); balanced it is a
+// few hundredths, and 1 s needs no doubling.
 Vector15 balancing_scales(const Matrix15& F) {
   Vector15 d = Vector15::Ones();
   Matrix15 A = F.cwiseAbs();
@@ -182,8 +182,8 @@ Discretized discretize_van_loan(const Matrix15& F, const Matrix15& Qc, double dt
     return {Matrix15::Constant(nan), Matrix15::Constant(nan)};
   const Vector15 d = balancing_scales(F), d_inv = d.cwiseInverse();
   const Matrix15 Fb = d_inv.asDiagonal() * F * d.asDiagonal();
-  const double norm = std::max((Fb * dt_s).cwiseAbs().colwise().sum().maxCoeff(),
-                               (Fb * dt_s).cwiseAbs().rowwise().sum().maxCoeff());
+  const Matrix15 abs_Fdt = (Fb * dt_s).cwiseAbs();
+  const double norm = std::max(abs_Fdt.colwise().sum().maxCoeff(), abs_Fdt.rowwise().sum().maxCoeff());
   const int s = norm > 0.125 ? static_cast<int>(std::ceil(std::log2(norm / 0.125))) : 0;
   Discretized x = taylor_pair(Fb, d_inv.asDiagonal() * Qc * d_inv.asDiagonal(), std::ldexp(dt_s, -s),
                               norm_terms(std::ldexp(norm, -s)));

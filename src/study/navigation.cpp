@@ -44,6 +44,11 @@ SensorErrorSpec triad_spec(const TriadSettings& t, double bias_scale, double whi
 }
 
 
+// IMU samples per compass reading (check_rig makes the IMU rate a whole multiple of the units').
+std::size_t imu_samples_per_reading(const Rig& rig) {
+  return static_cast<std::size_t>(std::lround(rig.imu.rate_hz / rig.units.rate_hz));
+}
+
 Sky sky_of(const Rig& rig) {
   const std::optional<Sky> sky = rig_sky(rig);
   if (!sky) throw RigError(no_sky_message(rig, "navigation"));
@@ -151,7 +156,7 @@ NavigationScene navigation_scene(const Rig& rig, const Progress& progress) {
   NavigationScene scene{generate_trajectory(trajectory_spec(rig)), {}};
   progress.finish();
   const std::vector<TruthSample>& truth = scene.trajectory.truth;
-  const std::size_t step = static_cast<std::size_t>(std::lround(rig.imu.rate_hz / rig.units.rate_hz));
+  const std::size_t step = imu_samples_per_reading(rig);
   scene.sun.resize(scene.trajectory.imu.size() / step);
   progress.begin("navigation: the sun along the trajectory", static_cast<long long>(scene.sun.size()));
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, scene.sun.size(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -174,10 +179,8 @@ NavigationDataset simulate_navigation(const Rig& rig, const NavigationScene& sce
   require_instrument(rig, Instrument::kUnitArray, "a navigation run");
   const Sky sky = sky_of(rig);
   const Trajectory& tr = scene.trajectory;
-  const std::size_t step = static_cast<std::size_t>(std::lround(rig.imu.rate_hz / rig.units.rate_hz));
-  double duration_s = 0;
-  for (const Segment& g : trajectory_spec(rig).segments) duration_s += g.duration_s;
-  const std::size_t samples = static_cast<std::size_t>(std::llround(duration_s * rig.imu.rate_hz)) + 1;
+  const std::size_t step = imu_samples_per_reading(rig);
+  const std::size_t samples = static_cast<std::size_t>(std::llround(trajectory_spec(rig).duration_s() * rig.imu.rate_hz)) + 1;
   const std::size_t epochs = (samples - 1) / step;
   if (tr.truth.size() != samples || scene.sun.size() != epochs)
     throw std::invalid_argument(fmt::format("navigation scene: {} samples and {} compass epochs, the rig's run has {} and {}",

@@ -242,10 +242,7 @@ NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& 
       study.cells.push_back({static_cast<int>(study.cells.size()), std::string(sw.factor), std::string(sw.key), v, 0});
       rigs.push_back(rig_with_value(rig, sw.key, v));
     }
-  for (std::size_t c = 0; c < rigs.size(); ++c) {
-    const TrajectorySpec spec = trajectory_spec(rigs[c]);
-    for (const Segment& s : spec.segments) study.cells[c].duration_s += s.duration_s;
-  }
+  for (std::size_t c = 0; c < rigs.size(); ++c) study.cells[c].duration_s = trajectory_spec(rigs[c]).duration_s();
 
   // Cells in parallel, each making its scene (the trajectory and the sun, the same for every seed)
   // once and running its trials in parallel. The trials are isolated: a thread waiting for them

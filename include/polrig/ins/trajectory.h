@@ -38,6 +38,12 @@ struct TrajectorySpec {
   std::vector<Segment> segments;
   double imu_rate_hz = 100;
   int substeps = 8;        // per IMU interval, even (Simpson)
+
+  double duration_s() const {  // the segments' sum
+    double t = 0;
+    for (const Segment& g : segments) t += g.duration_s;
+    return t;
+  }
 };
 
 struct TruthSample {

@@ -94,17 +94,27 @@ void meridian_frame(const Vec3& v, Vec3& e_theta, Vec3& e_phi) {
   e_phi = {-sin_phi, cos_phi, 0};
 }
 
-SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model) {
-  SkyLight light;
-  const Vec3 c = vec3::cross(s, v);
-  const double sin_gamma = vec3::norm(c), cos_gamma = vec3::dot(s, v);
-  const double sin2 = sin_gamma * sin_gamma, cos2 = cos_gamma * cos_gamma;
-  const double h_s = std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg;
+SunSky::SunSky(const Vec3& s, const SkyModel& model)
+    : s_(s), P_max_(model.P_max.at(std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg)), radiance_(model.radiance) {}
+
+SkyRay SunSky::along(const Vec3& v) const {
+  SkyRay ray;
+  const Vec3 c = vec3::cross(s_, v);
+  ray.sin_gamma = vec3::norm(c);
+  const double cos_gamma = vec3::dot(s_, v);
+  const double sin2 = ray.sin_gamma * ray.sin_gamma, cos2 = cos_gamma * cos_gamma;
   // P = P_max·sin²γ/(1 + cos²γ); sin²γ from |s × v|², exact at γ = 0° and 180°.
-  light.dop = model.P_max.at(h_s) * sin2 / (1 + cos2);
-  light.radiance = relative_radiance(model.radiance, s, v, cos_gamma, sin_gamma);
-  if (sin_gamma > 0) {
-    light.e_vector = vec3::mul(c, 1 / sin_gamma);
+  ray.dop = P_max_ * sin2 / (1 + cos2);
+  ray.radiance = relative_radiance(radiance_, s_, v, cos_gamma, ray.sin_gamma);
+  if (ray.sin_gamma > 0) ray.e_vector = vec3::mul(c, 1 / ray.sin_gamma);
+  return ray;
+}
+
+SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model) {
+  const SkyRay ray = SunSky(s, model).along(v);
+  SkyLight light;
+  light.radiance = ray.radiance, light.dop = ray.dop, light.e_vector = ray.e_vector;
+  if (ray.sin_gamma > 0) {
     Vec3 e_theta, e_phi;
     meridian_frame(v, e_theta, e_phi);
     double chi = std::atan2(vec3::dot(light.e_vector, e_phi), vec3::dot(light.e_vector, e_theta)) / kDeg;

@@ -27,17 +27,16 @@ std::array<double, 6> SkySource::ideal_irradiance(const SourceView& rig, const S
 namespace {
 class SkyViews final : public LightAlongViews {
  public:
-  SkyViews(const Vec3& sun, const SkyModel& model, double E0) : sun_(sun), model_(model), E0_(E0) {}
+  SkyViews(const Vec3& sun, const SkyModel& model, double E0) : sky_(sun, model), E0_(E0) {}
   void along(std::span<const Vec3> views, std::span<ViewLight> out) const override {
     for (std::size_t i = 0; i < views.size(); ++i) {
-      const SkyLight l = sky_light(sun_, views[i], model_);
+      const SkyRay l = sky_.along(views[i]);
       out[i] = {E0_ * l.radiance, l.e_vector, l.dop};
     }
   }
 
  private:
-  Vec3 sun_;
-  SkyModel model_;
+  SunSky sky_;
   double E0_;
 };
 }  // namespace

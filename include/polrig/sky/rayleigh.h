@@ -57,6 +57,28 @@ struct SkyLight {
 // P_max(h_s) is asin(s_z). The sun below the horizon still defines DoP and AoP.
 SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model);
 
+// What the sky sends along −v without the angle χ (which needs v's meridian frame): what a camera
+// pixel needs, that takes the E-vector into its own frame.
+struct SkyRay {
+  double radiance = 1;
+  double dop = 0;
+  Vec3 e_vector{};        // zero where undefined (sin γ = 0)
+  double sin_gamma = 0;   // |s × v|
+};
+
+// One sun's sky along many views: P_max(h_s) found once. Each ray's radiance, dop and e_vector
+// are sky_light's bit for bit (sky_light is built on it).
+class SunSky {
+ public:
+  SunSky(const Vec3& s, const SkyModel& model);
+  SkyRay along(const Vec3& v) const;
+
+ private:
+  Vec3 s_;
+  double P_max_;
+  SkyRadiance radiance_;
+};
+
 // The local meridian frame of v = (sin θ cos φ, sin θ sin φ, cos θ), φ the math azimuth
 // (anticlockwise from east seen from above, φ = 90° − A): e_θ = ∂v/∂θ points down the meridian
 // (towards the horizon), e_φ = ẑ × v/|ẑ × v| along the almucantar towards rising φ. At the zenith,

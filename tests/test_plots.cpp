@@ -184,7 +184,7 @@ TEST_F(PlotsOfDatasets, FourCameraDatasetPreviewsShowTheFusedImageOfTheFirstAndL
   if (!gnuplot_present()) GTEST_SKIP() << "no gnuplot";
   const fs::path dir = tmp / "w16";
   ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml")) +
-     " --set schedule.count=3 --set schedule.dwell_s=600 --set device.cameras.width_px=64"
+     " --layers fused --set schedule.count=3 --set schedule.dwell_s=600 --set device.cameras.width_px=64"
      " --set device.cameras.height_px=48 --set 'device.cameras.fx_px=[48, 48, 48, 48]'"
      " --set 'device.cameras.fy_px=[48, 48, 48, 48]' --set 'device.cameras.cx_px=[32, 32, 32, 32]'"
      " --set 'device.cameras.cy_px=[24, 24, 24, 24]' -o " + shell_quote(dir));

@@ -96,10 +96,10 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                          "lens (spec §2.5)")
                              ->check(CLI::IsMember({"image-plane", "in-front"}))->capture_default_str();
     // A camera array (four-camera): which layers each stop's EXR holds.
-    auto layers = std::make_shared<std::string>("fused");
+    auto layers = std::make_shared<std::string>(four_camera_layers_name(FourCameraDatasetOptions{}.layers));
     auto* array_layers_opt = app->add_option("--layers", *layers,
-                                       "a camera array: fused (S0, S1, S2, AoP, DoP: the default), all (also the "
-                                       "four raw frames) or aop (AoP, DoP: what locate reads)")
+                                       "a camera array: aop (AoP, DoP: what locate reads; the default), fused "
+                                       "(also S0, S1, S2) or all (also the four raw frames)")
                            ->check(CLI::IsMember({"all", "fused", "aop"}))->capture_default_str();
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
@@ -114,8 +114,7 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
           throw RigError(fmt::format("--truth-layers: device.kind {} writes its truth in truth.yaml", r.rig.device_kind));
         FourCameraDatasetOptions o;
         o.previews = out->plots();
-        o.layers = *layers == "fused" ? FourCameraLayers::Fused : *layers == "aop" ? FourCameraLayers::Aop
-                                                                                     : FourCameraLayers::All;
+        o.layers = *parse_four_camera_layers(*layers);  // checked by IsMember
         try {
           const FourCameraSimulator check(r.rig);  // refused before the folder is opened
           if (r.rig.checkerboard.views > 0) (void)checkerboard_poses(r.rig);  // the board placed, likewise

@@ -33,9 +33,7 @@ FourCameraSimulator simulator(const LoadedRig& loaded) {
 }
 
 FourCameraLayers layers_of(const std::string& name) {
-  if (name == "all") return FourCameraLayers::All;
-  if (name == "fused") return FourCameraLayers::Fused;
-  if (name == "aop") return FourCameraLayers::Aop;
+  if (const std::optional<FourCameraLayers> l = parse_four_camera_layers(name)) return *l;
   throw py::value_error(fmt::format("layers='{}' (expected 'all', 'fused' or 'aop')", name));
 }
 
@@ -89,8 +87,8 @@ constexpr const char* kSimulateDoc = R"doc(
 Writes the four-camera dataset into the new folder `out` (the CLI's `polrig simulate RIG -o OUT`
 for a four-camera rig; docs/formats.md "Four-camera dataset") and returns its path.
 
-  layers: 'fused' (S0, S1, S2, AoP, DoP, valid: the default), 'all' (also the raw frames) or 'aop'
-  (AoP, DoP and valid only).
+  layers: 'aop' (AoP, DoP and valid: what locate reads; the default), 'fused' (also S0, S1, S2)
+  or 'all' (also the raw frames).
   force: replace an existing folder.
   plots: also draw the previews (previews/: the first and last stops' fused AoP, DoP and S0 PNGs;
     needs gnuplot; the CLI draws them unless --no-plots).
@@ -182,8 +180,8 @@ void bind_four_camera(py::module_& m) {
       write_four_camera_dataset(loaded, out, o, command, force, p);
     }
     return out;
-  }, with_shared(kSimulateDoc).c_str(), py::arg("out"), py::kw_only(), py::arg("layers") = "fused",
-     py::arg("force") = false, py::arg("plots") = false, py::arg("threads") = py::none(),
+  }, with_shared(kSimulateDoc).c_str(), py::arg("out"), py::kw_only(),
+     py::arg("layers") = std::string(four_camera_layers_name(FourCameraDatasetOptions{}.layers)), py::arg("force") = false, py::arg("plots") = false, py::arg("threads") = py::none(),
      py::arg("progress") = py::none());
 
   m.def("read_four_camera_dataset", [](const std::filesystem::path& dir, std::optional<int> stop, bool raw) {

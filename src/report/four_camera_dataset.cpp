@@ -23,6 +23,12 @@ std::string_view four_camera_layers_name(FourCameraLayers layers) {
   return "all";
 }
 
+std::optional<FourCameraLayers> parse_four_camera_layers(std::string_view name) {
+  for (const FourCameraLayers l : {FourCameraLayers::All, FourCameraLayers::Fused, FourCameraLayers::Aop})
+    if (four_camera_layers_name(l) == name) return l;
+  return std::nullopt;
+}
+
 std::string four_camera_truth_yaml(const FourCameraSpec& spec, const FourCameraModel& truth,
                                    const VirtualCamera& grid) {
   // Plain numbers, shortest round-trip text ({}): the file reads back to the same doubles.

@@ -12,6 +12,7 @@
 //                             fused AoP, DoP and S0 (report/dataset_previews.h)
 //   DIR/manifest.yaml, DIR/rig.yaml
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -29,11 +30,13 @@ enum class FourCameraLayers {
   Aop,    // the fused AoP, DoP and valid (what `locate` reads)
 };
 std::string_view four_camera_layers_name(FourCameraLayers layers);  // "all", "fused", "aop"
+std::optional<FourCameraLayers> parse_four_camera_layers(std::string_view name);
 
 struct FourCameraDatasetOptions {
-  // The fused layers by default: a full-resolution stop with the raw frames is 21 MB (formats.md
-  // §6.14a); the calibration, which needs them, asks for All.
-  FourCameraLayers layers = FourCameraLayers::Fused;
+  // What locate reads by default: at W16's size a stop is 6.2 MB and ≈ 0.4 core-seconds, against
+  // 15.4 MB and ≈ 0.7 with the fused Stokes layers and 21 MB with the raw frames (docs/cli.md,
+  // "simulate"); the calibration, which needs the raw frames, asks for All.
+  FourCameraLayers layers = FourCameraLayers::Aop;
   // The first and the last stop's fused AoP, DoP and S0 as PNGs in DIR/previews/ (gnuplot;
   // report/dataset_previews.h), whichever layers the EXRs keep.
   bool previews = false;

@@ -39,28 +39,36 @@ namespace polrig {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-// y[i] = ln x[i]; whether every x[i] was positive and finite (what Highway's Log is meant for).
-bool LogArray(const double* x, double* y, std::size_t n) {
+// The lanes of y (in a vector) where x is not positive and finite (what Highway's Log is meant
+// for) take std::log's exact special value of x instead.
+template <class D, class V>
+void special_values(D d, V x, double* y, std::size_t lanes) {
+  HWY_ALIGN double xs[hn::MaxLanes(d)];
+  hn::Store(x, d, xs);
+  for (std::size_t k = 0; k < lanes; ++k)
+    if (!(xs[k] > 0.0 && xs[k] <= std::numeric_limits<double>::max())) y[k] = std::log(xs[k]);
+}
+
+// y[i] = ln x[i], also in place (x == y: each vector is read before its logarithms are stored).
+void LogArray(const double* x, double* y, std::size_t n) {
   const hn::ScalableTag<double> d;
   const std::size_t lanes = hn::Lanes(d);
   const auto zero = hn::Zero(d);
   const auto largest = hn::Set(d, std::numeric_limits<double>::max());
-  auto positive_finite = hn::Eq(zero, zero);
   std::size_t i = 0;
   for (; i + lanes <= n; i += lanes) {
     const auto v = hn::LoadU(d, x + i);
-    positive_finite = hn::And(positive_finite, hn::And(hn::Gt(v, zero), hn::Le(v, largest)));
     hn::StoreU(hn::Log(d, v), d, y + i);
+    if (HWY_UNLIKELY(!hn::AllTrue(d, hn::And(hn::Gt(v, zero), hn::Le(v, largest))))) special_values(d, v, y + i, lanes);
   }
   if (i < n) {  // the tail, padded with ones into a whole vector
     HWY_ALIGN double tail[hn::MaxLanes(d)];
     for (std::size_t k = 0; k < lanes; ++k) tail[k] = i + k < n ? x[i + k] : 1.0;
     const auto v = hn::Load(d, tail);
-    positive_finite = hn::And(positive_finite, hn::And(hn::Gt(v, zero), hn::Le(v, largest)));
     hn::Store(hn::Log(d, v), d, tail);
+    special_values(d, v, tail, lanes);
     for (std::size_t k = 0; i + k < n; ++k) y[i + k] = tail[k];
   }
-  return hn::AllTrue(d, positive_finite);
 }
 
 }  // namespace HWY_NAMESPACE
@@ -69,31 +77,6 @@ HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
 namespace polrig {
-
-namespace {
-using LogPath = bool (*)(const double*, double*, std::size_t);
-
-// `path`, except that x ≤ 0, inf and NaN give std::log's exact special values.
-void run_checked(LogPath path, const double* x, double* y, std::size_t n) {
-  // In blocks; in place, each block through a buffer, so that its inputs are still there when
-  // one of them needs std::log.
-  constexpr std::size_t kBlock = 2048;
-  double buffer[kBlock];
-  for (std::size_t b = 0; b < n; b += kBlock) {
-    const std::size_t m = std::min(kBlock, n - b);
-    double* out = x == y ? buffer : y + b;
-    if (!path(x + b, out, m))
-      for (std::size_t i = 0; i < m; ++i)
-        if (!(x[b + i] > 0.0 && x[b + i] <= std::numeric_limits<double>::max())) out[i] = std::log(x[b + i]);
-    if (out == buffer) std::copy(buffer, buffer + m, y + b);
-  }
-}
-
-template <LogPath Path>
-void checked(const double* x, double* y, std::size_t n) {
-  run_checked(Path, x, y, n);
-}
-}  // namespace
 
 HWY_EXPORT(LogArray);
 
@@ -110,9 +93,9 @@ void set_baseline_paths_only(bool on) { baseline_only.store(on); }
 
 void log_array(const double* x, double* y, std::size_t n) {
 #if HWY_TARGETS & HWY_SCALAR
-  if (baseline_only.load(std::memory_order_relaxed)) return run_checked(&N_SCALAR::LogArray, x, y, n);
+  if (baseline_only.load(std::memory_order_relaxed)) return N_SCALAR::LogArray(x, y, n);
 #endif
-  run_checked(&HWY_DYNAMIC_DISPATCH(LogArray), x, y, n);
+  HWY_DYNAMIC_DISPATCH(LogArray)(x, y, n);
 }
 
 std::vector<LogArrayPath> log_array_paths() {
@@ -122,19 +105,19 @@ std::vector<LogArrayPath> log_array_paths() {
     if (cpu & target) paths.push_back({hwy::TargetName(target), f});
   };
 #if HWY_TARGETS & HWY_AVX2
-  add(HWY_AVX2, &checked<N_AVX2::LogArray>);
+  add(HWY_AVX2, &N_AVX2::LogArray);
 #endif
 #if HWY_TARGETS & HWY_SSE4
-  add(HWY_SSE4, &checked<N_SSE4::LogArray>);
+  add(HWY_SSE4, &N_SSE4::LogArray);
 #endif
 #if HWY_TARGETS & HWY_SSSE3
-  add(HWY_SSSE3, &checked<N_SSSE3::LogArray>);
+  add(HWY_SSSE3, &N_SSSE3::LogArray);
 #endif
 #if HWY_TARGETS & HWY_EMU128
-  add(HWY_EMU128, &checked<N_EMU128::LogArray>);
+  add(HWY_EMU128, &N_EMU128::LogArray);
 #endif
 #if HWY_TARGETS & HWY_SCALAR
-  add(HWY_SCALAR, &checked<N_SCALAR::LogArray>);  // the baseline build's own: any x86-64
+  add(HWY_SCALAR, &N_SCALAR::LogArray);  // the baseline build's own: any x86-64
 #endif
   (void)add;
   return paths;

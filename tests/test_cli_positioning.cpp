@@ -102,6 +102,10 @@ TEST_F(CliPositioning, LocateFromAFourCameraDatasetFindsTheSiteAndHeading) {
   ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml")) + " --layers aop --no-plots" + quarter +
      " -o " + shell_quote(data));
   ok("locate " + shell_quote(data) + " --prior 29,113.5 -o " + shell_quote(out));
+  // The stops run side by side: the same files from one thread.
+  ok("locate " + shell_quote(data) + " --prior 29,113.5 --threads 1 -o " + shell_quote(tmp / "loc1"));
+  for (const char* f : {"sun.csv", "fix.csv", "heading.csv", "map.csv"})
+    EXPECT_EQ(read_file(out / f), read_file(tmp / "loc1" / f)) << f;
   const Csv stops = read_csv(data / "stops.csv"), sun = read_csv(out / "sun.csv");
   const Csv fix = read_csv(out / "fix.csv"), heading = read_csv(out / "heading.csv");
   ASSERT_EQ(sun.rows.size(), 13u);
@@ -195,6 +199,21 @@ TEST_F(CliPositioning, LocateRefusesWhatItCannotUse) {
   Result r = polrig("locate " + shell_quote(tmp / "none") + " -o " + shell_quote(tmp / "x"));
   EXPECT_EQ(r.status, 2);  // a usage error (docs/cli.md exit codes)
   EXPECT_HAS(r.err, "--prior");
+  // Two unreadable stops: the first in stop order is named, whichever thread met it, and nothing
+  // is written.
+  const fs::path w16 = tmp / "w16";
+  ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml")) +
+     " --no-plots --set schedule.count=12 --set device.cameras.width_px=64 --set device.cameras.height_px=48"
+     " --set 'device.cameras.fx_px=[48, 48, 48, 48]' --set 'device.cameras.fy_px=[48, 48, 48, 48]'"
+     " --set 'device.cameras.cx_px=[32, 32, 32, 32]' --set 'device.cameras.cy_px=[24, 24, 24, 24]' -o " +
+     shell_quote(w16));
+  for (const char* stop : {"stop_0003.exr", "stop_0009.exr"}) write_file(w16 / "frames" / stop, "not an EXR");
+  for (int run = 0; run < 3; ++run) {
+    r = polrig("locate " + shell_quote(w16) + " --prior 28,113 --threads 2 -o " + shell_quote(tmp / "z"));
+    EXPECT_EQ(r.status, 2) << r.err;  // a camera dataset's file (docs/cli.md "Exit status")
+    EXPECT_HAS(r.err, "stop_0003.exr");
+    EXPECT_FALSE(fs::exists(tmp / "z"));
+  }
   // A DoFP camera's dataset has no camera array.
   const fs::path dofp = tmp / "dofp";
   ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/han2017-outdoor.yaml")) +

@@ -17,8 +17,6 @@
 #include <ImfVecAttribute.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
-#include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 #include <ImfIO.h>
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
@@ -28,6 +26,7 @@
 #include <fmt/format.h>
 
 #include "polrig/io/measured.h"
+#include "polrig/write_pipeline.h"
 
 namespace polrig {
 
@@ -36,18 +35,10 @@ namespace {
 // no threads until told (OutputFile's thread count alone only sizes its line buffers: the
 // compression then ran on the calling thread, one core busy with PIZ while H17's simulation
 // waited). Sized to the threads polrig may use (--threads).
-// TBB's arena says the machine's concurrency whatever --threads set (tbb::global_control limits
-// the workers only, and a writer thread is in no arena): the smaller of the two.
-int exr_threads() {
-  return static_cast<int>(std::min<std::size_t>(
-      static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()),
-      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
-}
-
 int use_exr_threads() {
   static std::mutex mutex;
   const std::lock_guard lock(mutex);
-  const int threads = exr_threads();
+  const int threads = usable_threads();
   if (Imf::globalThreadCount() != threads) Imf::setGlobalThreadCount(threads);
   return threads;
 }
@@ -163,7 +154,7 @@ namespace {
 // The one writer of both entry points (the channels by reference: no copy of the pixels).
 void write_channels(const std::filesystem::path& path, int width, int height, std::span<const ExrChannel> floats,
                     std::span<const ExrUintChannel> uints, const ExrAttributes& attributes,
-                    ExrCompression compression) {
+                    ExrCompression compression, bool on_pool = true) {
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   try {
     Imf::Header header(width, height);
@@ -192,9 +183,9 @@ void write_channels(const std::filesystem::path& path, int width, int height, st
     }
     CheckedOStream stream(path);
     {
-      // Compression runs per block of lines on the threads polrig may use (--threads); the
-      // file is the same for any count (its blocks are written in line order).
-      Imf::OutputFile file(stream, header, use_exr_threads());
+      // Compression runs per block of lines on the threads polrig may use (--threads), or on
+      // this thread alone; the file is the same for any count (its blocks are written in line order).
+      Imf::OutputFile file(stream, header, on_pool ? use_exr_threads() : 0);
       file.setFrameBuffer(fb);
       file.writePixels(height);
     }
@@ -214,6 +205,11 @@ void write_exr(const std::filesystem::path& path, int width, int height,
 
 void write_exr_image(const std::filesystem::path& path, const ExrImage& image, ExrCompression compression) {
   write_channels(path, image.width, image.height, image.floats, image.uints, image.attributes, compression);
+}
+
+void write_exr_image_on_this_thread(const std::filesystem::path& path, const ExrImage& image,
+                                    ExrCompression compression) {
+  write_channels(path, image.width, image.height, image.floats, image.uints, image.attributes, compression, false);
 }
 
 namespace {

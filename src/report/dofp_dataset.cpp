@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include "polrig/background_writer.h"
 #include "polrig/calib/dofp_polarization.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
@@ -11,6 +10,7 @@
 #include "polrig/sky/sensor_view.h"
 #include "polrig/sky/sun.h"
 #include "polrig/units.h"
+#include "polrig/write_pipeline.h"
 
 namespace polrig {
 
@@ -58,9 +58,12 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
   const DofpTruth nominal = nominal_dofp_parameters(sim.width(), sim.height(), rig.camera.mosaic_deg);
-  BackgroundWriter writer;
-  for (const DofpStop& stop : sim.stops()) {
-    const std::size_t index = static_cast<std::size_t>(&stop - sim.stops().data());
+  struct StopFile {
+    std::filesystem::path path;
+    ExrImage image;
+  };
+  const auto make_stop = [&](std::size_t index) {
+    const DofpStop& stop = sim.stops()[index];
     const bool preview = options.previews && (index == 0 || index == last);
     std::vector<std::uint32_t> preview_sum(preview ? n : 0);
     const std::string file = fmt::format("frames/stop_{:04}.exr", stop.index);
@@ -112,9 +115,6 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
       a.vectors.push_back({"sun_enu", s});
       a.vectors.push_back({"sun_camera", {vec3::dot(s, axes.x), vec3::dot(s, axes.y), vec3::dot(s, axes.z)}});
     }
-    // PIZ: the smallest lossless form of noisy frames, 0.79× ZIP's bytes (docs/formats.md §6.14).
-    // Compressed and written while the next stop's frames are computed.
-    writer.submit([path = dir / file, image = std::move(image)] { write_exr_image(path, image, ExrCompression::Piz); });
     csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc, stop.intensity,
                        stop.polarized ? 1 : 0, heading, stop.frames, file);
     if (preview && stop.frames > 0) {
@@ -134,8 +134,13 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
       p.aop_deg = std::move(cells.aop_deg), p.dop = std::move(cells.dop), p.S0 = std::move(cells.S0);
       previews.push_back(std::move(p));
     }
-  }
-  writer.finish();
+    return StopFile{dir / file, std::move(image)};
+  };
+  // Each stop's EXR compressed and written while the next stops' frames are computed. PIZ: the
+  // smallest lossless form of noisy frames, 0.79× ZIP's bytes (docs/formats.md §6.14).
+  make_in_order_write_beside(sim.stops().size(), make_stop, [](const StopFile& f) {
+    write_exr_image_on_this_thread(f.path, f.image, ExrCompression::Piz);
+  });
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
   PreviewOptions po;

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include "polrig/background_writer.h"
 #include "polrig/io/csv.h"
 #include "polrig/io/exr.h"
 #include "polrig/io/output_dir.h"
@@ -11,6 +10,7 @@
 #include "polrig/sky/sensor_view.h"
 #include "polrig/sky/sun.h"
 #include "polrig/units.h"
+#include "polrig/write_pipeline.h"
 
 namespace polrig {
 
@@ -81,9 +81,12 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
   // The previews' stops: the first and the last (one when they are the same).
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
-  BackgroundWriter writer;
-  for (const DofpStop& stop : sim.stops()) {
-    const std::size_t index = static_cast<std::size_t>(&stop - sim.stops().data());
+  struct StopFile {
+    std::filesystem::path path;
+    ExrImage image;
+  };
+  const auto make_stop = [&](std::size_t index) {
+    const DofpStop& stop = sim.stops()[index];
     const std::string file = fmt::format("frames/stop_{:04}.exr", stop.index);
     ExrImage image;
     image.width = sim.width(), image.height = sim.height();
@@ -139,8 +142,6 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
       a.vectors.push_back({"sun_enu", s});
       a.vectors.push_back({"sun_camera1", sc});
     }
-    // Compressed and written while the next stop is computed.
-    writer.submit([path = dir / file, image = std::move(image)] { write_exr_image(path, image); });
     if (options.previews && (index == 0 || index == last))
       previews.back().title = fmt::format("stop {}: {}t = {:.6g} s, θ_R = {:.6g}°{}\nthe fused image on the virtual camera 1 grid (white: not valid)",
                                           stop.index, utc.empty() ? std::string() : fmt::format("{} UTC, ", utc),
@@ -150,8 +151,11 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
     csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, utc, stop.t_s, stop.theta_R_deg, stop.intensity,
                        stop.polarized ? 1 : 0, heading, sun_cols, file);
     progress.advance();
-  }
-  writer.finish();
+    return StopFile{dir / file, std::move(image)};
+  };
+  // Each stop's EXR compressed and written while the next stops are computed.
+  make_in_order_write_beside(sim.stops().size(), make_stop,
+                             [](const StopFile& f) { write_exr_image_on_this_thread(f.path, f.image); });
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
   PreviewOptions po;

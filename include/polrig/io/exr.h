@@ -73,6 +73,10 @@ struct ExrImage {
 // Writes every channel of `image` (lossless `compression`) and its attributes. Throws as write_exr.
 void write_exr_image(const std::filesystem::path& path, const ExrImage& image,
                      ExrCompression compression = ExrCompression::Zip);
+// The same, compressed on the calling thread alone (OpenEXR's pool untouched): for callers that
+// write several images at once on their own threads (write_pipeline.h). The same bytes.
+void write_exr_image_on_this_thread(const std::filesystem::path& path, const ExrImage& image,
+                                    ExrCompression compression = ExrCompression::Zip);
 // Reads an image back: FLOAT and HALF channels as floats, UINT channels as uints, and the string,
 // double, float, int and V3d attributes (float and int as doubles). Throws naming the file; the
 // size is checked from the header first, as read_exr's.

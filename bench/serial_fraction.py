@@ -6,11 +6,16 @@ the serial fraction f that Amdahl's law gives for it, f = (N·T_N/T_1 − 1)/(N 
 serial time goes: the stage that loses most (its own T_N − T_1/N over T_1, ranked) and the time
 outside every stage (start-up, reading, writing the outputs).
 
-    python3 bench/serial_fraction.py [--polrig build/polrig] [--threads 2] [--only sweep,navigate]
+    python3 bench/serial_fraction.py [--polrig build/polrig] [--threads 2] [--only sweep,navigate] [--corun]
+
+--corun also runs N copies of the one-thread run at once, each on its own core, and prints the
+machine's own f for the command: what N independent one-thread runs lose to each other (shared
+caches, memory bandwidth, the page cache) is a serial fraction no code change removes, and on a
+small machine it is most of what the N-thread run loses.
 
 Run it on an idle machine: another process on the cores reads as serial time. The one-thread run
-is pinned to one core (taskset), since a command's writer thread (background_writer.h) would
-otherwise overlap its output with one TBB thread. Inputs are made under a scratch folder (the
+is pinned to one core (taskset), so that no thread beside TBB's (the sweep's writer,
+background_writer.h; OpenEXR's pool) overlaps with it. Inputs are made under a scratch folder (the
 datasets the calibrations read are simulated first, untimed).
 """
 import argparse
@@ -32,24 +37,52 @@ COMMANDS = [
     ("calibrate H17 (dofp)", "calibrate {d}/h17 --method dofp",
      "simulate rigs/han2017-indoor.yaml -o {d}/h17"),
     ("simulate W16 rotation", "simulate rigs/wang2016-rotation.yaml", None),
-    ("simulate W16 static hour", "simulate rigs/wang2016-static.yaml", None),
-    ("locate W16 static hour", "locate {d}/w16", "simulate rigs/wang2016-static.yaml -o {d}/w16"),
+    # The static hour's first 2 minutes (the hour itself: docs/validation.md, "Datasets sized to
+    # what users run")
+    ("simulate W16 static 120 s", "simulate rigs/wang2016-static.yaml --set schedule.count=120", None),
+    ("locate W16 static 120 s", "locate {d}/w16 --prior 29,113.5",
+     "simulate rigs/wang2016-static.yaml --set schedule.count=120 -o {d}/w16"),
     ("simulate Z21 static", "simulate rigs/zhang2021-static.yaml", None),
     ("navigate Z21 static", "navigate {d}/z21", "simulate rigs/zhang2021-static.yaml -o {d}/z21"),
     ("study navigation Z21 ×40", "study navigation rigs/zhang2021-static.yaml --trials 40", None),
 ]
 
 
-def run(polrig, args, threads, scratch, log):
-    out = os.path.join(scratch, "out")
-    shutil.rmtree(out, ignore_errors=True)
+def command(polrig, args, threads, out, log, core=None):
     # The sphere cache off: a traced rig's first run would solve the sphere and the second load it.
     env = dict(os.environ, POLRIG_STAGE_TIMES=log, POLRIG_CACHE_DIR="off")
     cmd = [polrig] + args.split() + ["-o", out, "--threads", str(threads), "--quiet", "--force"]
-    if threads == 1:  # one core, not one TBB thread: a writer thread would run beside it otherwise
-        cmd = ["taskset", "-c", str(min(os.sched_getaffinity(0)))] + cmd
+    if core is not None:
+        cmd = ["taskset", "-c", str(core)] + cmd
     if not args.startswith(("locate", "navigate")):
         cmd.append("--no-plots")
+    return cmd, env
+
+
+def corun(polrig, args, n, scratch):
+    """The wall time of n one-thread runs at once, each on its own core."""
+    cores = sorted(os.sched_getaffinity(0))[:n]
+    procs = []
+    t0 = time.monotonic()
+    for k, core in enumerate(cores):
+        out = os.path.join(scratch, f"corun{k}")
+        shutil.rmtree(out, ignore_errors=True)
+        cmd, env = command(polrig, args, 1, out, os.path.join(scratch, f"corun{k}.csv"), core)
+        procs.append(subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL))
+    for p in procs:
+        if p.wait() != 0:
+            sys.exit(f"serial_fraction: {args} failed in the co-run")
+    wall = time.monotonic() - t0
+    for k in range(len(cores)):
+        shutil.rmtree(os.path.join(scratch, f"corun{k}"), ignore_errors=True)
+    return wall
+
+
+def run(polrig, args, threads, scratch, log):
+    out = os.path.join(scratch, "out")
+    shutil.rmtree(out, ignore_errors=True)
+    # one core, not one TBB thread: a writer thread would run beside it otherwise
+    cmd, env = command(polrig, args, threads, out, log, min(os.sched_getaffinity(0)) if threads == 1 else None)
     t0 = time.monotonic()
     subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL)
     wall = time.monotonic() - t0
@@ -70,13 +103,16 @@ def main():
     p.add_argument("--polrig", default="build/polrig")
     p.add_argument("--threads", type=int, default=os.cpu_count())
     p.add_argument("--only", default="", help="comma-separated words; a command runs if its name has one")
+    p.add_argument("--corun", action="store_true", help="also the machine's own f (N one-thread runs at once)")
     a = p.parse_args()
     n = a.threads
     if n < 2:
         sys.exit("serial_fraction: needs at least 2 threads")
     words = [w for w in a.only.split(",") if w]
-    print(f"| command | 1 thread | {n} threads | speed-up | serial fraction | stage losing most | outside stages |")
-    print("|---|---|---|---|---|---|---|")
+    extra = (" machine's own f |", "---|") if a.corun else ("", "")
+    print(f"| command | 1 thread | {n} threads | speed-up | serial fraction | stage losing most | outside stages |"
+          f"{extra[0]}")
+    print("|---|---|---|---|---|---|---|" + extra[1])
     with tempfile.TemporaryDirectory(prefix="polrig-serial-") as scratch:
         log = os.path.join(scratch, "stages.csv")
         for name, args, setup in COMMANDS:
@@ -92,8 +128,12 @@ def main():
             worst = max(loss, key=loss.get) if loss else "—"
             outside = (tn - sum(w for w, _ in sn.values())) / t1
             worst_text = f"{worst} ({100 * loss[worst]:.1f} %)" if loss else "—"
+            machine = ""
+            if a.corun:  # n runs at once in T_c: as one run of n·T1 work taking T_c, Amdahl's f
+                tc = corun(a.polrig, args.format(d=scratch), n, scratch)
+                machine = f" {100 * (n * (tc / n) / t1 - 1) / (n - 1):.1f} % |"
             print(f"| {name} | {t1:.2f} s | {tn:.2f} s | {t1 / tn:.2f}× | {100 * f:.1f} % | {worst_text} | "
-                  f"{100 * outside:.1f} % |", flush=True)
+                  f"{100 * outside:.1f} % |{machine}", flush=True)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,11 @@ serial time goes: the stage that loses most (its own T_N − T_1/N over T_1, ran
 outside every stage (start-up, reading, writing the outputs).
 
     python3 bench/serial_fraction.py [--polrig build/polrig] [--threads 2] [--only sweep,navigate] [--corun]
+                                     [--repeat 3]
+
+--repeat K runs the one-thread and the N-thread runs K times each, alternately, and takes the
+median of each: on a shared virtual machine one run's time moves by up to ±8 %, which on two
+cores is ±16 % in f.
 
 --corun also runs N copies of the one-thread run at once, each on its own core, and prints the
 machine's own f for the command: what N independent one-thread runs lose to each other (shared
@@ -98,12 +103,18 @@ def run(polrig, args, threads, scratch, log):
     return wall, total_cpu, stages
 
 
+def median_run(runs):
+    """The run of median wall time (its stages with it)."""
+    return sorted(runs, key=lambda r: r[0])[len(runs) // 2]
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--polrig", default="build/polrig")
     p.add_argument("--threads", type=int, default=os.cpu_count())
     p.add_argument("--only", default="", help="comma-separated words; a command runs if its name has one")
     p.add_argument("--corun", action="store_true", help="also the machine's own f (N one-thread runs at once)")
+    p.add_argument("--repeat", type=int, default=1, help="runs of each, alternately; the medians are used")
     a = p.parse_args()
     n = a.threads
     if n < 2:
@@ -121,8 +132,12 @@ def main():
             if setup:
                 subprocess.run([a.polrig] + setup.format(d=scratch).split() + ["--quiet", "--force", "--no-plots"],
                                check=True, stdout=subprocess.DEVNULL, env=dict(os.environ, POLRIG_CACHE_DIR="off"))
-            t1, _, s1 = run(a.polrig, args.format(d=scratch), 1, scratch, log)
-            tn, _, sn = run(a.polrig, args.format(d=scratch), n, scratch, log)
+            ones, ns = [], []
+            for _ in range(a.repeat):  # alternately, so that a slow spell of the machine hits both
+                ones.append(run(a.polrig, args.format(d=scratch), 1, scratch, log))
+                ns.append(run(a.polrig, args.format(d=scratch), n, scratch, log))
+            t1, _, s1 = median_run(ones)
+            tn, _, sn = median_run(ns)
             f = (n * tn / t1 - 1) / (n - 1)
             loss = {k: (sn[k][0] - s1[k][0] / n) / t1 for k in s1 if k in sn}
             worst = max(loss, key=loss.get) if loss else "—"

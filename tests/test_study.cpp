@@ -4,8 +4,12 @@
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <thread>
 #include <cmath>
 #include <complex>
 #include <cstring>
@@ -30,6 +34,7 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/study/sweep.h"
 #include "polrig/vector_log.h"
+#include "polrig/write_pipeline.h"
 #include "polrig/units.h"
 #include "thread_ranks.h"
 
@@ -525,6 +530,54 @@ TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
     EXPECT_STREQ(e.what(), "sweep.h5: disk full");
   }
   EXPECT_EQ(calls, 2u);
+}
+
+// The datasets' pipeline (write_pipeline.h): every piece made once, in order; every piece
+// written; never more than threads + 1 pieces alive; an error from a write or a make is thrown.
+TEST(WritePipeline, MakesInOrderWritesEachOnceAndBoundsThePiecesAlive) {
+  for (int threads : {1, 2, 4}) {
+    const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+    std::vector<std::size_t> made;
+    std::vector<std::atomic<int>> written(40);
+    std::atomic<int> alive{0}, most{0};
+    make_in_order_write_beside(
+        written.size(),
+        [&](std::size_t i) {
+          made.push_back(i);
+          const int now = ++alive;
+          for (int m = most.load(); now > m && !most.compare_exchange_weak(m, now);) {}
+          return i;
+        },
+        [&](std::size_t i) {
+          std::this_thread::sleep_for(std::chrono::milliseconds(2));  // writes slower than makes
+          ++written[i];
+          --alive;
+        });
+    std::vector<std::size_t> in_order(written.size());
+    for (std::size_t i = 0; i < in_order.size(); ++i) in_order[i] = i;
+    EXPECT_EQ(made, in_order) << threads;
+    for (std::size_t i = 0; i < written.size(); ++i) EXPECT_EQ(written[i].load(), 1) << threads << " " << i;
+    EXPECT_LE(most.load(), usable_threads() + 1) << threads;
+    EXPECT_EQ(usable_threads(), std::min(threads, tbb::this_task_arena::max_concurrency())) << threads;
+  }
+  const auto fails = [](bool in_make) {
+    make_in_order_write_beside(
+        10,
+        [&](std::size_t i) {
+          if (in_make && i == 3) throw std::runtime_error("stop_0003.exr: cannot make");
+          return i;
+        },
+        [&](std::size_t i) {
+          if (!in_make && i == 5) throw std::runtime_error("stop_0005.exr: disk full");
+        });
+  };
+  EXPECT_THROW(fails(true), std::runtime_error);
+  try {
+    fails(false);
+    FAIL() << "expected the write's error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "stop_0005.exr: disk full");
+  }
 }
 
 TEST(Sweep, AnInteriorPointThatBreaksARuleIsNamedBeforeItIsComputed) {

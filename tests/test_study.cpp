@@ -532,52 +532,61 @@ TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
   EXPECT_EQ(calls, 2u);
 }
 
-// The datasets' pipeline (write_pipeline.h): every piece made once, in order; every piece
-// written; never more than threads + 1 pieces alive; an error from a write or a make is thrown.
-TEST(WritePipeline, MakesInOrderWritesEachOnceAndBoundsThePiecesAlive) {
+// The datasets' pipeline (write_pipeline.h): every piece's work done once, results collected in
+// order; never more than threads + 1 pieces in flight; the first failing piece in order is the
+// error thrown, whichever thread met it.
+TEST(WritePipeline, WorksSideBySideCollectsInOrderAndBoundsThePiecesInFlight) {
   for (int threads : {1, 2, 4}) {
     const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-    std::vector<std::size_t> made;
-    std::vector<std::atomic<int>> written(40);
-    std::atomic<int> alive{0}, most{0};
-    make_in_order_write_beside(
-        written.size(),
+    std::vector<std::atomic<int>> worked(40);
+    std::vector<std::size_t> collected;
+    std::atomic<int> in_flight{0}, most{0};
+    side_by_side_in_order(
+        worked.size(),
         [&](std::size_t i) {
-          made.push_back(i);
-          const int now = ++alive;
+          const int now = ++in_flight;
           for (int m = most.load(); now > m && !most.compare_exchange_weak(m, now);) {}
+          // Later pieces finish first: collecting must still go in order.
+          std::this_thread::sleep_for(std::chrono::microseconds(200 * (i % 5 == 0 ? 10 : 1)));
+          ++worked[i];
           return i;
         },
         [&](std::size_t i) {
-          std::this_thread::sleep_for(std::chrono::milliseconds(2));  // writes slower than makes
-          ++written[i];
-          --alive;
+          collected.push_back(i);
+          --in_flight;
         });
-    std::vector<std::size_t> in_order(written.size());
+    std::vector<std::size_t> in_order(worked.size());
     for (std::size_t i = 0; i < in_order.size(); ++i) in_order[i] = i;
-    EXPECT_EQ(made, in_order) << threads;
-    for (std::size_t i = 0; i < written.size(); ++i) EXPECT_EQ(written[i].load(), 1) << threads << " " << i;
+    EXPECT_EQ(collected, in_order) << threads;
+    for (std::size_t i = 0; i < worked.size(); ++i) EXPECT_EQ(worked[i].load(), 1) << threads << " " << i;
     EXPECT_LE(most.load(), usable_threads() + 1) << threads;
     EXPECT_EQ(usable_threads(), std::min(threads, tbb::this_task_arena::max_concurrency())) << threads;
   }
-  const auto fails = [](bool in_make) {
-    make_in_order_write_beside(
-        10,
-        [&](std::size_t i) {
-          if (in_make && i == 3) throw std::runtime_error("stop_0003.exr: cannot make");
-          return i;
-        },
-        [&](std::size_t i) {
-          if (!in_make && i == 5) throw std::runtime_error("stop_0005.exr: disk full");
-        });
-  };
-  EXPECT_THROW(fails(true), std::runtime_error);
-  try {
-    fails(false);
-    FAIL() << "expected the write's error";
-  } catch (const std::runtime_error& e) {
-    EXPECT_STREQ(e.what(), "stop_0005.exr: disk full");
+  const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
+  for (int run = 0; run < 5; ++run) {
+    try {
+      side_by_side_in_order(
+          12,
+          [&](std::size_t i) {
+            if (i == 7) throw std::runtime_error("stop_0007.exr: disk full");
+            if (i == 3) {  // met after stop 7 on another thread
+              std::this_thread::sleep_for(std::chrono::milliseconds(5));
+              throw std::runtime_error("stop_0003.exr: disk full");
+            }
+            return i;
+          },
+          [](std::size_t) {});
+      FAIL() << "expected stop 3's error";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "stop_0003.exr: disk full") << run;
+    }
   }
+  EXPECT_THROW(side_by_side_in_order(
+                   5, [](std::size_t i) { return i; },
+                   [](std::size_t i) {
+                     if (i == 2) throw std::runtime_error("stops.csv: cannot collect");
+                   }),
+               std::runtime_error);
 }
 
 TEST(Sweep, AnInteriorPointThatBreaksARuleIsNamedBeforeItIsComputed) {

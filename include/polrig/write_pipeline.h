@@ -1,17 +1,19 @@
 #pragma once
-// Pieces made in order and written side by side: a dataset's stops, each stop's image compressed
-// and written on whichever thread is free while the next stops are made. make(i) runs for
-// i = 0, 1, … in order, one at a time (its own work may run in parallel inside); write(piece)
-// runs on any thread, several at once, in no set order (each piece is its own file). At most
-// usable_threads() + 1 pieces exist at a time (one being made, one written per thread): memory
-// is bounded by them, not by the dataset.
-// Both run in the caller's TBB arena, so nothing runs beside the threads polrig may use
-// (--threads). An exception from either stops the pipeline and is rethrown.
+// Pieces of work side by side, their results collected in order: a dataset's stops, each stop's
+// frames made, compressed and written on one thread (its data stay in that core's caches) while
+// other threads do other stops, and each stop's CSV row and preview gathered in stop order.
+// work(i) runs for every i in [0, count) on any thread, several at once; collect(result) runs
+// for i = 0, 1, … in order, one at a time. At most usable_threads() + 1 pieces are in flight, so
+// memory is bounded by them, not by the dataset; both run in the caller's TBB arena, so nothing
+// runs beside the threads polrig may use (--threads). An exception from work(i) is thrown when
+// collecting reaches i (the first failing piece in order, whichever thread met it); one from
+// collect is thrown at once. Either stops the pipeline.
 #include <cstddef>
+#include <exception>
 #include <memory>
+#include <optional>
 
 #include <tbb/parallel_pipeline.h>
-#include <tbb/task_arena.h>
 
 namespace polrig {
 
@@ -19,26 +21,36 @@ namespace polrig {
 // limits the workers but not what the arena says).
 int usable_threads();
 
-template <class Make, class Write>
-void make_in_order_write_beside(std::size_t count, Make&& make, Write&& write) {
-  using Piece = decltype(make(std::size_t{0}));
+template <class Work, class Collect>
+void side_by_side_in_order(std::size_t count, Work&& work, Collect&& collect) {
+  using Result = decltype(work(std::size_t{0}));
+  struct Done {
+    std::optional<Result> result;
+    std::exception_ptr error;
+  };
   std::size_t next = 0;
   tbb::parallel_pipeline(
       static_cast<std::size_t>(usable_threads() + 1),
-      tbb::make_filter<void, std::shared_ptr<Piece>>(tbb::filter_mode::serial_in_order,
-                                                     [&](tbb::flow_control& fc) -> std::shared_ptr<Piece> {
-                                                       if (next == count) {
-                                                         fc.stop();
-                                                         return nullptr;
-                                                       }
-                                                       // Isolated: while make's own parallel work
-                                                       // waits, its thread takes none of the writes,
-                                                       // which would hold up the next piece.
-                                                       return tbb::this_task_arena::isolate(
-                                                           [&] { return std::make_shared<Piece>(make(next++)); });
-                                                     }) &
-          tbb::make_filter<std::shared_ptr<Piece>, void>(tbb::filter_mode::parallel,
-                                                         [&](const std::shared_ptr<Piece>& p) { write(*p); }));
+      tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
+                                          [&](tbb::flow_control& fc) -> std::size_t {
+                                            if (next == count) fc.stop();
+                                            return next++;
+                                          }) &
+          tbb::make_filter<std::size_t, std::shared_ptr<Done>>(tbb::filter_mode::parallel,
+                                                               [&](std::size_t i) {
+                                                                 auto d = std::make_shared<Done>();
+                                                                 try {
+                                                                   d->result.emplace(work(i));
+                                                                 } catch (...) {
+                                                                   d->error = std::current_exception();
+                                                                 }
+                                                                 return d;
+                                                               }) &
+          tbb::make_filter<std::shared_ptr<Done>, void>(tbb::filter_mode::serial_in_order,
+                                                        [&](const std::shared_ptr<Done>& d) {
+                                                          if (d->error) std::rethrow_exception(d->error);
+                                                          collect(std::move(*d->result));
+                                                        }));
 }
 
 }  // namespace polrig

@@ -58,11 +58,13 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
   const DofpTruth nominal = nominal_dofp_parameters(sim.width(), sim.height(), rig.camera.mosaic_deg);
-  struct StopFile {
-    std::filesystem::path path;
-    ExrImage image;
+  struct StopRow {
+    std::string csv;
+    std::optional<PreviewStop> preview;
   };
-  const auto make_stop = [&](std::size_t index) {
+  // One stop whole on one thread: its frames, its EXR compressed and written, its CSV row and
+  // preview.
+  const auto do_stop = [&](std::size_t index) {
     const DofpStop& stop = sim.stops()[index];
     const bool preview = options.previews && (index == 0 || index == last);
     std::vector<std::uint32_t> preview_sum(preview ? n : 0);
@@ -115,8 +117,11 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
       a.vectors.push_back({"sun_enu", s});
       a.vectors.push_back({"sun_camera", {vec3::dot(s, axes.x), vec3::dot(s, axes.y), vec3::dot(s, axes.z)}});
     }
-    csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc, stop.intensity,
-                       stop.polarized ? 1 : 0, heading, stop.frames, file);
+    // PIZ: the smallest lossless form of noisy frames, 0.79× ZIP's bytes (docs/formats.md §6.14).
+    write_exr_image_on_this_thread(dir / file, image, ExrCompression::Piz);
+    StopRow row{fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc,
+                            stop.intensity, stop.polarized ? 1 : 0, heading, stop.frames, file),
+                std::nullopt};
     if (preview && stop.frames > 0) {
       // The mean frame as read_dofp_mean_frame reads it back (the sum over the frames), its cells'
       // polarization with the nominal parameters (as `orient` without --params).
@@ -132,14 +137,13 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
                             stop.frames == 1 ? "" : "s");
       p.cols = cells.cells_x, p.rows = cells.cells_y, p.pixels = 2;
       p.aop_deg = std::move(cells.aop_deg), p.dop = std::move(cells.dop), p.S0 = std::move(cells.S0);
-      previews.push_back(std::move(p));
+      row.preview = std::move(p);
     }
-    return StopFile{dir / file, std::move(image)};
+    return row;
   };
-  // Each stop's EXR compressed and written while the next stops' frames are computed. PIZ: the
-  // smallest lossless form of noisy frames, 0.79× ZIP's bytes (docs/formats.md §6.14).
-  make_in_order_write_beside(sim.stops().size(), make_stop, [](const StopFile& f) {
-    write_exr_image_on_this_thread(f.path, f.image, ExrCompression::Piz);
+  side_by_side_in_order(sim.stops().size(), do_stop, [&](StopRow&& row) {
+    csv += row.csv;
+    if (row.preview) previews.push_back(std::move(*row.preview));
   });
   progress.finish();
   write_text_file(dir / "stops.csv", csv);

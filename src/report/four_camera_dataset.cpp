@@ -81,11 +81,13 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
   // The previews' stops: the first and the last (one when they are the same).
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
-  struct StopFile {
-    std::filesystem::path path;
-    ExrImage image;
+  struct StopRow {
+    std::string csv;
+    std::optional<PreviewStop> preview;
   };
-  const auto make_stop = [&](std::size_t index) {
+  // One stop whole on one thread: its frames and fusion, its EXR compressed and written, its CSV
+  // row and preview.
+  const auto do_stop = [&](std::size_t index) {
     const DofpStop& stop = sim.stops()[index];
     const std::string file = fmt::format("frames/stop_{:04}.exr", stop.index);
     ExrImage image;
@@ -93,6 +95,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
     const FourCameraSignal signal = sim.signal(stop);
     std::array<std::vector<std::uint16_t>, kFourCameras> raw = sim.frames(signal, 0);
     FusedImage fused = sim.fuse(raw);
+    StopRow row;
     if (options.previews && (index == 0 || index == last)) {
       // The fused layers as the stop's EXR holds them (float), on the virtual camera 1 grid.
       PreviewStop p;
@@ -102,7 +105,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
       p.dop.assign(fused.DoP.begin(), fused.DoP.end());
       p.S0.assign(fused.S0.begin(), fused.S0.end());
       p.valid = fused.valid;
-      previews.push_back(std::move(p));
+      row.preview = std::move(p);
     }
     if (options.layers == FourCameraLayers::All)
       for (std::size_t j = 0; j < 4; ++j)
@@ -142,20 +145,22 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
       a.vectors.push_back({"sun_enu", s});
       a.vectors.push_back({"sun_camera1", sc});
     }
-    if (options.previews && (index == 0 || index == last))
-      previews.back().title = fmt::format("stop {}: {}t = {:.6g} s, θ_R = {:.6g}°{}\nthe fused image on the virtual camera 1 grid (white: not valid)",
+    if (row.preview)
+      row.preview->title = fmt::format("stop {}: {}t = {:.6g} s, θ_R = {:.6g}°{}\nthe fused image on the virtual camera 1 grid (white: not valid)",
                                           stop.index, utc.empty() ? std::string() : fmt::format("{} UTC, ", utc),
                                           stop.t_s, stop.theta_R_deg,
                                           heading.empty() ? std::string() : fmt::format(", true heading {:.4f}°",
                                                                                         std::stod(heading)));
-    csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, utc, stop.t_s, stop.theta_R_deg, stop.intensity,
-                       stop.polarized ? 1 : 0, heading, sun_cols, file);
+    write_exr_image_on_this_thread(dir / file, image);
+    row.csv = fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, utc, stop.t_s, stop.theta_R_deg, stop.intensity,
+                          stop.polarized ? 1 : 0, heading, sun_cols, file);
     progress.advance();
-    return StopFile{dir / file, std::move(image)};
+    return row;
   };
-  // Each stop's EXR compressed and written while the next stops are computed.
-  make_in_order_write_beside(sim.stops().size(), make_stop,
-                             [](const StopFile& f) { write_exr_image_on_this_thread(f.path, f.image); });
+  side_by_side_in_order(sim.stops().size(), do_stop, [&](StopRow&& row) {
+    csv += row.csv;
+    if (row.preview) previews.push_back(std::move(*row.preview));
+  });
   progress.finish();
   write_text_file(dir / "stops.csv", csv);
   PreviewOptions po;

@@ -34,7 +34,7 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/study/sweep.h"
 #include "polrig/vector_log.h"
-#include "polrig/write_pipeline.h"
+#include "polrig/side_by_side.h"
 #include "polrig/units.h"
 #include "thread_ranks.h"
 
@@ -532,7 +532,7 @@ TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
   EXPECT_EQ(calls, 2u);
 }
 
-// The datasets' pipeline (write_pipeline.h): every piece's work done once, results collected in
+// The datasets' pipeline (side_by_side.h): every piece's work done once, results collected in
 // order; never more than threads + 1 pieces in flight; the first failing piece in order is the
 // error thrown, whichever thread met it.
 TEST(WritePipeline, WorksSideBySideCollectsInOrderAndBoundsThePiecesInFlight) {

@@ -10,7 +10,7 @@
 #include "polrig/sky/sensor_view.h"
 #include "polrig/sky/sun.h"
 #include "polrig/units.h"
-#include "polrig/write_pipeline.h"
+#include "polrig/side_by_side.h"
 
 namespace polrig {
 

@@ -1,16 +1,12 @@
 #include "polrig/report/locate_report.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <limits>
-#include <exception>
 #include <optional>
 #include <stdexcept>
 
 #include <fmt/format.h>
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
@@ -18,6 +14,7 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/report/positioning_reports.h"
 #include "polrig/rig/rig.h"
+#include "polrig/side_by_side.h"
 
 namespace polrig {
 
@@ -62,43 +59,31 @@ DatasetLocation locate_four_camera_dataset(const FourCameraDataset& dataset, con
   DatasetLocation run;
   run.truth = truth;
   std::vector<SunSighting> sightings;
-  // The stops side by side, each on its own (the same work on any thread: the same results for any
-  // thread count), at most one stop's images per thread in memory. A failing stop stops the stops
-  // after it; the first failure in stop order is the one thrown.
-  const std::size_t N = dataset.stops.size();
-  std::vector<std::optional<StopSun>> suns(N);
-  std::vector<std::exception_ptr> errors(N);
-  std::atomic<std::size_t> first_failure{N};
-  progress.begin("locate: sun vectors", static_cast<long long>(N));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, N, 1), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t s = r.begin(); s < r.end(); ++s) {
-      const FourCameraDatasetStop& st = dataset.stops[s];
-      if (s > first_failure.load() || !st.polarized || st.utc.empty()) {
-        progress.advance(1);
-        continue;
-      }
-      try {
-        FusedAopDop fused = aop_dop(s);
-        const SkyPoints points =
-            grid_points(dataset.width, dataset.height, 1.0, std::move(fused.aop_deg), std::move(fused.dop));
-        suns[s] = StopSun{st.stop, st.utc, sun_vector_eigen(points, *camera, orientation)};
-      } catch (...) {
-        errors[s] = std::current_exception();
-        std::size_t f = first_failure.load();
-        while (s < f && !first_failure.compare_exchange_weak(f, s)) {}
-      }
-      progress.advance(1);
+  // The stops side by side, each on its own thread (the same work on any thread: the same results
+  // for any thread count), collected in stop order; the first failing stop in order is thrown.
+  progress.begin("locate: sun vectors", static_cast<long long>(dataset.stops.size()));
+  const auto stop_sun = [&](std::size_t s) {
+    const FourCameraDatasetStop& st = dataset.stops[s];
+    std::optional<StopSun> sun;
+    if (st.polarized && !st.utc.empty()) {
+      FusedAopDop fused = aop_dop(s);
+      const SkyPoints points =
+          grid_points(dataset.width, dataset.height, 1.0, std::move(fused.aop_deg), std::move(fused.dop));
+      sun = StopSun{st.stop, st.utc, sun_vector_eigen(points, *camera, orientation)};
     }
+    progress.advance(1);
+    return sun;
+  };
+  std::size_t s = 0;
+  side_by_side_in_order(dataset.stops.size(), stop_sun, [&](std::optional<StopSun>&& sun) {
+    const std::size_t stop = s++;
+    if (!sun) return;
+    if (has_sun(sun->sun.status)) {
+      sightings.push_back({parse_utc(sun->utc), sun->sun.sun, 1.0});
+      run.true_heading_deg.push_back(dataset.stops[stop].heading_deg.value_or(std::nan("")));
+    }
+    run.suns.push_back(std::move(*sun));
   });
-  if (first_failure.load() < N) std::rethrow_exception(errors[first_failure.load()]);
-  for (std::size_t s = 0; s < N; ++s) {
-    if (!suns[s]) continue;
-    if (has_sun(suns[s]->sun.status)) {
-      sightings.push_back({parse_utc(suns[s]->utc), suns[s]->sun.sun, 1.0});
-      run.true_heading_deg.push_back(dataset.stops[s].heading_deg.value_or(std::nan("")));
-    }
-    run.suns.push_back(std::move(*suns[s]));
-  }
   progress.finish();
   if (run.suns.empty())
     throw std::invalid_argument("no polarized stop with a UTC time: nothing to locate from (a sky dataset's stops.csv "

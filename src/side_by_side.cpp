@@ -1,4 +1,4 @@
-#include "polrig/write_pipeline.h"
+#include "polrig/side_by_side.h"
 
 #include <algorithm>
 

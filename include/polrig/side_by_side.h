@@ -15,11 +15,9 @@
 
 #include <tbb/parallel_pipeline.h>
 
-namespace polrig {
+#include "polrig/threads.h"
 
-// The threads polrig may use: the arena's concurrency within --threads (tbb::global_control, which
-// limits the workers but not what the arena says).
-int usable_threads();
+namespace polrig {
 
 template <class Work, class Collect>
 void side_by_side_in_order(std::size_t count, Work&& work, Collect&& collect) {

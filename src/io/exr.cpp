@@ -26,7 +26,7 @@
 #include <fmt/format.h>
 
 #include "polrig/io/measured.h"
-#include "polrig/side_by_side.h"
+#include "polrig/threads.h"
 
 namespace polrig {
 

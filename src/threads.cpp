@@ -1,6 +1,7 @@
-#include "polrig/side_by_side.h"
+#include "polrig/threads.h"
 
 #include <algorithm>
+#include <cstddef>
 
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>

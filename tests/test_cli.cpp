@@ -460,7 +460,8 @@ TEST_F(Cli, StageTimesWhenAsked) {
   EXPECT_GT(wall, 0.1);  // 200,000 points on one thread
   EXPECT_LE(wall, std::stod(csv.rows.back()[1]));
   EXPECT_LE(cpu, 1.02 * wall + 0.01);
-  EXPECT_GT(cpu, 0.5 * wall);
+  // Counted, not zero: another test may share the core (under the sanitizers, -j2, it took 49 %).
+  EXPECT_GT(cpu, 0.1 * wall);
   // Without the variable, no file.
   fs::remove(log);
   ok("sweep " + shell_quote(kRig) + " --grid eccentricity.L_S=0.001:1:5 --no-plots -o " + dir_arg(tmp / "sw2"));

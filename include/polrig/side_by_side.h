@@ -10,8 +10,8 @@
 // collect is thrown at once. Either stops the pipeline.
 #include <cstddef>
 #include <exception>
-#include <memory>
 #include <optional>
+#include <vector>
 
 #include <tbb/parallel_pipeline.h>
 
@@ -26,29 +26,35 @@ void side_by_side_in_order(std::size_t count, Work&& work, Collect&& collect) {
     std::optional<Result> result;
     std::exception_ptr error;
   };
+  // Piece i lives in slot i mod tokens: TBB lets piece i in only once piece i − tokens has left the
+  // last stage. Only indices pass between the stages, so a pipeline stopped by an exception
+  // leaves nothing behind (TBB does not destroy the objects in flight when it cancels).
+  const auto tokens = static_cast<std::size_t>(usable_threads() + 1);
+  std::vector<Done> slots(tokens);
   std::size_t next = 0;
   tbb::parallel_pipeline(
-      static_cast<std::size_t>(usable_threads() + 1),
+      tokens,
       tbb::make_filter<void, std::size_t>(tbb::filter_mode::serial_in_order,
                                           [&](tbb::flow_control& fc) -> std::size_t {
                                             if (next == count) fc.stop();
                                             return next++;
                                           }) &
-          tbb::make_filter<std::size_t, std::shared_ptr<Done>>(tbb::filter_mode::parallel,
-                                                               [&](std::size_t i) {
-                                                                 auto d = std::make_shared<Done>();
-                                                                 try {
-                                                                   d->result.emplace(work(i));
-                                                                 } catch (...) {
-                                                                   d->error = std::current_exception();
-                                                                 }
-                                                                 return d;
-                                                               }) &
-          tbb::make_filter<std::shared_ptr<Done>, void>(tbb::filter_mode::serial_in_order,
-                                                        [&](const std::shared_ptr<Done>& d) {
-                                                          if (d->error) std::rethrow_exception(d->error);
-                                                          collect(std::move(*d->result));
-                                                        }));
+          tbb::make_filter<std::size_t, std::size_t>(tbb::filter_mode::parallel,
+                                                     [&](std::size_t i) {
+                                                       Done& d = slots[i % tokens];
+                                                       try {
+                                                         d.result.emplace(work(i));
+                                                       } catch (...) {
+                                                         d.error = std::current_exception();
+                                                       }
+                                                       return i;
+                                                     }) &
+          tbb::make_filter<std::size_t, void>(tbb::filter_mode::serial_in_order, [&](std::size_t i) {
+            Done& d = slots[i % tokens];
+            if (d.error) std::rethrow_exception(d.error);
+            collect(std::move(*d.result));
+            d.result.reset();
+          }));
 }
 
 }  // namespace polrig

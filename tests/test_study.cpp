@@ -532,10 +532,10 @@ TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
   EXPECT_EQ(calls, 2u);
 }
 
-// The datasets' pipeline (side_by_side.h): every piece's work done once, results collected in
-// order; never more than threads + 1 pieces in flight; the first failing piece in order is the
-// error thrown, whichever thread met it.
-TEST(WritePipeline, WorksSideBySideCollectsInOrderAndBoundsThePiecesInFlight) {
+// The datasets' stops side by side (side_by_side.h): every piece's work done once, the results
+// collected in order; never more than threads + 1 pieces in flight; the first failing piece in
+// order is the error thrown, whichever thread met it.
+TEST(SideBySide, WorksSideBySideCollectsInOrderAndBoundsThePiecesInFlight) {
   for (int threads : {1, 2, 4}) {
     const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     std::vector<std::atomic<int>> worked(40);

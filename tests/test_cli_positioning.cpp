@@ -199,15 +199,15 @@ TEST_F(CliPositioning, LocateRefusesWhatItCannotUse) {
   Result r = polrig("locate " + shell_quote(tmp / "none") + " -o " + shell_quote(tmp / "x"));
   EXPECT_EQ(r.status, 2);  // a usage error (docs/cli.md exit codes)
   EXPECT_HAS(r.err, "--prior");
-  // Two unreadable stops: the first in stop order is named, whichever thread met it, and nothing
-  // is written.
+  // Two unreadable stops, next to each other (both in flight at 2 threads): the first in stop
+  // order is named, whichever thread met it, and nothing is written.
   const fs::path w16 = tmp / "w16";
   ok("simulate " + shell_quote(std::string(POLRIG_SOURCE_DIR "/rigs/wang2016-static.yaml")) +
      " --no-plots --set schedule.count=12 --set device.cameras.width_px=64 --set device.cameras.height_px=48"
      " --set 'device.cameras.fx_px=[48, 48, 48, 48]' --set 'device.cameras.fy_px=[48, 48, 48, 48]'"
      " --set 'device.cameras.cx_px=[32, 32, 32, 32]' --set 'device.cameras.cy_px=[24, 24, 24, 24]' -o " +
      shell_quote(w16));
-  for (const char* stop : {"stop_0003.exr", "stop_0009.exr"}) write_file(w16 / "frames" / stop, "not an EXR");
+  for (const char* stop : {"stop_0003.exr", "stop_0004.exr"}) write_file(w16 / "frames" / stop, "not an EXR");
   for (int run = 0; run < 3; ++run) {
     r = polrig("locate " + shell_quote(w16) + " --prior 28,113 --threads 2 -o " + shell_quote(tmp / "z"));
     EXPECT_EQ(r.status, 2) << r.err;  // a camera dataset's file (docs/cli.md "Exit status")

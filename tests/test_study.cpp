@@ -562,25 +562,37 @@ TEST(SideBySide, WorksSideBySideCollectsInOrderAndBoundsThePiecesInFlight) {
     EXPECT_LE(most.load(), usable_threads() + 1) << threads;
     EXPECT_EQ(usable_threads(), std::min(threads, tbb::this_task_arena::max_concurrency())) << threads;
   }
+  // Four threads whatever the machine (five pieces in flight), so that stop 4 fails while stop 3
+  // is still at work: stop 3's error must still be the one thrown.
   const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
-  for (int run = 0; run < 5; ++run) {
-    try {
-      side_by_side_in_order(
-          12,
-          [&](std::size_t i) {
-            if (i == 7) throw std::runtime_error("stop_0007.exr: disk full");
-            if (i == 3) {  // met after stop 7 on another thread
-              std::this_thread::sleep_for(std::chrono::milliseconds(5));
-              throw std::runtime_error("stop_0003.exr: disk full");
-            }
-            return i;
-          },
-          [](std::size_t) {});
-      FAIL() << "expected stop 3's error";
-    } catch (const std::runtime_error& e) {
-      EXPECT_STREQ(e.what(), "stop_0003.exr: disk full") << run;
+  tbb::task_arena four(4);
+  four.execute([&] {
+    ASSERT_EQ(usable_threads(), 4);
+    for (int run = 0; run < 5; ++run) {
+      std::atomic<bool> later_failed_first{false};
+      try {
+        side_by_side_in_order(
+            12,
+            [&](std::size_t i) {
+              if (i == 4) {
+                later_failed_first = true;
+                throw std::runtime_error("stop_0004.exr: disk full");
+              }
+              if (i == 3) {
+                for (int k = 0; k < 200 && !later_failed_first; ++k)
+                  std::this_thread::sleep_for(std::chrono::milliseconds(1));
+                throw std::runtime_error("stop_0003.exr: disk full");
+              }
+              return i;
+            },
+            [](std::size_t) {});
+        FAIL() << "expected stop 3's error";
+      } catch (const std::runtime_error& e) {
+        EXPECT_STREQ(e.what(), "stop_0003.exr: disk full") << run;
+      }
+      EXPECT_TRUE(later_failed_first) << run;  // stop 4 did fail first
     }
-  }
+  });
   EXPECT_THROW(side_by_side_in_order(
                    5, [](std::size_t i) { return i; },
                    [](std::size_t i) {

@@ -35,10 +35,14 @@ namespace {
 // no threads until told (OutputFile's thread count alone only sizes its line buffers: the
 // compression then ran on the calling thread, one core busy with PIZ while H17's simulation
 // waited). Sized to the threads polrig may use (--threads).
-int use_exr_threads() {
+// OutputFile hands its line blocks to the global pool whatever thread count it is given (that
+// count sizes its buffers): only a pool of no threads compresses on the calling thread. So the
+// pool is sized per call: `usable_threads()` for one image at a time, none for callers that
+// write several at once on their own threads (write_exr_image_on_this_thread).
+int use_exr_threads(bool on_pool = true) {
   static std::mutex mutex;
   const std::lock_guard lock(mutex);
-  const int threads = usable_threads();
+  const int threads = on_pool ? usable_threads() : 0;
   if (Imf::globalThreadCount() != threads) Imf::setGlobalThreadCount(threads);
   return threads;
 }
@@ -185,7 +189,7 @@ void write_channels(const std::filesystem::path& path, int width, int height, st
     {
       // Compression runs per block of lines on the threads polrig may use (--threads), or on
       // this thread alone; the file is the same for any count (its blocks are written in line order).
-      Imf::OutputFile file(stream, header, on_pool ? use_exr_threads() : 0);
+      Imf::OutputFile file(stream, header, use_exr_threads(on_pool));
       file.setFrameBuffer(fb);
       file.writePixels(height);
     }

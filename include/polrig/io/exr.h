@@ -73,8 +73,9 @@ struct ExrImage {
 // Writes every channel of `image` (lossless `compression`) and its attributes. Throws as write_exr.
 void write_exr_image(const std::filesystem::path& path, const ExrImage& image,
                      ExrCompression compression = ExrCompression::Zip);
-// The same, compressed on the calling thread alone (OpenEXR's pool untouched): for callers that
-// write several images at once on their own threads (side_by_side.h). The same bytes.
+// The same, compressed on the calling thread alone (OpenEXR's global pool is set to no threads
+// for it, which write_exr_image sizes again): for callers that write several images at once on
+// their own threads (side_by_side.h). The same bytes.
 void write_exr_image_on_this_thread(const std::filesystem::path& path, const ExrImage& image,
                                     ExrCompression compression = ExrCompression::Zip);
 // Reads an image back: FLOAT and HALF channels as floats, UINT channels as uints, and the string,

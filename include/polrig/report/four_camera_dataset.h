@@ -33,8 +33,8 @@ std::string_view four_camera_layers_name(FourCameraLayers layers);  // "all", "f
 std::optional<FourCameraLayers> parse_four_camera_layers(std::string_view name);
 
 struct FourCameraDatasetOptions {
-  // What locate reads by default: at W16's size a stop is 6.2 MB and ≈ 0.4 core-seconds, against
-  // 15.4 MB and ≈ 0.7 with the fused Stokes layers and 21 MB with the raw frames (docs/cli.md,
+  // What locate reads by default: at W16's size a stop is 6.2 MB and ≈ 0.5 core-seconds, against
+  // 15.4 MB and ≈ 0.75 with the fused Stokes layers and 21 MB with the raw frames (docs/cli.md,
   // "simulate"); the calibration, which needs the raw frames, asks for All.
   FourCameraLayers layers = FourCameraLayers::Aop;
   // The first and the last stop's fused AoP, DoP and S0 as PNGs in DIR/previews/ (gnuplot;

@@ -6,6 +6,12 @@ the serial fraction f that Amdahl's law gives for it, f = (N·T_N/T_1 − 1)/(N 
 serial time goes: the stage that loses most (its own T_N − T_1/N over T_1, ranked) and the time
 outside every stage (start-up, reading, writing the outputs).
 
+The same run's f (the issue's measure: the time in serial stages against the CPU time of the
+parallel ones) comes from the N-thread run alone, so that no second run's noise enters it: the
+run's cores idle N·T_N − CPU_N core-seconds, and a serial stage of s seconds idles (N − 1)·s of
+them, so f = (N·T_N − CPU_N)/((N − 1)·CPU_N) (CPU_N ≈ T_1 when the threads add no work). The stage
+that idles most is named with its share of that f.
+
     python3 bench/serial_fraction.py [--polrig build/polrig] [--threads 2] [--only sweep,navigate] [--corun]
                                      [--repeat 3]
 
@@ -103,6 +109,16 @@ def run(polrig, args, threads, scratch, log):
     return wall, total_cpu, stages
 
 
+def idle_fraction(n, wall, cpu, stages):
+    """The same run's f, and the stage idling most with its share of f (None outside every stage)."""
+    scale = (n - 1) * cpu
+    f = (n * wall - cpu) / scale
+    idle = {k: (n * w - c) / scale for k, (w, c) in stages.items()}
+    idle[None] = f - sum(idle.values())
+    worst = max(idle, key=idle.get)
+    return f, worst, idle[worst]
+
+
 def median_run(runs):
     """The run of median wall time (its stages with it)."""
     return sorted(runs, key=lambda r: r[0])[len(runs) // 2]
@@ -122,8 +138,8 @@ def main():
     words = [w for w in a.only.split(",") if w]
     extra = (" machine's own f |", "---|") if a.corun else ("", "")
     print(f"| command | 1 thread | {n} threads | speed-up | serial fraction | stage losing most | outside stages |"
-          f"{extra[0]}")
-    print("|---|---|---|---|---|---|---|" + extra[1])
+          f" same run's f | stage idling most |{extra[0]}")
+    print("|---|---|---|---|---|---|---|---|---|" + extra[1])
     with tempfile.TemporaryDirectory(prefix="polrig-serial-") as scratch:
         log = os.path.join(scratch, "stages.csv")
         for name, args, setup in COMMANDS:
@@ -137,18 +153,20 @@ def main():
                 ones.append(run(a.polrig, args.format(d=scratch), 1, scratch, log))
                 ns.append(run(a.polrig, args.format(d=scratch), n, scratch, log))
             t1, _, s1 = median_run(ones)
-            tn, _, sn = median_run(ns)
+            tn, cn, sn = median_run(ns)
             f = (n * tn / t1 - 1) / (n - 1)
             loss = {k: (sn[k][0] - s1[k][0] / n) / t1 for k in s1 if k in sn}
             worst = max(loss, key=loss.get) if loss else "—"
             outside = (tn - sum(w for w, _ in sn.values())) / t1
             worst_text = f"{worst} ({100 * loss[worst]:.1f} %)" if loss else "—"
+            fi, idler, share = idle_fraction(n, tn, cn, sn)
+            idler_text = f"{idler or 'outside stages'} ({100 * share:.1f} %)"
             machine = ""
             if a.corun:  # n runs at once in T_c: as one run of n·T1 work taking T_c, Amdahl's f
                 tc = corun(a.polrig, args.format(d=scratch), n, scratch)
                 machine = f" {100 * (n * (tc / n) / t1 - 1) / (n - 1):.1f} % |"
             print(f"| {name} | {t1:.2f} s | {tn:.2f} s | {t1 / tn:.2f}× | {100 * f:.1f} % | {worst_text} | "
-                  f"{100 * outside:.1f} % |{machine}", flush=True)
+                  f"{100 * outside:.1f} % | {100 * fi:.1f} % | {idler_text} |{machine}", flush=True)
 
 
 if __name__ == "__main__":

@@ -515,8 +515,9 @@ TEST(Sweep, ResumingAtABlockComputesOnlyTheRestAndTheSameValues) {
 }
 
 TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
-  // The sink runs on a writer thread beside the next block's computation (study/sweep.cpp): its
-  // error must still reach the caller, and the blocks after the failed one must not be written.
+  // The sink runs on one of the pipeline's threads while the others compute the next block's
+  // pieces (study/sweep.cpp): its error must still reach the caller, and the blocks after the
+  // failed one must not be written.
   const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
                                    GridAxis::parse("eccentricity.alpha_S=0:359:50")};  // 4 blocks
   std::size_t calls = 0;
@@ -705,17 +706,26 @@ TEST(SweepOnRanks, ABadPointOnRank1sShardStopsEveryRankWithOneProcesssMessage) {
 }
 
 TEST(SweepOnRanks, ASinkFailureOnRank0StopsEveryRankAtTheNextCollective) {
-  // Thrown for the second block: said when the third is computed.
+  // Rank 0 writes a block on its writer thread while the next is computed: a failed write is found
+  // when the next block is handed on and said at the collective after it; the last block's at
+  // the end. Either way every rank stops with the sink's message and no later block is written.
   const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
-                                   GridAxis::parse("eccentricity.alpha_S=0:359:50")};
-  for (int size : {2, 3}) {
-    const auto errors = test::with_thread_ranks(size, [&](const Ranks& ranks) {
-      sweep(Rig{}, axes, CsTurn(8), [&](std::size_t first, std::span<const CsSummary>) {
-        if (first > 0) throw std::runtime_error("disk full");
-      }, SweepProgress{}, SweepOptions{.ranks = &ranks});
-    });
-    EXPECT_EQ(errors, std::vector<std::string>(static_cast<std::size_t>(size), "disk full")) << size;
-  }
+                                   GridAxis::parse("eccentricity.alpha_S=0:359:50")};  // 4 blocks
+  const std::size_t block = sweep_block_size(grid_points(axes));
+  for (int size : {2, 3})
+    for (std::size_t failing : {std::size_t{1}, std::size_t{3}}) {
+      std::vector<std::size_t> written;
+      const auto errors = test::with_thread_ranks(size, [&](const Ranks& ranks) {
+        sweep(Rig{}, axes, CsTurn(8), [&](std::size_t first, std::span<const CsSummary>) {
+          written.push_back(first / block);
+          if (first == failing * block) throw std::runtime_error("disk full");
+        }, SweepProgress{}, SweepOptions{.ranks = &ranks});
+      });
+      EXPECT_EQ(errors, std::vector<std::string>(static_cast<std::size_t>(size), "disk full")) << size;
+      std::vector<std::size_t> expected(failing + 1);
+      for (std::size_t b = 0; b <= failing; ++b) expected[b] = b;
+      EXPECT_EQ(written, expected) << size << " ranks, block " << failing << " failing";
+    }
 }
 
 TEST(Sweep, IsBitIdenticalForAnyThreadCount) {

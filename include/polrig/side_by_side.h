@@ -3,8 +3,9 @@
 // frames made, compressed and written on one thread (its data stay in that core's caches) while
 // other threads do other stops, and each stop's CSV row and preview gathered in stop order.
 // work(i) runs for every i in [0, count) on any thread, several at once; collect(result) runs
-// for i = 0, 1, … in order, one at a time. At most usable_threads() + 1 pieces are in flight, so
-// memory is bounded by them, not by the dataset; both run in the caller's TBB arena, so nothing
+// for i = 0, 1, … in order, one at a time. At most `tokens` pieces are in flight (by default
+// usable_threads() + 1), so memory is bounded by them, not by the dataset; piece i starts only
+// once piece i − tokens has been collected; both run in the caller's TBB arena, so nothing
 // runs beside the threads polrig may use (--threads). An exception from work(i) is thrown when
 // collecting reaches i (the first failing piece in order, whichever thread met it); one from
 // collect is thrown at once. Either stops the pipeline.
@@ -20,7 +21,8 @@
 namespace polrig {
 
 template <class Work, class Collect>
-void side_by_side_in_order(std::size_t count, Work&& work, Collect&& collect) {
+void side_by_side_in_order(std::size_t count, Work&& work, Collect&& collect,
+                           std::size_t tokens = static_cast<std::size_t>(usable_threads() + 1)) {
   using Result = decltype(work(std::size_t{0}));
   struct Done {
     std::optional<Result> result;
@@ -29,7 +31,6 @@ void side_by_side_in_order(std::size_t count, Work&& work, Collect&& collect) {
   // Piece i lives in slot i mod tokens: TBB lets piece i in only once piece i − tokens has left the
   // last stage. Only indices pass between the stages, so a pipeline stopped by an exception
   // leaves nothing behind (TBB does not destroy the objects in flight when it cancels).
-  const auto tokens = static_cast<std::size_t>(usable_threads() + 1);
   std::vector<Done> slots(tokens);
   std::size_t next = 0;
   tbb::parallel_pipeline(

@@ -19,6 +19,8 @@
 #include <tbb/parallel_for.h>
 
 #include "polrig/background_writer.h"
+#include "polrig/side_by_side.h"
+#include "polrig/threads.h"
 #include "polrig/rig/error.h"
 #include "polrig/study/rank_failure.h"
 
@@ -229,9 +231,36 @@ void check_grid(const Rig& base, const std::vector<GridAxis>& axes) {
 }
 
 namespace {
-// The CS summaries of grid points [begin, end) into out[0 … end − begin), in parallel. Throws
-// RigError naming the first point (in grid order) that breaks a rule of check_rig; nothing else
-// is then meaningful in `out`.
+// The CS summaries of grid points [begin, end) into out[0 … end − begin), one after another, or
+// the index of the first point that breaks a rule of check_rig (nothing after it computed). One
+// rig stepped through the grid in row-major order, setting only the keys whose index changed (in
+// axis order, as rig_at does): no copy of the rig (and of its shared light) and no allocation per
+// point.
+std::optional<std::size_t> compute_points(const Rig& base, const std::vector<GridAxis>& axes,
+                                          const CsTurn& turn, std::size_t begin, std::size_t end,
+                                          CsSummary* out, std::vector<double>& scratch) {
+  if (begin == end) return std::nullopt;
+  std::vector<int> idx = grid_indices(axes, begin);
+  Rig rig = rig_at(base, axes, idx);
+  for (std::size_t p = begin; p != end; ++p) {
+    if (p != begin) {
+      std::size_t a = axes.size();
+      while (a-- > 0 && ++idx[a] == axes[a].count) idx[a] = 0;
+      for (; a < axes.size(); ++a) axes[a].key->real(rig) = axes[a].value(idx[a]);
+    }
+    if (check_rig(rig)) return p;
+    out[p - begin] = cs_summary(rig, turn, scratch);
+  }
+  return std::nullopt;
+}
+
+[[noreturn]] void throw_point_error(const Rig& base, const std::vector<GridAxis>& axes, std::size_t point) {
+  const std::vector<int> idx = grid_indices(axes, point);
+  throw point_error(axes, idx, *check_rig(rig_at(base, axes, idx)));
+}
+
+// compute_points in parallel (one rank's shard of a block). Throws RigError naming the first
+// point (in grid order) that breaks a rule of check_rig; nothing else is then meaningful in `out`.
 void compute_block(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,
                    std::size_t begin, std::size_t end, CsSummary* out,
                    tbb::enumerable_thread_specific<std::vector<double>>& scratch) {
@@ -239,32 +268,14 @@ void compute_block(const Rig& base, const std::vector<GridAxis>& axes, const CsT
   std::atomic<std::size_t> first_bad{none};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(begin, end, 256),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      std::vector<double>& s = scratch.local();
-                      // One rig and one index per range of points, stepped through the grid in
-                      // row-major order, setting only the keys whose index changed (in axis
-                      // order, as rig_at does): no copy of the rig (and of its shared light) and
-                      // no allocation per point.
-                      std::vector<int> idx = grid_indices(axes, r.begin());
-                      Rig rig = rig_at(base, axes, idx);
-                      for (std::size_t p = r.begin(); p != r.end(); ++p) {
-                        if (p != r.begin()) {
-                          std::size_t a = axes.size();
-                          while (a-- > 0 && ++idx[a] == axes[a].count) idx[a] = 0;
-                          for (; a < axes.size(); ++a) axes[a].key->real(rig) = axes[a].value(idx[a]);
-                        }
-                        if (check_rig(rig)) {
-                          std::size_t seen = first_bad.load();
-                          while (p < seen && !first_bad.compare_exchange_weak(seen, p)) {
-                          }
-                          continue;
-                        }
-                        out[p - begin] = cs_summary(rig, turn, s);
+                      const auto bad = compute_points(base, axes, turn, r.begin(), r.end(),
+                                                      out + (r.begin() - begin), scratch.local());
+                      if (!bad) return;
+                      std::size_t seen = first_bad.load();
+                      while (*bad < seen && !first_bad.compare_exchange_weak(seen, *bad)) {
                       }
                     });
-  if (first_bad != none) {
-    const std::vector<int> idx = grid_indices(axes, first_bad);
-    throw point_error(axes, idx, *check_rig(rig_at(base, axes, idx)));
-  }
+  if (first_bad != none) throw_point_error(base, axes, first_bad);
 }
 }  // namespace
 
@@ -275,34 +286,52 @@ std::size_t sweep_block_size(std::size_t total_points) {
 
 namespace {
 
-// One process: block b + 1 is computed while a writer thread hands block b to the sink, so the
-// sink's writing (sweep.h5's chunks, sweep.csv, the resume state) never stalls the computation.
-// Two buffers: memory for two blocks. The sink still sees every block once, in grid order, one
-// call at a time; an error is the first in grid order (a failed write before a bad point after it).
+// One process: the points in pieces side by side (side_by_side.h), across the blocks' bounds, so
+// that no core waits for a block's last piece; each block handed to the sink whole, in grid order,
+// one call at a time, on one thread while the others compute the next block's pieces. Pieces of at
+// most 256 points, at least eight a thread in a block (a traced rig's grid of a few hundred
+// points, one block, is shared too); at most a block of them in flight beside the block being
+// assembled: memory for two blocks. An error is the first in grid order (a failed write before a
+// bad point after it).
 void sweep_alone(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn, const SweepSink& sink,
                  const SweepProgress& progress, std::size_t first_point, std::size_t block) {
   const std::size_t total = grid_points(axes);
-  std::array<std::vector<CsSummary>, 2> buffers;
-  for (std::vector<CsSummary>& b : buffers) b.resize(std::min(block, total));
+  if (first_point == total) return;
+  block = std::min(block, total);
+  const auto threads = static_cast<std::size_t>(usable_threads());
+  const std::size_t piece = std::clamp<std::size_t>((block + 8 * threads - 1) / (8 * threads), 1, 256);
+  const std::size_t pieces_per_block = (block + piece - 1) / piece;
+  const std::size_t blocks = (total - first_point + block - 1) / block;
+  struct Piece {
+    std::size_t index;
+    std::vector<CsSummary> summaries;
+  };
+  // The points of piece i: its block's, from the piece's start (empty past a last, short block)
+  const auto bounds = [&](std::size_t i) {
+    const std::size_t block_begin = first_point + i / pieces_per_block * block;
+    const std::size_t block_end = std::min(total, block_begin + block);
+    const std::size_t begin = std::min(block_end, block_begin + i % pieces_per_block * piece);
+    return std::array<std::size_t, 4>{block_begin, block_end, begin, std::min(block_end, begin + piece)};
+  };
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
-  BackgroundWriter writer;
-  std::size_t current = 0;
-  try {
-    for (std::size_t begin = first_point; begin < total; begin += block) {
-      const std::size_t end = std::min(total, begin + block);
-      compute_block(base, axes, turn, begin, end, buffers[current].data(), scratch);
-      // submit() waits for block b − 1's write: the buffer computed next is free.
-      writer.submit([&sink, &progress, &buffers, current, begin, end, total] {
-        sink(begin, std::span<const CsSummary>(buffers[current].data(), end - begin));
-        if (progress) progress(end, total);
-      });
-      current ^= 1;
-    }
-    writer.finish();
-  } catch (...) {
-    writer.finish();  // a failed write of the block before is said first
-    throw;
-  }
+  std::vector<CsSummary> assembled(block);
+  side_by_side_in_order(
+      blocks * pieces_per_block,
+      [&](std::size_t i) {
+        const auto [block_begin, block_end, begin, end] = bounds(i);
+        Piece p{i, std::vector<CsSummary>(end - begin)};
+        if (const auto bad = compute_points(base, axes, turn, begin, end, p.summaries.data(), scratch.local()))
+          throw_point_error(base, axes, *bad);
+        return p;
+      },
+      [&](Piece p) {
+        const auto [block_begin, block_end, begin, end] = bounds(p.index);
+        std::copy(p.summaries.begin(), p.summaries.end(), assembled.begin() + (begin - block_begin));
+        if (p.index % pieces_per_block != pieces_per_block - 1) return;
+        sink(block_begin, std::span<const CsSummary>(assembled.data(), block_end - block_begin));
+        if (progress) progress(block_end, total);
+      },
+      pieces_per_block + 1);
 }
 
 }  // namespace
@@ -328,6 +357,15 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
   std::vector<CsSummary> summaries(std::min(block, total) / size + 1);
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
   std::optional<std::string> sink_failure;  // rank 0's, said at the next collective point
+  // Rank 0 hands block b to the sink on a writer thread while every rank computes block b + 1: two
+  // buffers, the one written and the one gathered next. A failed write is found when the next is
+  // submitted (or at the end) and said at the collective point after it.
+  std::array<std::vector<CsSummary>, 2> written;
+  BackgroundWriter writer;
+  std::size_t current = 0;
+  const auto note_sink_failure = [&](const std::exception& e) {
+    if (!sink_failure) sink_failure = rank_failure_text(e);
+  };
   for (std::size_t begin = options.first_point; begin < total; begin += block) {
     const std::size_t end = std::min(total, begin + block);
     const std::size_t mine_begin = begin + (end - begin) * rank / size;
@@ -350,16 +388,25 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
     try {
       if (gathered.size() != (end - begin) * sizeof(CsSummary))
         throw std::logic_error(fmt::format("sweep: gathered {} bytes for {} points", gathered.size(), end - begin));
-      std::vector<CsSummary> block_summaries(end - begin);
+      std::vector<CsSummary>& block_summaries = written[current];
+      block_summaries.resize(end - begin);
       std::memcpy(block_summaries.data(), gathered.data(), gathered.size());
-      sink(begin, block_summaries);
-      if (progress) progress(end, total);
+      // submit() waits for block b − 1's write (throwing its failure); block b − 2's buffer is free
+      writer.submit([&sink, &progress, &block_summaries, begin, end, total] {
+        sink(begin, block_summaries);
+        if (progress) progress(end, total);
+      });
+      current ^= 1;
     } catch (const std::exception& e) {
-      sink_failure = rank_failure_text(e);
+      note_sink_failure(e);
     }
   }
-  if (size > 1)
-    if (const auto first = ranks.first_failure(sink_failure)) throw_rank_failure(*first);
+  if (rank == 0) try {
+      writer.finish();
+    } catch (const std::exception& e) {
+      note_sink_failure(e);
+    }
+  if (const auto first = ranks.first_failure(sink_failure)) throw_rank_failure(*first);
 }
 
 SweepResult sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn,

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <array>
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -471,6 +472,46 @@ TEST(Exr, AHeaderClaimingAnotherSizeIsRefusedBeforeItsPixelsAreAllocated) {
   const std::string limit = file.string() + ": 100000 × 100000 px (expected at most 16384 × 16384)";
   EXPECT_EQ(refusal([&] { read_exr_image(file); }), limit);
   EXPECT_EQ(refusal([&] { read_exr(file, w, h); }), limit);
+  fs::remove_all(dir);
+}
+
+}  // namespace polrig
+
+namespace polrig {
+
+// ExrThreads: an image compressed on OpenEXR's pool or on the calling thread alone is the same
+// file, and reads back to the pixels written either way, also two images at once on two threads
+// (as side_by_side.h's stops read them). 200 rows: 13 ZIP and 7 PIZ line blocks.
+TEST(Exr, OnThisThreadOrOnThePoolTheSameBytesAndPixels) {
+  const fs::path dir = fresh_dir("exr-threads");
+  fs::create_directories(dir);
+  ExrImage image;
+  image.width = 64, image.height = 200;
+  std::vector<float> aop(64 * 200);
+  std::vector<std::uint32_t> raw(aop.size());
+  for (std::size_t i = 0; i < aop.size(); ++i) {
+    aop[i] = static_cast<float>(std::fmod(0.37 * static_cast<double>(i * i % 9973), 180.0));
+    raw[i] = static_cast<std::uint32_t>((i * 2654435761u) % 4096u);
+  }
+  image.floats.push_back({"AoP", aop});
+  image.uints.push_back({"raw.000", raw});
+  for (ExrCompression c : {ExrCompression::Zip, ExrCompression::Piz}) {
+    const fs::path pooled = dir / "pooled.exr", here = dir / "here.exr";
+    write_exr_image(pooled, image, c, ExrThreads::Pool);
+    write_exr_image(here, image, c, ExrThreads::ThisThread);
+    EXPECT_EQ(read_file(pooled), read_file(here));
+    std::array<ExrImage, 2> back;
+    std::thread other([&] { back[1] = read_exr_image(here, ExrSize{64, 200}, ExrThreads::ThisThread); });
+    back[0] = read_exr_image(pooled, ExrSize{64, 200}, ExrThreads::ThisThread);
+    other.join();
+    for (const ExrImage& b : back) {
+      EXPECT_EQ(b.floats.at(0).pixels, aop);
+      EXPECT_EQ(b.uints.at(0).pixels, raw);
+    }
+    EXPECT_EQ(read_exr_image(here, ExrSize{64, 200}, ExrThreads::Pool).uints.at(0).pixels, raw);
+    const ExrImage band = read_exr_rows(here, 70, 50, nullptr, ExrSize{64, 200}, ExrThreads::ThisThread);
+    EXPECT_EQ(band.uints.at(0).pixels, std::vector<std::uint32_t>(raw.begin() + 70 * 64, raw.begin() + 120 * 64));
+  }
   fs::remove_all(dir);
 }
 

@@ -13,6 +13,7 @@ Progress = Union[None, bool, Callable[[str, float, float], Any]]
 
 __version__: str
 git_revision: str
+def keep_freed_memory() -> None: ...
 
 # ---- errors (module.cpp)
 class RigError(ValueError): ...

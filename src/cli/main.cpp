@@ -10,6 +10,7 @@
 
 #include "cli.h"
 #include "polrig/calib/fit.h"
+#include "polrig/freed_memory.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/output_dir.h"
 #include "polrig/io/sphere_cache.h"
@@ -31,6 +32,7 @@ std::string command_name(const CLI::App* app) {
 
 int main(int argc, char** argv) {
   const auto started = std::chrono::steady_clock::now();
+  keep_freed_memory();  // before any allocation worth keeping (freed_memory.h)
   clean_up_outputs_on_signals();  // first: before any other thread exists (MPI starts some)
   // MPI starts only under a launcher (mpirun, srun), and ends when `job` goes, after everything.
   std::unique_ptr<Ranks> job;

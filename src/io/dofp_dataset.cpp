@@ -183,7 +183,7 @@ std::vector<double> mean_of(const ExrImage& image, const DofpDatasetStop& s, con
 std::vector<double> read_dofp_mean_frame(const DofpDataset& dataset, std::size_t stop_index) {
   const DofpDatasetStop& s = dataset.stops.at(stop_index);
   const std::filesystem::path file = dataset.dir / s.file;
-  const ExrImage image = read_exr_image(file, size_of(dataset));
+  const ExrImage image = read_exr_image(file, size_of(dataset), ExrThreads::ThisThread);
   return mean_of(image, s, file, image.height, dataset.adc_bits);
 }
 
@@ -192,14 +192,14 @@ std::vector<double> read_dofp_mean_rows(const DofpDataset& dataset, std::size_t 
   const std::filesystem::path file = dataset.dir / s.file;
   if (first_row < 0 || rows < 1 || first_row > dataset.height - rows)
     throw std::out_of_range(fmt::format("rows {} to {} of a {}-row camera", first_row, first_row + rows - 1, dataset.height));
-  const ExrImage image = read_exr_rows(file, first_row, rows, nullptr, size_of(dataset));
+  const ExrImage image = read_exr_rows(file, first_row, rows, nullptr, size_of(dataset), ExrThreads::ThisThread);
   return mean_of(image, s, file, rows, dataset.adc_bits);
 }
 
 std::vector<std::vector<std::uint16_t>> read_dofp_frames(const DofpDataset& dataset, std::size_t stop_index) {
   const DofpDatasetStop& s = dataset.stops.at(stop_index);
   const std::filesystem::path file = dataset.dir / s.file;
-  const ExrImage image = read_exr_image(file, size_of(dataset));
+  const ExrImage image = read_exr_image(file, size_of(dataset), ExrThreads::ThisThread);
   std::vector<std::vector<std::uint16_t>> frames;
   for (const ExrUintChannel& c : image.uints)
     if (c.name.rfind("raw.", 0) == 0) {

@@ -38,11 +38,11 @@ namespace {
 // OutputFile hands its line blocks to the global pool whatever thread count it is given (that
 // count sizes its buffers): only a pool of no threads compresses on the calling thread. So the
 // pool is sized per call: `usable_threads()` for one image at a time, none for callers that
-// write several at once on their own threads (write_exr_image_on_this_thread).
-int use_exr_threads(bool on_pool = true) {
+// handle several at once on their own threads (ExrThreads::ThisThread).
+int use_exr_threads(ExrThreads where) {
   static std::mutex mutex;
   const std::lock_guard lock(mutex);
-  const int threads = on_pool ? usable_threads() : 0;
+  const int threads = where == ExrThreads::Pool ? usable_threads() : 0;
   if (Imf::globalThreadCount() != threads) Imf::setGlobalThreadCount(threads);
   return threads;
 }
@@ -158,7 +158,7 @@ namespace {
 // The one writer of both entry points (the channels by reference: no copy of the pixels).
 void write_channels(const std::filesystem::path& path, int width, int height, std::span<const ExrChannel> floats,
                     std::span<const ExrUintChannel> uints, const ExrAttributes& attributes,
-                    ExrCompression compression, bool on_pool = true) {
+                    ExrCompression compression, ExrThreads threads = ExrThreads::Pool) {
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   try {
     Imf::Header header(width, height);
@@ -189,7 +189,7 @@ void write_channels(const std::filesystem::path& path, int width, int height, st
     {
       // Compression runs per block of lines on the threads polrig may use (--threads), or on
       // this thread alone; the file is the same for any count (its blocks are written in line order).
-      Imf::OutputFile file(stream, header, use_exr_threads(on_pool));
+      Imf::OutputFile file(stream, header, use_exr_threads(threads));
       file.setFrameBuffer(fb);
       file.writePixels(height);
     }
@@ -207,22 +207,18 @@ void write_exr(const std::filesystem::path& path, int width, int height,
   write_channels(path, width, height, channels, {}, {}, compression);
 }
 
-void write_exr_image(const std::filesystem::path& path, const ExrImage& image, ExrCompression compression) {
-  write_channels(path, image.width, image.height, image.floats, image.uints, image.attributes, compression);
-}
-
-void write_exr_image_on_this_thread(const std::filesystem::path& path, const ExrImage& image,
-                                    ExrCompression compression) {
-  write_channels(path, image.width, image.height, image.floats, image.uints, image.attributes, compression, false);
+void write_exr_image(const std::filesystem::path& path, const ExrImage& image, ExrCompression compression,
+                     ExrThreads threads) {
+  write_channels(path, image.width, image.height, image.floats, image.uints, image.attributes, compression, threads);
 }
 
 namespace {
 // Rows [first_row, first_row + rows) of the image; rows < 0: to the bottom.
 ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height,
-                   const std::optional<ExrSize>& expected) {
+                   const std::optional<ExrSize>& expected, ExrThreads threads) {
   try {
     check_header_size(path, expected);
-    Imf::InputFile file(path.string().c_str(), use_exr_threads());
+    Imf::InputFile file(path.string().c_str(), use_exr_threads(threads));
     const Imf::Header& h = file.header();
     const Imath::Box2i dw = h.dataWindow();
     const ExrSize size = claimed_size(path, dw, expected);
@@ -277,15 +273,15 @@ ExrImage read_rows(const std::filesystem::path& path, int first_row, int rows, i
 }
 }  // namespace
 
-ExrImage read_exr_image(const std::filesystem::path& path, std::optional<ExrSize> expected) {
-  return read_rows(path, 0, -1, nullptr, expected);
+ExrImage read_exr_image(const std::filesystem::path& path, std::optional<ExrSize> expected, ExrThreads threads) {
+  return read_rows(path, 0, -1, nullptr, expected, threads);
 }
 
 ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height,
-                       std::optional<ExrSize> expected) {
+                       std::optional<ExrSize> expected, ExrThreads threads) {
   if (rows < 1)
     throw DataError(fmt::format("{}: cannot read the EXR image: {} rows requested", path.string(), rows));
-  return read_rows(path, first_row, rows, image_height, expected);
+  return read_rows(path, first_row, rows, image_height, expected, threads);
 }
 
 }  // namespace polrig

@@ -103,7 +103,7 @@ ExrImage stop_image(const FourCameraDataset& d, std::size_t stop_index, std::fil
   if (stop_index >= d.stops.size())
     throw DataError(fmt::format("{}: stop {} (the dataset has {})", d.dir.string(), stop_index, d.stops.size()));
   file = d.dir / d.stops[stop_index].file;
-  return read_exr_image(file, ExrSize{d.width, d.height});
+  return read_exr_image(file, ExrSize{d.width, d.height}, ExrThreads::ThisThread);
 }
 }  // namespace
 

@@ -6,6 +6,7 @@
 
 #include "bindings.h"
 #include "polrig/calib/fit.h"
+#include "polrig/freed_memory.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/sphere_cache.h"
 #include "polrig/rig/error.h"
@@ -37,6 +38,11 @@ PYBIND11_MODULE(_polrig, m) {
             "(docs/python.md).";
   m.attr("__version__") = POLRIG_VERSION;
   m.attr("git_revision") = POLRIG_GIT_REVISION;
+  m.def("keep_freed_memory", &polrig::keep_freed_memory,
+        "Keep freed buffers for reuse instead of giving them back to the system (glibc's malloc: "
+        "its mmap threshold at its 32 MiB ceiling, trimming past 1 GiB), as the CLI does: a loop "
+        "over a dataset's stops then stops paying the kernel to map and zero each stop's images "
+        "again. Process-wide; the process keeps about its peak memory. Call it once, early.");
   polrig::python::bind_errors(m);
   polrig::python::bind_rig(m);
   polrig::python::bind_studies(m);

@@ -118,7 +118,7 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
       a.vectors.push_back({"sun_camera", {vec3::dot(s, axes.x), vec3::dot(s, axes.y), vec3::dot(s, axes.z)}});
     }
     // PIZ: the smallest lossless form of noisy frames, 0.79× ZIP's bytes (docs/formats.md §6.14).
-    write_exr_image_on_this_thread(dir / file, image, ExrCompression::Piz);
+    write_exr_image(dir / file, image, ExrCompression::Piz, ExrThreads::ThisThread);
     StopRow row{fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc,
                             stop.intensity, stop.polarized ? 1 : 0, heading, stop.frames, file),
                 std::nullopt};

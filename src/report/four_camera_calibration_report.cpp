@@ -11,6 +11,7 @@
 #include "polrig/io/plot.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
+#include "polrig/side_by_side.h"
 #include "polrig/units.h"
 #include "csv_cells.h"
 
@@ -103,20 +104,26 @@ FourCameraCalibrationRun calibrate_four_camera_folder(const std::filesystem::pat
                                                : (dir / "truth.yaml").string(),
                                 geometry.model.width, geometry.model.height, dir.string(), ds.width, ds.height));
 
-  // The raw frames, every stop's (a dataset without them is refused at its first stop).
+  // The raw frames, every stop's (a dataset without them is refused at its first stop), read side
+  // by side and kept in stop order.
   std::vector<std::array<std::vector<std::uint16_t>, 4>> raw;
   std::vector<FourCameraFrames<std::uint16_t>> levels, polarized;
   progress.begin("calibrate four-camera: reading frames", static_cast<long long>(ds.stops.size()));
   raw.reserve(ds.stops.size());
-  for (std::size_t s = 0; s < ds.stops.size(); ++s) {
-    try {
-      raw.push_back(read_four_camera_raw(ds, s));
-    } catch (const std::runtime_error& e) {
-      throw DataError(fmt::format("{}: the calibration needs each stop's raw frames (`polrig simulate --layers all`): {}",
-                                  dir.string(), e.what()));
-    }
-    progress.advance();
-  }
+  side_by_side_in_order(
+      ds.stops.size(),
+      [&](std::size_t s) {
+        try {
+          auto frames = read_four_camera_raw(ds, s);
+          progress.advance();
+          return frames;
+        } catch (const std::runtime_error& e) {
+          throw DataError(fmt::format(
+              "{}: the calibration needs each stop's raw frames (`polrig simulate --layers all`): {}", dir.string(),
+              e.what()));
+        }
+      },
+      [&](std::array<std::vector<std::uint16_t>, 4>&& frames) { raw.push_back(std::move(frames)); });
   progress.finish();
   for (std::size_t s = 0; s < ds.stops.size(); ++s) {
     const FourCameraDatasetStop& st = ds.stops[s];

@@ -151,7 +151,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
                                           stop.t_s, stop.theta_R_deg,
                                           heading.empty() ? std::string() : fmt::format(", true heading {:.4f}°",
                                                                                         std::stod(heading)));
-    write_exr_image_on_this_thread(dir / file, image);
+    write_exr_image(dir / file, image, ExrCompression::Zip, ExrThreads::ThisThread);
     row.csv = fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, utc, stop.t_s, stop.theta_R_deg, stop.intensity,
                           stop.polarized ? 1 : 0, heading, sun_cols, file);
     progress.advance();

@@ -1,6 +1,7 @@
 #include "polrig/report/orientation_report.h"
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -13,6 +14,7 @@
 #include "polrig/rig/rig.h"
 #include "polrig/io/plot.h"
 #include "polrig/nav/heading.h"
+#include "polrig/side_by_side.h"
 
 namespace polrig {
 
@@ -89,9 +91,12 @@ std::vector<FrameOrientation> orient_dofp_dataset(const DofpDataset& dataset, co
   const CameraIntrinsics camera{dataset.f_c_px, dataset.cx, dataset.cy};
   check_intrinsics(camera);
   std::vector<FrameOrientation> out;
+  // The frames side by side, each read and oriented on one thread, collected in stop order (the
+  // first failing frame in order thrown): the same results for any thread count.
   progress.begin("orient: frames", static_cast<long long>(dataset.stops.size()));
-  for (std::size_t s = 0; s < dataset.stops.size(); ++s) {
+  const auto orient_stop = [&](std::size_t s) {
     const DofpDatasetStop& st = dataset.stops[s];
+    std::optional<FrameOrientation> frame_orientation;
     if (st.polarized) {
       const std::vector<double> frame = read_dofp_mean_frame(dataset, s);
       DofpCellPolarization cells = dofp_cell_polarization(frame, *parameters);
@@ -105,10 +110,14 @@ std::vector<FrameOrientation> orient_dofp_dataset(const DofpDataset& dataset, co
         if (heading_prior_deg) s.prior_sun = sun_in_level_camera(sun.azimuth_deg, sun.elevation_deg,
                                                              *heading_prior_deg + st.theta_R_deg);
       }
-      out.push_back({st.stop, orient_frame(points, camera, sun_azimuth, s), st.heading_deg});
+      frame_orientation = FrameOrientation{st.stop, orient_frame(points, camera, sun_azimuth, s), st.heading_deg};
     }
     progress.advance(1);
-  }
+    return frame_orientation;
+  };
+  side_by_side_in_order(dataset.stops.size(), orient_stop, [&](std::optional<FrameOrientation>&& o) {
+    if (o) out.push_back(std::move(*o));
+  });
   progress.finish();
   return out;
 }

@@ -70,23 +70,26 @@ struct ExrImage {
   ExrAttributes attributes;
 };
 
+// Where an image's line blocks are compressed or decompressed: on OpenEXR's global pool, sized to
+// the threads polrig may use (one image at a time), or on the calling thread alone (the pool is
+// set to no threads for it, and sized again by the next pooled call), for callers that handle
+// several images at once on their own threads (side_by_side.h, a parallel loop over stops): a
+// pooled image there would leave its thread waiting for the pool's. The same bytes either way.
+enum class ExrThreads { Pool, ThisThread };
+
 // Writes every channel of `image` (lossless `compression`) and its attributes. Throws as write_exr.
 void write_exr_image(const std::filesystem::path& path, const ExrImage& image,
-                     ExrCompression compression = ExrCompression::Zip);
-// The same, compressed on the calling thread alone (OpenEXR's global pool is set to no threads
-// for it, which write_exr_image sizes again): for callers that write several images at once on
-// their own threads (side_by_side.h). The same bytes.
-void write_exr_image_on_this_thread(const std::filesystem::path& path, const ExrImage& image,
-                                    ExrCompression compression = ExrCompression::Zip);
+                     ExrCompression compression = ExrCompression::Zip, ExrThreads threads = ExrThreads::Pool);
 // Reads an image back: FLOAT and HALF channels as floats, UINT channels as uints, and the string,
 // double, float, int and V3d attributes (float and int as doubles). Throws naming the file; the
 // size is checked from the header first, as read_exr's.
-ExrImage read_exr_image(const std::filesystem::path& path, std::optional<ExrSize> expected = std::nullopt);
+ExrImage read_exr_image(const std::filesystem::path& path, std::optional<ExrSize> expected = std::nullopt,
+                        ExrThreads threads = ExrThreads::Pool);
 // Rows [first_row, first_row + rows) of an image (row 0: the data window's top), as read_exr_image
 // but with height `rows`; only the line blocks holding them are decompressed; *image_height (when
 // given) is the whole image's. Throws naming the file, also for rows outside the image; the whole
 // image's size is checked from the header first, as read_exr's.
 ExrImage read_exr_rows(const std::filesystem::path& path, int first_row, int rows, int* image_height = nullptr,
-                       std::optional<ExrSize> expected = std::nullopt);
+                       std::optional<ExrSize> expected = std::nullopt, ExrThreads threads = ExrThreads::Pool);
 
 }  // namespace polrig

@@ -62,11 +62,10 @@ COMMANDS = [
 def command(polrig, args, threads, out, log, core=None):
     # The sphere cache off: a traced rig's first run would solve the sphere and the second load it.
     env = dict(os.environ, POLRIG_STAGE_TIMES=log, POLRIG_CACHE_DIR="off")
-    cmd = [polrig] + args.split() + ["-o", out, "--threads", str(threads), "--quiet", "--force"]
+    # --no-plots: gnuplot runs as a child process, whose time is not the command's
+    cmd = [polrig] + args.split() + ["-o", out, "--threads", str(threads), "--quiet", "--force", "--no-plots"]
     if core is not None:
         cmd = ["taskset", "-c", str(core)] + cmd
-    if not args.startswith(("locate", "navigate")):
-        cmd.append("--no-plots")
     return cmd, env
 
 

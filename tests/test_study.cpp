@@ -515,9 +515,8 @@ TEST(Sweep, ResumingAtABlockComputesOnlyTheRestAndTheSameValues) {
 }
 
 TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
-  // The sink runs on one of the pipeline's threads while the others compute the next block's
-  // pieces (study/sweep.cpp): its error must still reach the caller, and the blocks after the
-  // failed one must not be written.
+  // The sink runs on a writer thread while the next block's pieces are computed (study/sweep.cpp):
+  // its error must still reach the caller, and the blocks after the failed one must not be written.
   const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_S=0.001:1:300"),
                                    GridAxis::parse("eccentricity.alpha_S=0:359:50")};  // 4 blocks
   std::size_t calls = 0;

@@ -1,7 +1,7 @@
 #pragma once
 // Writing beside computing: one write at a time on its own thread while the caller computes the
-// next piece (rank 0's writes of an MPI sweep's blocks; one process's sweep and the datasets'
-// stops go side by side instead, side_by_side.h).
+// next piece (a sweep's blocks, in one process and on an MPI job's rank 0: a write that waits for
+// the disk then idles no core; the datasets' stops go side by side instead, side_by_side.h).
 // submit() waits for the previous write, throwing
 // its error, then starts this one: writes happen in submission order, never two at once, and at
 // most one is pending, so memory is bounded by one write's data beside the piece being computed

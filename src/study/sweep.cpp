@@ -287,12 +287,14 @@ std::size_t sweep_block_size(std::size_t total_points) {
 namespace {
 
 // One process: the points in pieces side by side (side_by_side.h), across the blocks' bounds, so
-// that no core waits for a block's last piece; each block handed to the sink whole, in grid order,
-// one call at a time, on one thread while the others compute the next block's pieces. Pieces of at
-// most 256 points, at least eight a thread in a block (a traced rig's grid of a few hundred
-// points, one block, is shared too); at most a block of them in flight beside the block being
-// assembled: memory for two blocks. An error is the first in grid order (a failed write before a
-// bad point after it).
+// that no core waits for a block's last piece; each block, once whole, handed to the sink on a
+// writer thread (BackgroundWriter) while TBB's threads go on computing: a write that waits for the
+// disk leaves no core idle. Pieces of at most 256 points, at least eight a thread in a block (a
+// traced rig's grid of a few hundred points, one block, is shared too); at most a block of them
+// in flight beside the block being assembled and the one being written: memory for three blocks.
+// The sink sees every block once, in grid order, one call at a time. An error is the first in
+// grid order: a failed write (said when the next block is handed on, or at the end) before a bad
+// point after it.
 void sweep_alone(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& turn, const SweepSink& sink,
                  const SweepProgress& progress, std::size_t first_point, std::size_t block) {
   const std::size_t total = grid_points(axes);
@@ -305,6 +307,7 @@ void sweep_alone(const Rig& base, const std::vector<GridAxis>& axes, const CsTur
   struct Piece {
     std::size_t index;
     std::vector<CsSummary> summaries;
+    std::optional<std::size_t> bad;  // the first point breaking a rule (said in grid order)
   };
   // The points of piece i: its block's, from the piece's start (empty past a last, short block)
   const auto bounds = [&](std::size_t i) {
@@ -314,24 +317,35 @@ void sweep_alone(const Rig& base, const std::vector<GridAxis>& axes, const CsTur
     return std::array<std::size_t, 4>{block_begin, block_end, begin, std::min(block_end, begin + piece)};
   };
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
-  std::vector<CsSummary> assembled(block);
+  // Block b is assembled in buffers[b % 2] while block b − 1 is written from the other.
+  std::array<std::vector<CsSummary>, 2> buffers;
+  for (std::vector<CsSummary>& b : buffers) b.resize(block);
+  BackgroundWriter writer;
   side_by_side_in_order(
       blocks * pieces_per_block,
       [&](std::size_t i) {
         const auto [block_begin, block_end, begin, end] = bounds(i);
-        Piece p{i, std::vector<CsSummary>(end - begin)};
-        if (const auto bad = compute_points(base, axes, turn, begin, end, p.summaries.data(), scratch.local()))
-          throw_point_error(base, axes, *bad);
+        Piece p{i, std::vector<CsSummary>(end - begin), std::nullopt};
+        p.bad = compute_points(base, axes, turn, begin, end, p.summaries.data(), scratch.local());
         return p;
       },
       [&](Piece p) {
+        if (p.bad) {
+          writer.finish();  // a failed write of an earlier block is said first
+          throw_point_error(base, axes, *p.bad);
+        }
         const auto [block_begin, block_end, begin, end] = bounds(p.index);
+        std::vector<CsSummary>& assembled = buffers[p.index / pieces_per_block % 2];
         std::copy(p.summaries.begin(), p.summaries.end(), assembled.begin() + (begin - block_begin));
         if (p.index % pieces_per_block != pieces_per_block - 1) return;
-        sink(block_begin, std::span<const CsSummary>(assembled.data(), block_end - block_begin));
-        if (progress) progress(block_end, total);
+        // submit() waits for block b − 1's write (throwing its failure): its buffer is the next one filled
+        writer.submit([&sink, &progress, &assembled, block_begin, block_end, total] {
+          sink(block_begin, std::span<const CsSummary>(assembled.data(), block_end - block_begin));
+          if (progress) progress(block_end, total);
+        });
       },
       pieces_per_block + 1);
+  writer.finish();
 }
 
 }  // namespace

@@ -532,6 +532,33 @@ TEST(Sweep, ASinkFailureIsThrownAndNoLaterBlockIsHandedOn) {
   EXPECT_EQ(calls, 2u);
 }
 
+TEST(Sweep, AFailedWriteIsSaidBeforeABadPointInALaterBlock) {
+  // Thirteen varying axes (no corners checked up front), schedule.start_deg the first: its bad
+  // value begins block 1 (point 4096). Block 0's write fails while block 1 is computed: the
+  // write's error comes first in grid order, in one process and on ranks.
+  std::vector<GridAxis> axes{GridAxis::parse("schedule.start_deg=0:400:2")};
+  for (int k = 0; k < 12; ++k) axes.push_back(GridAxis::parse("eccentricity.alpha_S=0:1:2"));
+  ASSERT_EQ(sweep_block_size(grid_points(axes)), 4096u);
+  const auto failing_sink = [](std::size_t, std::span<const CsSummary>) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));  // still writing when block 1 fails
+    throw std::runtime_error("sweep.h5: disk full");
+  };
+  try {
+    sweep(Rig{}, axes, CsTurn(4), failing_sink);
+    FAIL() << "expected the write's error";
+  } catch (const RigError& e) {
+    FAIL() << "the bad point was said before the earlier block's failed write: " << e.what();
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "sweep.h5: disk full");
+  }
+  for (int size : {2, 3}) {
+    const auto errors = test::with_thread_ranks(size, [&](const Ranks& ranks) {
+      sweep(Rig{}, axes, CsTurn(4), failing_sink, SweepProgress{}, SweepOptions{.ranks = &ranks});
+    });
+    EXPECT_EQ(errors, std::vector<std::string>(static_cast<std::size_t>(size), "sweep.h5: disk full")) << size;
+  }
+}
+
 // The datasets' stops side by side (side_by_side.h): every piece's work done once, the results
 // collected in order; never more than threads + 1 pieces in flight; the first failing piece in
 // order is the error thrown, whichever thread met it.

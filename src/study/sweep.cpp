@@ -393,8 +393,19 @@ void sweep(const Rig& base, const std::vector<GridAxis>& axes, const CsTurn& tur
       }
     }
     // Every shard is computed before anything of the block is written: a rank that failed (the
-    // lowest, whose bad point comes first in grid order, as one process finds it) stops all.
-    if (const auto first = ranks.first_failure(failure)) throw_rank_failure(*first);
+    // lowest, whose bad point comes first in grid order, as one process finds it) stops all. A
+    // failed write of an earlier block still being written comes before it in grid order: rank 0
+    // waits for that write, and every rank hears its failure first.
+    if (const auto first = ranks.first_failure(failure)) {
+      std::optional<std::string> write_failure;
+      if (rank == 0) try {
+          writer.finish();
+        } catch (const std::exception& e) {
+          write_failure = rank_failure_text(e);
+        }
+      if (const auto earlier = ranks.first_failure(write_failure)) throw_rank_failure(*earlier);
+      throw_rank_failure(*first);
+    }
     static_assert(std::is_trivially_copyable_v<CsSummary>, "CsSummary travels between ranks as bytes");
     const std::vector<std::byte> gathered =
         ranks.gather(std::as_bytes(std::span<const CsSummary>(summaries.data(), mine_end - mine_begin)));

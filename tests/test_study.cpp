@@ -463,6 +463,9 @@ TEST(Sweep, StreamsBlocksInGridOrderWithBoundedMemory) {
   std::vector<double> scratch;
   sweep(Rig{}, axes, turn,
         [&](std::size_t first, std::span<const CsSummary> block) {
+          // A slow write (the sink runs on a writer thread beside the next blocks' pieces): a
+          // buffer filled again before its write ended would show in the values checked below.
+          std::this_thread::sleep_for(std::chrono::milliseconds(2));
           EXPECT_EQ(first, next);
           for (std::size_t k = 0; k < block.size(); ++k)
             EXPECT_EQ(block[k][0].asd_mV, cs_summary([&] {

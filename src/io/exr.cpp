@@ -38,7 +38,11 @@ namespace {
 // OutputFile hands its line blocks to the global pool whatever thread count it is given (that
 // count sizes its buffers): only a pool of no threads compresses on the calling thread. So the
 // pool is sized per call: `usable_threads()` for one image at a time, none for callers that
-// handle several at once on their own threads (ExrThreads::ThisThread).
+// handle several at once on their own threads (ExrThreads::ThisThread). Resizing while another
+// thread's image is on the pool is safe with Debian's OpenEXR 3.1 (setProvider waits for the
+// pool's users and runs their queued blocks); the CLI never mixes the two at once, but two Python
+// threads may (speed only). A fixed provider that runs a ThisThread caller's blocks inline would
+// end the resizing (and is what OpenEXR ≥ 3.2, whose swap does not wait, would need).
 int use_exr_threads(ExrThreads where) {
   static std::mutex mutex;
   const std::lock_guard lock(mutex);

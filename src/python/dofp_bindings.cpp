@@ -16,6 +16,7 @@
 #include "polrig/io/plot.h"
 #include "polrig/report/dofp_dataset.h"
 #include "polrig/sim/dofp_frames.h"
+#include "polrig/side_by_side.h"
 #include "rig_handle.h"
 
 namespace polrig::python {
@@ -189,11 +190,10 @@ void bind_dofp(py::module_& m) {
     {
       py::gil_scoped_release release;
       d = read_dofp_dataset(dir);
-      if (mean_frames)
-        for (std::size_t s = 0; s < d.stops.size(); ++s) {
-          const std::vector<double> f = read_dofp_mean_frame(d, s);
-          means.insert(means.end(), f.begin(), f.end());
-        }
+      if (mean_frames)  // side by side, each on its own thread, appended in stop order
+        side_by_side_in_order(
+            d.stops.size(), [&](std::size_t s) { return read_dofp_mean_frame(d, s); },
+            [&](std::vector<double>&& f) { means.insert(means.end(), f.begin(), f.end()); });
     }
     py::dict out;
     out["width"] = d.width, out["height"] = d.height, out["f_c_px"] = d.f_c_px, out["cx"] = d.cx, out["cy"] = d.cy;

@@ -58,10 +58,6 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
   const DofpTruth nominal = nominal_dofp_parameters(sim.width(), sim.height(), rig.camera.mosaic_deg);
-  struct StopRow {
-    std::string csv;
-    std::optional<PreviewStop> preview;
-  };
   // One stop whole on one thread: its frames, its EXR compressed and written, its CSV row and
   // preview.
   const auto do_stop = [&](std::size_t index) {
@@ -119,7 +115,7 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
     }
     // PIZ: the smallest lossless form of noisy frames, 0.79× ZIP's bytes (docs/formats.md §6.14).
     write_exr_image(dir / file, image, ExrCompression::Piz, ExrThreads::ThisThread);
-    StopRow row{fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc,
+    DatasetStopRow row{fmt::format("{},{},{},{},{},{},{},{},{}\n", stop.index, stop.theta_R_deg, stop.t_s, utc,
                             stop.intensity, stop.polarized ? 1 : 0, heading, stop.frames, file),
                 std::nullopt};
     if (preview && stop.frames > 0) {
@@ -141,7 +137,7 @@ std::vector<DatasetFile> report_dofp_dataset(const std::filesystem::path& dir, c
     }
     return row;
   };
-  side_by_side_in_order(sim.stops().size(), do_stop, [&](StopRow&& row) {
+  side_by_side_in_order(sim.stops().size(), do_stop, [&](DatasetStopRow&& row) {
     csv += row.csv;
     if (row.preview) previews.push_back(std::move(*row.preview));
   });

@@ -81,10 +81,6 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
   // The previews' stops: the first and the last (one when they are the same).
   const std::size_t last = sim.stops().empty() ? 0 : sim.stops().size() - 1;
   std::vector<PreviewStop> previews;
-  struct StopRow {
-    std::string csv;
-    std::optional<PreviewStop> preview;
-  };
   // One stop whole on one thread: its frames and fusion, its EXR compressed and written, its CSV
   // row and preview.
   const auto do_stop = [&](std::size_t index) {
@@ -95,7 +91,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
     const FourCameraSignal signal = sim.signal(stop);
     std::array<std::vector<std::uint16_t>, kFourCameras> raw = sim.frames(signal, 0);
     FusedImage fused = sim.fuse(raw);
-    StopRow row;
+    DatasetStopRow row;
     if (options.previews && (index == 0 || index == last)) {
       // The fused layers as the stop's EXR holds them (float), on the virtual camera 1 grid.
       PreviewStop p;
@@ -157,7 +153,7 @@ std::vector<DatasetFile> report_four_camera_dataset(const std::filesystem::path&
     progress.advance();
     return row;
   };
-  side_by_side_in_order(sim.stops().size(), do_stop, [&](StopRow&& row) {
+  side_by_side_in_order(sim.stops().size(), do_stop, [&](DatasetStopRow&& row) {
     csv += row.csv;
     if (row.preview) previews.push_back(std::move(*row.preview));
   });

@@ -309,42 +309,54 @@ void sweep_alone(const Rig& base, const std::vector<GridAxis>& axes, const CsTur
     std::vector<CsSummary> summaries;
     std::optional<std::size_t> bad;  // the first point breaking a rule (said in grid order)
   };
+  struct PieceBounds {
+    std::size_t block_begin, block_end, begin, end;
+  };
   // The points of piece i: its block's, from the piece's start (empty past a last, short block)
   const auto bounds = [&](std::size_t i) {
-    const std::size_t block_begin = first_point + i / pieces_per_block * block;
-    const std::size_t block_end = std::min(total, block_begin + block);
-    const std::size_t begin = std::min(block_end, block_begin + i % pieces_per_block * piece);
-    return std::array<std::size_t, 4>{block_begin, block_end, begin, std::min(block_end, begin + piece)};
+    PieceBounds b;
+    b.block_begin = first_point + i / pieces_per_block * block;
+    b.block_end = std::min(total, b.block_begin + block);
+    b.begin = std::min(b.block_end, b.block_begin + i % pieces_per_block * piece);
+    b.end = std::min(b.block_end, b.begin + piece);
+    return b;
   };
   tbb::enumerable_thread_specific<std::vector<double>> scratch;
-  // Block b is assembled in buffers[b % 2] while block b − 1 is written from the other.
+  // Block b is assembled in buffers[b % 2] while block b − 1 is written from the other: the
+  // collect of block b's last piece hands it on only once block b − 1's write is done, before
+  // any piece of block b + 1 is collected into that buffer.
   std::array<std::vector<CsSummary>, 2> buffers;
   for (std::vector<CsSummary>& b : buffers) b.resize(block);
   BackgroundWriter writer;
-  side_by_side_in_order(
-      blocks * pieces_per_block,
-      [&](std::size_t i) {
-        const auto [block_begin, block_end, begin, end] = bounds(i);
-        Piece p{i, std::vector<CsSummary>(end - begin), std::nullopt};
-        p.bad = compute_points(base, axes, turn, begin, end, p.summaries.data(), scratch.local());
-        return p;
-      },
-      [&](Piece p) {
-        if (p.bad) {
-          writer.finish();  // a failed write of an earlier block is said first
-          throw_point_error(base, axes, *p.bad);
-        }
-        const auto [block_begin, block_end, begin, end] = bounds(p.index);
-        std::vector<CsSummary>& assembled = buffers[p.index / pieces_per_block % 2];
-        std::copy(p.summaries.begin(), p.summaries.end(), assembled.begin() + (begin - block_begin));
-        if (p.index % pieces_per_block != pieces_per_block - 1) return;
-        // submit() waits for block b − 1's write (throwing its failure): its buffer is the next one filled
-        writer.submit([&sink, &progress, &assembled, block_begin, block_end, total] {
-          sink(block_begin, std::span<const CsSummary>(assembled.data(), block_end - block_begin));
-          if (progress) progress(block_end, total);
-        });
-      },
-      pieces_per_block + 1);
+  try {
+    side_by_side_in_order(
+        blocks * pieces_per_block,
+        [&](std::size_t i) {
+          const PieceBounds b = bounds(i);
+          Piece p{i, std::vector<CsSummary>(b.end - b.begin), std::nullopt};
+          p.bad = compute_points(base, axes, turn, b.begin, b.end, p.summaries.data(), scratch.local());
+          return p;
+        },
+        [&](Piece p) {
+          if (p.bad) {
+            writer.finish();  // a failed write of an earlier block is said first
+            throw_point_error(base, axes, *p.bad);
+          }
+          const PieceBounds b = bounds(p.index);
+          std::vector<CsSummary>& assembled = buffers[p.index / pieces_per_block % 2];
+          std::copy(p.summaries.begin(), p.summaries.end(), assembled.begin() + (b.begin - b.block_begin));
+          if (p.index % pieces_per_block != pieces_per_block - 1) return;
+          // submit() waits for block b − 1's write, throwing its failure
+          writer.submit([&sink, &progress, &assembled, first = b.block_begin, last = b.block_end, total] {
+            sink(first, std::span<const CsSummary>(assembled.data(), last - first));
+            if (progress) progress(last, total);
+          });
+        },
+        pieces_per_block + 1);
+  } catch (...) {
+    writer.finish();  // any error of a later piece: a failed write before it is said first
+    throw;
+  }
   writer.finish();
 }
 

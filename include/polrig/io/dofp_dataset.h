@@ -50,7 +50,7 @@ DofpDataset read_dofp_dataset(const std::filesystem::path& dir);
 
 // The mean frame of a stop (DN, row-major, top row first): the mean of its frames, or raw_sum /
 // frames. Throws naming the file. These readers decompress on the calling thread
-// (ExrThreads::ThisThread): their callers read several stops at once.
+// (ExrThreads::ThisThread): read several stops side by side (side_by_side.h) to use more cores.
 std::vector<double> read_dofp_mean_frame(const DofpDataset& dataset, std::size_t stop_index);
 // Rows [first_row, first_row + rows) of a stop's mean frame, the same values as those rows of
 // read_dofp_mean_frame (only those rows are decompressed). Throws naming the file.

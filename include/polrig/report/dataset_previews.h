@@ -3,7 +3,9 @@
 // drawn by gnuplot from a CSV beside it whose columns the plots read by name. The DoFP camera's
 // dataset previews its cells' polarization (report/dofp_dataset.h), the four cameras' dataset its
 // fused image (report/four_camera_dataset.h).
+#include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,6 +23,13 @@ struct PreviewStop {
   int cols = 0, rows = 0, pixels = 1;
   std::vector<double> aop_deg, dop, S0;
   std::vector<std::uint8_t> valid;  // empty: every sample valid
+};
+
+// What a camera dataset's writer collects of each stop, in stop order (side_by_side.h): its
+// stops.csv row and, for the stops previewed, its layers.
+struct DatasetStopRow {
+  std::string csv;
+  std::optional<PreviewStop> preview;
 };
 
 struct PreviewOptions {

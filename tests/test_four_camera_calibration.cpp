@@ -2,6 +2,7 @@
 // §3.3 items 1–2; calib/four_camera.h): noise-free signals give back the truth, noisy frames
 // within what their noise allows, the Jacobian against finite differences, the gauge and the frame
 // offsets δ_j with large rolls, the refusals.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -460,6 +461,26 @@ TEST_F(FourCameraCalibrationCli, MeasuredDatasetsCalibrateAndLocateAsTheSimulate
 // Refusals, each before anything is written: a dataset without unpolarized levels, with one level,
 // without raw frames; options that do not apply; a geometry of another size; locate with a bad
 // calibration.yaml (file, line, key, value) or on a dataset without raw frames.
+// --layers unless told: a calibration rig's dataset holds the raw frames its calibration reads, a
+// sky rig's the AoP layers locate reads (default_four_camera_layers).
+TEST_F(FourCameraCalibrationCli, ACalibrationRigKeepsTheRawFramesUnlessToldASkyRigTheAopLayers) {
+  const auto channels = [](const fs::path& exr) {
+    const ExrImage image = read_exr_image(exr);
+    std::vector<std::string> names;
+    for (const ExrChannel& c : image.floats) names.push_back(c.name);
+    for (const ExrUintChannel& c : image.uints) names.push_back(c.name);
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  ok(fmt::format("simulate {} {} --set schedule.step_deg=60 --set schedule.stop_deg=300 -o {}",
+                 rig("wang2016-calibration.yaml"), kEighth + kNoViews, at("cal")));
+  EXPECT_EQ(channels(tmp / "cal" / "frames" / "stop_0000.exr"),
+            (std::vector<std::string>{"AoP", "DoP", "S0", "S1", "S2", "cam1", "cam2", "cam3", "cam4", "valid"}));
+  ok(fmt::format("calibrate {} --method four-camera -o {}", at("cal"), at("out")));
+  ok(fmt::format("simulate {} {} --set schedule.count=1 -o {}", rig("wang2016-static.yaml"), kEighth, at("sky")));
+  EXPECT_EQ(channels(tmp / "sky" / "frames" / "stop_0000.exr"), (std::vector<std::string>{"AoP", "DoP", "valid"}));
+}
+
 TEST_F(FourCameraCalibrationCli, RefusesWhatItCannotCalibrate) {
   const auto refused = [&](const std::string& args, const std::string& text) {
     const Result r = polrig(args);

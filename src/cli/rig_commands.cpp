@@ -96,11 +96,13 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
                                          "lens (spec §2.5)")
                              ->check(CLI::IsMember({"image-plane", "in-front"}))->capture_default_str();
     // A camera array (four-camera): which layers each stop's EXR holds.
-    auto layers = std::make_shared<std::string>(four_camera_layers_name(FourCameraDatasetOptions{}.layers));
+    auto layers = std::make_shared<std::string>();
     auto* array_layers_opt = app->add_option("--layers", *layers,
-                                       "a camera array: aop (AoP, DoP: what locate reads; the default), fused "
-                                       "(also S0, S1, S2) or all (also the four raw frames)")
-                           ->check(CLI::IsMember({"all", "fused", "aop"}))->capture_default_str();
+                                       "a camera array: aop (AoP, DoP: what locate reads), fused (also S0, S1, "
+                                       "S2) or all (also the four raw frames, which the calibration reads); "
+                                       "default: all for a calibration rig (unpolarized levels or checkerboard "
+                                       "views), else aop")
+                           ->check(CLI::IsMember({"all", "fused", "aop"}));
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
       const LoadedRig r = rig->load();
@@ -114,7 +116,8 @@ std::vector<Command> add_rig_commands(CLI::App& root, int& threads) {
           throw RigError(fmt::format("--truth-layers: device.kind {} writes its truth in truth.yaml", r.rig.device_kind));
         FourCameraDatasetOptions o;
         o.previews = out->plots();
-        o.layers = *parse_four_camera_layers(*layers);  // checked by IsMember
+        o.layers = array_layers_opt->count() > 0 ? *parse_four_camera_layers(*layers)  // checked by IsMember
+                                                 : default_four_camera_layers(r.rig);
         try {
           const FourCameraSimulator check(r.rig);  // refused before the folder is opened
           if (r.rig.checkerboard.views > 0) (void)checkerboard_poses(r.rig);  // the board placed, likewise

@@ -87,8 +87,9 @@ constexpr const char* kSimulateDoc = R"doc(
 Writes the four-camera dataset into the new folder `out` (the CLI's `polrig simulate RIG -o OUT`
 for a four-camera rig; docs/formats.md "Four-camera dataset") and returns its path.
 
-  layers: 'aop' (AoP, DoP and valid: what locate reads; the default), 'fused' (also S0, S1, S2)
-  or 'all' (also the raw frames).
+  layers: 'aop' (AoP, DoP and valid: what locate reads), 'fused' (also S0, S1, S2) or 'all'
+  (also the raw frames, which the calibration reads); None (the default): 'all' for a
+  calibration rig (unpolarized levels or checkerboard views), else 'aop', as the CLI.
   force: replace an existing folder.
   plots: also draw the previews (previews/: the first and last stops' fused AoP, DoP and S0 PNGs;
     needs gnuplot; the CLI draws them unless --no-plots).
@@ -161,27 +162,29 @@ void bind_four_camera(py::module_& m) {
     return d;
   }, kTruthDoc);
 
-  rig.def("simulate_four_camera", [](const PyRig& self, const std::filesystem::path& out, const std::string& layers,
+  rig.def("simulate_four_camera", [](const PyRig& self, const std::filesystem::path& out,
+                                     const std::optional<std::string>& layers,
                                      bool force, bool plots, std::optional<int> threads, const py::object& progress) {
     if (plots && !gnuplot_available())
       throw std::runtime_error("plots=True needs gnuplot, which was not found; install it "
                                "(scripts/setup-deps.sh) or pass plots=False");
-    FourCameraDatasetOptions o;
-    o.layers = layers_of(layers);
-    o.previews = plots;
     const LoadedRig loaded = self.loaded;
+    FourCameraDatasetOptions o;
+    o.layers = layers ? layers_of(*layers) : default_four_camera_layers(loaded.rig);
+    o.previews = plots;
     simulator(loaded);  // refused before the folder is made
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     const std::string command = fmt::format("python: polrig.Rig({}).simulate_four_camera(out='{}', layers='{}'{})",
-                                            loaded.origin, out.string(), layers, plots ? ", plots=True" : "");
+                                            loaded.origin, out.string(), four_camera_layers_name(o.layers),
+                                            plots ? ", plots=True" : "");
     {
       py::gil_scoped_release release;
       write_four_camera_dataset(loaded, out, o, command, force, p);
     }
     return out;
   }, with_shared(kSimulateDoc).c_str(), py::arg("out"), py::kw_only(),
-     py::arg("layers") = std::string(four_camera_layers_name(FourCameraDatasetOptions{}.layers)), py::arg("force") = false, py::arg("plots") = false, py::arg("threads") = py::none(),
+     py::arg("layers") = py::none(), py::arg("force") = false, py::arg("plots") = false, py::arg("threads") = py::none(),
      py::arg("progress") = py::none());
 
   m.def("read_four_camera_dataset", [](const std::filesystem::path& dir, std::optional<int> stop, bool raw) {

@@ -23,6 +23,11 @@ std::string_view four_camera_layers_name(FourCameraLayers layers) {
   return "all";
 }
 
+FourCameraLayers default_four_camera_layers(const Rig& rig) {
+  const bool calibration = !rig.schedule.unpolarized_levels.empty() || rig.checkerboard.views > 0;
+  return calibration ? FourCameraLayers::All : FourCameraLayers::Aop;
+}
+
 std::optional<FourCameraLayers> parse_four_camera_layers(std::string_view name) {
   for (const FourCameraLayers l : {FourCameraLayers::All, FourCameraLayers::Fused, FourCameraLayers::Aop})
     if (four_camera_layers_name(l) == name) return l;

@@ -31,11 +31,15 @@ enum class FourCameraLayers {
 };
 std::string_view four_camera_layers_name(FourCameraLayers layers);  // "all", "fused", "aop"
 std::optional<FourCameraLayers> parse_four_camera_layers(std::string_view name);
+// The layers a rig's dataset holds unless told (the CLI's and Python's default): All for a
+// calibration's dataset (unpolarized levels or checkerboard views: `calibrate --method
+// four-camera` reads the raw frames), else Aop (what `locate` reads).
+FourCameraLayers default_four_camera_layers(const Rig& rig);
 
 struct FourCameraDatasetOptions {
-  // What locate reads by default: at W16's size a stop is 6.2 MB and ≈ 0.5 core-seconds, against
-  // 15.4 MB and ≈ 0.75 with the fused Stokes layers and 21 MB with the raw frames (docs/cli.md,
-  // "simulate"); the calibration, which needs the raw frames, asks for All.
+  // At W16's size a stop is 6.2 MB and ≈ 0.5 core-seconds with Aop, 15.4 MB and ≈ 0.75 with the
+  // fused Stokes layers, 21 MB with the raw frames (docs/cli.md, "simulate");
+  // default_four_camera_layers is the rig's choice.
   FourCameraLayers layers = FourCameraLayers::Aop;
   // The first and the last stop's fused AoP, DoP and S0 as PNGs in DIR/previews/ (gnuplot;
   // report/dataset_previews.h), whichever layers the EXRs keep.

@@ -1,0 +1,50 @@
+#pragma once
+// The diffuse polarized sky of a plane-parallel Rayleigh atmosphere over a Lambertian ground, by
+// adding–doubling per Fourier term in azimuth (spec skies.md §2; de Haan, Bosma & Hovenier 1987;
+// Hansen & Travis 1974 §3.2). Directions off the quadrature are carried through the doubling as
+// rows of zero weight, so their radiances are as exact as the quadrature's, not interpolated.
+#include <Eigen/Core>
+#include <vector>
+
+namespace polrig {
+
+struct VectorRtSettings {
+  double tau_rayleigh = 0.1;      // total optical depth, > 0
+  double depolarization = 0.0279; // ρ of air, [0, 0.5)
+  double ground_albedo = 0;       // Lambertian, [0, 1]
+  int streams = 32;               // discrete ordinates over both hemispheres (even, 4..128)
+};
+
+// Throws std::invalid_argument naming the value of the first setting outside its range.
+void check_vector_rt(const VectorRtSettings& s);
+
+// The diffuse Stokes field for one sun (cosine of its zenith angle mu0, sun at relative azimuth 0)
+// in chosen directions, as Fourier coefficients in the relative azimuth φ:
+//   I(φ) = Σ_m I_m cos mφ, Q(φ) = Σ_m Q_m cos mφ, U(φ) = Σ_m U_m sin mφ, V(φ) = Σ_m V_m sin mφ.
+// Units: radiance per unit extraterrestrial irradiance normal to the sun's beam (L/E₀, sr⁻¹).
+// Frame (polrig's, sky-and-compasses.md §0): the view direction v (where the sensor looks, opposite
+// to the light's travel), its meridian frame (e_θ down the meridian, e_φ towards rising math
+// azimuth), χ from e_θ towards e_φ: Q = L·P·cos 2χ, U = L·P·sin 2χ. φ is the view's math azimuth
+// (anticlockwise seen from above) less the sun's.
+struct DiffuseField {
+  std::vector<double> mu;  // the |cosines| of the views' zenith angles, as asked for
+  // down[m][u]: the sky seen from the ground looking up at mu[u]; up[m][u]: the atmosphere seen
+  // from above its top looking down at mu[u] (the reflected field).
+  std::vector<std::vector<Eigen::Vector4d>> down, up;
+  Eigen::Vector4d down_at(std::size_t u, double phi) const;
+  Eigen::Vector4d up_at(std::size_t u, double phi) const;
+};
+
+// Solves the field for a sun at cos zenith mu0 ∈ (0, 1] and reports it at the view cosines
+// `view_mu` (each in (0, 1]). Throws std::invalid_argument for settings or cosines out of range.
+DiffuseField solve_vector_rt(const VectorRtSettings& s, double mu0, const std::vector<double>& view_mu);
+
+// The diffuse fluxes for the conservation check: with the sun's irradiance E₀ = 1 normal to the
+// beam, the upward flux leaving the top, the downward diffuse flux at the ground and the direct
+// flux μ₀e^{−τ/μ₀} there (per unit horizontal area).
+struct DiffuseFluxes {
+  double up_top = 0, down_diffuse_bottom = 0, down_direct_bottom = 0;
+};
+DiffuseFluxes vector_rt_fluxes(const VectorRtSettings& s, double mu0);
+
+}  // namespace polrig

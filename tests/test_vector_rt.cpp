@@ -174,6 +174,23 @@ TEST(VectorRt, IsReciprocal) {
   }
 }
 
+// Bodhaine et al. 1999 against Hansen & Travis 1974's independent fit 0.008569λ⁻⁴(1 + 0.0113λ⁻² +
+// 0.00013λ⁻⁴) (λ in µm, sea level; its own stated accuracy is about 1 %), and the spec's 0.22 at
+// 450 nm; τ is proportional to the pressure.
+TEST(VectorRt, RayleighOpticalDepthFollowsBodhaine) {
+  for (double nm = 400; nm <= 800; nm += 50) {
+    const double um = nm * 1e-3;
+    const double fit = 0.008569 * std::pow(um, -4) * (1 + 0.0113 * std::pow(um, -2) + 0.00013 * std::pow(um, -4));
+    EXPECT_NEAR(rayleigh_optical_depth_bodhaine(nm, 1013.25, 0.0279) / fit, 1, 0.01) << nm;
+  }
+  EXPECT_NEAR(rayleigh_optical_depth_bodhaine(450, 1013.25, 0.0279), 0.22, 0.002);
+  EXPECT_DOUBLE_EQ(rayleigh_optical_depth_bodhaine(500, 500, 0.0279) * 2,
+                   rayleigh_optical_depth_bodhaine(500, 1000, 0.0279));
+  EXPECT_THROW(rayleigh_optical_depth_bodhaine(100, 1013, 0.03), std::invalid_argument);
+  EXPECT_THROW(rayleigh_optical_depth_bodhaine(500, 0, 0.03), std::invalid_argument);
+  EXPECT_THROW(rayleigh_optical_depth_bodhaine(500, 1013, std::nan("")), std::invalid_argument);
+}
+
 TEST(VectorRt, RefusesSettingsOutsideTheirRanges) {
   const VectorRtSettings s;
   for (double tau : {0.0, -1.0, std::nan(""), static_cast<double>(INFINITY)}) {

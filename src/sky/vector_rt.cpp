@@ -331,4 +331,25 @@ DiffuseFluxes vector_rt_fluxes(const VectorRtSettings& s, double mu0) {
   return f;
 }
 
+double rayleigh_optical_depth_bodhaine(double wavelength_nm, double pressure_hPa, double rho) {
+  if (!(wavelength_nm >= 250 && wavelength_nm <= 4000))
+    throw std::invalid_argument(fmt::format("Rayleigh optical depth: wavelength {} nm is outside [250, 4000] nm", wavelength_nm));
+  if (!(pressure_hPa >= 1 && pressure_hPa <= 1100))
+    throw std::invalid_argument(fmt::format("Rayleigh optical depth: pressure {} hPa is outside [1, 1100] hPa", pressure_hPa));
+  if (!(rho >= 0 && rho < 0.5))
+    throw std::invalid_argument(fmt::format("Rayleigh optical depth: depolarization {} is outside [0, 0.5)", rho));
+  constexpr double kCo2 = 360e-6;                    // volume fraction
+  constexpr double kNs = 2.546899e19;                // molecules cm⁻³ at 288.15 K, 1013.25 hPa
+  constexpr double kAvogadro = 6.0221367e23, kGravity = 980.616;  // mol⁻¹, cm s⁻²
+  const double lambda_um = wavelength_nm * 1e-3, inv2 = 1 / (lambda_um * lambda_um);
+  const double n300_minus_1 = (8060.51 + 2480990 / (132.274 - inv2) + 17455.7 / (39.32957 - inv2)) * 1e-8;
+  const double n = 1 + n300_minus_1 * (1 + 0.54 * (kCo2 - 0.0003));
+  const double lambda_cm = lambda_um * 1e-4, n2 = n * n;
+  const double king = (6 + 3 * rho) / (6 - 7 * rho);
+  const double sigma = 24 * std::pow(M_PI, 3) * (n2 - 1) * (n2 - 1) /
+                       (std::pow(lambda_cm, 4) * kNs * kNs * (n2 + 2) * (n2 + 2)) * king;  // cm²
+  const double m_air = 15.0556 * kCo2 + 28.9595;                                       // g mol⁻¹
+  return sigma * pressure_hPa * 1e3 * kAvogadro / (m_air * kGravity);
+}
+
 }  // namespace polrig

@@ -47,4 +47,11 @@ struct DiffuseFluxes {
 };
 DiffuseFluxes vector_rt_fluxes(const VectorRtSettings& s, double mu0);
 
+// The Rayleigh optical depth of dry air (Bodhaine et al. 1999, J. Atmos. Oceanic Technol. 16,
+// 1854, Eqs. 4–5, 22, 30): the refractive index of 360 ppm CO₂ air (Peck & Reeves 1962), the
+// cross-section σ = 24π³(n² − 1)²/(λ⁴N_s²(n² + 2)²)·F with the King factor F = (6 + 3ρ)/(6 − 7ρ)
+// of the depolarization ρ, and τ = σ·P·N_A/(m_a·g) at g = 980.616 cm s⁻² (45°, sea level).
+// Throws std::invalid_argument outside 250–4000 nm, 1–1100 hPa or ρ ∈ [0, 0.5).
+double rayleigh_optical_depth_bodhaine(double wavelength_nm, double pressure_hPa, double depolarization);
+
 }  // namespace polrig

@@ -117,9 +117,8 @@ std::vector<Layer> thin_layers(const Geometry& g, double delta, double rho) {
     l.e_sun_minus_1 = std::expm1(-delta / g.mu0);
     l.e_view_minus_1.resize(nv);
   }
-  // The node columns carry the quadrature (the azimuth integral is in K: 2π·w_j for m = 0, π·w_j
-  // otherwise, as W_m above already weighs); the sun column the collimated beam's
-  // (2 − δ_m0)/2π from the Fourier series of the source.
+  // A node column carries its quadrature weight w_j (K already holds the azimuth integral); the
+  // sun's column the collimated beam's (2 − δ_m0)/2π from the Fourier series of its source.
   auto fill_rows = [&](double mu, int i, MatrixXd Layer::*R, MatrixXd Layer::*T, MatrixXd Layer::*Rs,
                        MatrixXd Layer::*Ts, VectorXd Layer::*r_sun, VectorXd Layer::*t_sun) {
     for (int j = 0; j < N; ++j) {
@@ -200,7 +199,7 @@ Layer doubled(const Layer& l) {
   const VectorXd Dus = l.tu_sun + l.Rsu * u_sun, Uus = l.Ru * d_sun + l.ru_sun * e;
   o.ru_sun = l.ru_sun + l.Tsu * u_sun + Ev * Uus;
   o.tu_sun = l.Tu * d_sun + Ev * Dus + l.tu_sun * e;
-  o.e_view_minus_1 = l.e_view_minus_1.cwiseProduct(l.e_view_minus_1.array().matrix()) + 2 * l.e_view_minus_1;
+  o.e_view_minus_1 = l.e_view_minus_1.cwiseProduct(l.e_view_minus_1) + 2 * l.e_view_minus_1;  // e² − 1
   return o;
 }
 

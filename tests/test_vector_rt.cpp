@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "polrig/sky/rayleigh.h"
+#include "polrig/sky/sun.h"
 #include "polrig/sky/vector_rt.h"
 #include "polrig/units.h"
 
@@ -104,10 +105,7 @@ TEST(SlowVectorRt, MatchesTheExactTablesAtTau002) { expect_table_accuracy("0.02"
 TEST(SlowVectorRt, MatchesTheExactTablesAtTau005) { expect_table_accuracy("0.05"); }
 TEST(SlowVectorRt, MatchesTheExactTablesAtTau01) { expect_table_accuracy("0.1"); }
 
-Vec3 enu(double az_deg, double el_deg) {
-  return {std::cos(el_deg * kDeg) * std::sin(az_deg * kDeg), std::cos(el_deg * kDeg) * std::cos(az_deg * kDeg),
-          std::sin(el_deg * kDeg)};
-}
+Vec3 enu(double az_deg, double el_deg) { return sun_direction_enu({.azimuth_deg = az_deg, .elevation_deg = el_deg}); }
 
 // As τ → 0 the diffuse sky is single scattering: radiance (P11(Θ)/4π)·μ₀(e^{−τ/μ₀} − e^{−τ/μ})/(μ₀ − μ)
 // (downward at the ground, ϖ = 1), DoP sin²Θ/(1 + cos²Θ + 2ρ/(1 − ρ)) (Rayleigh with depolarization

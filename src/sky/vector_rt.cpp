@@ -1,4 +1,4 @@
-// Adding–doubling for the polarized Rayleigh sky (spec skies.md §2; docs/physics.md §22).
+// Adding–doubling for the polarized Rayleigh sky (spec skies.md §2; docs/physics.md §21).
 //
 // Per Fourier term m, a layer is described by radiance-to-radiance operators on the quadrature
 // streams (μ_j, w_j: Gauss–Legendre in √μ on (0, 1] in each hemisphere, `streams`/2 of them), each a
@@ -259,12 +259,13 @@ Geometry make_geometry(const VectorRtSettings& s, double mu0, const std::vector<
   return g;
 }
 
-std::vector<Emerging> solve(const VectorRtSettings& s, const Geometry& g) {
+// The first `terms` Fourier terms (the fluxes need m = 0 alone).
+std::vector<Emerging> solve(const VectorRtSettings& s, const Geometry& g, int terms = kRayleighTerms) {
   int doublings = 0;
   while (s.tau_rayleigh / std::ldexp(1.0, doublings) > kStartDepth) ++doublings;
   std::vector<Layer> L = thin_layers(g, std::ldexp(s.tau_rayleigh, -doublings), s.depolarization);
   std::vector<Emerging> out;
-  for (int m = 0; m < kRayleighTerms; ++m) {
+  for (int m = 0; m < terms; ++m) {
     Layer l = std::move(L[m]);
     for (int k = 0; k < doublings; ++k) l = doubled(l);
     out.push_back(with_ground(l, g, s.ground_albedo, m == 0));
@@ -319,7 +320,7 @@ DiffuseField solve_vector_rt(const VectorRtSettings& s, double mu0, const std::v
 
 DiffuseFluxes vector_rt_fluxes(const VectorRtSettings& s, double mu0) {
   const Geometry g = make_geometry(s, mu0, {});
-  const Emerging e = solve(s, g).front();
+  const Emerging e = solve(s, g, 1).front();
   DiffuseFluxes f;
   for (std::size_t j = 0; j < g.mu.size(); ++j) {
     const double weight = 2 * M_PI * g.w[j] * g.mu[j];

@@ -9,6 +9,7 @@
 
 #include "polrig/sky/sky.h"
 #include "polrig/sky/sky_map.h"
+#include "polrig/sky/vector_rt.h"
 
 namespace {
 using namespace polrig;
@@ -56,5 +57,18 @@ void BM_Sky_Map1024(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * 1024 * 1024);
 }
 BENCHMARK(BM_Sky_Map1024)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// One exact polarized Rayleigh solve (default 32 streams, sun at 60° zenith) at τ = range(0)/100,
+// with range(1) views off the quadrature carried through the doublings. The bound is
+// "well under 10 ms" on one core.
+void BM_Sky_VectorRtSolve(benchmark::State& state) {
+  VectorRtSettings s;
+  s.tau_rayleigh = static_cast<double>(state.range(0)) / 100;
+  std::vector<double> views;
+  for (int k = 0; k < state.range(1); ++k) views.push_back((k + 0.5) / static_cast<double>(state.range(1)));
+  for (auto _ : state) benchmark::DoNotOptimize(solve_vector_rt(s, 0.5, views));
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Sky_VectorRtSolve)->Args({25, 0})->Args({100, 0})->Args({25, 16})->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -101,9 +101,9 @@ void expect_table_accuracy(const std::string& tau) {
 }
 
 TEST(VectorRt, MatchesTheExactTablesAtTau025) { expect_table_accuracy("0.25"); }
-TEST(SlowVectorRt, MatchesTheExactTablesAtTau002) { expect_table_accuracy("0.02"); }
-TEST(SlowVectorRt, MatchesTheExactTablesAtTau005) { expect_table_accuracy("0.05"); }
-TEST(SlowVectorRt, MatchesTheExactTablesAtTau01) { expect_table_accuracy("0.1"); }
+TEST(VectorRt, MatchesTheExactTablesAtTau002) { expect_table_accuracy("0.02"); }
+TEST(VectorRt, MatchesTheExactTablesAtTau005) { expect_table_accuracy("0.05"); }
+TEST(VectorRt, MatchesTheExactTablesAtTau01) { expect_table_accuracy("0.1"); }
 
 Vec3 enu(double az_deg, double el_deg) { return sun_direction_enu({.azimuth_deg = az_deg, .elevation_deg = el_deg}); }
 

@@ -5,8 +5,10 @@
 // block of Stokes components: R (lit from above, leaving the top), T (lit from above, leaving the
 // bottom, the direct e^{−δ/μ} on its diagonal), R* and T* (lit from below). Columns of the
 // collimated sun and rows of the asked views (zero quadrature weight) ride along. A layer of
-// δ = τ/2ⁿ starts as single scattering (its error is O(δ) relative) and is doubled n times
-// (van de Hulst's adding equations for two identical layers); the ground is added at the end.
+// δ = τ/2ⁿ ≤ 1e-5 starts as single and double scattering with every leg's decay exact (its error
+// O(δ²) relative, 2e-8 in the flux budget; single scattering alone needed δ ~ 1e-10, 32 doublings
+// instead of 15 at τ = 0.25) and is doubled n times (van de Hulst's adding equations for two identical layers, one
+// factorisation each by the layer's mirror symmetry); the ground is added at the end.
 #include "polrig/sky/vector_rt.h"
 
 #include "polrig/quadrature.h"
@@ -25,19 +27,22 @@ using Eigen::VectorXd;
 
 namespace {
 
-constexpr int kRayleighTerms = 3;      // m = 0, 1, 2: Rayleigh's phase matrix has no others
-constexpr int kAzimuths = 6;           // > 2·(highest m): the azimuth sums below are exact
-constexpr double kStartDepth = 1e-10;  // the first layer's δ is at most this (its O(δ) error)
-constexpr int kStokes = 3;             // I, Q, U: Rayleigh never couples V to them
+constexpr int kRayleighTerms = 3;     // m = 0, 1, 2: Rayleigh's phase matrix has no others
+constexpr int kAzimuths = 6;          // > 2·(highest m): the azimuth sums below are exact
+constexpr double kStartDepth = 1e-5;  // the first layer's δ is at most this (its O(δ²) error)
+constexpr int kStokes = 3;            // I, Q, U: Rayleigh never couples V to them
+
+// The Stokes components term m carries: at m = 0 U decouples from I and Q (its sin 0 vanishes).
+int stokes_in_term(int m) { return m == 0 ? 2 : kStokes; }
 
 // The m-th Fourier kernel of the phase matrix between two cosines (signed: > 0 upward), the
 // factor 1/4π of the scattering integral included:
 //   K^m = (1/4π)∫₀^{2π} Z(μ, φ; μ', 0)∘W_m(φ) dφ,
 // W_m = cos mφ on the (I, Q)×(I, Q) and (U, V)×(U, V) blocks, −sin mφ on (I, Q)×(U, V) and
 // +sin mφ on (U, V)×(I, Q): with I(φ) = Σ_m Φ_m(φ)c_m, Φ_m = diag(cos, cos, sin, sin)(mφ),
-// (1/4π)∫∫Z·I dφ' dμ' = Σ_m Φ_m(φ)∫K^m(μ, μ')c_m(μ')dμ'.
+// (1/4π)∫∫Z·I dφ' dμ' = Σ_m Φ_m(φ)∫K^m(μ, μ')c_m(μ')dμ'. Kept for I, Q, U.
 struct Kernels {
-  Eigen::Matrix4d K[kRayleighTerms];
+  Eigen::Matrix3d K[kRayleighTerms];
 };
 
 Kernels fourier_kernels(double mu_out, double mu_in, double rho) {
@@ -48,43 +53,93 @@ Kernels fourier_kernels(double mu_out, double mu_in, double rho) {
     // A grid shifted by half a step never meets the forward or backward direction exactly.
     const double phi = (k + 0.5) * 2 * M_PI / kAzimuths;
     const Direction o = direction(mu_out, phi);
-    const Eigen::Matrix4d Z = phase_matrix(in, o, rayleigh_elements(vec3::dot(in.k, o.k), rho));
+    const Eigen::Matrix3d Z =
+        phase_matrix(in, o, rayleigh_elements(vec3::dot(in.k, o.k), rho)).topLeftCorner<3, 3>();
     for (int m = 0; m < kRayleighTerms; ++m) {
       const double c = std::cos(m * phi), s = std::sin(m * phi);
-      Eigen::Matrix4d W;
-      W << c, c, -s, -s, c, c, -s, -s, s, s, c, c, s, s, c, c;
+      Eigen::Matrix3d W;
+      W << c, c, -s, c, c, -s, s, s, c;
       out.K[m] += Z.cwiseProduct(W) * (2 * M_PI / kAzimuths / (4 * M_PI));
     }
   }
   return out;
 }
 
+// A plane-parallel layer is its own mirror image in its middle plane: the mirror takes a downward
+// direction to an upward one and reverses the sense of U (Hovenier 1969). So the kernel from up
+// to up is Δ·(down to down)·Δ, R* = ΔRΔ and T* = ΔTΔ with Δ = diag(1, 1, −1) per stream.
+Eigen::Matrix3d mirrored(const Eigen::Matrix3d& K) {
+  Eigen::Matrix3d M = K;
+  M.block<2, 1>(0, 2) *= -1;
+  M.block<1, 2>(2, 0) *= -1;
+  return M;
+}
+VectorXd mirror_signs(Eigen::Index size, int ns) {
+  VectorXd d = VectorXd::Ones(size);
+  if (ns == 3)
+    for (Eigen::Index k = 2; k < size; k += 3) d(k) = -1;
+  return d;
+}
+MatrixXd mirrored(const MatrixXd& M, int ns) {
+  if (ns < 3) return M;
+  return mirror_signs(M.rows(), ns).asDiagonal() * M * mirror_signs(M.cols(), ns).asDiagonal();
+}
+
 // expm1(x)/x, 1 at x = 0.
 double phi1(double x) { return std::abs(x) < 1e-8 ? 1 + x / 2 : std::expm1(x) / x; }
 
-// Single scattering in a layer of thickness δ, from direction μ' (> 0) into μ (> 0):
-// reflection (1/μ)∫₀^δ e^{−t/μ'}e^{−t/μ}dt and transmission (1/μ)∫₀^δ e^{−t/μ'}e^{−(δ−t)/μ}dt.
-double path_reflected(double delta, double mu, double mu_in) {
-  const double a = 1 / mu + 1 / mu_in;
-  return delta / mu * std::exp(-a * delta) * phi1(a * delta);
-}
-double path_transmitted(double delta, double mu, double mu_in) {
-  return delta / mu * std::exp(-delta / mu) * phi1((1 / mu - 1 / mu_in) * delta);
+// The path integrals of light scattered once or twice in a layer of thickness δ whose legs decay
+// at the rates x (the sum of 1/μ over the directions that cross each stretch of the layer). Once:
+// ∫₀^δ e^{−x₀t − x₁(δ−t)}dt; twice: ∫∫_{0<r<s<δ} e^{−x₀r − x₁(s−r) − x₂(δ−s)} dr ds. Each is the
+// divided difference f[x₀, …] of f(x) = e^{−δx} (Hermite–Genocchi), evaluated after a shift to the
+// smallest rate so that no exponential grows: by its series where the spread is small, by
+// differences of φ₁ otherwise.
+double once_scattered_path(double delta, double x0, double x1) {
+  return delta * std::exp(-std::min(x0, x1) * delta) * phi1(-std::abs(x1 - x0) * delta);
 }
 
-// One Fourier term of a layer (see the top of the file). n = N·kStokes node components; the view
-// rows are nu·kStokes. The transmissions are kept as their departures from the identity
-// (T = E + T_minus_E, e = 1 + e_minus_1): a first layer of δ ~ 1e-10 would otherwise keep only
-// six digits of what it scatters (1 − δ/μ rounds at 1e-16).
+double twice_scattered_path(double delta, double x0, double x1, double x2) {
+  if (x0 > x1) std::swap(x0, x1);
+  if (x1 > x2) std::swap(x1, x2);
+  if (x0 > x1) std::swap(x0, x1);
+  const double u1 = (x1 - x0) * delta, u2 = (x2 - x0) * delta;
+  double h;  // h[0, u1, u2] of h(u) = e^{−u}
+  if (u2 < 0.25) {
+    // Σ_k (−1)^k/(k + 2)!·Σ_{i+j=k} u1^i u2^j
+    h = 0;
+    double factorial = 2, sum = 1, u1_power = 1;
+    for (int k = 0; k < 24; ++k) {
+      const double term = ((k % 2) ? -sum : sum) / factorial;
+      h += term;
+      if (std::abs(term) < 1e-18 * h) break;
+      u1_power *= u1;
+      sum = sum * u2 + u1_power;
+      factorial *= k + 3;
+    }
+  } else {
+    const double h01 = -phi1(-u1), h12 = -std::exp(-u1) * phi1(-(u2 - u1));
+    h = (h12 - h01) / u2;
+  }
+  return delta * delta * std::exp(-x0 * delta) * h;
+}
+
+// One Fourier term of a layer (see the top of the file), `ns` Stokes components per stream.
+// R* and T* are the mirror images of R and T. The transmissions are kept as their departures
+// from the identity (T = E + T_minus_E, e = 1 + e_minus_1): a first layer as thin as δ ~ 1e-4
+// would otherwise lose the digits of what it scatters to 1 − δ/μ.
 struct Layer {
-  MatrixXd R, T_minus_E, Rs, Ts_minus_E;  // node → node
-  VectorXd r_sun, t_sun;                  // diffuse response at the nodes to the collimated sun
-  double e_sun_minus_1 = 0;               // the sun beam's direct transmission, less 1
-  MatrixXd Ru, Tu, Rsu, Tsu;              // node → view, diffuse only
-  VectorXd ru_sun, tu_sun;                // sun → view, diffuse
-  VectorXd e_view_minus_1;                // each view's direct transmission, less 1, per Stokes row
+  int ns = kStokes;
+  MatrixXd R, T_minus_E;    // node → node
+  VectorXd r_sun, t_sun;    // diffuse response at the nodes to the collimated sun
+  double e_sun_minus_1 = 0; // the sun beam's direct transmission, less 1
+  MatrixXd Ru, Tu;          // node → view, diffuse only
+  VectorXd ru_sun, tu_sun;  // sun → view, diffuse
+  VectorXd e_view_minus_1;  // each view's direct transmission, less 1, per Stokes row
   MatrixXd T() const { return T_minus_E + MatrixXd::Identity(R.rows(), R.cols()); }
-  MatrixXd Ts() const { return Ts_minus_E + MatrixXd::Identity(R.rows(), R.cols()); }
+  MatrixXd Rs() const { return mirrored(R, ns); }
+  MatrixXd Ts() const { return mirrored(T(), ns); }
+  MatrixXd Rsu() const { return mirrored(Ru, ns); }
+  MatrixXd Tsu() const { return mirrored(Tu, ns); }
   double e_sun() const { return 1 + e_sun_minus_1; }
   VectorXd e_view() const { return e_view_minus_1.array() + 1; }
 };
@@ -95,94 +150,143 @@ struct Geometry {
   double mu0 = 1;
 };
 
-// Puts the kStokes×kStokes block of `K`, scaled, at (row block i, column block j).
-void put(MatrixXd& M, int i, int j, const Eigen::Matrix4d& K, double scale) {
-  M.block(i * kStokes, j * kStokes, kStokes, kStokes) = K.topLeftCorner(kStokes, kStokes) * scale;
-}
-void put_column(VectorXd& v, int i, const Eigen::Matrix4d& K, double scale) {
-  v.segment(i * kStokes, kStokes) = K.col(0).head(kStokes) * scale;
+// The kernels the thin layer needs, every term at once: outgoing directions are the nodes, then
+// the views; incoming ones the nodes, then the sun. `same` goes from a downward direction into a
+// downward one, `across` from a downward one into an upward one; the other two are mirrored.
+struct KernelTable {
+  int cols = 0;
+  std::vector<Kernels> same, across, same_mirrored, across_mirrored;
+  const Eigen::Matrix3d& s(int o, int i, int m) const { return same[o * cols + i].K[m]; }
+  const Eigen::Matrix3d& a(int o, int i, int m) const { return across[o * cols + i].K[m]; }
+  const Eigen::Matrix3d& s_mirrored(int o, int i, int m) const { return same_mirrored[o * cols + i].K[m]; }
+  const Eigen::Matrix3d& a_mirrored(int o, int i, int m) const { return across_mirrored[o * cols + i].K[m]; }
+};
+
+KernelTable kernel_table(const Geometry& g, double rho) {
+  const int N = static_cast<int>(g.mu.size());
+  std::vector<double> out = g.mu, in = g.mu;
+  out.insert(out.end(), g.view_mu.begin(), g.view_mu.end());
+  in.push_back(g.mu0);
+  KernelTable t;
+  t.cols = N + 1;
+  for (double mo : out)
+    for (double mi : in) {
+      t.same.push_back(fourier_kernels(-mo, -mi, rho));
+      t.across.push_back(fourier_kernels(mo, -mi, rho));
+      Kernels sm = t.same.back(), am = t.across.back();
+      for (int m = 0; m < kRayleighTerms; ++m) sm.K[m] = mirrored(sm.K[m]), am.K[m] = mirrored(am.K[m]);
+      t.same_mirrored.push_back(sm), t.across_mirrored.push_back(am);
+    }
+  return t;
 }
 
-// The thin layer δ for every Fourier term: single scattering with ϖ = 1.
+// Light entering the top of the thin layer δ downward in direction `in` (decay rate a = 1/μ_in),
+// leaving in the outgoing direction `o` (rate c = 1/μ_o): the reflected (up, at the top) and
+// transmitted (down, at the bottom, diffuse) responses of every term to first and second order of
+// scattering with ϖ = 1. The second order sums over the nodes k (rate b) of the intermediate leg,
+// down then up; each leg's decay is exact, so grazing streams with δ/μ ≫ 1 stay right. The error
+// is O(δ³) per layer, O(δ²) relative after the doublings.
+struct Scattered {
+  Eigen::Matrix3d reflected[kRayleighTerms], transmitted[kRayleighTerms];
+};
+
+Scattered thin_response(const KernelTable& t, const Geometry& g, int o, double mu_o, int in, double mu_in,
+                        double delta) {
+  const int N = static_cast<int>(g.mu.size());
+  const double a = 1 / mu_in, c = 1 / mu_o;
+  const double once_reflected = once_scattered_path(delta, a + c, 0) / mu_o;
+  const double once_transmitted = once_scattered_path(delta, a, c) / mu_o;
+  Scattered x;
+  for (int m = 0; m < kRayleighTerms; ++m) {
+    x.reflected[m] = t.a(o, in, m) * once_reflected;
+    x.transmitted[m] = t.s(o, in, m) * once_transmitted;
+  }
+  for (int k = 0; k < N; ++k) {
+    const double b = 1 / g.mu[k], s_k = g.w[k] / (mu_o * g.mu[k]);
+    const double r_down = s_k * twice_scattered_path(delta, a + c, b + c, 0);
+    const double r_up = s_k * twice_scattered_path(delta, a + c, a + b, 0);
+    const double t_down = s_k * twice_scattered_path(delta, a, b, c);
+    const double t_up = s_k * twice_scattered_path(delta, a, a + b + c, c);
+    for (int m = 0; m < kRayleighTerms; ++m) {
+      const Eigen::Matrix3d& down_from_in = t.s(k, in, m);
+      const Eigen::Matrix3d& up_from_in = t.a(k, in, m);
+      x.reflected[m].noalias() += t.a(o, k, m) * (r_down * down_from_in);
+      x.reflected[m].noalias() += t.s_mirrored(o, k, m) * (r_up * up_from_in);
+      x.transmitted[m].noalias() += t.s(o, k, m) * (t_down * down_from_in);
+      x.transmitted[m].noalias() += t.a_mirrored(o, k, m) * (t_up * up_from_in);
+    }
+  }
+  return x;
+}
+
+// The thin layer δ for every Fourier term.
 std::vector<Layer> thin_layers(const Geometry& g, double delta, double rho) {
   const int N = static_cast<int>(g.mu.size()), nu = static_cast<int>(g.view_mu.size());
-  const int n = N * kStokes, nv = nu * kStokes;
+  const KernelTable table = kernel_table(g, rho);
   std::vector<Layer> L(kRayleighTerms);
   for (int m = 0; m < kRayleighTerms; ++m) {
     Layer& l = L[m];
-    l.R = l.T_minus_E = l.Rs = l.Ts_minus_E = MatrixXd::Zero(n, n);
+    const int ns = l.ns = stokes_in_term(m), n = N * ns, nv = nu * ns;
+    l.R = l.T_minus_E = MatrixXd::Zero(n, n);
     l.r_sun = l.t_sun = VectorXd::Zero(n);
-    l.Ru = l.Tu = l.Rsu = l.Tsu = MatrixXd::Zero(nv, n);
+    l.Ru = l.Tu = MatrixXd::Zero(nv, n);
     l.ru_sun = l.tu_sun = VectorXd::Zero(nv);
     l.e_sun_minus_1 = std::expm1(-delta / g.mu0);
     l.e_view_minus_1.resize(nv);
   }
   // A node column carries its quadrature weight w_j (K already holds the azimuth integral); the
   // sun's column the collimated beam's (2 − δ_m0)/2π from the Fourier series of its source.
-  auto fill_rows = [&](double mu, int i, MatrixXd Layer::*R, MatrixXd Layer::*T, MatrixXd Layer::*Rs,
-                       MatrixXd Layer::*Ts, VectorXd Layer::*r_sun, VectorXd Layer::*t_sun) {
-    for (int j = 0; j < N; ++j) {
-      const double mj = g.mu[j], wj = g.w[j];
-      const double pr = path_reflected(delta, mu, mj), pt = path_transmitted(delta, mu, mj);
-      const Kernels down_from_down = fourier_kernels(-mu, -mj, rho);
-      const Kernels up_from_down = fourier_kernels(mu, -mj, rho);
-      const Kernels down_from_up = fourier_kernels(-mu, mj, rho);
-      const Kernels up_from_up = fourier_kernels(mu, mj, rho);
+  auto fill = [&](int o, double mu_o, MatrixXd Layer::*R, MatrixXd Layer::*T, VectorXd Layer::*r_sun,
+                  VectorXd Layer::*t_sun, int row) {
+    for (int j = 0; j <= N; ++j) {
+      const bool sun = j == N;
+      const Scattered x = thin_response(table, g, o, mu_o, j, sun ? g.mu0 : g.mu[j], delta);
       for (int m = 0; m < kRayleighTerms; ++m) {
         Layer& l = L[m];
-        put(l.*R, i, j, up_from_down.K[m], wj * pr);
-        put(l.*T, i, j, down_from_down.K[m], wj * pt);
-        put(l.*Rs, i, j, down_from_up.K[m], wj * pr);
-        put(l.*Ts, i, j, up_from_up.K[m], wj * pt);
+        const int ns = l.ns;
+        if (sun) {
+          const double sun_weight = (m == 0 ? 1.0 : 2.0) / (2 * M_PI);
+          (l.*r_sun).segment(row * ns, ns) = x.reflected[m].col(0).head(ns) * sun_weight;
+          (l.*t_sun).segment(row * ns, ns) = x.transmitted[m].col(0).head(ns) * sun_weight;
+        } else {
+          (l.*R).block(row * ns, j * ns, ns, ns) = x.reflected[m].topLeftCorner(ns, ns) * g.w[j];
+          (l.*T).block(row * ns, j * ns, ns, ns) = x.transmitted[m].topLeftCorner(ns, ns) * g.w[j];
+        }
       }
-    }
-    const Kernels up_from_sun = fourier_kernels(mu, -g.mu0, rho);
-    const Kernels down_from_sun = fourier_kernels(-mu, -g.mu0, rho);
-    for (int m = 0; m < kRayleighTerms; ++m) {
-      const double c = (m == 0 ? 1.0 : 2.0) / (2 * M_PI);
-      put_column(L[m].*r_sun, i, up_from_sun.K[m], c * path_reflected(delta, mu, g.mu0));
-      put_column(L[m].*t_sun, i, down_from_sun.K[m], c * path_transmitted(delta, mu, g.mu0));
     }
   };
   for (int i = 0; i < N; ++i) {
-    fill_rows(g.mu[i], i, &Layer::R, &Layer::T_minus_E, &Layer::Rs, &Layer::Ts_minus_E, &Layer::r_sun,
-              &Layer::t_sun);
-    const double e_minus_1 = std::expm1(-delta / g.mu[i]);
-    for (auto& l : L)
-      for (int s = 0; s < kStokes; ++s) {
-        const int k = i * kStokes + s;
-        l.T_minus_E(k, k) += e_minus_1, l.Ts_minus_E(k, k) += e_minus_1;
-      }
+    fill(i, g.mu[i], &Layer::R, &Layer::T_minus_E, &Layer::r_sun, &Layer::t_sun, i);
+    for (Layer& l : L) l.T_minus_E.diagonal().segment(i * l.ns, l.ns).array() += std::expm1(-delta / g.mu[i]);
   }
   for (int u = 0; u < nu; ++u) {
-    fill_rows(g.view_mu[u], u, &Layer::Ru, &Layer::Tu, &Layer::Rsu, &Layer::Tsu, &Layer::ru_sun, &Layer::tu_sun);
-    for (auto& l : L) l.e_view_minus_1.segment(u * kStokes, kStokes).setConstant(std::expm1(-delta / g.view_mu[u]));
+    fill(N + u, g.view_mu[u], &Layer::Ru, &Layer::Tu, &Layer::ru_sun, &Layer::tu_sun, u);
+    for (Layer& l : L) l.e_view_minus_1.segment(u * l.ns, l.ns).setConstant(std::expm1(-delta / g.view_mu[u]));
   }
   return L;
 }
 
 // Two identical layers a (above) and b (below) as one (van de Hulst 1980; Hansen & Travis 1974
-// Eqs. 3.41–3.48 with the sun's and the views' columns and rows).
+// Eqs. 3.41–3.48 with the sun's and the views' columns and rows). By the mirror symmetry the
+// interface's response to light from below is the mirror image of its response from above, so one
+// factorisation serves both.
 Layer doubled(const Layer& l) {
   const auto n = l.R.rows();
   const MatrixXd I = MatrixXd::Identity(n, n);
-  const MatrixXd T = l.T(), Ts = l.Ts();
-  const Eigen::PartialPivLU<MatrixXd> A(I - l.Rs * l.R);  // (E − R*_a R_b): lit from above
-  const Eigen::PartialPivLU<MatrixXd> B(I - l.R * l.Rs);  // (E − R_b R*_a): lit from below
+  const MatrixXd T = l.T(), Rs = l.Rs(), Ts = l.Ts();
+  const MatrixXd RsR = Rs * l.R;
+  const Eigen::PartialPivLU<MatrixXd> A(I - RsR);  // (E − R*_a R_b): lit from above
   const double e = l.e_sun();
   Layer o;
-  // Lit from above: D = (E − R*R)⁻¹T down and U up at the interface; (E − R*R)⁻¹ = E + (E − R*R)⁻¹R*R.
-  const MatrixXd X = A.solve(l.Rs * (l.R * T));
+  o.ns = l.ns;
+  // Lit from above: D = (E − R*R)⁻¹T down and U up at the interface; (E − R*R)⁻¹ = E + (E − R*R)⁻¹R*R
+  // keeps D − T = X to its own digits.
+  const MatrixXd X = A.solve(RsR * T);
   const MatrixXd D = T + X, U = l.R * D;
-  // Lit from below: U' up and D' down at the interface.
-  const MatrixXd Y = B.solve(l.R * (l.Rs * Ts));
-  const MatrixXd Up = Ts + Y, Dp = l.Rs * Up;
   o.R = l.R + Ts * U;
-  o.T_minus_E = 2 * l.T_minus_E + l.T_minus_E * l.T_minus_E + T * X;  // T·D − E
-  o.Rs = l.Rs + T * Dp;
-  o.Ts_minus_E = 2 * l.Ts_minus_E + l.Ts_minus_E * l.Ts_minus_E + Ts * Y;
+  o.T_minus_E = l.T_minus_E * D + l.T_minus_E + X;  // T·D − E = (T − E)·D + D − E
   // The sun: its direct beam reaches b after a's e.
-  const VectorXd d_sun = A.solve(l.t_sun + l.Rs * (l.r_sun * e));
+  const VectorXd d_sun = A.solve(l.t_sun + Rs * (l.r_sun * e));
   const VectorXd u_sun = l.R * d_sun + l.r_sun * e;
   o.r_sun = l.r_sun + Ts * u_sun;
   o.t_sun = T * d_sun + l.t_sun * e;
@@ -190,14 +294,12 @@ Layer doubled(const Layer& l) {
   // The views: their radiance at the interface, then through a (up) or b (down).
   const VectorXd ev = l.e_view();
   const auto Ev = ev.asDiagonal();
-  const MatrixXd Du = l.Tu + l.Rsu * U, Uu = l.Ru * D;
-  const MatrixXd Upu = l.Tsu + l.Ru * Dp, Dpu = l.Rsu * Up;
-  o.Ru = l.Ru + l.Tsu * U + Ev * Uu;
+  const MatrixXd Rsu = l.Rsu(), Tsu = l.Tsu();
+  const MatrixXd Du = l.Tu + Rsu * U, Uu = l.Ru * D;
+  o.Ru = l.Ru + Tsu * U + Ev * Uu;
   o.Tu = l.Tu * D + Ev * Du;
-  o.Rsu = l.Rsu + l.Tu * Dp + Ev * Dpu;
-  o.Tsu = l.Tsu * Up + Ev * Upu;
-  const VectorXd Dus = l.tu_sun + l.Rsu * u_sun, Uus = l.Ru * d_sun + l.ru_sun * e;
-  o.ru_sun = l.ru_sun + l.Tsu * u_sun + Ev * Uus;
+  const VectorXd Dus = l.tu_sun + Rsu * u_sun, Uus = l.Ru * d_sun + l.ru_sun * e;
+  o.ru_sun = l.ru_sun + Tsu * u_sun + Ev * Uus;
   o.tu_sun = l.Tu * d_sun + Ev * Dus + l.tu_sun * e;
   o.e_view_minus_1 = l.e_view_minus_1.cwiseProduct(l.e_view_minus_1) + 2 * l.e_view_minus_1;  // e² − 1
   return o;
@@ -207,13 +309,15 @@ Layer doubled(const Layer& l) {
 // reflects isotropically, L = (A/π)·(downward flux)). Returns the views' down and up coefficients
 // and the nodes' (for fluxes).
 struct Emerging {
+  int ns = kStokes;
   VectorXd down_nodes, up_nodes, down_views, up_views;
 };
 
 Emerging with_ground(const Layer& l, const Geometry& g, double A, bool m0) {
   const auto n = l.R.rows();
-  const int N = static_cast<int>(g.mu.size()), nu = static_cast<int>(g.view_mu.size());
+  const int N = static_cast<int>(g.mu.size()), nu = static_cast<int>(g.view_mu.size()), ns = l.ns;
   Emerging e;
+  e.ns = ns;
   if (!m0 || A == 0) {
     e.down_nodes = l.t_sun, e.up_nodes = l.r_sun;
     e.down_views = l.tu_sun, e.up_views = l.ru_sun;
@@ -223,19 +327,19 @@ Emerging with_ground(const Layer& l, const Geometry& g, double A, bool m0) {
   MatrixXd Rg = MatrixXd::Zero(n, n);
   VectorXd rg_sun = VectorXd::Zero(n);
   for (int i = 0; i < N; ++i) {
-    for (int j = 0; j < N; ++j) Rg(i * kStokes, j * kStokes) = 2 * A * g.w[j] * g.mu[j];
-    rg_sun(i * kStokes) = A * g.mu0 / M_PI;
+    for (int j = 0; j < N; ++j) Rg(i * ns, j * ns) = 2 * A * g.w[j] * g.mu[j];
+    rg_sun(i * ns) = A * g.mu0 / M_PI;
   }
-  const MatrixXd I = MatrixXd::Identity(n, n);
-  const VectorXd D = Eigen::PartialPivLU<MatrixXd>(I - l.Rs * Rg).solve(l.t_sun + l.Rs * rg_sun * l.e_sun());
+  const MatrixXd I = MatrixXd::Identity(n, n), Rs = l.Rs();
+  const VectorXd D = Eigen::PartialPivLU<MatrixXd>(I - Rs * Rg).solve(l.t_sun + Rs * rg_sun * l.e_sun());
   const VectorXd U = Rg * D + rg_sun * l.e_sun();  // leaving the ground, at the nodes
   e.down_nodes = D;
   e.up_nodes = l.r_sun + l.Ts() * U;
-  e.down_views = l.tu_sun + l.Rsu * U;
+  e.down_views = l.tu_sun + l.Rsu() * U;
   // Leaving the ground in the views' directions: the same isotropic radiance U(I).
-  VectorXd Uv = VectorXd::Zero(nu * kStokes);
-  for (int u = 0; u < nu; ++u) Uv(u * kStokes) = U(0);
-  e.up_views = l.ru_sun + l.Tsu * U + l.e_view().cwiseProduct(Uv);
+  VectorXd Uv = VectorXd::Zero(nu * ns);
+  for (int u = 0; u < nu; ++u) Uv(u * ns) = U(0);
+  e.up_views = l.ru_sun + l.Tsu() * U + l.e_view().cwiseProduct(Uv);
   return e;
 }
 
@@ -275,8 +379,8 @@ std::vector<Emerging> solve(const VectorRtSettings& s, const Geometry& g, int te
 
 // The solver's frame → polrig's: the view v = −k has the same e_θ and the opposite e_φ, so U and V
 // change sign; φ(view) − φ(sun) equals the light's relative azimuth.
-Eigen::Vector4d to_view_frame(const VectorXd& x, int u) {
-  return {x(u * kStokes), x(u * kStokes + 1), -x(u * kStokes + 2), 0};
+Eigen::Vector4d to_view_frame(const VectorXd& x, int u, int ns) {
+  return {x(u * ns), x(u * ns + 1), ns > 2 ? -x(u * ns + 2) : 0.0, 0};
 }
 
 Eigen::Vector4d fourier_sum(const std::vector<std::vector<Eigen::Vector4d>>& c, std::size_t u, double phi) {
@@ -312,8 +416,8 @@ DiffuseField solve_vector_rt(const VectorRtSettings& s, double mu0, const std::v
   f.down.resize(e.size()), f.up.resize(e.size());
   for (std::size_t m = 0; m < e.size(); ++m)
     for (int u = 0; u < static_cast<int>(view_mu.size()); ++u) {
-      f.down[m].push_back(to_view_frame(e[m].down_views, u));
-      f.up[m].push_back(to_view_frame(e[m].up_views, u));
+      f.down[m].push_back(to_view_frame(e[m].down_views, u, e[m].ns));
+      f.up[m].push_back(to_view_frame(e[m].up_views, u, e[m].ns));
     }
   return f;
 }
@@ -324,8 +428,8 @@ DiffuseFluxes vector_rt_fluxes(const VectorRtSettings& s, double mu0) {
   DiffuseFluxes f;
   for (std::size_t j = 0; j < g.mu.size(); ++j) {
     const double weight = 2 * M_PI * g.w[j] * g.mu[j];
-    f.up_top += weight * e.up_nodes(static_cast<Eigen::Index>(j) * kStokes);
-    f.down_diffuse_bottom += weight * e.down_nodes(static_cast<Eigen::Index>(j) * kStokes);
+    f.up_top += weight * e.up_nodes(static_cast<Eigen::Index>(j) * e.ns);
+    f.down_diffuse_bottom += weight * e.down_nodes(static_cast<Eigen::Index>(j) * e.ns);
   }
   f.down_direct_bottom = mu0 * std::exp(-s.tau_rayleigh / mu0);
   return f;

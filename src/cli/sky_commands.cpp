@@ -39,7 +39,9 @@ struct SkyOptions {
   // rig, only the options given on the command line (`app` counts them) change it.
   Sky sky(const Sky& base = {}, const CLI::App* app = nullptr) const {
     Sky s = base;
-    const auto given = [&](const char* option) { return app == nullptr || app->count(option) > 0; };
+    const auto given = [&](const char* option) {
+      return app == nullptr || (app->get_option_no_throw(option) != nullptr && app->count(option) > 0);
+    };
     if (!site.empty()) s.site = parse_site(site);
     if (!utc.empty()) s.first_stop = parse_utc_option(utc);
     if (given("--p-max")) s.model.P_max.constant = p_max;
@@ -65,13 +67,23 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     auto input = std::make_shared<std::string>();
     auto out = std::make_shared<OutputOptions>();
     auto opts = std::make_shared<SkyOptions>();
-    app->add_option("INPUT", *input, "CSV with columns utc, lat_deg, lon_deg, view_az_deg, view_el_deg")
+    app->add_option("INPUT", *input, "CSV with columns utc, lat_deg, lon_deg, view_az_deg, view_el_deg, or "
+                                     "sun_az_deg, sun_el_deg, view_az_deg, view_el_deg (a fixed sun)")
         ->required();
+    auto rig = std::make_shared<RigInput>();
+    app->add_option("--rig", rig->path, "a rig file with source.model sky: its sky block (sky.model, sky.rt.*, "
+                                        "P_max, radiance, refraction) is the default of every option");
+    add_set_option(*app, rig->sets);
     out->add_to(*app, false);
     opts->add_to(*app, false);
     add_threads_option(*app, threads);
     commands.push_back({app, [=] {
-      const Sky sky = opts->sky();
+      std::optional<LoadedRig> loaded;
+      if (!rig->path.empty() || !rig->sets.empty()) {
+        loaded = rig->load();
+        if (!rig_sky(loaded->rig)) throw RigError(no_sky_message(loaded->rig, rig->path));
+      }
+      const Sky sky = loaded ? opts->sky(*rig_sky(loaded->rig), app) : opts->sky();
       const CsvFile in = CsvFile::read(*input);
       const std::vector<SkyQuery> queries = read_sky_table_input(in);  // every cell checked
       // Opened before the work, so that an existing destination fails at once.
@@ -80,11 +92,16 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
       try {
         samples = sky_along(queries, sky.model, sky.sun, progress());
       } catch (const SunRowError& e) {
-        throw DataError(fmt::format("{}:{}: column 'utc': {}", in.origin, in.line[e.row], e.what()));
+        throw DataError(fmt::format("{}:{}: column '{}': {}", in.origin, in.line[e.row],
+                                    sky_table_fixed_sun(in) ? "sun_el_deg" : "utc", e.what()));
       }
       write_text_file(dir.staging() / "sky.csv", sky_table_csv(in, samples));
-      Manifest m{command_line(), nullptr,
-                 {{"sky.csv", 1, "the input's columns as written, then sun_az_deg, sun_el_deg, dop, aop_deg"}}};
+      const bool absolute = !samples.empty() && samples.front().absolute;
+      Manifest m{command_line(), loaded ? &*loaded : nullptr,
+                 {{"sky.csv", 1,
+                   std::string("the input's columns as written, then ") +
+                       (sky_table_fixed_sun(in) ? "" : "sun_az_deg, sun_el_deg, ") + "dop, aop_deg" +
+                       (absolute ? ", I_sr, Q_sr, U_sr (L/E0 in 1/sr; Q, U in the view's meridian frame)" : "")}}};
       m.inputs.push_back(*input);
       write_manifest(dir.staging(), m);
       finish(dir);

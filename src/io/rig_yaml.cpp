@@ -289,6 +289,14 @@ class RigParser {
       if (present_.count(std::string(k.path)) && !k.read_by_source(rig.source.model))
         fail(std::string(k.path), fmt::format("expected no value with source.model {} (only source.model {} "
                                               "reads it)", rig.source.model, k.sources));
+    // An override of sky.model sets aside the file's keys of the other sky (a shipped rig's
+    // sky.p_max under --set sky.model=vector-rt); a file or an override that gives both is refused.
+    const bool model_overridden = override_for("sky.model") != nullptr;
+    for (const RigKey& k : rig_keys())
+      if (present_.count(std::string(k.path)) && rig.source.model == "sky" && !k.read_by_sky_model(rig.source.sky.model) &&
+          !(model_overridden && !override_for(std::string(k.path))))
+        fail(std::string(k.path), fmt::format("expected no value with sky.model {} (only sky.model {} reads it)",
+                                              rig.source.sky.model, k.sky_models));
     const SceneLoader load = [&](const std::string& path) {
       std::filesystem::path scene = path;
       if (scene.is_relative() && !override_for("source.scene") &&

@@ -47,19 +47,26 @@ std::vector<DatasetFile> write_sky_map(const fs::path& dir, const SkyMap& map, c
 }
 
 const std::vector<std::string>& sky_table_added_columns() {
-  static const std::vector<std::string> added{"sun_az_deg", "sun_el_deg", "dop", "aop_deg"};
+  static const std::vector<std::string> added{"sun_az_deg", "sun_el_deg", "dop", "aop_deg", "I_sr", "Q_sr", "U_sr"};
   return added;
 }
 
+bool sky_table_fixed_sun(const CsvFile& in) { return in.find_column("sun_az_deg") || in.find_column("sun_el_deg"); }
+
 std::vector<SkyQuery> read_sky_table_input(const CsvFile& in) {
   constexpr std::string_view section = "6.12 polrig sky table";
-  const std::size_t c_utc = in.column("utc", section), c_lat = in.column("lat_deg", section),
-                    c_lon = in.column("lon_deg", section), c_az = in.column("view_az_deg", section),
-                    c_el = in.column("view_el_deg", section);
+  const bool fixed = sky_table_fixed_sun(in);
   for (const std::string& added : sky_table_added_columns())
-    if (in.find_column(added))
+    if (in.find_column(added) && !(fixed && (added == "sun_az_deg" || added == "sun_el_deg")))
       throw DataError(fmt::format("{}:{}: column '{}' is one sky table writes: rename it",
                                   in.origin, in.header_line, added));
+  std::size_t c_utc = 0, c_lat = 0, c_lon = 0, c_sun_az = 0, c_sun_el = 0;
+  if (fixed) {
+    c_sun_az = in.column("sun_az_deg", section), c_sun_el = in.column("sun_el_deg", section);
+  } else {
+    c_utc = in.column("utc", section), c_lat = in.column("lat_deg", section), c_lon = in.column("lon_deg", section);
+  }
+  const std::size_t c_az = in.column("view_az_deg", section), c_el = in.column("view_el_deg", section);
   if (in.rows.empty()) throw DataError(fmt::format("{}: no data rows after the header", in.origin));
   auto ranged = [&](std::size_t row, std::size_t col, std::string_view field) {
     const double v = in.number(row, col);
@@ -72,12 +79,16 @@ std::vector<SkyQuery> read_sky_table_input(const CsvFile& in) {
   std::vector<SkyQuery> queries(in.rows.size());
   for (std::size_t r = 0; r < in.rows.size(); ++r) {
     SkyQuery& q = queries[r];
-    try {
-      q.at.utc = parse_utc(in.rows[r][c_utc]);
-    } catch (const std::invalid_argument& e) {
-      throw DataError(fmt::format("{}:{}: column 'utc': {}", in.origin, in.line[r], e.what()));
+    if (fixed) {
+      q.sun = fixed_sun(ranged(r, c_sun_az, "sun_az_deg"), ranged(r, c_sun_el, "sun_el_deg"));
+    } else {
+      try {
+        q.at.utc = parse_utc(in.rows[r][c_utc]);
+      } catch (const std::invalid_argument& e) {
+        throw DataError(fmt::format("{}:{}: column 'utc': {}", in.origin, in.line[r], e.what()));
+      }
+      q.at.site = {ranged(r, c_lat, "lat_deg"), ranged(r, c_lon, "lon_deg"), 0};
     }
-    q.at.site = {ranged(r, c_lat, "lat_deg"), ranged(r, c_lon, "lon_deg"), 0};
     q.view_az_deg = ranged(r, c_az, "view_az_deg");
     q.view_el_deg = ranged(r, c_el, "view_el_deg");
   }
@@ -87,20 +98,31 @@ std::vector<SkyQuery> read_sky_table_input(const CsvFile& in) {
 std::string sky_table_csv(const CsvFile& in, std::span<const SkySample> samples) {
   if (samples.size() != in.rows.size())
     throw std::logic_error("sky_table_csv: one sample per input row expected");
+  const bool fixed = sky_table_fixed_sun(in);
+  const bool absolute = !samples.empty() && samples.front().absolute.has_value();
+  std::vector<std::string> columns;
+  for (const std::string& c : sky_table_added_columns())
+    if (!(fixed && (c == "sun_az_deg" || c == "sun_el_deg")) && (absolute || !c.ends_with("_sr")))
+      columns.push_back(c);
   std::string out;
   for (const std::string& h : in.header) out += h + ",";
-  out += "sun_az_deg,sun_el_deg,dop,aop_deg\n";
+  for (std::size_t k = 0; k < columns.size(); ++k) out += columns[k] + (k + 1 < columns.size() ? "," : "\n");
   for (std::size_t r = 0; r < in.rows.size(); ++r) {
     const SkySample& s = samples[r];
     for (const std::string& v : in.rows[r]) out += v + ",";  // as written in the input
-    const double values[] = {s.sun.azimuth_deg, s.sun.elevation_deg, s.light.dop, s.light.aop_deg};
-    for (std::size_t k = 0; k < 4; ++k) {
+    std::vector<double> values;
+    if (!fixed) values = {s.sun.azimuth_deg, s.sun.elevation_deg};
+    values.insert(values.end(), {s.light.dop, s.light.aop_deg});
+    if (absolute) {
+      if (!s.absolute) throw std::logic_error("sky_table_csv: every sample or none has an absolute radiance");
+      values.insert(values.end(), {(*s.absolute)(0), (*s.absolute)(1), (*s.absolute)(2)});
+    }
+    for (std::size_t k = 0; k < values.size(); ++k) {
       if (!std::isfinite(values[k]))
         throw std::runtime_error(fmt::format("{}:{}: column '{}' is {}, not finite (a bug); "
-                                             "nothing was written", in.origin, in.line[r],
-                                             sky_table_added_columns()[k], values[k]));
+                                             "nothing was written", in.origin, in.line[r], columns[k], values[k]));
       out += fmt::format("{}", values[k]);
-      out += k < 3 ? ',' : '\n';
+      out += k + 1 < values.size() ? ',' : '\n';
     }
   }
   return out;

@@ -87,7 +87,8 @@ py::object value_of(const Rig& rig_in, const RigKey& k) {
 
 // Whether the rig's source and instrument read the key (Rig.keys(), `in`).
 bool reads_key(const PyRig& r, const RigKey& k) {
-  return k.read_by_source(r.rig().source.model) && k.read_by_instrument(r.rig().device_kind);
+  return k.read_by_source(r.rig().source.model) && k.read_by_instrument(r.rig().device_kind) &&
+         (r.rig().source.model != "sky" || k.read_by_sky_model(r.rig().source.sky.model));
 }
 
 PyRig reparsed(const PyRig& r, const std::vector<RigOverride>& more) {

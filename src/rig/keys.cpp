@@ -8,6 +8,9 @@
 
 #include <fmt/format.h>
 
+#include "polrig/sky/rayleigh.h"
+#include "polrig/source/sky_settings.h"
+
 #include "polrig/rig/error.h"
 #include "polrig/sky/sun.h"
 
@@ -300,6 +303,63 @@ void add_ins_keys(std::vector<RigKey>& keys) {
                "the integrated filter's H with the tilt columns: the INS's tilt error enters the measured H^n and is "
                "estimated (ins/filter.h) [C: false, Z21's position-only H]",
                [](Rig& r) -> bool& { return r.navigation.tilt_in_measurement; }), kNav);
+}
+
+// --- sky.model and sky.rt.* (source/sky_settings.h; docs/physics.md §21): which sky, and the
+// vector-RT sky's atmosphere. Read under source.model sky; sky.rt.* only by sky.model vector-rt.
+constexpr std::string_view kSingleScattering = "single-scattering", kVectorRt = "vector-rt";
+
+void add_vector_rt_keys(std::vector<RigKey>& keys) {
+  {
+    RigKey k{"sky.model", K::Text, "", "single-scattering or vector-rt",
+             "what the sky is: single scattering with one P_max and a radiance model (sky.p_max, "
+             "sky.radiance), or the exact polarized Rayleigh sky of a plane-parallel atmosphere over a "
+             "Lambertian ground (sky.rt.*), whose radiance, DoP and AoP all come from the solution"};
+    k.text = [](Rig& r) -> std::string& { return r.source.sky.model; };
+    k.valid_text = [](std::string_view v) { return parse_sky_kind(v).has_value(); };
+    keys.push_back(reads(k, kSimulate, "sky"));
+  }
+  const auto rt = [&](RigKey k) {
+    k.sky_models = kVectorRt;
+    keys.push_back(reads(std::move(k), kSimulate, "sky"));
+  };
+  {
+    RigKey k{"sky.rt.tau_rayleigh", K::Text, "", "an optical depth in (0, 100], or bodhaine",
+             "the Rayleigh optical depth of the whole atmosphere, or bodhaine: Bodhaine et al. 1999's at "
+             "sky.rt.wavelength_nm and sky.rt.pressure_hPa (0.22 at 450 nm, 0.097 at 550 nm at sea level)",
+             "from a nearly clear atmosphere to one the sun barely crosses"};
+    k.text = [](Rig& r) -> std::string& { return r.source.sky.tau_rayleigh; };
+    k.valid_text = [](std::string_view v) {
+      try {
+        (void)parse_tau_rayleigh(v);
+        return true;
+      } catch (const std::invalid_argument&) {
+        return false;
+      }
+    };
+    rt(k);
+  }
+  rt(real<RealRange{250.0, 4000.0}>(
+      "sky.rt.wavelength_nm", "nm", "a wavelength", "the wavelength of sky.rt.tau_rayleigh: bodhaine",
+      "Bodhaine et al.'s refractive index of air holds from the near UV to the thermal infrared",
+      [](Rig& r) -> double& { return r.source.sky.wavelength_nm; }));
+  rt(real<RealRange{1.0, 1100.0}>(
+      "sky.rt.pressure_hPa", "hPa", "a pressure", "the surface pressure of sky.rt.tau_rayleigh: bodhaine",
+      "from the stratosphere to the deepest mine; sea level is 1013.25 hPa",
+      [](Rig& r) -> double& { return r.source.sky.pressure_hPa; }));
+  rt(real<RealRange{0.0, 0.5, false, true}>(
+      "sky.rt.depolarization", "", "a depolarization factor",
+      "ρ of the Rayleigh scatterers (Hansen & Travis 1974 Eq. 2.15): air's is 0.0279",
+      "0 is isotropic molecules; 1/2 makes the phase matrix's Δ' change sign",
+      [](Rig& r) -> double& { return r.source.sky.rt.depolarization; }));
+  rt(real<RealRange{0.0, 1.0}>(
+      "sky.rt.ground_albedo", "", "an albedo", "the Lambertian ground's albedo under the atmosphere",
+      "a ground reflects between none and all of the light it receives",
+      [](Rig& r) -> double& { return r.source.sky.rt.ground_albedo; }));
+  rt(integer("sky.rt.streams", "an even integer in [4, 128]",
+             "discrete ordinates over both hemispheres; 32 meets the exact tables to 6e-6 in I",
+             "fewer than 4 cannot hold Rayleigh's m = 2 term; beyond 128 the solve takes seconds",
+             [](Rig& r) -> int& { return r.source.sky.rt.streams; }, &integer_within<4, 128, true>));
 }
 
 std::vector<RigKey> make_keys() {
@@ -802,6 +862,7 @@ std::vector<RigKey> make_keys() {
       "P_max of the single-scattering sky, P = P_max·sin²γ/(1 + cos²γ)",
       "near 0 a nearly unpolarized sky, 1 the single-scattering limit (clear skies: 0.65–0.75)",
       [](Rig& r) -> double& { return r.source.sky.sky.model.P_max.constant; }), kSimulate, "sky"));
+  keys.back().sky_models = kSingleScattering;
   for (const bool values : {false, true}) {
     constexpr RealRange kElevation{-90.0, 90.0}, kPmax{0.0, 1.0, true, false};
     RigKey k{values ? "sky.p_max_table" : "sky.p_max_table_elevation_deg", K::RealList,
@@ -818,12 +879,15 @@ std::vector<RigKey> make_keys() {
     k.range = values ? kPmax : kElevation;
     k.max_items = 1000;
     k.valid_real = values ? &within<kPmax> : &within<kElevation>;
+    k.sky_models = kSingleScattering;
     keys.push_back(reads(k, kSimulate, "sky"));
   }
   sky_text("sky.radiance", "uniform, rayleigh or cie-clear", "the sky's radiance model (spec §1.2)",
            [](Rig& r) -> std::string& { return r.source.sky.radiance; },
            [](std::string_view v) { return v == "uniform" || v == "rayleigh" || v == "cie-clear"; },
            kSimulate);
+  keys.back().sky_models = kSingleScattering;
+  add_vector_rt_keys(keys);
   keys.push_back(reads(real<kTurn>(
       "sky.mount_deg", "deg", "an angle",
       "geographic azimuth (clockwise from north) of the sensor's 0° axis at table angle 0",
@@ -1009,6 +1073,7 @@ bool listed(std::string_view list, std::string_view name) {
 
 bool RigKey::read_by_source(std::string_view model) const { return listed(sources, model); }
 bool RigKey::read_by_instrument(std::string_view kind) const { return listed(instruments, kind); }
+bool RigKey::read_by_sky_model(std::string_view model) const { return listed(sky_models, model); }
 
 std::string RigKey::studies_text() const {
   std::string out;
@@ -1150,6 +1215,9 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
 bool written_for(const RigKey& key, const Rig& rig_in) {
   if (!key.read_by_source(rig_in.source.model)) return false;
   if (!key.read_by_instrument(rig_in.device_kind)) return false;
+  if (rig_in.source.model == "sky" && !key.read_by_sky_model(rig_in.source.sky.model)) return false;
+  if (key.path == "sky.rt.wavelength_nm" || key.path == "sky.rt.pressure_hPa")
+    if (rig_in.source.sky.tau_rayleigh != "bodhaine") return false;
   if (key.path == "device.kind" && rig_in.device_kind == kDefaultDeviceKind) return false;
   // A source that sets the light's d itself (the traced port film, the sky at its first stop): the
   // file leaves device.d out and the parser derives it again, so that a --set of the source's keys

@@ -1,5 +1,6 @@
 // The single-scattering Rayleigh sky (spec sky-and-compasses.md §1.2).
 #include "polrig/sky/rayleigh.h"
+#include "polrig/sky/vector_rt_sky.h"
 #include "polrig/units.h"
 
 #include <algorithm>
@@ -22,6 +23,20 @@ std::string_view sky_radiance_name(SkyRadiance r) {
 std::optional<SkyRadiance> parse_sky_radiance(std::string_view name) {
   for (const SkyRadiance r : {SkyRadiance::Uniform, SkyRadiance::Rayleigh, SkyRadiance::CieClear})
     if (sky_radiance_name(r) == name) return r;
+  return std::nullopt;
+}
+
+std::string_view sky_kind_name(SkyKind k) {
+  switch (k) {
+    case SkyKind::SingleScattering: return "single-scattering";
+    case SkyKind::VectorRt: return "vector-rt";
+  }
+  return "?";
+}
+
+std::optional<SkyKind> parse_sky_kind(std::string_view name) {
+  for (const SkyKind k : {SkyKind::SingleScattering, SkyKind::VectorRt})
+    if (sky_kind_name(k) == name) return k;
   return std::nullopt;
 }
 
@@ -95,12 +110,48 @@ void meridian_frame(const Vec3& v, Vec3& e_theta, Vec3& e_phi) {
 }
 
 SunSky::SunSky(const Vec3& s, const SkyModel& model)
-    : s_(s), P_max_(model.P_max.at(std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg)), radiance_(model.radiance) {}
+    : s_(s), P_max_(model.P_max.at(std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg)), radiance_(model.radiance) {
+  if (model.kind == SkyKind::VectorRt) {
+    if (!model.vector_rt) throw std::logic_error("a vector-rt sky model without its solved sky");
+    field_ = std::make_shared<const SunField>(model.vector_rt->for_sun(std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg));
+    sun_math_azimuth_ = std::atan2(s[1], s[0]);
+  }
+}
+
+namespace {
+
+// The vector-RT sky's Stokes vector along v (L/E₀; Q, U in v's meridian frame).
+Eigen::Vector3d field_stokes(const SunField& f, double sun_math_azimuth, const Vec3& v) {
+  const double phi = std::atan2(v[1], v[0]) - sun_math_azimuth;  // at the zenith: φ_v = 0, as meridian_frame
+  return f.stokes(std::clamp(v[2], 0.0, 1.0), phi);
+}
+
+}  // namespace
+
+std::optional<Stokes> SunSky::absolute_stokes(const Vec3& v) const {
+  if (!field_) return std::nullopt;
+  const Eigen::Vector3d x = field_stokes(*field_, sun_math_azimuth_, v);
+  return Stokes{x(0), x(1), x(2), 0};
+}
 
 SkyRay SunSky::along(const Vec3& v) const {
   SkyRay ray;
   const Vec3 c = vec3::cross(s_, v);
   ray.sin_gamma = vec3::norm(c);
+  if (field_) {
+    const Eigen::Vector3d x = field_stokes(*field_, sun_math_azimuth_, v);
+    ray.radiance = x(0) / field_->zenith_radiance();
+    const double lp = std::hypot(x(1), x(2));
+    ray.dop = lp / x(0);
+    if (lp > 0) {
+      // e = cos χ e_θ + sin χ e_φ with cos 2χ = Q/(LP), sin 2χ = U/(LP).
+      const double chi = 0.5 * std::atan2(x(2), x(1));
+      Vec3 e_theta, e_phi;
+      meridian_frame(v, e_theta, e_phi);
+      ray.e_vector = vec3::add(vec3::mul(e_theta, std::cos(chi)), vec3::mul(e_phi, std::sin(chi)));
+    }
+    return ray;
+  }
   const double cos_gamma = vec3::dot(s_, v);
   const double sin2 = ray.sin_gamma * ray.sin_gamma, cos2 = cos_gamma * cos_gamma;
   // P = P_max·sin²γ/(1 + cos²γ); sin²γ from |s × v|², exact at γ = 0° and 180°.
@@ -110,11 +161,11 @@ SkyRay SunSky::along(const Vec3& v) const {
   return ray;
 }
 
-SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model) {
-  const SkyRay ray = SunSky(s, model).along(v);
+SkyLight sky_light(const SunSky& sky, const Vec3& v) {
+  const SkyRay ray = sky.along(v);
   SkyLight light;
   light.radiance = ray.radiance, light.dop = ray.dop, light.e_vector = ray.e_vector;
-  if (ray.sin_gamma > 0) {
+  if (vec3::norm(ray.e_vector) > 0) {
     Vec3 e_theta, e_phi;
     meridian_frame(v, e_theta, e_phi);
     double chi = std::atan2(vec3::dot(light.e_vector, e_phi), vec3::dot(light.e_vector, e_theta)) / kDeg;
@@ -123,6 +174,8 @@ SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model) {
   }
   return light;
 }
+
+SkyLight sky_light(const Vec3& s, const Vec3& v, const SkyModel& model) { return sky_light(SunSky(s, model), v); }
 
 Stokes sky_stokes(const SkyLight& light) {
   const double two_chi = 2 * light.aop_deg * kDeg;

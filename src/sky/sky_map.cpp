@@ -38,7 +38,7 @@ SkyMap sky_map(const Sky& sky, int size) {
   map.size = size;
   map.time = sky.first_stop;
   map.sun = sun_position(sky.first_stop, sky.site, sky.sun);
-  const Vec3 s = sun_direction_enu(map.sun);
+  const SunSky sun_sky(sun_direction_enu(map.sun), sky.model);  // one sun: its sky found once
   const std::size_t n = static_cast<std::size_t>(size) * static_cast<std::size_t>(size);
   for (auto* layer : {&map.S0, &map.S1, &map.S2, &map.aop_deg, &map.dop, &map.inside})
     layer->assign(n, 0.0f);
@@ -46,7 +46,7 @@ SkyMap sky_map(const Sky& sky, int size) {
     for (int i = 0; i < size; ++i) {
       Vec3 v;
       if (!sky_map_direction(size, i + 0.5, j + 0.5, v)) continue;
-      const SkyLight light = sky_light(s, v, sky.model);
+      const SkyLight light = sky_light(sun_sky, v);
       const Stokes st = sky_stokes(light);
       const std::size_t k = static_cast<std::size_t>(j) * static_cast<std::size_t>(size) +
                             static_cast<std::size_t>(i);

@@ -1,17 +1,20 @@
 #include "polrig/source/sky_settings.h"
 
+#include "polrig/sky/vector_rt_sky.h"
+
 #include <optional>
 #include <stdexcept>
+#include <string_view>
 
 namespace polrig {
 
 Sky SkySettings::resolved_sky() const {
   Sky s = sky;
   s.first_stop = parse_utc(first_stop_utc);
-  const std::optional<SkyRadiance> model = parse_sky_radiance(radiance);
-  if (!model)
+  const std::optional<SkyRadiance> radiance_model = parse_sky_radiance(radiance);
+  if (!radiance_model)
     throw std::invalid_argument("sky.radiance: expected uniform, rayleigh or cie-clear, got '" + radiance + "'");
-  s.model.radiance = *model;
+  s.model.radiance = *radiance_model;
   if (refraction != "off" && refraction != "on")
     throw std::invalid_argument("sky.refraction: expected off or on, got '" + refraction + "'");
   s.sun.refraction = refraction == "on";
@@ -23,6 +26,34 @@ Sky SkySettings::resolved_sky() const {
   for (std::size_t i = 0; i < p_max_table.size(); ++i)
     s.model.P_max.table.emplace_back(p_max_table_elevation_deg[i], p_max_table[i]);
   check_sky_model(s.model);
+  const std::optional<SkyKind> kind = parse_sky_kind(model);
+  if (!kind)
+    throw std::invalid_argument("sky.model: expected single-scattering or vector-rt, got '" + model + "'");
+  s.model.kind = *kind;
+  if (*kind == SkyKind::VectorRt) s.model.vector_rt = vector_rt_sky(resolved_rt());
+  return s;
+}
+
+std::optional<double> parse_tau_rayleigh(std::string_view text) {
+  if (text == "bodhaine") return std::nullopt;
+  std::size_t used = 0;
+  double tau = 0;
+  try {
+    tau = std::stod(std::string(text), &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !(tau > 0 && tau <= 100))
+    throw std::invalid_argument("sky.rt.tau_rayleigh: expected an optical depth in (0, 100] or bodhaine, got '" +
+                                std::string(text) + "'");
+  return tau;
+}
+
+VectorRtSettings SkySettings::resolved_rt() const {
+  VectorRtSettings s = rt;
+  const std::optional<double> tau = parse_tau_rayleigh(tau_rayleigh);
+  s.tau_rayleigh = tau ? *tau : rayleigh_optical_depth_bodhaine(wavelength_nm, pressure_hPa, s.depolarization);
+  check_vector_rt(s);
   return s;
 }
 

@@ -24,12 +24,16 @@ std::string sun_yaml(std::string_view what, UtcTime t, const Sky& sky, const Sun
 std::vector<DatasetFile> write_sky_map(const std::filesystem::path& dir, const SkyMap& map,
                                        const Sky& sky, ExrCompression compression);
 
-// `polrig sky table`'s input: every row of INPUT (columns utc, lat_deg, lon_deg, view_az_deg,
-// view_el_deg; others are carried through) as a query. Throws DataError naming the file, line,
-// column and value of the first bad cell, for a file without data rows, or for an input column
-// named like one sky table adds.
+// `polrig sky table`'s input: every row of INPUT as a query, in one of two forms: columns utc,
+// lat_deg, lon_deg, view_az_deg, view_el_deg (the sun from the ephemeris), or sun_az_deg,
+// sun_el_deg, view_az_deg, view_el_deg (a fixed sun, no ephemeris); others are carried through.
+// Throws DataError naming the file, line, column and value of the first bad cell, for a file
+// without data rows, or for an input column named like one sky table adds.
 std::vector<SkyQuery> read_sky_table_input(const CsvFile& input);
-// sky.csv: the input's columns as written, then sun_az_deg, sun_el_deg, dop, aop_deg.
+// Whether INPUT gives its suns (sun_az_deg, sun_el_deg) rather than times and places.
+bool sky_table_fixed_sun(const CsvFile& input);
+// sky.csv: the input's columns as written, then sun_az_deg, sun_el_deg (ephemeris rows only), dop,
+// aop_deg, and I_sr, Q_sr, U_sr where the sky has an absolute radiance (vector-rt).
 std::string sky_table_csv(const CsvFile& input, std::span<const SkySample> samples);
 
 }  // namespace polrig

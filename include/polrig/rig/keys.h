@@ -70,6 +70,10 @@ struct RigKey {
   // A rig whose instrument is not among them refuses the key, as for `sources`.
   std::string_view instruments = {};
   bool read_by_instrument(std::string_view kind) const;
+  // The skies that read it (sky.model names, space-separated); empty: every sky. A rig whose
+  // sky.model is not among them refuses the key, as for `sources`.
+  std::string_view sky_models = {};
+  bool read_by_sky_model(std::string_view model) const;
   std::string studies_text() const;  // "simulate, cs"
 };
 

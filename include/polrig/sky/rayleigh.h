@@ -2,9 +2,10 @@
 // Single-scattering Rayleigh sky (spec sky-and-compasses.md §1.2): the E-vector, degree and angle
 // of linear polarization, and the radiance models, for a viewing direction v and the sun s, both
 // unit vectors in ENU (x east, y north, z up).
-#include <utility>
+#include <memory>
 #include <optional>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "polrig/optics/polarizer.h"
@@ -35,9 +36,22 @@ struct MaxDegree {
 };
 
 
+// What the sky is made of (the rig key sky.model): single scattering with one P_max and a
+// radiance model (this file), or the exact polarized Rayleigh sky of a plane-parallel atmosphere
+// (sky/vector_rt_sky.h), whose radiance, DoP and AoP all come from the solution.
+enum class SkyKind { SingleScattering, VectorRt };
+// "single-scattering", "vector-rt".
+std::string_view sky_kind_name(SkyKind k);
+std::optional<SkyKind> parse_sky_kind(std::string_view name);
+
+class VectorRtSky;
+class SunField;
+
 struct SkyModel {
-  MaxDegree P_max;
-  SkyRadiance radiance = SkyRadiance::Uniform;
+  MaxDegree P_max;                            // single scattering
+  SkyRadiance radiance = SkyRadiance::Uniform;  // single scattering
+  SkyKind kind = SkyKind::SingleScattering;
+  std::shared_ptr<const VectorRtSky> vector_rt;  // kind VectorRt: the solved sky (vector_rt_sky())
 };
 
 // Throws std::invalid_argument naming the value: P_max outside (0, 1], a table not rising in h_s,
@@ -66,18 +80,30 @@ struct SkyRay {
   double sin_gamma = 0;   // |s × v|
 };
 
-// One sun's sky along many views: P_max(h_s) found once. Each ray's radiance, dop and e_vector
-// are sky_light's bit for bit (sky_light is built on it).
+// One sun's sky along many views: P_max(h_s), or the vector-RT sky's field for this sun, found
+// once. Each ray's radiance, dop and e_vector are sky_light's bit for bit (sky_light is built on
+// it). Under the vector-RT sky the radiance is relative to the zenith's diffuse radiance (as every
+// radiance model's is), views below the horizon see the horizon's light, and a sun below
+// VectorRtSky::kMinSunElevationDeg throws std::invalid_argument.
 class SunSky {
  public:
   SunSky(const Vec3& s, const SkyModel& model);
   SkyRay along(const Vec3& v) const;
+  // The diffuse radiance L/E₀ (sr⁻¹, per unit irradiance normal to the sun's beam) and Q, U in v's
+  // meridian frame (polrig's χ): the vector-RT sky's absolute Stokes vector; empty for a
+  // single-scattering sky, which has no absolute scale.
+  std::optional<Stokes> absolute_stokes(const Vec3& v) const;
 
  private:
   Vec3 s_;
   double P_max_;
   SkyRadiance radiance_;
+  std::shared_ptr<const SunField> field_;  // the vector-RT sky for this sun
+  double sun_math_azimuth_ = 0;
 };
+
+// The same for many views under one sun (what a map or a table of views calls).
+SkyLight sky_light(const SunSky& sky, const Vec3& v);
 
 // The local meridian frame of v = (sin θ cos φ, sin θ sin φ, cos θ), φ the math azimuth
 // (anticlockwise from east seen from above, φ = 90° − A): e_θ = ∂v/∂θ points down the meridian

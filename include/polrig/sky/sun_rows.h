@@ -2,6 +2,7 @@
 // The sun and the sky for many rows of (time, site): the tables of `polrig sky table` and
 // `polrig heading`. Values only; reading and writing the files is io/'s.
 #include <cstddef>
+#include <optional>
 #include <span>
 #include <string_view>
 #include <stdexcept>
@@ -39,23 +40,30 @@ std::vector<SunPosition> sun_positions(std::span<const SunRow> rows,
 
 // A direction on the sky at a time and place: geographic azimuth (from north towards east) and
 // elevation of the viewing direction, degrees.
+// With `sun` set the row's sun is given (no ephemeris: `at` is not read).
 struct SkyQuery {
   SunRow at;
   double view_az_deg = 0, view_el_deg = 90;
+  std::optional<SunPosition> sun;
 };
+// A sun given by its geographic azimuth and elevation, degrees (zenith 90° − elevation; no hour
+// angles).
+SunPosition fixed_sun(double azimuth_deg, double elevation_deg);
 // The range of one input of a row (a CSV column, a Python argument): [lo, hi] and what it is.
 struct InputRange {
   double lo, hi;
   const char* what;
 };
 // The ranges of `polrig sky table`'s inputs (its CSV columns, polrig.sky_table's arguments):
-// lat_deg, lon_deg, view_az_deg, view_el_deg; std::invalid_argument for another name.
+// lat_deg, lon_deg, view_az_deg, view_el_deg, sun_az_deg, sun_el_deg; std::invalid_argument for
+// another name.
 InputRange sky_query_range(std::string_view field);
 
 struct SkySample {
   SunPosition sun;
   SkyLight light;  // along the viewing direction; χ in its local meridian frame (at the zenith,
                    // the limit along view_az_deg)
+  std::optional<Stokes> absolute;  // the vector-RT sky's L/E₀, Q, U (SunSky::absolute_stokes)
 };
 // The single-scattering sky (sky_light) of one sun along a viewing direction given by its
 // geographic azimuth (from north towards east) and elevation, degrees: what sky_along computes per
@@ -68,7 +76,10 @@ SkyLight sky_light_toward(const SunPosition& sun, double view_az_deg, double vie
 std::vector<SkyLight> sky_light_toward(const SunPosition& sun, std::span<const double> view_az_deg,
                                        std::span<const double> view_el_deg, const SkyModel& model);
 
-// The sun (sun_positions) and the single-scattering sky (sky_light) for every query, in order.
+// The sun (sun_positions, or the row's own) and the sky (sky_light) for every query, in order.
+// The sky of each distinct sun is found once (SunSky), so that the vector-RT sky interpolates its
+// field once per sun, not per row. A row whose sun the sky refuses (the vector-RT sky's low-sun
+// limit) throws SunRowError naming the first such row.
 std::vector<SkySample> sky_along(std::span<const SkyQuery> queries, const SkyModel& model,
                                  const SunSettings& settings = {},
                                  const Progress& progress = {});

@@ -4,6 +4,8 @@
 // thread-count independence, and the rig keys.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -16,6 +18,7 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/rig.h"
+#include "polrig/sky/neutral_points.h"
 #include "polrig/sky/sun_rows.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/units.h"
@@ -164,6 +167,81 @@ TEST(VectorRtSky, SameBitsForAnyThreadCount) {
     ASSERT_EQ(one[i].light.dop, two[i].light.dop) << i;
     ASSERT_EQ(one[i].light.aop_deg, two[i].light.aop_deg) << i;
     ASSERT_EQ(*one[i].absolute, *two[i].absolute) << i;
+  }
+}
+
+// The zeros of one table column Q(μ) (polrig's sign), as view elevations: each sign change between
+// grid points, located on the 4-point Lagrange interpolant in μ by bisection.
+std::vector<double> table_zeros_deg(const std::vector<Row>& rows, std::size_t first, int column) {
+  std::vector<double> mu, q, zeros;
+  for (std::size_t k = 0; k < 16; ++k) mu.push_back(rows[first + k].mu), q.push_back(-rows[first + k].v[column]);
+  const auto interp = [&](std::size_t j0, double x) {
+    double sum = 0;
+    for (std::size_t i = j0; i < j0 + 4; ++i) {
+      double w = 1;
+      for (std::size_t j = j0; j < j0 + 4; ++j)
+        if (j != i) w *= (x - mu[j]) / (mu[i] - mu[j]);
+      sum += w * q[i];
+    }
+    return sum;
+  };
+  for (std::size_t k = 0; k + 1 < mu.size(); ++k) {
+    if ((q[k] > 0) == (q[k + 1] > 0)) continue;
+    const std::size_t j0 = std::min<std::size_t>(k > 0 ? k - 1 : 0, mu.size() - 4);
+    double a = mu[k], b = mu[k + 1];
+    const bool a_positive = q[k] > 0;
+    for (int it = 0; it < 60; ++it) {
+      const double m = 0.5 * (a + b);
+      ((interp(j0, m) > 0) == a_positive ? a : b) = m;
+    }
+    zeros.push_back(std::asin(0.5 * (a + b)) / kDeg);
+  }
+  return zeros;
+}
+
+// The neutral points against the exact tables (τ = 0.25 DN, black ground, every μ₀): each point
+// polrig finds is a sign change of the table's Q in the principal plane at the same place, to the
+// interpolation of the table's μ grid (0.5°), and every sign change of the tables is one of them.
+TEST(VectorRtSky, NeutralPointsAreWhereTheExactTablesChangeSign) {
+  const auto Q = read_blocks("Q_DN_TAU_0.25");
+  VectorRtSettings s;
+  s.tau_rayleigh = 0.25, s.depolarization = 0;
+  int checked = 0;
+  for (std::size_t r0 = 0; r0 < Q[0].size(); r0 += 16) {
+    const double h = std::asin(Q[0][r0].mu0) / kDeg;
+    if (h < VectorRtSky::kMinSunElevationDeg || h > 85) continue;
+    const NeutralPoints p = vector_rt_neutral_points(s, h);
+    std::vector<double> sun_side = table_zeros_deg(Q[0], r0, 0), anti_side = table_zeros_deg(Q[0], r0, 6);
+    const auto claim = [&](std::vector<double>& zeros, double elevation, const char* what) {
+      if (elevation < std::asin(Q[0][r0].mu) / kDeg) return;  // below the tables' lowest view (μ = 0.02)
+      ASSERT_FALSE(zeros.empty()) << what << " at sun " << h << "°: no sign change in the table";
+      std::size_t best = 0;
+      for (std::size_t k = 1; k < zeros.size(); ++k)
+        if (std::abs(zeros[k] - elevation) < std::abs(zeros[best] - elevation)) best = k;
+      EXPECT_NEAR(zeros[best], elevation, 0.5) << what << " at sun " << h << "°";
+      zeros.erase(zeros.begin() + static_cast<long>(best));
+      ++checked;
+    };
+    if (p.babinet_deg) {
+      const double e = h + *p.babinet_deg;
+      e <= 90 ? claim(sun_side, e, "Babinet") : claim(anti_side, 180 - e, "Babinet");
+    }
+    if (p.brewster_deg) claim(sun_side, h - *p.brewster_deg, "Brewster");
+    if (p.arago_deg) claim(anti_side, *p.arago_deg - h, "Arago");
+    EXPECT_TRUE(sun_side.empty() && anti_side.empty()) << "sun " << h << "°: a sign change polrig did not find";
+  }
+  EXPECT_GE(checked, 10);
+  // The spec's reading of the tables (skies.md §1): Babinet ~15.5° above and Brewster ~20.3° below
+  // a sun at 36.9° (τ 0.25); Arago ~19–25° above the antisun at low sun (τ 0.1–0.25).
+  const NeutralPoints p = vector_rt_neutral_points(s, 36.87);
+  EXPECT_NEAR(*p.babinet_deg, 15.5, 0.6);
+  EXPECT_NEAR(*p.brewster_deg, 20.3, 0.3);
+  for (double tau : {0.1, 0.25}) {
+    s.tau_rayleigh = tau;
+    const NeutralPoints low = vector_rt_neutral_points(s, 10);
+    ASSERT_TRUE(low.arago_deg);
+    EXPECT_GE(*low.arago_deg, 18);
+    EXPECT_LE(*low.arago_deg, 26);
   }
 }
 

@@ -137,6 +137,31 @@ def test_sky_light_and_stokes_are_sky_table_at_one_time(tmp_path):
     assert np.all(st[:, 3] == 0) and np.array_equal(st[:, 0], light.radiance)
 
 
+def test_vector_rt_sky_is_sky_table_with_the_rigs_sky_block(tmp_path):
+    az = np.linspace(-350, 350, 12)
+    el = np.linspace(-5, 90, 12)
+    write_table_input(tmp_path / "in.csv", [(UTC, *SITE, a, e) for a, e in zip(az, el)])
+    run_cli("sky", "table", tmp_path / "in.csv", "-o", tmp_path / "t", "--set", "source.model=sky",
+            "--set", "sky.model=vector-rt", "--set", "sky.rt.tau_rayleigh=0.25", "--set", "sky.rt.ground_albedo=0.1")
+    csv = read_csv(tmp_path / "t" / "sky.csv")
+    sky = polrig.Sky(site=SITE, utc=UTC, model="vector-rt", tau_rayleigh=0.25, ground_albedo=0.1)
+    assert sky.model == "vector-rt" and sky.tau_rayleigh == 0.25
+    light = sky.light(az, el)
+    assert np.array_equal(light.dop, csv["dop"]) and np.array_equal(light.aop_deg, csv["aop_deg"])
+    iqu = sky.radiance_sr(az, el)
+    assert iqu.shape == (12, 3)
+    for k, name in enumerate(["I_sr", "Q_sr", "U_sr"]):
+        assert np.array_equal(iqu[:, k], csv[name])
+    # χ = ½·atan2(U, Q), P = √(Q² + U²)/I (sky table's columns, formats.md §6.12)
+    assert np.allclose(np.hypot(iqu[:, 1], iqu[:, 2]) / iqu[:, 0], light.dop, rtol=1e-14)
+    assert polrig.Sky(model="vector-rt", tau_rayleigh="bodhaine", wavelength_nm=450).tau_rayleigh == \
+        pytest.approx(0.2203, abs=5e-4)
+    with pytest.raises(ValueError, match="tau_rayleigh"):
+        polrig.Sky(model="vector-rt", tau_rayleigh=-1)
+    with pytest.raises(ValueError, match="single-scattering sky has no absolute radiance"):
+        polrig.Sky().radiance_sr(0, 90)
+
+
 def test_broadcasting_shapes():
     sky = polrig.Sky()
     az = np.arange(0, 360, 30.0)[None, :]

@@ -8,6 +8,7 @@
 #include <string>
 
 #include <fmt/format.h>
+#include <tbb/parallel_for.h>
 
 #include "cli.h"
 #include "polrig/io/csv.h"
@@ -16,7 +17,10 @@
 #include "polrig/report/sky_reports.h"
 #include "polrig/sky/sun_rows.h"
 #include "polrig/sky/sky.h"
+#include "polrig/io/plot.h"
+#include "polrig/sky/neutral_points.h"
 #include "polrig/sky/sky_map.h"
+#include "polrig/sky/vector_rt_sky.h"
 
 namespace polrig::cli {
 namespace {
@@ -51,6 +55,38 @@ struct SkyOptions {
     return s;
   }
 };
+
+// --sun-el-deg: "X", or "A:B:N" for N elevations from A to B (both included).
+std::vector<double> parse_elevations(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return DataError(fmt::format("--sun-el-deg {}: {} (expected X or A:B:N, degrees)", text, why));
+  };
+  std::vector<std::string> parts;
+  for (std::size_t pos = 0;;) {
+    const std::size_t colon = text.find(':', pos);
+    parts.push_back(text.substr(pos, colon == std::string::npos ? std::string::npos : colon - pos));
+    if (colon == std::string::npos) break;
+    pos = colon + 1;
+  }
+  const auto number = [&](const std::string& t) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(t, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != t.size() || !std::isfinite(v)) throw bad("'" + t + "' is not a number");
+    return v;
+  };
+  if (parts.size() == 1) return {number(parts[0])};
+  if (parts.size() != 3) throw bad("expected one value or three");
+  const double a = number(parts[0]), b = number(parts[1]), n = number(parts[2]);
+  if (!(n >= 2 && n <= 1000 && n == std::floor(n))) throw bad("N must be a whole number in [2, 1000]");
+  std::vector<double> out;
+  for (int k = 0; k < static_cast<int>(n); ++k) out.push_back(a + (b - a) * k / (n - 1));
+  return out;
+}
 
 }  // namespace
 
@@ -104,6 +140,67 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
                        (absolute ? ", I_sr, Q_sr, U_sr (L/E0 in 1/sr; Q, U in the view's meridian frame)" : "")}}};
       m.inputs.push_back(*input);
       write_manifest(dir.staging(), m);
+      finish(dir);
+    }});
+  }
+
+  // ---- sky neutral-points
+  {
+    auto* app = sky_app->add_subcommand(
+        "neutral-points", "the Babinet, Brewster and Arago points of the rig's sky along its solar meridian");
+    auto out = std::make_shared<OutputOptions>();
+    auto rig = std::make_shared<RigInput>();
+    auto elevations = std::make_shared<std::string>();
+    app->add_option("--rig", rig->path, "a rig file with source.model sky (its sky block: sky.model, sky.rt.*)");
+    add_set_option(*app, rig->sets);
+    app->add_option("--sun-el-deg", *elevations, "the sun's elevation X, or A:B:N (N elevations from A to B), degrees")
+        ->required();
+    out->add_to(*app, true);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      const LoadedRig loaded = rig->load();
+      const std::optional<Sky> sky = rig_sky(loaded.rig);
+      if (!sky) throw RigError(no_sky_message(loaded.rig, rig->path));
+      const std::vector<double> h = parse_elevations(*elevations);
+      const bool rt = sky->model.kind == SkyKind::VectorRt;
+      for (double e : h)
+        if (!(e >= (rt ? VectorRtSky::kMinSunElevationDeg : -90) && e <= 90))
+          throw DataError(fmt::format("--sun-el-deg {}: the sun's elevation {}° is outside [{}°, 90°]{}", *elevations, e,
+                                      rt ? VectorRtSky::kMinSunElevationDeg : -90,
+                                      rt ? " (the vector-rt sky's low-sun limit)" : ""));
+      OutputDir dir = out->open();
+      std::vector<NeutralPoints> points(h.size());
+      const Progress p = progress();
+      p.begin("neutral points", static_cast<long long>(h.size()));
+      tbb::parallel_for(std::size_t{0}, h.size(), [&](std::size_t k) {
+        // The single-scattering sky has none: Q < 0 everywhere off the sun's line.
+        points[k] = rt ? vector_rt_neutral_points(sky->model.vector_rt->settings(), h[k]) : NeutralPoints{h[k], {}, {}, {}};
+        p.advance();
+      });
+      p.finish();
+      std::string csv = "sun_el_deg,babinet_deg,brewster_deg,arago_deg\n";
+      const auto cell = [](const std::optional<double>& v) { return v ? fmt::format("{}", *v) : std::string("nan"); };
+      for (const NeutralPoints& n : points)
+        csv += fmt::format("{},{},{},{}\n", n.sun_el_deg, cell(n.babinet_deg), cell(n.brewster_deg), cell(n.arago_deg));
+      write_text_file(dir.staging() / "neutral_points.csv", csv);
+      std::vector<DatasetFile> files{{"neutral_points.csv", 1,
+          "sun_el_deg, then the angular distances along the solar meridian of Babinet (above the sun), Brewster "
+          "(below it) and Arago (above the antisun), degrees; nan where absent or below the horizon"}};
+      if (out->plots() && rt) {  // a single-scattering sky has no point to draw
+        const std::string what = rt ? fmt::format("vector-RT sky, tau {:.4g}, albedo {:.3g}",
+                                                  sky->model.vector_rt->settings().tau_rayleigh,
+                                                  sky->model.vector_rt->settings().ground_albedo)
+                                    : std::string("single-scattering sky");
+        Plot plot{"neutral_points.png", "Neutral points on the solar meridian (" + what + "; single scattering: none)",
+                  "sun elevation (deg)", "distance along the meridian (deg)", "",
+                  {{"neutral_points.csv", "$sun_el_deg:$babinet_deg", "Babinet (above the sun)", "linespoints lw 2 pt 7 ps 0.6"},
+                   {"neutral_points.csv", "$sun_el_deg:$brewster_deg", "Brewster (below the sun)", "linespoints lw 2 pt 5 ps 0.6"},
+                   {"neutral_points.csv", "$sun_el_deg:$arago_deg", "Arago (above the antisun)", "linespoints lw 2 pt 9 ps 0.6"}},
+                  "set key top right\nset grid\nset yrange [0:*]"};
+        render_plots(dir.staging(), "plots.gp", {plot}, progress());
+        files.push_back({"neutral_points.png", 1, "the three distances against the sun's elevation"});
+      }
+      write_manifest(dir.staging(), {command_line(), &loaded, files});
       finish(dir);
     }});
   }

@@ -24,6 +24,8 @@
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
 #include "polrig/sky/sun_rows.h"
+#include "polrig/sky/vector_rt_sky.h"
+#include "polrig/source/sky_settings.h"
 #include "polrig/spectral/kd.h"
 #include "polrig/spectral/sources.h"
 #include "records.h"
@@ -216,7 +218,9 @@ void bind_sky(py::module_& m) {
       "view's local meridian frame, from e_θ (down the meridian) towards e_φ.")
       .def(py::init([](const py::object& site, const py::object& utc, double p_max,
                        const std::string& radiance, bool refraction, double ut1_minus_utc_s,
-                       const py::object& p_max_table) {
+                       const py::object& p_max_table, const std::string& model, const py::object& tau_rayleigh,
+                       double wavelength_nm, double pressure_hPa, double depolarization, double ground_albedo,
+                       int streams) {
              Sky s;
              s.site = site_of(site, "site");
              s.first_stop = utc_time(utc, "utc");
@@ -228,11 +232,25 @@ void bind_sky(py::module_& m) {
              s.sun.ut1_minus_utc_s = ut1_minus_utc_s;
              s.model.P_max.table = p_max_table_of(p_max_table);
              check_sky_model(s.model);
+             // The vector-RT sky through the rig's own resolution of its keys (sky_settings.h).
+             const std::optional<SkyKind> kind = parse_sky_kind(model);
+             if (!kind) throw py::value_error("model: expected 'single-scattering' or 'vector-rt', got '" + model + "'");
+             s.model.kind = *kind;
+             if (*kind == SkyKind::VectorRt) {
+               SkySettings rt;
+               rt.tau_rayleigh = py::isinstance<py::str>(tau_rayleigh) ? tau_rayleigh.cast<std::string>()
+                                                                       : fmt::format("{}", tau_rayleigh.cast<double>());
+               rt.wavelength_nm = wavelength_nm, rt.pressure_hPa = pressure_hPa;
+               rt.rt.depolarization = depolarization, rt.rt.ground_albedo = ground_albedo, rt.rt.streams = streams;
+               s.model.vector_rt = vector_rt_sky(rt.resolved_rt());
+             }
              return PySky(s);
            }),
            "site"_a = py::make_tuple(38.879167, 121.543889), "utc"_a = "2018-11-16T08:09:40Z",
            "p_max"_a = 0.7, py::kw_only(), "radiance"_a = "uniform", "refraction"_a = false,
-           "ut1_minus_utc_s"_a = 0.0, "p_max_table"_a = py::none(),
+           "ut1_minus_utc_s"_a = 0.0, "p_max_table"_a = py::none(), "model"_a = "single-scattering",
+           "tau_rayleigh"_a = py::float_(0.1), "wavelength_nm"_a = 550.0, "pressure_hPa"_a = 1013.25,
+           "depolarization"_a = 0.0279, "ground_albedo"_a = 0.0, "streams"_a = 32,
            "A sky at one time and place (the defaults: W19 Outdoor1's first stop on its roof in "
            "Dalian).\n\n"
            "site: (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m): latitude in [-90, 90] "
@@ -245,6 +263,11 @@ void bind_sky(py::module_& m) {
            "ut1_minus_utc_s: UT1 − UTC in seconds, [-1, 1].\n"
            "p_max_table: None, or an (N, 2) array of (sun elevation in degrees, rising; P_max), "
            "interpolated linearly and held beyond its ends; replaces p_max.\n"
+           "model: 'single-scattering' (p_max, radiance) or 'vector-rt', the exact polarized Rayleigh "
+           "sky (docs/physics.md §21; p_max and radiance unused): tau_rayleigh, a number in (0, 100] or "
+           "'bodhaine' (Bodhaine et al. 1999 at wavelength_nm and pressure_hPa); depolarization ρ in "
+           "[0, 0.5); ground_albedo in [0, 1]; streams even in [4, 128]. The rig keys sky.model and "
+           "sky.rt.* (docs/formats.md §1.10). Its sun must stand at 2° or higher.\n"
            "Raises ValueError naming the argument and value (the CLI's ranges; a site out of "
            "range included), and for a date outside ERFA's range.")
       .def_static("from_rig", [](const PyRig& r) {
@@ -271,6 +294,36 @@ void bind_sky(py::module_& m) {
            }, "None, or the (N, 2) table of (sun elevation in degrees, P_max).")
       .def_property_readonly("radiance", [](const PySky& s) { return radiance_name(s.sky.model.radiance); },
                              "The radiance model: 'uniform', 'rayleigh' or 'cie-clear'.")
+      .def_property_readonly("model", [](const PySky& s) { return std::string(sky_kind_name(s.sky.model.kind)); },
+                             "What the sky is: 'single-scattering' or 'vector-rt'.")
+      .def_property_readonly("tau_rayleigh", [](const PySky& s) -> py::object {
+             if (!s.sky.model.vector_rt) return py::none();
+             return py::float_(s.sky.model.vector_rt->settings().tau_rayleigh);
+           }, "The vector-RT sky's Rayleigh optical depth (resolved, Bodhaine's if asked); None otherwise.")
+      .def("radiance_sr", [](const PySky& s, const py::object& az, const py::object& el, std::optional<int> threads) {
+             if (!s.sky.model.vector_rt) throw py::value_error("radiance_sr: a single-scattering sky has no absolute radiance (model='vector-rt' has)");
+             const Broadcast b = view_directions(az, el);
+             ThreadLimit limit(threads);
+             std::vector<SkyQuery> q(b.values[0].size());
+             for (std::size_t i = 0; i < q.size(); ++i)
+               q[i].sun = s.sun, q[i].view_az_deg = b.values[0][i], q[i].view_el_deg = b.values[1][i];
+             std::vector<SkySample> samples;
+             {
+               py::gil_scoped_release release;
+               samples = sky_along(q, s.sky.model);
+             }
+             std::vector<double> out(3 * q.size());
+             for (std::size_t i = 0; i < q.size(); ++i)
+               for (int k = 0; k < 3; ++k) out[3 * i + static_cast<std::size_t>(k)] = (*samples[i].absolute)(k);
+             std::vector<py::ssize_t> shape = b.shape;
+             shape.push_back(3);
+             return take(std::move(out), shape);
+           }, "view_az_deg"_a, "view_el_deg"_a, py::kw_only(), "threads"_a = py::none(),
+           (std::string("The vector-RT sky's diffuse (I, Q, U) along viewing directions, vectorised: "
+                        "L/E₀ in sr⁻¹ per unit extraterrestrial irradiance normal to the sun's beam, Q and U "
+                        "in the view's meridian frame (χ = ½·atan2(U, Q)): `polrig sky table`'s I_sr, Q_sr, "
+                        "U_sr. view_az_deg, view_el_deg as in Sky.light; returns shape S + (3,). Raises "
+                        "ValueError for a single-scattering sky.\n") + kThreadsDoc).c_str())
       .def_property_readonly("refraction", [](const PySky& s) { return s.sky.sun.refraction; },
                              "Whether the sun is refracted.")
       .def_property_readonly("ut1_minus_utc_s", [](const PySky& s) { return s.sky.sun.ut1_minus_utc_s; },
@@ -339,6 +392,13 @@ void bind_sky(py::module_& m) {
             "\nReturns polrig.SkyMap (S0, S1, S2 with reference axis e_θ; aop_deg; dop; inside; "
             "utc; sun).").c_str())
       .def("__repr__", [](const PySky& s) {
+        if (s.sky.model.vector_rt) {
+          const VectorRtSettings& v = s.sky.model.vector_rt->settings();
+          return fmt::format("<polrig.Sky: site ({}, {}, {}), utc {}, model vector-rt, tau_rayleigh {}, "
+                             "depolarization {}, ground_albedo {}, streams {}>", s.sky.site.lat_deg,
+                             s.sky.site.lon_deg, s.sky.site.height_m, format_utc(s.sky.first_stop),
+                             v.tau_rayleigh, v.depolarization, v.ground_albedo, v.streams);
+        }
         return fmt::format("<polrig.Sky: site ({}, {}, {}), utc {}, p_max {}, radiance {}, "
                            "refraction {}, ut1_minus_utc_s {}>", s.sky.site.lat_deg,
                            s.sky.site.lon_deg, s.sky.site.height_m, format_utc(s.sky.first_stop),

@@ -109,28 +109,40 @@ void meridian_frame(const Vec3& v, Vec3& e_theta, Vec3& e_phi) {
   e_phi = {-sin_phi, cos_phi, 0};
 }
 
+namespace {
+std::pair<double, double> azimuth_cos_sin(const Vec3& v);
+}  // namespace
+
 SunSky::SunSky(const Vec3& s, const SkyModel& model)
     : s_(s), P_max_(model.P_max.at(std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg)), radiance_(model.radiance) {
   if (model.kind == SkyKind::VectorRt) {
     if (!model.vector_rt) throw std::logic_error("a vector-rt sky model without its solved sky");
     field_ = std::make_shared<const SunField>(model.vector_rt->for_sun(std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg));
-    sun_math_azimuth_ = std::atan2(s[1], s[0]);
+    sun_azimuth_ = azimuth_cos_sin(s);
   }
 }
 
 namespace {
 
-// The vector-RT sky's Stokes vector along v (L/E₀; Q, U in v's meridian frame).
-Eigen::Vector3d field_stokes(const SunField& f, double sun_math_azimuth, const Vec3& v) {
-  const double phi = std::atan2(v[1], v[0]) - sun_math_azimuth;  // at the zenith: φ_v = 0, as meridian_frame
-  return f.stokes(std::clamp(v[2], 0.0, 1.0), phi);
+// cos and sin of a horizontal direction's math azimuth; (1, 0) straight up or down, as
+// meridian_frame takes φ = 0 there.
+std::pair<double, double> azimuth_cos_sin(const Vec3& v) {
+  const double rho = std::hypot(v[0], v[1]);
+  return rho > 0 ? std::pair{v[0] / rho, v[1] / rho} : std::pair{1.0, 0.0};
+}
+
+// The vector-RT sky's Stokes vector along v (L/E₀; Q, U in v's meridian frame), at the relative
+// azimuth φ = φ_v − φ_sun.
+Eigen::Vector3d field_stokes(const SunField& f, const std::pair<double, double>& sun, const Vec3& v) {
+  const auto [cv, sv] = azimuth_cos_sin(v);
+  return f.stokes(std::clamp(v[2], 0.0, 1.0), cv * sun.first + sv * sun.second, sv * sun.first - cv * sun.second);
 }
 
 }  // namespace
 
 std::optional<Stokes> SunSky::absolute_stokes(const Vec3& v) const {
   if (!field_) return std::nullopt;
-  const Eigen::Vector3d x = field_stokes(*field_, sun_math_azimuth_, v);
+  const Eigen::Vector3d x = field_stokes(*field_, sun_azimuth_, v);
   return Stokes{x(0), x(1), x(2), 0};
 }
 
@@ -139,7 +151,7 @@ SkyRay SunSky::along(const Vec3& v) const {
   const Vec3 c = vec3::cross(s_, v);
   ray.sin_gamma = vec3::norm(c);
   if (field_) {
-    const Eigen::Vector3d x = field_stokes(*field_, sun_math_azimuth_, v);
+    const Eigen::Vector3d x = field_stokes(*field_, sun_azimuth_, v);
     ray.radiance = x(0) / field_->zenith_radiance();
     const double lp = std::hypot(x(1), x(2));
     ray.dop = lp / x(0);

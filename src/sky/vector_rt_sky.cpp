@@ -95,17 +95,20 @@ SunField VectorRtSky::for_sun(double h) const {
   return out;
 }
 
-Eigen::Vector3d SunField::stokes(double mu, double phi) const {
+Eigen::Vector3d SunField::stokes(double mu, double phi) const { return stokes(mu, std::cos(phi), std::sin(phi)); }
+
+Eigen::Vector3d SunField::stokes(double mu, double cos_phi, double sin_phi) const {
   static const std::vector<double> x_nodes = view_s();
   const double x = grid_s(std::clamp(mu, kHorizonMu, 1.0));
   const int j0 = stencil_start(x_nodes, x);
   const std::array<double, 4> w = lagrange4(&x_nodes[j0], x);
+  // cos mφ, sin mφ for m = 0, 1, 2 by the double-angle formulas.
+  const double cm[3] = {1, cos_phi, 2 * cos_phi * cos_phi - 1}, sm[3] = {0, sin_phi, 2 * sin_phi * cos_phi};
   Eigen::Vector3d out = Eigen::Vector3d::Zero();
   for (std::size_t m = 0; m < coefficients_.size(); ++m) {
-    Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (int i = 0; i < 4; ++i) c += w[i] * coefficients_[m][j0 + i];
-    const double cm = std::cos(double(m) * phi), sm = std::sin(double(m) * phi);
-    out += Eigen::Vector3d(cm * c(0), cm * c(1), sm * c(2));
+    const Eigen::Vector3d* c = &coefficients_[m][static_cast<std::size_t>(j0)];
+    const Eigen::Vector3d v = w[0] * c[0] + w[1] * c[1] + w[2] * c[2] + w[3] * c[3];
+    out += Eigen::Vector3d(cm[m] * v(0), cm[m] * v(1), sm[m] * v(2));
   }
   return out;
 }

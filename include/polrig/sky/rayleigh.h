@@ -99,7 +99,7 @@ class SunSky {
   double P_max_;
   SkyRadiance radiance_;
   std::shared_ptr<const SunField> field_;  // the vector-RT sky for this sun
-  double sun_math_azimuth_ = 0;
+  std::pair<double, double> sun_azimuth_{1, 0};  // cos, sin of the sun's math azimuth
 };
 
 // The same for many views under one sun (what a map or a table of views calls).

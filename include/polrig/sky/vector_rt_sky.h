@@ -21,6 +21,8 @@ namespace polrig {
 class SunField {
  public:
   Eigen::Vector3d stokes(double mu, double phi) const;
+  // The same from cos φ and sin φ (no trigonometry: what SunSky calls per ray).
+  Eigen::Vector3d stokes(double mu, double cos_phi, double sin_phi) const;
   double zenith_radiance() const { return zenith_I_; }
 
  private:

@@ -212,7 +212,9 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     auto size = std::make_shared<int>(1024);
     auto rig = std::make_shared<std::string>();
     sky_app->add_option("RIG", *rig, "a rig file with source.model sky: its sky block (site, first "
-                                     "stop, P_max, radiance, refraction) is the default of every option");
+                                     "stop, sky.model, sky.rt.*, P_max, radiance, refraction) is the default of every option");
+    auto sets = std::make_shared<std::vector<std::string>>();
+    add_set_option(*sky_app, *sets);
     auto compression = std::make_shared<std::string>("rle");
     // -o is checked when the map is made: `sky table` has its own.
     sky_app->add_option("-o,--out", out->out, "output folder (written whole or not at all); "
@@ -235,8 +237,8 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
     });
     commands.push_back({sky_app, [=] {
       std::optional<LoadedRig> loaded;
-      if (!rig->empty()) {
-        loaded = load_rig(*rig);
+      if (!rig->empty() || !sets->empty()) {
+        loaded = RigInput{*rig, *sets}.load();
         if (!rig_sky(loaded->rig)) throw RigError(no_sky_message(loaded->rig, *rig));
       }
       const Sky sky = loaded ? opts->sky(*rig_sky(loaded->rig), sky_app)

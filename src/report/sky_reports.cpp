@@ -9,6 +9,7 @@
 
 #include "polrig/io/csv.h"
 #include "polrig/io/plot.h"
+#include "polrig/sky/sky_map.h"
 
 namespace polrig {
 
@@ -75,12 +76,49 @@ std::string preview_script(const SkyMap& map, const Sky& sky, const std::string&
   return s;
 }
 
+// Beside a sky that is not single scattering: its AoP less single scattering's, wrapped to
+// (−90°, 90°], and its DoP over single scattering's with P_max = 1, sin²γ/(1 + cos²γ) (the
+// P_max single scattering would need at each point; spec skies.md §1).
+std::vector<DatasetFile> report_sky_differences(const fs::path& dir, const SkyMap& map, const Sky& sky) {
+  Sky single = sky;
+  single.model = SkyModel{};
+  single.model.P_max.constant = 1;
+  const SkyMap ss = sky_map(single, map.size);
+  std::vector<float> d_aop(map.aop_deg.size()), ratio(map.dop.size());
+  for (std::size_t k = 0; k < d_aop.size(); ++k) {
+    d_aop[k] = static_cast<float>(std::remainder(double(map.aop_deg[k]) - double(ss.aop_deg[k]), 180.0));
+    ratio[k] = ss.dop[k] > 1e-6f ? map.dop[k] / ss.dop[k] : 0.0f;
+  }
+  write_f32(dir / "aop_difference.f32", map, d_aop);
+  write_f32(dir / "dop_ratio.f32", map, ratio);
+  // −1 marks the outside in the f32 files: the AoP difference's plot shows everything above −90.
+  auto aop = std::async(std::launch::async, [&] {
+    std::string script = preview_script(map, sky, "aop_difference.f32", "aop_difference.png",
+                                        "AoP less single scattering's (deg, meridian frame)", -10, 10,
+                                        "set palette defined (0 '#2166ac', 0.5 '#f7f7f7', 1 '#b2182b')");
+    const std::string mask = "using ($1 < 0 ? NaN : $1)";
+    script.replace(script.find(mask), mask.size(), "using ($1 <= -90 ? NaN : $1)");
+    run_gnuplot(dir, "aop_difference.gp", script, {"aop_difference.png"});
+  });
+  run_gnuplot(dir, "dop_ratio.gp",
+              preview_script(map, sky, "dop_ratio.f32", "dop_ratio.png",
+                             "DoP over single scattering's sin^2(g)/(1 + cos^2(g))", 0, 1,
+                             "set palette defined (0 '#000004', 0.25 '#51127c', 0.5 '#b73779', 0.75 '#fc8961', 1 '#fcfdbf')"),
+              {"dop_ratio.png"});
+  aop.get();
+  return {{"aop_difference.png", 1, "AoP less the single-scattering sky's, deg (colour range ±10°)"},
+          {"dop_ratio.png", 1, "DoP over sin²γ/(1 + cos²γ): the P_max single scattering would need"}};
+}
+
 }  // namespace
 
 std::vector<DatasetFile> report_sky_previews(const fs::path& dir, const SkyMap& map, const Sky& sky) {
   write_f32(dir / "aop.f32", map, map.aop_deg);
   write_f32(dir / "dop.f32", map, map.dop);
-  const double p_hi = std::max(0.05, std::ceil(sky.model.P_max.at(map.sun.elevation_deg) * 20) / 20);
+  const double top = sky.model.kind == SkyKind::SingleScattering
+                         ? sky.model.P_max.at(map.sun.elevation_deg)
+                         : *std::max_element(map.dop.begin(), map.dop.end());
+  const double p_hi = std::max(0.05, std::ceil(top * 20) / 20);
   // Two gnuplot processes at once: each preview takes ~0.3 s of gnuplot's single thread.
   auto aop = std::async(std::launch::async, [&] {
     run_gnuplot(dir, "aop.gp",
@@ -95,10 +133,13 @@ std::vector<DatasetFile> report_sky_previews(const fs::path& dir, const SkyMap& 
                                    "'#b73779', 0.75 '#fc8961', 1 '#fcfdbf')"),
               {"dop.png"});
   aop.get();
-  return {{"aop.f32", 1, "AoP for the preview (every ceil(size/512)-th pixel): float32, row-major, top row first, -1 outside"},
+  std::vector<DatasetFile> files{{"aop.f32", 1, "AoP for the preview (every ceil(size/512)-th pixel): float32, row-major, top row first, -1 outside"},
           {"dop.f32", 1, "DoP for the preview (every ceil(size/512)-th pixel): float32, row-major, top row first, -1 outside"},
           {"aop.png", 1, "AoP preview with the sun marked"},
           {"dop.png", 1, "DoP preview with the sun marked"}};
+  if (sky.model.kind != SkyKind::SingleScattering)
+    for (DatasetFile& f : report_sky_differences(dir, map, sky)) files.push_back(std::move(f));
+  return files;
 }
 
 }  // namespace polrig

@@ -127,7 +127,7 @@ namespace {
 // cos and sin of a horizontal direction's math azimuth; (1, 0) straight up or down, as
 // meridian_frame takes φ = 0 there.
 std::pair<double, double> azimuth_cos_sin(const Vec3& v) {
-  const double rho = std::hypot(v[0], v[1]);
+  const double rho = std::sqrt(v[0] * v[0] + v[1] * v[1]);  // a unit vector's: no overflow to guard (hypot's cost)
   return rho > 0 ? std::pair{v[0] / rho, v[1] / rho} : std::pair{1.0, 0.0};
 }
 
@@ -153,14 +153,22 @@ SkyRay SunSky::along(const Vec3& v) const {
   if (field_) {
     const Eigen::Vector3d x = field_stokes(*field_, sun_azimuth_, v);
     ray.radiance = x(0) / field_->zenith_radiance();
-    const double lp = std::hypot(x(1), x(2));
+    const double lp = std::sqrt(x(1) * x(1) + x(2) * x(2));
     ray.dop = lp / x(0);
     if (lp > 0) {
-      // e = cos χ e_θ + sin χ e_φ with cos 2χ = Q/(LP), sin 2χ = U/(LP).
-      const double chi = 0.5 * std::atan2(x(2), x(1));
+      // e = cos χ e_θ + sin χ e_φ with cos 2χ = Q/(LP), sin 2χ = U/(LP), χ ∈ (−90°, 90°]: by the
+      // half-angle formulas, from the larger of 1 ± cos 2χ (no cancellation).
+      const double c2 = x(1) / lp, s2 = x(2) / lp;
+      double cos_chi, sin_chi;
+      if (c2 >= 0) {
+        cos_chi = std::sqrt(0.5 * (1 + c2)), sin_chi = s2 / (2 * cos_chi);
+      } else {
+        sin_chi = std::copysign(std::sqrt(0.5 * (1 - c2)), s2), cos_chi = s2 / (2 * sin_chi);
+        if (s2 == 0) sin_chi = 1, cos_chi = 0;
+      }
       Vec3 e_theta, e_phi;
       meridian_frame(v, e_theta, e_phi);
-      ray.e_vector = vec3::add(vec3::mul(e_theta, std::cos(chi)), vec3::mul(e_phi, std::sin(chi)));
+      ray.e_vector = vec3::add(vec3::mul(e_theta, cos_chi), vec3::mul(e_phi, sin_chi));
     }
     return ray;
   }

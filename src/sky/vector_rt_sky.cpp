@@ -97,11 +97,43 @@ SunField VectorRtSky::for_sun(double h) const {
 
 Eigen::Vector3d SunField::stokes(double mu, double phi) const { return stokes(mu, std::cos(phi), std::sin(phi)); }
 
+namespace {
+
+// The view grid's interpolation: its nodes, and for every 4-node stencil the denominators
+// Π_{j≠i}(s_i − s_j) of its Lagrange weights (the nodes past the first are uniform, so the stencil
+// is found without a search).
+struct ViewStencils {
+  std::vector<double> s;
+  std::vector<std::array<double, 4>> inverse_denominators;
+  ViewStencils() : s(view_s()) {
+    for (std::size_t j0 = 0; j0 + 4 <= s.size(); ++j0) {
+      std::array<double, 4> d;
+      for (int i = 0; i < 4; ++i) {
+        double p = 1;
+        for (int j = 0; j < 4; ++j)
+          if (j != i) p *= s[j0 + static_cast<std::size_t>(i)] - s[j0 + static_cast<std::size_t>(j)];
+        d[static_cast<std::size_t>(i)] = 1 / p;
+      }
+      inverse_denominators.push_back(d);
+    }
+  }
+  int start(double x) const {
+    const int n = static_cast<int>(s.size());
+    const int j = x < s[1] ? 0 : std::min(n - 1, static_cast<int>(x * (n - 1)));
+    return std::clamp(j - 1, 0, n - 4);
+  }
+};
+
+}  // namespace
+
 Eigen::Vector3d SunField::stokes(double mu, double cos_phi, double sin_phi) const {
-  static const std::vector<double> x_nodes = view_s();
+  static const ViewStencils grid;
   const double x = grid_s(std::clamp(mu, kHorizonMu, 1.0));
-  const int j0 = stencil_start(x_nodes, x);
-  const std::array<double, 4> w = lagrange4(&x_nodes[j0], x);
+  const int j0 = grid.start(x);
+  const double* t = &grid.s[static_cast<std::size_t>(j0)];
+  const std::array<double, 4>& inv = grid.inverse_denominators[static_cast<std::size_t>(j0)];
+  const double d0 = x - t[0], d1 = x - t[1], d2 = x - t[2], d3 = x - t[3];
+  const double w[4] = {d1 * d2 * d3 * inv[0], d0 * d2 * d3 * inv[1], d0 * d1 * d3 * inv[2], d0 * d1 * d2 * inv[3]};
   // cos mφ, sin mφ for m = 0, 1, 2 by the double-angle formulas.
   const double cm[3] = {1, cos_phi, 2 * cos_phi * cos_phi - 1}, sm[3] = {0, sin_phi, 2 * sin_phi * cos_phi};
   Eigen::Vector3d out = Eigen::Vector3d::Zero();

@@ -969,6 +969,8 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
         rig.source.model = std::string(k.sources);
         rig.light = make_source(rig.source);
       }
+      if (!k.read_by_sky_model(rig.source.sky.model)) rig.source.sky.model = std::string(k.sky_models);  // sky.rt.*
+      if (k.path == "sky.rt.wavelength_nm" || k.path == "sky.rt.pressure_hPa") rig.source.sky.tau_rayleigh = "bodhaine";
       if (k.kind == RigKey::Kind::Real) k.real(rig) = v;
       else for (double& x : k.array(rig)) x = v;
       if (k.path == "schedule.start_deg" || k.path == "schedule.stop_deg")
@@ -979,7 +981,7 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 2 * (23 + 11));  // every real key (11 of the sky's), both ends
+  EXPECT_EQ(checked, 2 * (23 + 15));  // every real key (15 of the sky's, 4 of them sky.rt.*), both ends
 }
 
 // Past the ranges (a rig built in code), simulate stops on the first non-finite voltage and says

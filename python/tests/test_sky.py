@@ -162,6 +162,19 @@ def test_vector_rt_sky_is_sky_table_with_the_rigs_sky_block(tmp_path):
         polrig.Sky().radiance_sr(0, 90)
 
 
+def test_neutral_points_are_the_cli_csv(tmp_path):
+    run_cli("sky", "neutral-points", "--set", "source.model=sky", "--set", "sky.model=vector-rt",
+            "--set", "sky.rt.tau_rayleigh=0.25", "--sun-el-deg", "5:45:3", "--no-plots", "-o", tmp_path / "np")
+    csv = read_csv(tmp_path / "np" / "neutral_points.csv")
+    p = polrig.Sky(model="vector-rt", tau_rayleigh=0.25).neutral_points([5, 25, 45])
+    for name in ["sun_el_deg", "babinet_deg", "brewster_deg", "arago_deg"]:
+        assert np.array_equal(getattr(p, name), csv[name], equal_nan=True)
+    assert np.isnan(p.brewster_deg[0]) and np.isnan(p.arago_deg[2])
+    assert np.all(np.isnan(polrig.Sky().neutral_points(30).babinet_deg))
+    with pytest.raises(ValueError, match="sun_el_deg"):
+        polrig.Sky(model="vector-rt").neutral_points(1)
+
+
 def test_broadcasting_shapes():
     sky = polrig.Sky()
     az = np.arange(0, 360, 30.0)[None, :]

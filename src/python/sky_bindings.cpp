@@ -10,6 +10,7 @@
 
 #include <fmt/format.h>
 #include <pybind11/stl.h>
+#include <tbb/parallel_for.h>
 
 #include "bindings.h"
 #include "convert.h"
@@ -23,6 +24,7 @@
 #include "polrig/sky/sky.h"
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
+#include "polrig/sky/neutral_points.h"
 #include "polrig/sky/sun_rows.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/source/sky_settings.h"
@@ -41,6 +43,7 @@ struct SunPositionsTag {};
 struct SkyLightTag {};
 struct SkyMapTag {};
 struct SkyTableTag {};
+struct NeutralPointsTag {};
 struct DriftTag {};
 struct SpectralKdTag {};
 struct KdSpectraTag {};
@@ -156,14 +159,24 @@ void bind_sky(py::module_& m) {
       {"lha_deg", "local hour angle, westwards, [0, 360) degrees."},
       {"enu", "unit vectors to the sun in ENU (x east, y north, z up), shape (..., 3)."}});
   bind_record<SkyLightTag>(m, "SkyLight",
-      "The single-scattering Rayleigh sky along viewing directions (sky/rayleigh.h).", {
-      {"radiance", "relative radiance (1 at the zenith; 1 everywhere for radiance='uniform')."},
-      {"dop", "degree of linear polarization P = P_max·sin²γ/(1 + cos²γ), γ the view-sun angle."},
+      "The sky along viewing directions (sky/rayleigh.h: single scattering, or the vector-RT sky).", {
+      {"radiance", "relative radiance (1 at the zenith; 1 everywhere for radiance='uniform'; the vector-RT "
+                   "sky's diffuse radiance over the zenith's)."},
+      {"dop", "degree of linear polarization: P = P_max·sin²γ/(1 + cos²γ), γ the view-sun angle, or the "
+              "vector-RT sky's √(Q² + U²)/I."},
       {"aop_deg", "angle of polarization χ in degrees, [0, 180), in the view's local meridian frame: "
                   "from e_θ (down the meridian, towards the horizon) towards e_φ (along the almucantar, "
                   "anticlockwise seen from above); at the zenith, the limit along view_az_deg."},
-      {"e_vector", "the E-vector e = (s × v)/|s × v| in ENU, shape (..., 3); zero where undefined "
-                   "(looking at the sun or away from it)."}});
+      {"e_vector", "the E-vector in ENU, shape (..., 3): e = (s × v)/|s × v| (single scattering), or "
+                   "cos χ·e_θ + sin χ·e_φ (the vector-RT sky); zero where undefined (unpolarized)."}});
+  bind_record<NeutralPointsTag>(m, "NeutralPoints",
+      "`polrig sky neutral-points`: the neutral points on the solar meridian for each sun elevation "
+      "(sky/neutral_points.h), arrays of the elevations' shape; NaN where a point is absent or below "
+      "the horizon (everywhere for a single-scattering sky).", {
+      {"sun_el_deg", "the sun's elevation, degrees."},
+      {"babinet_deg", "the Babinet point's angular distance above the sun along the meridian, degrees."},
+      {"brewster_deg", "the Brewster point's distance below the sun, degrees."},
+      {"arago_deg", "the Arago point's distance above the antisun, degrees."}});
   bind_record<SkyMapTag>(m, "SkyMap",
       "An all-sky map, an equidistant fisheye seen from below (zenith at the centre, north up, east "
       "LEFT, r = (θ/90°)·size/2): the layers of `polrig sky`'s sky.exr as float32 (size, size) "
@@ -324,6 +337,36 @@ void bind_sky(py::module_& m) {
                         "in the view's meridian frame (χ = ½·atan2(U, Q)): `polrig sky table`'s I_sr, Q_sr, "
                         "U_sr. view_az_deg, view_el_deg as in Sky.light; returns shape S + (3,). Raises "
                         "ValueError for a single-scattering sky.\n") + kThreadsDoc).c_str())
+      .def("neutral_points", [](const PySky& s, const py::object& sun_el, std::optional<int> threads) {
+             Broadcast b = broadcast({{sun_el, "sun_el_deg"}});
+             const bool rt = s.sky.model.kind == SkyKind::VectorRt;
+             check_range(b.values[0], "sun_el_deg", rt ? VectorRtSky::kMinSunElevationDeg : -90, 90,
+                         "degrees above the horizon");
+             ThreadLimit limit(threads);
+             const std::vector<double>& h = b.values[0];
+             std::vector<NeutralPoints> p(h.size());
+             {
+               py::gil_scoped_release release;
+               tbb::parallel_for(std::size_t{0}, h.size(), [&](std::size_t k) {
+                 p[k] = rt ? vector_rt_neutral_points(s.sky.model.vector_rt->settings(), h[k]) : NeutralPoints{h[k], {}, {}, {}};
+               });
+             }
+             const double nan = std::nan("");
+             std::vector<double> el(h.size()), ba(h.size()), br(h.size()), ar(h.size());
+             for (std::size_t k = 0; k < h.size(); ++k)
+               el[k] = h[k], ba[k] = p[k].babinet_deg.value_or(nan), br[k] = p[k].brewster_deg.value_or(nan),
+               ar[k] = p[k].arago_deg.value_or(nan);
+             Record r;
+             r.add("sun_el_deg", take(std::move(el), b.shape));
+             r.add("babinet_deg", take(std::move(ba), b.shape));
+             r.add("brewster_deg", take(std::move(br), b.shape));
+             r.add("arago_deg", take(std::move(ar), b.shape));
+             return RecordOf<NeutralPointsTag>(std::move(r));
+           }, "sun_el_deg"_a, py::kw_only(), "threads"_a = py::none(),
+           (std::string("The neutral points of this sky's model on its solar meridian at the sun elevations "
+                        "sun_el_deg (array-like, degrees; the vector-RT sky needs 2 or more): "
+                        "polrig.NeutralPoints, what `polrig sky neutral-points` writes (its site and time are "
+                        "not used). Raises ValueError for an elevation out of range.\n") + kThreadsDoc).c_str())
       .def_property_readonly("refraction", [](const PySky& s) { return s.sky.sun.refraction; },
                              "Whether the sun is refracted.")
       .def_property_readonly("ut1_minus_utc_s", [](const PySky& s) { return s.sky.sun.ut1_minus_utc_s; },

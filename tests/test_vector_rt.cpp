@@ -13,36 +13,13 @@
 #include "polrig/sky/sun.h"
 #include "polrig/sky/vector_rt.h"
 #include "polrig/units.h"
+#include "rayleigh_tables.h"
 
 namespace polrig {
 namespace {
 
-// One block (albedo) of a table file: rows of (mu0, mu, value at φ = 0, 30, …, 180°).
-struct TableRow {
-  double mu0 = 0, mu = 0;
-  double v[7] = {};
-};
-using TableBlocks = std::vector<std::vector<TableRow>>;
-
-TableBlocks read_table(const std::string& name) {
-  const std::string path = std::string(POLRIG_SOURCE_DIR) + "/data/rayleigh-tables/" + name;
-  std::ifstream in(path);
-  EXPECT_TRUE(in) << path;
-  TableBlocks blocks;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.find("albedo") != std::string::npos) {
-      blocks.emplace_back();
-      continue;
-    }
-    std::istringstream is(line);
-    TableRow r;
-    if (!(is >> r.mu0 >> r.mu)) continue;
-    for (double& x : r.v) is >> x;
-    if (!blocks.empty()) blocks.back().push_back(r);
-  }
-  return blocks;
-}
+using test::read_rayleigh_table;
+using test::TableBlocks;
 
 double aop_deg(double Q, double U) { return 0.5 * std::atan2(U, Q) / kDeg; }
 double angle_diff_deg(double a, double b) { return std::remainder(a - b, 180.0); }
@@ -57,8 +34,8 @@ struct TableErrors {
 // polarization across the meridian plane): polrig's (Q, U) = −(Q, U)_table, which the thin-limit
 // test below ties to polrig's single-scattering sky.
 TableErrors compare_with_tables(const std::string& tau, const std::string& way) {
-  const TableBlocks I = read_table("I_" + way + "_TAU_" + tau), Q = read_table("Q_" + way + "_TAU_" + tau),
-                    U = read_table("U_" + way + "_TAU_" + tau);
+  const TableBlocks I = read_rayleigh_table("I_" + way + "_TAU_" + tau), Q = read_rayleigh_table("Q_" + way + "_TAU_" + tau),
+                    U = read_rayleigh_table("U_" + way + "_TAU_" + tau);
   EXPECT_EQ(I.size(), 3u);
   const double albedos[3] = {0, 0.25, 0.8};
   TableErrors e;

@@ -22,6 +22,7 @@
 #include "polrig/sky/sun_rows.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/units.h"
+#include "rayleigh_tables.h"
 #include "support.h"
 
 namespace polrig {
@@ -74,26 +75,8 @@ TEST(SlowVectorRtSky, InterpolatesExactSolvesWithinItsStatedError) {
 // Every row of the τ = 0.25 DN tables at μ₀ = 0.6 (the sun at 36.87°), black ground and albedo
 // 0.25, through sky_along's fixed suns: the views' geographic azimuths (A_view = A_sun − φ), their
 // meridian frames and the absolute L/E₀ (a tabulated I is π·L/E₀; (Q, U)_polrig = −(Q, U)_table).
-struct Row {
-  double mu0, mu, v[7];
-};
-std::vector<std::vector<Row>> read_blocks(const std::string& name) {
-  std::ifstream in(std::string(POLRIG_SOURCE_DIR) + "/data/rayleigh-tables/" + name);
-  std::vector<std::vector<Row>> blocks;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.find("albedo") != std::string::npos) {
-      blocks.emplace_back();
-      continue;
-    }
-    std::istringstream is(line);
-    Row r{};
-    if (!(is >> r.mu0 >> r.mu)) continue;
-    for (double& x : r.v) is >> x;
-    if (!blocks.empty()) blocks.back().push_back(r);
-  }
-  return blocks;
-}
+using Row = test::TableRow;
+const auto read_blocks = test::read_rayleigh_table;
 
 TEST(VectorRtSky, SkyTableMatchesTheExactTablesThroughTheWholeChain) {
   const auto I = read_blocks("I_DN_TAU_0.25"), Q = read_blocks("Q_DN_TAU_0.25"), U = read_blocks("U_DN_TAU_0.25");

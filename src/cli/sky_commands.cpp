@@ -187,10 +187,9 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
           "sun_el_deg, then the angular distances along the solar meridian of Babinet (above the sun), Brewster "
           "(below it) and Arago (above the antisun), degrees; nan where absent or below the horizon"}};
       if (out->plots() && rt) {  // a single-scattering sky has no point to draw
-        const std::string what = rt ? fmt::format("vector-RT sky, tau {:.4g}, albedo {:.3g}",
-                                                  sky->model.vector_rt->settings().tau_rayleigh,
-                                                  sky->model.vector_rt->settings().ground_albedo)
-                                    : std::string("single-scattering sky");
+        const std::string what = fmt::format("vector-RT sky, tau {:.4g}, albedo {:.3g}",
+                                             sky->model.vector_rt->settings().tau_rayleigh,
+                                             sky->model.vector_rt->settings().ground_albedo);
         Plot plot{"neutral_points.png", "Neutral points on the solar meridian (" + what + "; single scattering: none)",
                   "sun elevation (deg)", "distance along the meridian (deg)", "",
                   {{"neutral_points.csv", "$sun_el_deg:$babinet_deg", "Babinet (above the sun)", "linespoints lw 2 pt 7 ps 0.6"},

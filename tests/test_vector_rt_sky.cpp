@@ -248,7 +248,7 @@ TEST(VectorRtSky, RigKeysChooseTheSkyAndRefuseTheOthersKeys) {
     }
   };
   refused(std::string(kSkyRig) + "  p_max: 0.6\n",
-          "key 'sky.p_max': expected no value with sky.model vector-rt (only sky.model single-scattering reads it)");
+          "key 'sky.p_max': expected no value with sky.model vector-rt (only sky.model single-scattering or berry reads it)");
   refused("source:\n  model: sky\nsky:\n  rt:\n    streams: 16\n",
           "key 'sky.rt.streams': expected no value with sky.model single-scattering");
   refused(std::string(kSkyRig) + "  rt:\n    tau_rayleigh: -0.1\n", "key 'sky.rt.tau_rayleigh'");

@@ -175,6 +175,30 @@ def test_neutral_points_are_the_cli_csv(tmp_path):
         polrig.Sky(model="vector-rt").neutral_points(1)
 
 
+def test_berry_fit_and_neutral_points_are_the_cli_csv(tmp_path):
+    run_cli("sky", "berry-fit", "--set", "source.model=sky", "--set", "sky.model=vector-rt",
+            "--set", "sky.rt.tau_rayleigh=0.25", "--sun-el-deg", "10:50:3", "--no-plots", "-o", tmp_path / "bf")
+    csv = read_csv(tmp_path / "bf" / "berry_fit.csv")
+    f = polrig.Sky(model="vector-rt", tau_rayleigh=0.25).berry_fit([10, 30, 50])
+    for name in ["sun_el_deg", "babinet_deg", "brewster_deg", "aop_rms_deg", "single_aop_rms_deg"]:
+        assert np.array_equal(getattr(f, name), csv[name])
+    assert all(s.endswith("TooSmall") for s in f.status)
+    # Berry's sky with one fitted distance: its neutral points are its distances (CLI and Python).
+    run_cli("sky", "neutral-points", "--set", "source.model=sky", "--set", "sky.model=berry",
+            "--set", "sky.berry.brewster_deg=17.5", "--sun-el-deg", "10:50:3", "--no-plots", "-o", tmp_path / "np")
+    np_csv = read_csv(tmp_path / "np" / "neutral_points.csv")
+    b = polrig.Sky(model="berry", brewster_deg=17.5)
+    p = b.neutral_points([10, 30, 50])
+    for name in ["babinet_deg", "brewster_deg", "arago_deg"]:
+        assert np.array_equal(getattr(p, name), np_csv[name], equal_nan=True)
+    assert np.isnan(p.brewster_deg[0]) and p.arago_deg[0] == 17.5 and p.brewster_deg[1] == 17.5
+    assert b.model == "berry"
+    with pytest.raises(ValueError, match="berry"):
+        polrig.Sky(model="berry", babinet_deg=95.0)
+    with pytest.raises(ValueError, match="no atmosphere"):
+        polrig.Sky().berry_fit(30)
+
+
 def test_broadcasting_shapes():
     sky = polrig.Sky()
     az = np.arange(0, 360, 30.0)[None, :]

@@ -18,6 +18,7 @@
 #include "polrig/sky/sun_rows.h"
 #include "polrig/sky/sky.h"
 #include "polrig/io/plot.h"
+#include "polrig/sky/berry_fit.h"
 #include "polrig/sky/neutral_points.h"
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/vector_rt_sky.h"
@@ -86,6 +87,28 @@ std::vector<double> parse_elevations(const std::string& text) {
   std::vector<double> out;
   for (int k = 0; k < static_cast<int>(n); ++k) out.push_back(a + (b - a) * k / (n - 1));
   return out;
+}
+
+// --sun-el-deg's elevations, each within [the model's lowest sun, 90°].
+std::vector<double> checked_elevations(const std::string& text, const SkyModel& model) {
+  const std::vector<double> h = parse_elevations(text);
+  const double lo = min_sun_elevation_deg(model);
+  for (double e : h)
+    if (!(e >= lo && e <= 90))
+      throw DataError(fmt::format("--sun-el-deg {}: the sun's elevation {}° is outside [{}°, 90°]{}", text, e, lo,
+                                  lo > -90 ? " (the vector-rt sky's low-sun limit)" : ""));
+  return h;
+}
+
+// The sky in a plot's title: its model and, where it has one, its atmosphere.
+std::string sky_title(const Rig& rig, const SkyModel& model) {
+  if (model.kind == SkyKind::SingleScattering) return "single scattering";
+  const VectorRtSettings rt = rig.source.sky.resolved_rt();
+  const std::string atmosphere = fmt::format("tau {:.4g}, albedo {:.3g}", rt.tau_rayleigh, rt.ground_albedo);
+  if (model.kind == SkyKind::VectorRt) return "vector-RT sky, " + atmosphere;
+  const auto distance = [](const std::optional<double>& d) { return d ? fmt::format("{:g} deg", *d) : std::string("fit"); };
+  return fmt::format("Berry's sky, Babinet {}, Brewster {}{}", distance(model.berry.babinet_deg),
+                     distance(model.berry.brewster_deg), model.berry.fit ? " to the vector-RT sky of " + atmosphere : "");
 }
 
 }  // namespace
@@ -161,20 +184,13 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
       const LoadedRig loaded = rig->load();
       const std::optional<Sky> sky = rig_sky(loaded.rig);
       if (!sky) throw RigError(no_sky_message(loaded.rig, rig->path));
-      const std::vector<double> h = parse_elevations(*elevations);
-      const bool rt = sky->model.kind == SkyKind::VectorRt;
-      for (double e : h)
-        if (!(e >= (rt ? VectorRtSky::kMinSunElevationDeg : -90) && e <= 90))
-          throw DataError(fmt::format("--sun-el-deg {}: the sun's elevation {}° is outside [{}°, 90°]{}", *elevations, e,
-                                      rt ? VectorRtSky::kMinSunElevationDeg : -90,
-                                      rt ? " (the vector-rt sky's low-sun limit)" : ""));
+      const std::vector<double> h = checked_elevations(*elevations, sky->model);
       OutputDir dir = out->open();
       std::vector<NeutralPoints> points(h.size());
       const Progress p = progress();
       p.begin("neutral points", static_cast<long long>(h.size()));
       tbb::parallel_for(std::size_t{0}, h.size(), [&](std::size_t k) {
-        // The single-scattering sky has none: Q < 0 everywhere off the sun's line.
-        points[k] = rt ? vector_rt_neutral_points(sky->model.vector_rt->settings(), h[k]) : NeutralPoints{h[k], {}, {}, {}};
+        points[k] = sky_neutral_points(sky->model, h[k]);
         p.advance();
       });
       p.finish();
@@ -186,10 +202,8 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
       std::vector<DatasetFile> files{{"neutral_points.csv", 1,
           "sun_el_deg, then the angular distances along the solar meridian of Babinet (above the sun), Brewster "
           "(below it) and Arago (above the antisun), degrees; nan where absent or below the horizon"}};
-      if (out->plots() && rt) {  // a single-scattering sky has no point to draw
-        const std::string what = fmt::format("vector-RT sky, tau {:.4g}, albedo {:.3g}",
-                                             sky->model.vector_rt->settings().tau_rayleigh,
-                                             sky->model.vector_rt->settings().ground_albedo);
+      if (out->plots() && sky->model.kind != SkyKind::SingleScattering) {  // single scattering has no point to draw
+        const std::string what = sky_title(loaded.rig, sky->model);
         Plot plot{"neutral_points.png", "Neutral points on the solar meridian (" + what + "; single scattering: none)",
                   "sun elevation (deg)", "distance along the meridian (deg)", "",
                   {{"neutral_points.csv", "$sun_el_deg:$babinet_deg", "Babinet (above the sun)", "linespoints lw 2 pt 7 ps 0.6"},
@@ -198,6 +212,68 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
                   "set key top right\nset grid\nset yrange [0:*]"};
         render_plots(dir.staging(), "plots.gp", {plot}, progress());
         files.push_back({"neutral_points.png", 1, "the three distances against the sun's elevation"});
+      }
+      write_manifest(dir.staging(), {command_line(), &loaded, files});
+      finish(dir);
+    }});
+  }
+
+  // ---- sky berry-fit
+  {
+    auto* app = sky_app->add_subcommand(
+        "berry-fit", "Berry's two distances fitted to the vector-RT sky of the rig's atmosphere, with the fit's AoP error");
+    auto out = std::make_shared<OutputOptions>();
+    auto rig = std::make_shared<RigInput>();
+    auto elevations = std::make_shared<std::string>();
+    app->add_option("--rig", rig->path, "a rig file with source.model sky (its atmosphere: sky.rt.*)");
+    add_set_option(*app, rig->sets);
+    app->add_option("--sun-el-deg", *elevations, "the sun's elevation X, or A:B:N (N elevations from A to B), degrees")
+        ->required();
+    out->add_to(*app, true);
+    add_threads_option(*app, threads);
+    commands.push_back({app, [=] {
+      const LoadedRig loaded = rig->load();
+      if (!rig_sky(loaded.rig)) throw RigError(no_sky_message(loaded.rig, rig->path));
+      const VectorRtSettings rt = loaded.rig.source.sky.resolved_rt();
+      SkyModel exact;
+      exact.kind = SkyKind::VectorRt;
+      const std::vector<double> h = checked_elevations(*elevations, exact);
+      OutputDir dir = out->open();
+      const std::shared_ptr<const VectorRtSky> sky = vector_rt_sky(rt);
+      std::vector<BerryFitResult> fits(h.size());
+      const Progress p = progress();
+      p.begin("Berry fits", static_cast<long long>(h.size()));
+      tbb::parallel_for(std::size_t{0}, h.size(), [&](std::size_t k) {
+        fits[k] = fit_berry(sky->for_sun(h[k]), h[k]);
+        p.advance();
+      });
+      p.finish();
+      std::string csv = "sun_el_deg,babinet_deg,brewster_deg,aop_rms_deg,aop_p95_deg,single_aop_rms_deg,views,iterations,status\n";
+      for (const BerryFitResult& f : fits)
+        csv += fmt::format("{},{},{},{},{},{},{},{},{}\n", f.sun_el_deg, f.distances.babinet_deg, f.distances.brewster_deg,
+                           f.summary.aop_rms_deg, f.summary.aop_p95_deg, f.summary.single_aop_rms_deg, f.summary.views,
+                           f.summary.iterations, f.summary.status);
+      write_text_file(dir.staging() / "berry_fit.csv", csv);
+      std::vector<DatasetFile> files{{"berry_fit.csv", 1,
+          "sun_el_deg; Berry's fitted babinet_deg and brewster_deg; over the views with exact DoP >= 0.02 (uniform in "
+          "solid angle above the horizon) Berry's AoP error against the vector-RT sky, rms and 95th percentile, and "
+          "single scattering's rms; views; iterations and Eigen's Levenberg-Marquardt status"}};
+      if (out->plots()) {
+        const std::string what = fmt::format("tau {:.4g}, albedo {:.3g}", rt.tau_rayleigh, rt.ground_albedo);
+        Plot distances{"berry_fit.png", "Berry's distances fitted to the vector-RT sky (" + what + ")",
+                       "sun elevation (deg)", "distance along the solar meridian (deg)", "",
+                       {{"berry_fit.csv", "$sun_el_deg:$babinet_deg", "Babinet (above the sun)", "linespoints lw 2 pt 7 ps 0.6"},
+                        {"berry_fit.csv", "$sun_el_deg:$brewster_deg", "Brewster (below the sun)", "linespoints lw 2 pt 5 ps 0.6"}},
+                       "set key top right\nset grid\nset yrange [0:*]"};
+        Plot error{"berry_fit_error.png", "AoP against the vector-RT sky (" + what + "; views with DoP >= 0.02)",
+                   "sun elevation (deg)", "AoP error (deg)", "",
+                   {{"berry_fit.csv", "$sun_el_deg:$aop_rms_deg", "Berry fitted, rms", "linespoints lw 2 pt 7 ps 0.6"},
+                    {"berry_fit.csv", "$sun_el_deg:$aop_p95_deg", "Berry fitted, 95th percentile", "linespoints lw 1 pt 6 ps 0.6"},
+                    {"berry_fit.csv", "$sun_el_deg:$single_aop_rms_deg", "single scattering, rms", "linespoints lw 2 pt 5 ps 0.6"}},
+                   "set key top right\nset grid\nset yrange [0:*]"};
+        render_plots(dir.staging(), "plots.gp", {distances, error}, progress());
+        files.push_back({"berry_fit.png", 1, "the two distances against the sun's elevation"});
+        files.push_back({"berry_fit_error.png", 1, "Berry's and single scattering's AoP error against the sun's elevation"});
       }
       write_manifest(dir.staging(), {command_line(), &loaded, files});
       finish(dir);
@@ -250,7 +326,9 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
       // The previews (gnuplot, a process of its own) are drawn while the EXR is written.
       std::future<std::vector<DatasetFile>> previews;
       if (out->plots())
-        previews = std::async(std::launch::async, [&] { return report_sky_previews(dir.staging(), map, sky); });
+        previews = std::async(std::launch::async, [&] {
+          return report_sky_previews(dir.staging(), map, sky, loaded ? loaded->rig.source.sky.resolved_rt() : VectorRtSettings{});
+        });
       std::vector<DatasetFile> files = write_sky_map(dir.staging(), map, sky, c);
       if (previews.valid())
         for (DatasetFile& f : previews.get()) files.push_back(std::move(f));

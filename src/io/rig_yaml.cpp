@@ -294,9 +294,12 @@ class RigParser {
     const bool model_overridden = override_for("sky.model") != nullptr;
     for (const RigKey& k : rig_keys())
       if (present_.count(std::string(k.path)) && rig.source.model == "sky" && !k.read_by_sky_model(rig.source.sky.model) &&
-          !(model_overridden && !override_for(std::string(k.path))))
+          !(model_overridden && !override_for(std::string(k.path)))) {
+        std::string models;  // "single-scattering berry" → "single-scattering or berry"
+        for (char c : k.sky_models) models += c == ' ' ? std::string(" or ") : std::string(1, c);
         fail(std::string(k.path), fmt::format("expected no value with sky.model {} (only sky.model {} reads it)",
-                                              rig.source.sky.model, k.sky_models));
+                                              rig.source.sky.model, models));
+      }
     const SceneLoader load = [&](const std::string& path) {
       std::filesystem::path scene = path;
       if (scene.is_relative() && !override_for("source.scene") &&

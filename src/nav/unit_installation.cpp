@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <unsupported/Eigen/LevenbergMarquardt>
 
+#include "polrig/lm_status.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -65,26 +66,6 @@ struct InstallationResiduals : Eigen::DenseFunctor<double> {
   const std::vector<Sample>& samples;
 };
 
-const char* status_name(Eigen::LevenbergMarquardtSpace::Status s, bool& converged) {
-  using S = Eigen::LevenbergMarquardtSpace::Status;
-  converged = false;
-  switch (s) {
-    case S::NotStarted: return "NotStarted";
-    case S::Running: return "Running";
-    case S::UserAsked: return "UserAsked";
-    case S::ImproperInputParameters: return "ImproperInputParameters";
-    case S::TooManyFunctionEvaluation: return "TooManyFunctionEvaluation";
-    case S::RelativeReductionTooSmall: converged = true; return "RelativeReductionTooSmall";
-    case S::RelativeErrorTooSmall: converged = true; return "RelativeErrorTooSmall";
-    case S::RelativeErrorAndReductionTooSmall: converged = true; return "RelativeErrorAndReductionTooSmall";
-    case S::CosinusTooSmall: converged = true; return "CosinusTooSmall";
-    case S::FtolTooSmall: converged = true; return "FtolTooSmall";
-    case S::XtolTooSmall: converged = true; return "XtolTooSmall";
-    case S::GtolTooSmall: converged = true; return "GtolTooSmall";
-  }
-  return "?";
-}
-
 double rms_deg(const Eigen::VectorXd& r) {
   return r.size() ? rad2deg(std::sqrt(r.squaredNorm() / static_cast<double>(r.size()))) : 0.0;
 }
@@ -141,7 +122,7 @@ std::vector<UnitInstallation> calibrate_installation(std::span<const UnitMount> 
         status = lm.minimizeOneStep(x);
       while (status == Eigen::LevenbergMarquardtSpace::Running && static_cast<int>(lm.njev()) < settings.max_iterations);
     u.iterations = static_cast<int>(lm.njev());
-    u.termination = status_name(status, u.converged);
+    u.termination = lm_status_name(status, u.converged);
     f(x, r);
     u.rms_after_deg = rms_deg(r);
     Eigen::MatrixXd J(f.values(), 3);

@@ -24,6 +24,7 @@
 #include "polrig/sky/sky.h"
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/sun.h"
+#include "polrig/sky/berry_fit.h"
 #include "polrig/sky/neutral_points.h"
 #include "polrig/sky/sun_rows.h"
 #include "polrig/sky/vector_rt_sky.h"
@@ -44,6 +45,7 @@ struct SkyLightTag {};
 struct SkyMapTag {};
 struct SkyTableTag {};
 struct NeutralPointsTag {};
+struct BerryFitTag {};
 struct DriftTag {};
 struct SpectralKdTag {};
 struct KdSpectraTag {};
@@ -177,6 +179,18 @@ void bind_sky(py::module_& m) {
       {"babinet_deg", "the Babinet point's angular distance above the sun along the meridian, degrees."},
       {"brewster_deg", "the Brewster point's distance below the sun, degrees."},
       {"arago_deg", "the Arago point's distance above the antisun, degrees."}});
+  bind_record<BerryFitTag>(m, "BerryFit",
+      "`polrig sky berry-fit`: Berry's two distances fitted to the vector-RT sky for each sun elevation "
+      "(sky/berry_fit.h), arrays of the elevations' shape, berry_fit.csv's columns.", {
+      {"sun_el_deg", "the sun's elevation, degrees."},
+      {"babinet_deg", "the fitted Babinet distance above the sun, degrees."},
+      {"brewster_deg", "the fitted Brewster distance below the sun, degrees."},
+      {"aop_rms_deg", "Berry's AoP less the exact sky's, rms over the views with exact DoP ≥ 0.02, degrees."},
+      {"aop_p95_deg", "its 95th percentile of |ΔAoP|, degrees."},
+      {"single_aop_rms_deg", "single scattering's AoP less the exact sky's, rms over the same views, degrees."},
+      {"views", "the views the fit used (int)."},
+      {"iterations", "Levenberg–Marquardt's Jacobian evaluations (int)."},
+      {"status", "list of str: Eigen's LevenbergMarquardtSpace::Status for each fit."}});
   bind_record<SkyMapTag>(m, "SkyMap",
       "An all-sky map, an equidistant fisheye seen from below (zenith at the centre, north up, east "
       "LEFT, r = (θ/90°)·size/2): the layers of `polrig sky`'s sky.exr as float32 (size, size) "
@@ -233,7 +247,7 @@ void bind_sky(py::module_& m) {
                        const std::string& radiance, bool refraction, double ut1_minus_utc_s,
                        const py::object& p_max_table, const std::string& model, const py::object& tau_rayleigh,
                        double wavelength_nm, double pressure_hPa, double depolarization, double ground_albedo,
-                       int streams) {
+                       int streams, const py::object& babinet_deg, const py::object& brewster_deg) {
              Sky s;
              s.site = site_of(site, "site");
              s.first_stop = utc_time(utc, "utc");
@@ -245,18 +259,19 @@ void bind_sky(py::module_& m) {
              s.sun.ut1_minus_utc_s = ut1_minus_utc_s;
              s.model.P_max.table = p_max_table_of(p_max_table);
              check_sky_model(s.model);
-             // The vector-RT sky through the rig's own resolution of its keys (sky_settings.h).
-             const std::optional<SkyKind> kind = parse_sky_kind(model);
-             if (!kind) throw py::value_error("model: expected 'single-scattering' or 'vector-rt', got '" + model + "'");
-             s.model.kind = *kind;
-             if (*kind == SkyKind::VectorRt) {
-               SkySettings rt;
-               rt.tau_rayleigh = py::isinstance<py::str>(tau_rayleigh) ? tau_rayleigh.cast<std::string>()
-                                                                       : fmt::format("{}", tau_rayleigh.cast<double>());
-               rt.wavelength_nm = wavelength_nm, rt.pressure_hPa = pressure_hPa;
-               rt.rt.depolarization = depolarization, rt.rt.ground_albedo = ground_albedo, rt.rt.streams = streams;
-               s.model.vector_rt = vector_rt_sky(rt.resolved_rt());
-             }
+             // The vector-RT and Berry skies through the rig's own resolution of its keys (sky_settings.h).
+             const auto text = [](const py::object& v) {
+               return py::isinstance<py::str>(v) ? v.cast<std::string>() : fmt::format("{}", v.cast<double>());
+             };
+             SkySettings keys;
+             keys.model = model;
+             keys.tau_rayleigh = text(tau_rayleigh);
+             keys.wavelength_nm = wavelength_nm, keys.pressure_hPa = pressure_hPa;
+             keys.rt.depolarization = depolarization, keys.rt.ground_albedo = ground_albedo, keys.rt.streams = streams;
+             keys.berry_babinet_deg = text(babinet_deg), keys.berry_brewster_deg = text(brewster_deg);
+             if (!parse_sky_kind(model))
+               throw py::value_error("model: expected 'single-scattering', 'vector-rt' or 'berry', got '" + model + "'");
+             keys.resolve_kind(s.model);
              return PySky(s);
            }),
            "site"_a = py::make_tuple(38.879167, 121.543889), "utc"_a = "2018-11-16T08:09:40Z",
@@ -264,6 +279,7 @@ void bind_sky(py::module_& m) {
            "ut1_minus_utc_s"_a = 0.0, "p_max_table"_a = py::none(), "model"_a = "single-scattering",
            "tau_rayleigh"_a = py::float_(0.1), "wavelength_nm"_a = 550.0, "pressure_hPa"_a = 1013.25,
            "depolarization"_a = 0.0279, "ground_albedo"_a = 0.0, "streams"_a = 32,
+           "babinet_deg"_a = "fit", "brewster_deg"_a = "fit",
            "A sky at one time and place (the defaults: W19 Outdoor1's first stop on its roof in "
            "Dalian).\n\n"
            "site: (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m): latitude in [-90, 90] "
@@ -281,6 +297,10 @@ void bind_sky(py::module_& m) {
            "'bodhaine' (Bodhaine et al. 1999 at wavelength_nm and pressure_hPa); depolarization ρ in "
            "[0, 0.5); ground_albedo in [0, 1]; streams even in [4, 128]. The rig keys sky.model and "
            "sky.rt.* (docs/formats.md §1.10). Its sun must stand at 2° or higher.\n"
+           "model='berry': Berry et al. 2004's sky (docs/physics.md §22) with p_max and radiance: "
+           "babinet_deg and brewster_deg, each a distance in [0, 90) degrees along the solar meridian "
+           "or 'fit' (fitted to the vector-RT sky of tau_rayleigh, depolarization, ground_albedo, "
+           "streams; its sun at 2° or higher): the rig keys sky.berry.*.\n"
            "Raises ValueError naming the argument and value (the CLI's ranges; a site out of "
            "range included), and for a date outside ERFA's range.")
       .def_static("from_rig", [](const PyRig& r) {
@@ -308,7 +328,7 @@ void bind_sky(py::module_& m) {
       .def_property_readonly("radiance", [](const PySky& s) { return radiance_name(s.sky.model.radiance); },
                              "The radiance model: 'uniform', 'rayleigh' or 'cie-clear'.")
       .def_property_readonly("model", [](const PySky& s) { return std::string(sky_kind_name(s.sky.model.kind)); },
-                             "What the sky is: 'single-scattering' or 'vector-rt'.")
+                             "What the sky is: 'single-scattering', 'vector-rt' or 'berry'.")
       .def_property_readonly("tau_rayleigh", [](const PySky& s) -> py::object {
              if (!s.sky.model.vector_rt) return py::none();
              return py::float_(s.sky.model.vector_rt->settings().tau_rayleigh);
@@ -339,16 +359,14 @@ void bind_sky(py::module_& m) {
                         "ValueError for a single-scattering sky.\n") + kThreadsDoc).c_str())
       .def("neutral_points", [](const PySky& s, const py::object& sun_el, std::optional<int> threads) {
              Broadcast b = broadcast({{sun_el, "sun_el_deg"}});
-             const bool rt = s.sky.model.kind == SkyKind::VectorRt;
-             check_range(b.values[0], "sun_el_deg", rt ? VectorRtSky::kMinSunElevationDeg : -90, 90,
-                         "degrees above the horizon");
+             check_range(b.values[0], "sun_el_deg", min_sun_elevation_deg(s.sky.model), 90, "degrees above the horizon");
              ThreadLimit limit(threads);
              const std::vector<double>& h = b.values[0];
              std::vector<NeutralPoints> p(h.size());
              {
                py::gil_scoped_release release;
                tbb::parallel_for(std::size_t{0}, h.size(), [&](std::size_t k) {
-                 p[k] = rt ? vector_rt_neutral_points(s.sky.model.vector_rt->settings(), h[k]) : NeutralPoints{h[k], {}, {}, {}};
+                 p[k] = sky_neutral_points(s.sky.model, h[k]);
                });
              }
              const double nan = std::nan("");
@@ -364,9 +382,48 @@ void bind_sky(py::module_& m) {
              return RecordOf<NeutralPointsTag>(std::move(r));
            }, "sun_el_deg"_a, py::kw_only(), "threads"_a = py::none(),
            (std::string("The neutral points of this sky's model on its solar meridian at the sun elevations "
-                        "sun_el_deg (array-like, degrees; the vector-RT sky needs 2 or more): "
+                        "sun_el_deg (array-like, degrees; the vector-RT sky and a fitted Berry sky need 2 or more): "
                         "polrig.NeutralPoints, what `polrig sky neutral-points` writes (its site and time are "
                         "not used). Raises ValueError for an elevation out of range.\n") + kThreadsDoc).c_str())
+      .def("berry_fit", [](const PySky& s, const py::object& sun_el, std::optional<int> threads) {
+             std::shared_ptr<const VectorRtSky> exact = s.sky.model.vector_rt;
+             if (!exact && s.sky.model.berry.fit) exact = vector_rt_sky(s.sky.model.berry.fit->sky().settings());
+             if (!exact) throw py::value_error("berry_fit: this sky has no atmosphere to fit (model='vector-rt', or 'berry' with a distance 'fit', has)");
+             Broadcast b = broadcast({{sun_el, "sun_el_deg"}});
+             check_range(b.values[0], "sun_el_deg", VectorRtSky::kMinSunElevationDeg, 90, "degrees above the horizon");
+             ThreadLimit limit(threads);
+             const std::vector<double>& h = b.values[0];
+             std::vector<BerryFitResult> f(h.size());
+             {
+               py::gil_scoped_release release;
+               tbb::parallel_for(std::size_t{0}, h.size(), [&](std::size_t k) { f[k] = fit_berry(exact->for_sun(h[k]), h[k]); });
+             }
+             const std::size_t n = h.size();
+             std::vector<double> el(n), ba(n), br(n), rms(n), p95(n), single(n);
+             std::vector<long long> views(n), iterations(n);
+             py::list status;
+             for (std::size_t k = 0; k < n; ++k) {
+               el[k] = h[k], ba[k] = f[k].distances.babinet_deg, br[k] = f[k].distances.brewster_deg;
+               rms[k] = f[k].summary.aop_rms_deg, p95[k] = f[k].summary.aop_p95_deg, single[k] = f[k].summary.single_aop_rms_deg;
+               views[k] = f[k].summary.views, iterations[k] = f[k].summary.iterations;
+               status.append(f[k].summary.status);
+             }
+             Record r;
+             r.add("sun_el_deg", take(std::move(el), b.shape));
+             r.add("babinet_deg", take(std::move(ba), b.shape));
+             r.add("brewster_deg", take(std::move(br), b.shape));
+             r.add("aop_rms_deg", take(std::move(rms), b.shape));
+             r.add("aop_p95_deg", take(std::move(p95), b.shape));
+             r.add("single_aop_rms_deg", take(std::move(single), b.shape));
+             r.add("views", take(std::move(views), b.shape));
+             r.add("iterations", take(std::move(iterations), b.shape));
+             r.add("status", status);
+             return RecordOf<BerryFitTag>(std::move(r));
+           }, "sun_el_deg"_a, py::kw_only(), "threads"_a = py::none(),
+           (std::string("Berry's distances fitted to this sky's vector-RT sky (its own, or the one a fitted Berry "
+                        "sky is fitted to) at the sun elevations sun_el_deg (array-like, degrees, 2 to 90): "
+                        "polrig.BerryFit, what `polrig sky berry-fit` writes. Raises ValueError for a sky "
+                        "without an atmosphere or an elevation out of range.\n") + kThreadsDoc).c_str())
       .def_property_readonly("refraction", [](const PySky& s) { return s.sky.sun.refraction; },
                              "Whether the sun is refracted.")
       .def_property_readonly("ut1_minus_utc_s", [](const PySky& s) { return s.sky.sun.ut1_minus_utc_s; },

@@ -307,14 +307,18 @@ void add_ins_keys(std::vector<RigKey>& keys) {
 
 // --- sky.model and sky.rt.* (source/sky_settings.h; docs/physics.md §21): which sky, and the
 // vector-RT sky's atmosphere. Read under source.model sky; sky.rt.* only by sky.model vector-rt.
-constexpr std::string_view kSingleScattering = "single-scattering", kVectorRt = "vector-rt";
+// The sky models that read a key: P_max and the radiance model serve single scattering and Berry's
+// sky; the atmosphere (sky.rt.*) the vector-RT sky and Berry's fit to it.
+constexpr std::string_view kSingleScattering = "single-scattering berry", kVectorRt = "vector-rt berry",
+                           kBerry = "berry";
 
 void add_vector_rt_keys(std::vector<RigKey>& keys) {
   {
-    RigKey k{"sky.model", K::Text, "", "single-scattering or vector-rt",
+    RigKey k{"sky.model", K::Text, "", "single-scattering, vector-rt or berry",
              "what the sky is: single scattering with one P_max and a radiance model (sky.p_max, "
-             "sky.radiance), or the exact polarized Rayleigh sky of a plane-parallel atmosphere over a "
-             "Lambertian ground (sky.rt.*), whose radiance, DoP and AoP all come from the solution"};
+             "sky.radiance); the exact polarized Rayleigh sky of a plane-parallel atmosphere over a "
+             "Lambertian ground (sky.rt.*), whose radiance, DoP and AoP all come from the solution; or "
+             "Berry et al. 2004's four-neutral-point sky (sky.berry.*, with sky.p_max and sky.radiance)"};
     k.text = [](Rig& r) -> std::string& { return r.source.sky.model; };
     k.valid_text = [](std::string_view v) { return parse_sky_kind(v).has_value(); };
     keys.push_back(reads(k, kSimulate, "sky"));
@@ -360,6 +364,28 @@ void add_vector_rt_keys(std::vector<RigKey>& keys) {
              "discrete ordinates over both hemispheres; 32 meets the exact tables to 6e-6 in I",
              "fewer than 4 cannot hold Rayleigh's m = 2 term; beyond 128 the solve takes seconds",
              [](Rig& r) -> int& { return r.source.sky.rt.streams; }, &integer_within<4, 128, true>));
+  for (const bool babinet : {true, false}) {
+    RigKey k{babinet ? "sky.berry.babinet_deg" : "sky.berry.brewster_deg", K::Text, "deg",
+             "a distance in [0, 90) degrees, or fit",
+             babinet ? "Berry's sky: Babinet's point's distance above the sun along the solar meridian, or fit: "
+                       "fitted to the vector-RT sky of sky.rt.* at the sun's elevation (physics §22)"
+                     : "Berry's sky: Brewster's point's distance below the sun along the solar meridian, or fit "
+                       "(as sky.berry.babinet_deg)",
+             "0 puts the point on the sun (single scattering's pattern when both are 0); clear skies have "
+             "10-25 degrees; at 90 the point's antipode meets the sun"};
+    if (babinet) k.text = [](Rig& r) -> std::string& { return r.source.sky.berry_babinet_deg; };
+    else k.text = [](Rig& r) -> std::string& { return r.source.sky.berry_brewster_deg; };
+    k.valid_text = [](std::string_view v) {
+      try {
+        (void)parse_berry_distance("", v);
+        return true;
+      } catch (const std::invalid_argument&) {
+        return false;
+      }
+    };
+    k.sky_models = kBerry;
+    keys.push_back(reads(std::move(k), kSimulate, "sky"));
+  }
 }
 
 std::vector<RigKey> make_keys() {

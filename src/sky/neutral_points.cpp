@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 
+#include "polrig/sky/berry_fit.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/units.h"
 
@@ -107,6 +108,25 @@ NeutralPoints vector_rt_neutral_points(const VectorRtSettings& s, double h) {
     if (const std::optional<double> g = first_zero(180 - h, 0)) p.arago_deg = 180 - *g;
   }
   return p;
+}
+
+NeutralPoints sky_neutral_points(const SkyModel& model, double h) {
+  switch (model.kind) {
+    case SkyKind::VectorRt:
+      return vector_rt_neutral_points(model.vector_rt->settings(), h);
+    case SkyKind::Berry: {
+      const BerryDistances d = berry_distances(model.berry, h);
+      NeutralPoints p;
+      p.sun_el_deg = h;
+      p.babinet_deg = d.babinet_deg;
+      if (h - d.brewster_deg >= 0) p.brewster_deg = d.brewster_deg;
+      else p.arago_deg = d.brewster_deg;
+      return p;
+    }
+    case SkyKind::SingleScattering:
+      break;
+  }
+  return {h, {}, {}, {}};  // single scattering: Q < 0 everywhere off the sun's line
 }
 
 }  // namespace polrig

@@ -1,5 +1,7 @@
 // The single-scattering Rayleigh sky (spec sky-and-compasses.md §1.2).
 #include "polrig/sky/rayleigh.h"
+#include "polrig/sky/berry.h"
+#include "polrig/sky/berry_fit.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/units.h"
 
@@ -30,12 +32,13 @@ std::string_view sky_kind_name(SkyKind k) {
   switch (k) {
     case SkyKind::SingleScattering: return "single-scattering";
     case SkyKind::VectorRt: return "vector-rt";
+    case SkyKind::Berry: return "berry";
   }
   return "?";
 }
 
 std::optional<SkyKind> parse_sky_kind(std::string_view name) {
-  for (const SkyKind k : {SkyKind::SingleScattering, SkyKind::VectorRt})
+  for (const SkyKind k : {SkyKind::SingleScattering, SkyKind::VectorRt, SkyKind::Berry})
     if (sky_kind_name(k) == name) return k;
   return std::nullopt;
 }
@@ -83,6 +86,11 @@ double MaxDegree::at(double sun_elevation_deg) const {
   return lo->second + f * (hi->second - lo->second);
 }
 
+double min_sun_elevation_deg(const SkyModel& model) {
+  const bool fitted = model.kind == SkyKind::Berry && (!model.berry.babinet_deg || !model.berry.brewster_deg);
+  return model.kind == SkyKind::VectorRt || fitted ? VectorRtSky::kMinSunElevationDeg : -90.0;
+}
+
 void check_sky_model(const SkyModel& model) {
   auto check_p = [](double p, const std::string& where) {
     if (!(p > 0 && p <= 1))
@@ -119,6 +127,10 @@ SunSky::SunSky(const Vec3& s, const SkyModel& model)
     if (!model.vector_rt) throw std::logic_error("a vector-rt sky model without its solved sky");
     field_ = std::make_shared<const SunField>(model.vector_rt->for_sun(std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg));
     sun_azimuth_ = azimuth_cos_sin(s);
+  }
+  if (model.kind == SkyKind::Berry) {
+    const double h = std::asin(std::clamp(s[2], -1.0, 1.0)) / kDeg;
+    berry_ = std::make_shared<const BerryField>(s, berry_distances(model.berry, h));
   }
 }
 
@@ -173,6 +185,13 @@ SkyRay SunSky::along(const Vec3& v) const {
     return ray;
   }
   const double cos_gamma = vec3::dot(s_, v);
+  if (berry_) {
+    const BerryField::Polarization b = berry_->at(v);
+    ray.dop = berry_dop(b.w_abs, P_max_);
+    ray.radiance = relative_radiance(radiance_, s_, v, cos_gamma, ray.sin_gamma);
+    ray.e_vector = b.e_vector;
+    return ray;
+  }
   const double sin2 = ray.sin_gamma * ray.sin_gamma, cos2 = cos_gamma * cos_gamma;
   // P = P_max·sin²γ/(1 + cos²γ); sin²γ from |s × v|², exact at γ = 0° and 180°.
   ray.dop = P_max_ * sin2 / (1 + cos2);

@@ -135,7 +135,7 @@ std::vector<SkySample> sky_along(std::span<const SkyQuery> queries, const SkyMod
   }
   std::vector<std::unique_ptr<const SunSky>> skies(first_row.size());
   for (std::size_t k = 0; k < first_row.size(); ++k)  // the first refused sun, by row
-    if (model.kind == SkyKind::VectorRt && !(sun[first_row[k]].elevation_deg >= VectorRtSky::kMinSunElevationDeg)) {
+    if (!(sun[first_row[k]].elevation_deg >= min_sun_elevation_deg(model))) {
       try {
         (void)SunSky(sun_direction_enu(sun[first_row[k]]), model);
       } catch (const std::invalid_argument& e) {

@@ -1,5 +1,6 @@
 #include "polrig/source/sky_settings.h"
 
+#include "polrig/sky/berry_fit.h"
 #include "polrig/sky/vector_rt_sky.h"
 
 #include <optional>
@@ -26,12 +27,37 @@ Sky SkySettings::resolved_sky() const {
   for (std::size_t i = 0; i < p_max_table.size(); ++i)
     s.model.P_max.table.emplace_back(p_max_table_elevation_deg[i], p_max_table[i]);
   check_sky_model(s.model);
+  resolve_kind(s.model);
+  return s;
+}
+
+void SkySettings::resolve_kind(SkyModel& m) const {
   const std::optional<SkyKind> kind = parse_sky_kind(model);
   if (!kind)
-    throw std::invalid_argument("sky.model: expected single-scattering or vector-rt, got '" + model + "'");
-  s.model.kind = *kind;
-  if (*kind == SkyKind::VectorRt) s.model.vector_rt = vector_rt_sky(resolved_rt());
-  return s;
+    throw std::invalid_argument("sky.model: expected single-scattering, vector-rt or berry, got '" + model + "'");
+  m.kind = *kind;
+  m.vector_rt = *kind == SkyKind::VectorRt ? vector_rt_sky(resolved_rt()) : nullptr;
+  m.berry = {};
+  if (*kind == SkyKind::Berry) {
+    m.berry.babinet_deg = parse_berry_distance("sky.berry.babinet_deg", berry_babinet_deg);
+    m.berry.brewster_deg = parse_berry_distance("sky.berry.brewster_deg", berry_brewster_deg);
+    if (!m.berry.babinet_deg || !m.berry.brewster_deg) m.berry.fit = berry_fit(resolved_rt());
+  }
+}
+
+std::optional<double> parse_berry_distance(std::string_view key, std::string_view text) {
+  if (text == "fit") return std::nullopt;
+  std::size_t used = 0;
+  double d = 0;
+  try {
+    d = std::stod(std::string(text), &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !(d >= 0 && d < 90))
+    throw std::invalid_argument(std::string(key) + ": expected a distance in [0, 90) degrees or fit, got '" +
+                                std::string(text) + "'");
+  return d;
 }
 
 std::optional<double> parse_tau_rayleigh(std::string_view text) {

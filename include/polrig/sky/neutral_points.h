@@ -5,6 +5,7 @@
 // they are the zeros of Q (polrig's frame: Q > 0 along e_θ, in the meridian plane) found along it.
 #include <optional>
 
+#include "polrig/sky/rayleigh.h"
 #include "polrig/sky/vector_rt.h"
 
 namespace polrig {
@@ -22,5 +23,11 @@ struct NeutralPoints {
 // interpolation's error does not move it. Throws std::invalid_argument for settings or a sun
 // elevation the vector-RT sky refuses (VectorRtSky::kMinSunElevationDeg).
 NeutralPoints vector_rt_neutral_points(const VectorRtSettings& s, double sun_el_deg);
+
+// The neutral points of any sky model, what `sky neutral-points` writes: the vector-RT sky's
+// (above); Berry's at its distances (Babinet δ_Ba; Brewster δ_Br where it stands above the horizon,
+// else Arago, its antipode, δ_Br above the antisun); none for single scattering. Throws as the
+// model's sky does for a sun it refuses.
+NeutralPoints sky_neutral_points(const SkyModel& model, double sun_el_deg);
 
 }  // namespace polrig

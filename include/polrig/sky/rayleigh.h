@@ -37,22 +37,38 @@ struct MaxDegree {
 
 
 // What the sky is made of (the rig key sky.model): single scattering with one P_max and a
-// radiance model (this file), or the exact polarized Rayleigh sky of a plane-parallel atmosphere
-// (sky/vector_rt_sky.h), whose radiance, DoP and AoP all come from the solution.
-enum class SkyKind { SingleScattering, VectorRt };
-// "single-scattering", "vector-rt".
+// radiance model (this file); the exact polarized Rayleigh sky of a plane-parallel atmosphere
+// (sky/vector_rt_sky.h), whose radiance, DoP and AoP all come from the solution; or Berry's sky
+// (sky/berry.h): its E-vector pattern with four neutral points, its DoP P_max·|w|/(2 − |w|) and
+// single scattering's radiance models.
+enum class SkyKind { SingleScattering, VectorRt, Berry };
+// "single-scattering", "vector-rt", "berry".
 std::string_view sky_kind_name(SkyKind k);
 std::optional<SkyKind> parse_sky_kind(std::string_view name);
 
 class VectorRtSky;
 class SunField;
+class BerryField;
+class BerryFit;
+
+// Berry's two distances (degrees along the solar meridian): each a number, or empty for the fit
+// to the vector-RT sky at the sun's elevation (`fit`: sky/berry_fit.h).
+struct BerrySkySettings {
+  std::optional<double> babinet_deg, brewster_deg;
+  std::shared_ptr<const BerryFit> fit;  // set when either distance is fitted
+};
 
 struct SkyModel {
   MaxDegree P_max;                            // single scattering
   SkyRadiance radiance = SkyRadiance::Uniform;  // single scattering
   SkyKind kind = SkyKind::SingleScattering;
   std::shared_ptr<const VectorRtSky> vector_rt;  // kind VectorRt: the solved sky (vector_rt_sky())
+  BerrySkySettings berry;                        // kind Berry (with P_max and radiance)
 };
+
+// The lowest sun the model takes, degrees: VectorRtSky::kMinSunElevationDeg for the vector-RT sky
+// and for Berry's sky with a fitted distance, −90° otherwise.
+double min_sun_elevation_deg(const SkyModel& model);
 
 // Throws std::invalid_argument naming the value: P_max outside (0, 1], a table not rising in h_s,
 // or a non-finite entry.
@@ -84,7 +100,8 @@ struct SkyRay {
 // once. Each ray's radiance, dop and e_vector are sky_light's bit for bit (sky_light is built on
 // it). Under the vector-RT sky the radiance is relative to the zenith's diffuse radiance (as every
 // radiance model's is), views below the horizon see the horizon's light, and a sun below
-// VectorRtSky::kMinSunElevationDeg throws std::invalid_argument.
+// VectorRtSky::kMinSunElevationDeg throws std::invalid_argument. Under Berry's sky the DoP is
+// berry_dop(|w|, P_max(h_s)) and the E-vector Berry's; its fitted distances refuse the same suns.
 class SunSky {
  public:
   SunSky(const Vec3& s, const SkyModel& model);
@@ -99,6 +116,7 @@ class SunSky {
   double P_max_;
   SkyRadiance radiance_;
   std::shared_ptr<const SunField> field_;  // the vector-RT sky for this sun
+  std::shared_ptr<const BerryField> berry_;  // Berry's sky for this sun
   std::pair<double, double> sun_azimuth_{1, 0};  // cos, sin of the sun's math azimuth
 };
 

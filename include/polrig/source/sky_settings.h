@@ -17,17 +17,24 @@ namespace polrig {
 // std::invalid_argument naming the text for anything else.
 std::optional<double> parse_tau_rayleigh(std::string_view text);
 
+// sky.berry.babinet_deg's or sky.berry.brewster_deg's text: a distance in [0°, 90°), or nothing
+// for "fit". Throws std::invalid_argument naming the key and the text for anything else.
+std::optional<double> parse_berry_distance(std::string_view key, std::string_view text);
+
 struct SkySettings {
   Sky sky;  // site, sun settings (refraction, UT1 − UTC), model (constant P_max, radiance)
   // The rig keys' text forms, read into `sky` by resolved():
   std::string first_stop_utc = "2018-11-16T08:09:40Z";  // W19 Outdoor1's first stop
   std::string radiance = "uniform";                      // uniform | rayleigh | cie-clear
-  std::string model = "single-scattering";               // single-scattering | vector-rt
+  std::string model = "single-scattering";               // single-scattering | vector-rt | berry
   // The vector-RT sky (sky.rt.*; physics.md §21): τ as a number, or "bodhaine" for Bodhaine et
   // al. 1999's at the wavelength and surface pressure below; ρ, A and the streams in `rt`.
   std::string tau_rayleigh = "0.1";
   double wavelength_nm = 550, pressure_hPa = 1013.25;
   VectorRtSettings rt;
+  // Berry's sky (sky.berry.*; physics.md §22): each distance in degrees, or "fit" (to the
+  // vector-RT sky of the sky.rt.* settings at the sun's elevation).
+  std::string berry_babinet_deg = "fit", berry_brewster_deg = "fit";
   std::string refraction = "off";                        // off | on
   std::string field = "point";                           // point | cone (the lens's field)
   // P_max(h_s) as a table (replaces sky.p_max when given): the sun's elevations (rising) and the
@@ -39,8 +46,12 @@ struct SkySettings {
   // `sky` with the text forms and the P_max table applied, and the mount with its field. Throws
   // std::invalid_argument naming the value for text no key would accept, table columns of
   // different lengths or a table check_sky_model refuses. Under sky.model vector-rt the solved
-  // sky is the process's shared one for these settings (vector_rt_sky()).
+  // sky is the process's shared one for these settings (vector_rt_sky()); under berry a fitted
+  // distance reads the process's shared fit (berry_fit()) to the sky.rt.* settings' sky.
   Sky resolved_sky() const;
+  // m's kind and what it needs (the solved vector-RT sky, Berry's distances or their fit) from
+  // sky.model, sky.rt.* and sky.berry.*; throws as resolved_sky().
+  void resolve_kind(SkyModel& m) const;
   // The vector-RT settings with τ resolved (a number, or Bodhaine's); throws as resolved_sky().
   VectorRtSettings resolved_rt() const;
   SkyMount resolved_mount() const;

@@ -103,6 +103,9 @@ struct RigInput {
 // "a,b,c": finite numbers, or DataError naming `option` and the text (the studies' sweep lists);
 // an empty text is no values when `empty_ok`, else refused.
 std::vector<double> parse_number_list(const std::string& text, const char* option, bool empty_ok = false);
+// --sun-el-deg: "X", "X,Y,…", or "A:B:N" for N elevations from A to B (both included); DataError
+// naming the option and the text for anything else.
+std::vector<double> parse_elevations(const std::string& text);
 // --set KEY=VALUE (repeatable) into `sets`, refusing a value that is not KEY=VALUE.
 void add_set_option(CLI::App& app, std::vector<std::string>& sets);
 
@@ -152,6 +155,7 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads);
 std::vector<Command> add_position_commands(CLI::App& root, CLI::App& study, int& threads);
 std::vector<Command> add_navigation_commands(CLI::App& root, int& threads);
 std::vector<Command> add_navigation_study_commands(CLI::App& root, CLI::App& study, int& threads);
+std::vector<Command> add_sky_study_commands(CLI::App& root, CLI::App& study, int& threads);
 // `simulate` of a unit-array rig: its navigation dataset (navigation_commands.cpp).
 void simulate_unit_array(const LoadedRig& r, const OutputOptions& out);
 // `calibrate DIR --method unit-array`: the units' installation calibration (navigation_commands.cpp).

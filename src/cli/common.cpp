@@ -132,6 +132,55 @@ std::vector<double> parse_number_list(const std::string& text, const char* optio
   return values;
 }
 
+namespace {
+std::vector<std::string> parse_comma_parts(const std::string& text) {
+  std::vector<std::string> parts;
+  for (std::size_t pos = 0;;) {
+    const std::size_t comma = text.find(',', pos);
+    parts.push_back(text.substr(pos, comma == std::string::npos ? std::string::npos : comma - pos));
+    if (comma == std::string::npos) return parts;
+    pos = comma + 1;
+  }
+}
+}  // namespace
+
+std::vector<double> parse_elevations(const std::string& text) {
+  const auto bad = [&](const std::string& why) {
+    return DataError(fmt::format("--sun-el-deg {}: {} (expected X, X,Y,… or A:B:N, degrees)", text, why));
+  };
+  std::vector<std::string> parts;
+  for (std::size_t pos = 0;;) {
+    const std::size_t colon = text.find(':', pos);
+    parts.push_back(text.substr(pos, colon == std::string::npos ? std::string::npos : colon - pos));
+    if (colon == std::string::npos) break;
+    pos = colon + 1;
+  }
+  const auto number = [&](const std::string& t) {
+    std::size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(t, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != t.size() || !std::isfinite(v)) throw bad("'" + t + "' is not a number");
+    return v;
+  };
+  if (text.find(',') != std::string::npos) {
+    std::vector<double> out;
+    for (const std::string& t : parse_comma_parts(text)) out.push_back(number(t));
+    return out;
+  }
+  if (parts.size() == 1) return {number(parts[0])};
+  if (parts.size() != 3) throw bad("expected one value or three");
+  const double a = number(parts[0]), b = number(parts[1]), n = number(parts[2]);
+  if (!(n >= 2 && n <= 1000 && n == std::floor(n))) throw bad("N must be a whole number in [2, 1000]");
+  std::vector<double> out;
+  for (int k = 0; k < static_cast<int>(n); ++k) out.push_back(a + (b - a) * k / (n - 1));
+  return out;
+}
+
+
 void add_set_option(CLI::App& app, std::vector<std::string>& sets) {
   // A value that is not KEY=VALUE is refused here, so `--set -o out` names --set, not a missing -o.
   const CLI::Validator key_value(

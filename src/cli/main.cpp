@@ -60,6 +60,7 @@ int main(int argc, char** argv) {
   for (cli::Command& c : cli::add_position_commands(app, *study, threads)) commands.push_back(c);
   for (cli::Command& c : cli::add_navigation_commands(app, threads)) commands.push_back(c);
   for (cli::Command& c : cli::add_navigation_study_commands(app, *study, threads)) commands.push_back(c);
+  for (cli::Command& c : cli::add_sky_study_commands(app, *study, threads)) commands.push_back(c);
   cli::add_quiet_option(app);
 
   try {

@@ -57,38 +57,6 @@ struct SkyOptions {
   }
 };
 
-// --sun-el-deg: "X", or "A:B:N" for N elevations from A to B (both included).
-std::vector<double> parse_elevations(const std::string& text) {
-  const auto bad = [&](const std::string& why) {
-    return DataError(fmt::format("--sun-el-deg {}: {} (expected X or A:B:N, degrees)", text, why));
-  };
-  std::vector<std::string> parts;
-  for (std::size_t pos = 0;;) {
-    const std::size_t colon = text.find(':', pos);
-    parts.push_back(text.substr(pos, colon == std::string::npos ? std::string::npos : colon - pos));
-    if (colon == std::string::npos) break;
-    pos = colon + 1;
-  }
-  const auto number = [&](const std::string& t) {
-    std::size_t used = 0;
-    double v = 0;
-    try {
-      v = std::stod(t, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != t.size() || !std::isfinite(v)) throw bad("'" + t + "' is not a number");
-    return v;
-  };
-  if (parts.size() == 1) return {number(parts[0])};
-  if (parts.size() != 3) throw bad("expected one value or three");
-  const double a = number(parts[0]), b = number(parts[1]), n = number(parts[2]);
-  if (!(n >= 2 && n <= 1000 && n == std::floor(n))) throw bad("N must be a whole number in [2, 1000]");
-  std::vector<double> out;
-  for (int k = 0; k < static_cast<int>(n); ++k) out.push_back(a + (b - a) * k / (n - 1));
-  return out;
-}
-
 // --sun-el-deg's elevations, each within [the model's lowest sun, 90°].
 std::vector<double> checked_elevations(const std::string& text, const SkyModel& model) {
   const std::vector<double> h = parse_elevations(text);

@@ -59,7 +59,8 @@ pybind11_add_module(polrig_python MODULE NO_EXTRAS
   src/python/orientation_bindings.cpp
   src/python/position_bindings.cpp
   src/python/four_camera_calibration_bindings.cpp
-  src/python/navigation_bindings.cpp)
+  src/python/navigation_bindings.cpp
+  src/python/sky_study_bindings.cpp)
 target_link_libraries(polrig_python PRIVATE polrig_lib polrig_options TBB::tbb fmt::fmt)
 set_target_properties(polrig_python PROPERTIES
   OUTPUT_NAME _polrig

@@ -405,3 +405,27 @@ def test_spectral_kd_coverage_is_the_clis_message(tmp_path):
     sun.write_text("wavelength_nm,extraterrestrial\n330,1\n700,1\n")
     with pytest.raises(polrig.DataError, match=r"sun .*sun.csv: its wavelengths \[330, 700\] nm do not cover"):
         polrig.spectral_kd(str(films), str(SPECTRA / "blue-filter-photodiode-synthetic.csv"), sun=str(sun))
+
+
+def test_study_sky_is_the_cli_bit_for_bit(tmp_path, cli):
+    """Rig.study_sky against `polrig study sky` (Z21's unit array, two skies, noisy trials)."""
+    rig_file = ROOT / "rigs" / "zhang2021-static.yaml"
+    out = tmp_path / "study"
+    cli("study", "sky", rig_file, "--tau", "0.1", "--albedo", "0,0.5", "--sun-el-deg", "10:50:3", "--tilts", "0,5",
+        "--headings", "0,90", "--trials", "4", "--no-plots", "-o", out, "--quiet")
+    r = polrig.Rig.load(str(rig_file)).study_sky(tau=[0.1], albedo=[0, 0.5], sun_el_deg=[10, 30, 50],
+                                                 tilt_deg=[0, 5], heading_deg=[0, 90], trials=4, threads=1)
+    assert r.device == "unit-array"
+    for record, name in ((r.bias, "bias.csv"), (r.sky_dop, "sky_dop.csv"), (r.evector_by_dop, "evector_by_dop.csv")):
+        for column_name, column in read_csv(out / name).items():
+            got = getattr(record, column_name)
+            if column.dtype == object:
+                assert list(got) == list(column), column_name
+            else:
+                np.testing.assert_array_equal(np.asarray(got, dtype=float), column, err_msg=column_name)
+    # Single scattering is the method's own sky: no bias; the exact sky's is real.
+    single = r.bias.sky == "single-scattering"
+    assert np.nanmax(np.abs(r.bias.sun_el_error_deg[single])) < 1e-8
+    assert np.nanmax(np.abs(r.bias.sun_el_error_deg[~single])) > 0.1
+    with pytest.raises(ValueError, match="albedo"):
+        polrig.Rig.load(str(rig_file)).study_sky(albedo=[2], trials=0)

@@ -26,6 +26,7 @@ void bind_position(pybind11::module_& m);     // position_bindings.cpp: fix_posi
 void bind_four_camera_calibration(pybind11::module_& m);  // four_camera_calibration_bindings.cpp: W16's K, b, ε
 void bind_four_camera_geometry(pybind11::module_& m);  // four_camera_geometry_bindings.cpp: the geometric calibration
 void bind_navigation(pybind11::module_& m);   // navigation_bindings.cpp: Z21's unit array with an INS
+void bind_sky_study(pybind11::module_& m);   // sky_study_bindings.cpp: study sky (each compass under the vector-RT sky)
 
 // The geometric calibration's result as Python's dict (four_camera_geometry_bindings.cpp), for
 // fit_four_camera_geometry and calibrate_four_camera's "geometry".

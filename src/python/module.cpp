@@ -58,5 +58,6 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_four_camera(m);
   polrig::python::bind_four_camera_calibration(m);
   polrig::python::bind_navigation(m);
+  polrig::python::bind_sky_study(m);
   polrig::python::bind_four_camera_geometry(m);
 }

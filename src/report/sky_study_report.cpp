@@ -187,7 +187,9 @@ std::vector<Plot> plots_of(const SkyStudy& study) {
   }
   for (PlotSeries& p : heading.series)
     if (p.title.find("tilt") == std::string::npos) p.title += fmt::format(", tilt {}°", tilt_min);
-  heading.extra = "set key below horizontal spacing 1.2\nset grid";
+  // Logarithmic: a tilted view near the sun errs by tens of degrees, a level symmetric compass by 0
+  // (its curve then lies below the axis).
+  heading.extra = "set key below horizontal spacing 1.2\nset grid\nset logscale y\nset format y '%g'\nset yrange [1e-3:*]";
   plots.push_back(heading);
 
   if (study.compass.kind != SkyCompassKind::ZenithEVector) {

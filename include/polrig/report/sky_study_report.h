@@ -1,5 +1,5 @@
 #pragma once
-// What `polrig study sky` writes (columns: docs/formats.md §6.13): bias.csv (every sky, sun,
+// What `polrig study sky` writes (columns: docs/formats.md §6.21): bias.csv (every sky, sun,
 // attitude and method), by_sun.csv (over the headings at each sun), summary.csv (over every sun
 // and heading), sky_dop.csv, evector_by_dop.csv and, with plots, heading_bias.png,
 // sun_el_bias.png (not for one E-vector, which fixes no elevation), methods.png,

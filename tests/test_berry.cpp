@@ -222,3 +222,24 @@ TEST(BerrySky, FittedDistancesFollowTheExactTablesAop) {
 
 }  // namespace
 }  // namespace polrig
+
+namespace polrig {
+namespace {
+
+// A fitted distance below the vector-RT sky's low-sun limit is refused as Berry's sky's, with the
+// way out (distances given as numbers), not as the vector-RT sky's own error.
+TEST(BerryFit, RefusesASunBelowTheFitsLimitSayingWhatToGive) {
+  const std::shared_ptr<const BerryFit> fit = berry_fit(VectorRtSettings{});
+  try {
+    (void)fit->distances(1.0);
+    FAIL() << "a sun at 1° was fitted";
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("Berry's sky with fitted distances"), std::string::npos) << what;
+    EXPECT_NE(what.find("the sun's elevation 1° is outside [2°, 90°]"), std::string::npos) << what;
+    EXPECT_NE(what.find("sky.berry.babinet_deg"), std::string::npos) << what;
+  }
+}
+
+}  // namespace
+}  // namespace polrig

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include "cli.h"
+#include "polrig/io/measured.h"
 #include "polrig/report/sky_study_report.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/rig.h"

@@ -158,7 +158,11 @@ BerryFitResult BerryFit::at_node(int k) const {
 }
 
 BerryDistances BerryFit::distances(double h) const {
-  if (!(h >= VectorRtSky::kMinSunElevationDeg && h <= 90)) (void)sky_->for_sun(h);  // throws, naming h
+  if (!(h >= VectorRtSky::kMinSunElevationDeg && h <= 90))
+    throw std::invalid_argument(fmt::format("Berry's sky with fitted distances (sky.berry.*: fit, fitted to the "
+                                            "vector-rt sky): the sun's elevation {}° is outside [{}°, 90°] (give "
+                                            "sky.berry.babinet_deg and sky.berry.brewster_deg for a lower sun)",
+                                            h, VectorRtSky::kMinSunElevationDeg));
   const double t = (h - VectorRtSky::kMinSunElevationDeg) / VectorRtSky::kElevationStepDeg;
   const int last = static_cast<int>(std::lround((90 - VectorRtSky::kMinSunElevationDeg) / VectorRtSky::kElevationStepDeg));
   const int k = std::min(static_cast<int>(std::floor(t)), last - 1);

@@ -15,6 +15,7 @@
 #include "polrig/random.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/statistics.h"
+#include "polrig/units.h"
 
 namespace polrig {
 

@@ -1,4 +1,6 @@
 // What the real sky does to each compass: study sky (spec skies.md §5; docs/physics.md §23).
+#include <algorithm>
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -42,16 +44,11 @@ void print_summary(const SkyStudy& study) {
     const std::string sky = r.sky.kind == SkyKind::SingleScattering
                                 ? std::string("single scattering")
                                 : fmt::format("vector-RT τ = {}, A = {}", r.sky.tau, r.sky.albedo);
-    if (lines.empty() || lines.back().sky != sky || lines.back().tilt != r.tilt_deg) {
-      bool found = false;
-      for (Line& l : lines) found = found || (l.sky == sky && l.tilt == r.tilt_deg);
-      if (!found) lines.push_back({sky, r.tilt_deg});
-    }
-    for (Line& l : lines)
-      if (l.sky == sky && l.tilt == r.tilt_deg) {
-        if (std::isfinite(r.heading_error_deg)) l.heading = std::max(l.heading, std::abs(r.heading_error_deg));
-        if (std::isfinite(r.sun_el_error_deg)) l.el = std::max(l.el, std::abs(r.sun_el_error_deg));
-      }
+    auto l = std::find_if(lines.begin(), lines.end(),
+                          [&](const Line& x) { return x.sky == sky && x.tilt == r.tilt_deg; });
+    if (l == lines.end()) l = lines.insert(lines.end(), {sky, r.tilt_deg});
+    if (std::isfinite(r.heading_error_deg)) l->heading = std::max(l->heading, std::abs(r.heading_error_deg));
+    if (std::isfinite(r.sun_el_error_deg)) l->el = std::max(l->el, std::abs(r.sun_el_error_deg));
   }
   const bool has_el = study.compass.kind != SkyCompassKind::ZenithEVector;
   for (const Line& l : lines)

@@ -592,7 +592,7 @@ TEST(RigYamlError, MoreThanAMillionExplicitStops) {
 TEST(RigYamlError, DeepNestingIsNamedWithFileAndLine) {
   const std::string flow = "seed: " + std::string(3000, '[') + std::string(3000, ']') + "\n";
   EXPECT_EQ(rig_error(flow), std::string(kOrigin) + ":1: the YAML nests deeper than the reader's "
-                                                    "limit of 500 levels (a rig file nests 3 levels)");
+                                                    "limit of 500 levels (a rig file nests 4 levels)");
   std::string block = "device:\n";
   for (int i = 1; i < 2000; ++i) block += std::string(2 * static_cast<std::size_t>(i), ' ') + "k:\n";
   const std::string msg = rig_error(block);

@@ -162,6 +162,27 @@ def test_vector_rt_sky_is_sky_table_with_the_rigs_sky_block(tmp_path):
         polrig.Sky().radiance_sr(0, 90)
 
 
+def test_aerosol_sky_is_sky_table_with_the_rigs_aerosol(tmp_path):
+    phase = ROOT / "data" / "aerosol-phase-matrix" / "iprt-a4-spheroids-350nm.txt"
+    az = np.linspace(0, 330, 12)
+    el = np.linspace(5, 90, 12)
+    write_table_input(tmp_path / "in.csv", [(UTC, *SITE, a, e) for a, e in zip(az, el)])
+    run_cli("sky", "table", tmp_path / "in.csv", "-o", tmp_path / "t", "--set", "source.model=sky",
+            "--set", "sky.model=vector-rt", "--set", "sky.rt.aerosol.tau=0.2", "--set", "sky.rt.aerosol.ssa=0.787581",
+            "--set", f"sky.rt.aerosol.phase_matrix={phase}")
+    csv = read_csv(tmp_path / "t" / "sky.csv")
+    sky = polrig.Sky(site=SITE, utc=UTC, model="vector-rt", aerosol_tau=0.2, aerosol_ssa=0.787581,
+                     aerosol_phase_matrix=phase)
+    assert sky.aerosol_tau == 0.2
+    iqu = sky.radiance_sr(az, el)
+    for k, name in enumerate(["I_sr", "Q_sr", "U_sr"]):
+        assert np.array_equal(iqu[:, k], csv[name])
+    with pytest.raises(ValueError, match="aerosol_phase_matrix"):
+        polrig.Sky(model="vector-rt", aerosol_tau=0.2)
+    with pytest.raises(ValueError, match="streams: .* too few"):
+        polrig.Sky(model="vector-rt", aerosol_tau=0.2, streams=16, aerosol_phase_matrix=phase)
+
+
 def test_neutral_points_are_the_cli_csv(tmp_path):
     run_cli("sky", "neutral-points", "--set", "source.model=sky", "--set", "sky.model=vector-rt",
             "--set", "sky.rt.tau_rayleigh=0.25", "--sun-el-deg", "5:45:3", "--no-plots", "-o", tmp_path / "np")

@@ -72,7 +72,7 @@ std::vector<double> checked_elevations(const std::string& text, const SkyModel& 
 std::string sky_title(const Rig& rig, const SkyModel& model) {
   if (model.kind == SkyKind::SingleScattering) return "single scattering";
   const VectorRtSettings rt = rig.source.sky.resolved_rt();
-  const std::string atmosphere = fmt::format("tau {:.4g}, albedo {:.3g}", rt.tau_rayleigh, rt.ground_albedo);
+  const std::string atmosphere = atmosphere_text(rt);
   if (model.kind == SkyKind::VectorRt) return "vector-RT sky, " + atmosphere;
   const auto distance = [](const std::optional<double>& d) { return d ? fmt::format("{:g} deg", *d) : std::string("fit"); };
   return fmt::format("Berry's sky, Babinet {}, Brewster {}{}", distance(model.berry.babinet_deg),
@@ -227,7 +227,7 @@ std::vector<Command> add_sky_commands(CLI::App& root, int& threads) {
           "solid angle above the horizon) Berry's AoP error against the vector-RT sky, rms and 95th percentile, and "
           "single scattering's rms; views; iterations and Eigen's Levenberg-Marquardt status"}};
       if (out->plots()) {
-        const std::string what = fmt::format("tau {:.4g}, albedo {:.3g}", rt.tau_rayleigh, rt.ground_albedo);
+        const std::string what = atmosphere_text(rt);
         Plot distances{"berry_fit.png", "Berry's distances fitted to the vector-RT sky (" + what + ")",
                        "sun elevation (deg)", "distance along the solar meridian (deg)", "",
                        {{"berry_fit.csv", "$sun_el_deg:$babinet_deg", "Babinet (above the sun)", "linespoints lw 2 pt 7 ps 0.6"},

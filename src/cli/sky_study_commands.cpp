@@ -101,7 +101,8 @@ std::vector<Command> add_sky_study_commands(CLI::App& /*root*/, CLI::App& study,
     const LoadedRig r = rig->load();
     const std::optional<Sky> sky = rig_sky(r.rig);
     if (!sky) throw RigError(no_sky_message(r.rig, r.origin));
-    settings.rt = r.rig.source.sky.rt;  // the depolarization and the streams; τ and A are the sweep's
+    // The depolarization, the streams and the aerosol; τ and A are the sweep's.
+    settings.rt = r.rig.source.sky.resolved_rt();
     settings.P_max = sky->model.P_max;
     settings.seed = app->count("--seed") > 0 ? *seed : r.rig.seed;
     settings.tau = parse_number_list(*tau, "--tau");

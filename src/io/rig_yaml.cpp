@@ -34,7 +34,7 @@ class RigParser {
   const std::set<std::string>& given() const { return present_; }
 
   Rig parse(std::string_view text) {
-    YAML::Node root = load_yaml(std::string(text), file_, "a rig file nests 3 levels");
+    YAML::Node root = load_yaml(std::string(text), file_, "a rig file nests 4 levels");
     if (!root.IsMap() && !root.IsNull())
       throw RigError(fmt::format("{}: expected a mapping of rig sections (device, source, "
                                  "eccentricity, schedule, electronics, seed)", file_));
@@ -300,6 +300,7 @@ class RigParser {
         fail(std::string(k.path), fmt::format("expected no value with sky.model {} (only sky.model {} reads it)",
                                               rig.source.sky.model, models));
       }
+    resolve_aerosol_phase_matrix(rig);
     const SceneLoader load = [&](const std::string& path) {
       std::filesystem::path scene = path;
       if (scene.is_relative() && !override_for("source.scene") &&
@@ -329,6 +330,17 @@ class RigParser {
                                      "device.d out), got {}", *d, rig.source.model, rig.device.d));
       rig.device.d = *d;
     }
+  }
+
+  // sky.rt.aerosol.phase_matrix is read relative to the rig file, as a scene is, and kept absolute.
+  void resolve_aerosol_phase_matrix(Rig& rig) const {
+    std::string& path = rig.source.sky.aerosol_phase_matrix;
+    if (path.empty()) return;
+    std::filesystem::path p = path;
+    if (p.is_relative() && !override_for("sky.rt.aerosol.phase_matrix") &&
+        !std::filesystem::path(file_).parent_path().empty())
+      p = std::filesystem::path(file_).parent_path() / p;
+    path = std::filesystem::absolute(p).lexically_normal().string();
   }
 
   // A sky's run must lie where the ephemeris holds (1900–2100), its clock offset included: say so

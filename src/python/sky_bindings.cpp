@@ -29,6 +29,7 @@
 #include "polrig/sky/sun_rows.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/source/sky_settings.h"
+#include "polrig/source/source.h"
 #include "polrig/spectral/kd.h"
 #include "polrig/spectral/sources.h"
 #include "records.h"
@@ -247,7 +248,8 @@ void bind_sky(py::module_& m) {
                        const std::string& radiance, bool refraction, double ut1_minus_utc_s,
                        const py::object& p_max_table, const std::string& model, const py::object& tau_rayleigh,
                        double wavelength_nm, double pressure_hPa, double depolarization, double ground_albedo,
-                       int streams, const py::object& babinet_deg, const py::object& brewster_deg) {
+                       int streams, const py::object& babinet_deg, const py::object& brewster_deg,
+                       double aerosol_tau, double aerosol_ssa, const py::object& aerosol_phase_matrix) {
              Sky s;
              s.site = site_of(site, "site");
              s.first_stop = utc_time(utc, "utc");
@@ -269,9 +271,21 @@ void bind_sky(py::module_& m) {
              keys.wavelength_nm = wavelength_nm, keys.pressure_hPa = pressure_hPa;
              keys.rt.depolarization = depolarization, keys.rt.ground_albedo = ground_albedo, keys.rt.streams = streams;
              keys.berry_babinet_deg = text(babinet_deg), keys.berry_brewster_deg = text(brewster_deg);
+             check_option(aerosol_tau, "aerosol_tau", 0, 100, "");
+             if (!(aerosol_ssa > 0 && aerosol_ssa <= 1))
+               throw py::value_error(fmt::format("aerosol_ssa: expected a single-scattering albedo in (0, 1], got {}", aerosol_ssa));
+             keys.rt.aerosol.tau = aerosol_tau, keys.rt.aerosol.ssa = aerosol_ssa;
+             if (!aerosol_phase_matrix.is_none())
+               keys.aerosol_phase_matrix = py::str(aerosol_phase_matrix).cast<std::string>();
              if (!parse_sky_kind(model))
                throw py::value_error("model: expected 'single-scattering', 'vector-rt' or 'berry', got '" + model + "'");
-             keys.resolve_kind(s.model);
+             try {
+               keys.resolve_kind(s.model);
+             } catch (const SourceSettingError& e) {  // the rig key's name → the argument's
+               std::string arg = e.key.substr(e.key.rfind('.') + 1);
+               if (e.key.starts_with("sky.rt.aerosol.")) arg = "aerosol_" + arg;
+               throw py::value_error(arg + ": " + e.what());
+             }
              return PySky(s);
            }),
            "site"_a = py::make_tuple(38.879167, 121.543889), "utc"_a = "2018-11-16T08:09:40Z",
@@ -279,7 +293,8 @@ void bind_sky(py::module_& m) {
            "ut1_minus_utc_s"_a = 0.0, "p_max_table"_a = py::none(), "model"_a = "single-scattering",
            "tau_rayleigh"_a = py::float_(0.1), "wavelength_nm"_a = 550.0, "pressure_hPa"_a = 1013.25,
            "depolarization"_a = 0.0279, "ground_albedo"_a = 0.0, "streams"_a = 32,
-           "babinet_deg"_a = "fit", "brewster_deg"_a = "fit",
+           "babinet_deg"_a = "fit", "brewster_deg"_a = "fit", "aerosol_tau"_a = 0.0, "aerosol_ssa"_a = 1.0,
+           "aerosol_phase_matrix"_a = py::none(),
            "A sky at one time and place (the defaults: W19 Outdoor1's first stop on its roof in "
            "Dalian).\n\n"
            "site: (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m): latitude in [-90, 90] "
@@ -301,6 +316,10 @@ void bind_sky(py::module_& m) {
            "babinet_deg and brewster_deg, each a distance in [0, 90) degrees along the solar meridian "
            "or 'fit' (fitted to the vector-RT sky of tau_rayleigh, depolarization, ground_albedo, "
            "streams; its sun at 2° or higher): the rig keys sky.berry.*.\n"
+           "aerosol_tau in [0, 100], aerosol_ssa in (0, 1], aerosol_phase_matrix (a path, str or "
+           "os.PathLike; docs/formats.md §6.22): an aerosol mixed with the air (docs/physics.md §24; the "
+           "rig keys sky.rt.aerosol.*), its phase matrix truncated by δ-M with the single-scattering "
+           "correction; tau_rayleigh may then be 0.\n"
            "Raises ValueError naming the argument and value (the CLI's ranges; a site out of "
            "range included), and for a date outside ERFA's range.")
       .def_static("from_rig", [](const PyRig& r) {
@@ -333,6 +352,10 @@ void bind_sky(py::module_& m) {
              if (!s.sky.model.vector_rt) return py::none();
              return py::float_(s.sky.model.vector_rt->settings().tau_rayleigh);
            }, "The vector-RT sky's Rayleigh optical depth (resolved, Bodhaine's if asked); None otherwise.")
+      .def_property_readonly("aerosol_tau", [](const PySky& s) -> py::object {
+             if (!s.sky.model.vector_rt) return py::none();
+             return py::float_(s.sky.model.vector_rt->settings().aerosol.tau);
+           }, "The vector-RT sky's aerosol optical depth (0: none); None for another sky.")
       .def("radiance_sr", [](const PySky& s, const py::object& az, const py::object& el, std::optional<int> threads) {
              if (!s.sky.model.vector_rt) throw py::value_error("radiance_sr: a single-scattering sky has no absolute radiance (model='vector-rt' has)");
              const Broadcast b = view_directions(az, el);

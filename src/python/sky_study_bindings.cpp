@@ -154,7 +154,7 @@ void bind_sky_study(py::module_& m) {
         const std::optional<Sky> sky = rig_sky(rig.rig());
         if (!sky) throw RigError(no_sky_message(rig.rig(), rig.loaded.origin));
         SkyStudySettings s;
-        s.rt = rig.rig().source.sky.rt;
+        s.rt = rig.rig().source.sky.resolved_rt();
         s.P_max = sky->model.P_max;
         s.seed = seed.is_none() ? rig.rig().seed : seed.cast<std::uint64_t>();
         s.tau = std::move(tau);

@@ -11,6 +11,7 @@
 #include "polrig/io/csv.h"
 #include "polrig/io/plot.h"
 #include "polrig/sky/berry_fit.h"
+#include "polrig/sky/vector_rt.h"
 #include "polrig/sky/sky_map.h"
 #include "polrig/sky/vector_rt_sky.h"
 
@@ -163,7 +164,7 @@ std::vector<DatasetFile> report_sky_comparison(const fs::path& dir, const Sky& s
   const std::string titles[3] = {
       fmt::format("single scattering, P_max {:.3g}", sky.model.P_max.at(shown.sun.elevation_deg)),
       fmt::format("Berry, fitted: Babinet {:.1f}°, Brewster {:.1f}°", d.babinet_deg, d.brewster_deg),
-      fmt::format("vector RT, tau {:.4g}, albedo {:.3g}", atmosphere.tau_rayleigh, atmosphere.ground_albedo)};
+      "vector RT, " + atmosphere_text(atmosphere)};
   const std::string diverging = "set palette model RGB defined (0 '#2166ac', 0.5 '#f7f7f7', 1 '#b2182b')";
   std::string s = "set terminal pngcairo size 1500,1530 font ',10'\nset output 'skies_compared.png'\n";
   s += fmt::format("set multiplot layout 3,3 title \"Three skies at one sun: {}\" noenhanced\n", where_and_when(shown, sky));

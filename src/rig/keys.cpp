@@ -328,10 +328,11 @@ void add_vector_rt_keys(std::vector<RigKey>& keys) {
     keys.push_back(reads(std::move(k), kSimulate, "sky"));
   };
   {
-    RigKey k{"sky.rt.tau_rayleigh", K::Text, "", "an optical depth in (0, 100], or bodhaine",
+    RigKey k{"sky.rt.tau_rayleigh", K::Text, "", "an optical depth in [0, 100], or bodhaine",
              "the Rayleigh optical depth of the whole atmosphere, or bodhaine: Bodhaine et al. 1999's at "
              "sky.rt.wavelength_nm and sky.rt.pressure_hPa (0.22 at 450 nm, 0.097 at 550 nm at sea level)",
-             "from a nearly clear atmosphere to one the sun barely crosses"};
+             "from a nearly clear atmosphere to one the sun barely crosses; 0 only under an aerosol (an "
+             "aerosol-only layer, IPRT's cases)"};
     k.text = [](Rig& r) -> std::string& { return r.source.sky.tau_rayleigh; };
     k.valid_text = [](std::string_view v) {
       try {
@@ -364,6 +365,25 @@ void add_vector_rt_keys(std::vector<RigKey>& keys) {
              "discrete ordinates over both hemispheres; 32 meets the exact tables to 6e-6 in I",
              "fewer than 4 cannot hold Rayleigh's m = 2 term; beyond 128 the solve takes seconds",
              [](Rig& r) -> int& { return r.source.sky.rt.streams; }, &integer_within<4, 128, true>));
+  rt(real<RealRange{0.0, 100.0}>(
+      "sky.rt.aerosol.tau", "", "an optical depth",
+      "the aerosol's optical depth, mixed evenly with the air through the layer (physics §24); 0: no aerosol",
+      "0.05-0.3 in clear continental air at 500 nm; past 100 no light reaches the ground",
+      [](Rig& r) -> double& { return r.source.sky.rt.aerosol.tau; }));
+  rt(real<RealRange{0.0, 1.0, true, false}>(
+      "sky.rt.aerosol.ssa", "", "a single-scattering albedo",
+      "the aerosol's single-scattering albedo: the part of its extinction that is scattering",
+      "0.8-1 for most aerosols; 0 would be a pure absorber, which scatters no light to polarize",
+      [](Rig& r) -> double& { return r.source.sky.rt.aerosol.ssa; }));
+  {
+    RigKey k{"sky.rt.aerosol.phase_matrix", K::Text, "", "a path to a phase-matrix file",
+             "the aerosol's phase matrix over the scattering angle (docs/formats.md §6.22; "
+             "../shared/data/aerosol-phase-matrix/ holds IPRT case A4's), relative to the rig file; needed "
+             "with sky.rt.aerosol.tau > 0"};
+    k.text = [](Rig& r) -> std::string& { return r.source.sky.aerosol_phase_matrix; };
+    k.valid_text = [](std::string_view v) { return !v.empty(); };
+    rt(k);
+  }
   for (const bool babinet : {true, false}) {
     RigKey k{babinet ? "sky.berry.babinet_deg" : "sky.berry.brewster_deg", K::Text, "deg",
              "a distance in [0, 90) degrees, or fit",

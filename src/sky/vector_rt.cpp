@@ -15,7 +15,9 @@
 #include "polrig/sky/phase_matrix.h"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -28,56 +30,129 @@ using Eigen::VectorXd;
 namespace {
 
 constexpr int kRayleighTerms = 3;     // m = 0, 1, 2: Rayleigh's phase matrix has no others
-constexpr int kAzimuths = 6;          // > 2·(highest m): the azimuth sums below are exact
+constexpr int kRayleighAzimuths = 6;  // > 2·(highest m): the azimuth sums below are exact
 constexpr double kStartDepth = 1e-5;  // the first layer's δ is at most this (its O(δ²) error)
-constexpr int kStokes = 3;            // I, Q, U: Rayleigh never couples V to them
 
-// The Stokes components term m carries: at m = 0 U decouples from I and Q (its sin 0 vanishes).
-int stokes_in_term(int m) { return m == 0 ? 2 : kStokes; }
-
-// The m-th Fourier kernel of the phase matrix between two cosines (signed: > 0 upward), the
-// factor 1/4π of the scattering integral included:
-//   K^m = (1/4π)∫₀^{2π} Z(μ, φ; μ', 0)∘W_m(φ) dφ,
-// W_m = cos mφ on the (I, Q)×(I, Q) and (U, V)×(U, V) blocks, −sin mφ on (I, Q)×(U, V) and
-// +sin mφ on (U, V)×(I, Q): with I(φ) = Σ_m Φ_m(φ)c_m, Φ_m = diag(cos, cos, sin, sin)(mφ),
-// (1/4π)∫∫Z·I dφ' dμ' = Σ_m Φ_m(φ)∫K^m(μ, μ')c_m(μ')dμ'. Kept for I, Q, U.
-struct Kernels {
-  Eigen::Matrix3d K[kRayleighTerms];
+// The one homogeneous layer the solver sees: Rayleigh alone (exactly three Fourier terms, V
+// decoupled: I, Q, U), or Rayleigh and an aerosol after δ-M (terms m ≤ L = streams − 1, V coupled
+// to U by b2: all four).
+struct Medium {
+  double tau = 0;              // the solved layer's optical depth (δ-M scaled)
+  double rho = 0;              // Rayleigh's depolarization
+  int terms = kRayleighTerms;  // Fourier terms m = 0 … terms − 1
+  int azimuths = kRayleighAzimuths;
+  bool aerosol = false;
+  double rayleigh_share = 1, aerosol_share = 0;  // τ_R/τ', ϖ'_a·τ'_a/τ'
+  PhaseExpansion truncated;                      // the aerosol's δ-M phase matrix
+  // ϖ'P'(cos Θ): the layer's phase matrix times its single-scattering albedo.
+  ScatteringElements omega_P(double x) const {
+    const ScatteringElements r = rayleigh_elements(x, rho);
+    if (!aerosol) return r;
+    const ScatteringElements a = truncated.at(x);
+    const double R = rayleigh_share, A = aerosol_share;
+    return {R * r.a1 + A * a.a1, R * r.a2 + A * a.a2, R * r.a3 + A * a.a3,
+            R * r.a4 + A * a.a4, R * r.b1 + A * a.b1, R * r.b2 + A * a.b2};
+  }
 };
 
-Kernels fourier_kernels(double mu_out, double mu_in, double rho) {
-  Kernels out;
-  for (auto& K : out.K) K.setZero();
+// The δ-M expansion of the aerosol at the settings' streams, and the lowest value of its a1 over
+// the scattering angle (negative: too few streams for this phase matrix).
+// The order L of the truncated expansion: the quadrature (Gauss in √μ, N = streams/2 nodes per
+// hemisphere) integrates polynomials in μ exactly only to degree N − 1, and the m = 0 kernel is
+// one of degree L in μ', so L = N − 1 keeps the layer's scattering exactly conservative.
+int aerosol_order(int streams) { return streams / 2 - 1; }
+
+DeltaM aerosol_delta_m(const VectorRtSettings& s) {
+  const int L = aerosol_order(s.streams);
+  return delta_m(expand(*s.aerosol.phase, L + 1), L);
+}
+
+double lowest_a1(const PhaseExpansion& e, double* at_deg) {
+  double lowest = 1e300;
+  for (int i = 0; i <= 1800; ++i) {
+    const double a1 = e.at(std::cos(i * 0.1 * M_PI / 180)).a1;
+    if (a1 < lowest) lowest = a1, *at_deg = i * 0.1;
+  }
+  return lowest;
+}
+
+Medium make_medium(const VectorRtSettings& s) {
+  Medium md;
+  md.rho = s.depolarization;
+  md.tau = s.tau_rayleigh;
+  if (s.aerosol.tau == 0) return md;
+  const DeltaM dm = aerosol_delta_m(s);
+  const double w = s.aerosol.ssa, f = dm.f;
+  const double tau_a = (1 - w * f) * s.aerosol.tau, ssa_a = (1 - f) * w / (1 - w * f);
+  md.aerosol = true;
+  md.truncated = dm.truncated;
+  md.tau = s.tau_rayleigh + tau_a;
+  md.rayleigh_share = s.tau_rayleigh / md.tau;
+  md.aerosol_share = ssa_a * tau_a / md.tau;
+  md.terms = aerosol_order(s.streams) + 1;
+  md.azimuths = 2 * md.terms;  // > 2L: Z·cos mφ is a trigonometric polynomial of degree ≤ 2L
+  return md;
+}
+
+// The Stokes components term m carries: at m = 0 U and V decouple from I and Q (their sin 0
+// vanishes).
+int stokes_in_term(int m, int ns) { return m == 0 ? 2 : ns; }
+
+template <int NS>
+using Block = Eigen::Matrix<double, NS, NS>;
+
+// The m-th Fourier kernel of the phase matrix between two cosines (signed: > 0 upward), the
+// factor 1/4π of the scattering integral and ϖ included:
+//   K^m = (1/4π)∫₀^{2π} ϖZ(μ, φ; μ', 0)∘W_m(φ) dφ,
+// W_m = cos mφ on the (I, Q)×(I, Q) and (U, V)×(U, V) blocks, −sin mφ on (I, Q)×(U, V) and
+// +sin mφ on (U, V)×(I, Q): with I(φ) = Σ_m Φ_m(φ)c_m, Φ_m = diag(cos, cos, sin, sin)(mφ),
+// (1/4π)∫∫Z·I dφ' dμ' = Σ_m Φ_m(φ)∫K^m(μ, μ')c_m(μ')dμ'. Kept for the first NS components.
+template <int NS>
+struct Kernels {
+  std::vector<Block<NS>> K;
+};
+
+template <int NS>
+Block<NS> azimuth_weights(double c, double s) {
+  Block<NS> W;
+  for (int i = 0; i < NS; ++i)
+    for (int j = 0; j < NS; ++j) W(i, j) = (i < 2) == (j < 2) ? c : (i < 2 ? -s : s);
+  return W;
+}
+
+template <int NS>
+Kernels<NS> fourier_kernels(const Medium& md, double mu_out, double mu_in) {
+  Kernels<NS> out;
+  out.K.assign(static_cast<std::size_t>(md.terms), Block<NS>::Zero());
   const Direction in = direction(mu_in, 0);
-  for (int k = 0; k < kAzimuths; ++k) {
+  const int A = md.azimuths;
+  for (int k = 0; k < A; ++k) {
     // A grid shifted by half a step never meets the forward or backward direction exactly.
-    const double phi = (k + 0.5) * 2 * M_PI / kAzimuths;
+    const double phi = (k + 0.5) * 2 * M_PI / A;
     const Direction o = direction(mu_out, phi);
-    const Eigen::Matrix3d Z =
-        phase_matrix(in, o, rayleigh_elements(vec3::dot(in.k, o.k), rho)).topLeftCorner<3, 3>();
-    for (int m = 0; m < kRayleighTerms; ++m) {
-      const double c = std::cos(m * phi), s = std::sin(m * phi);
-      Eigen::Matrix3d W;
-      W << c, c, -s, c, c, -s, s, s, c;
-      out.K[m] += Z.cwiseProduct(W) * (2 * M_PI / kAzimuths / (4 * M_PI));
-    }
+    const Block<NS> Z = phase_matrix(in, o, md.omega_P(vec3::dot(in.k, o.k))).template topLeftCorner<NS, NS>();
+    for (int m = 0; m < md.terms; ++m)
+      out.K[static_cast<std::size_t>(m)] +=
+          Z.cwiseProduct(azimuth_weights<NS>(std::cos(m * phi), std::sin(m * phi))) * (2 * M_PI / A / (4 * M_PI));
   }
   return out;
 }
 
 // A plane-parallel layer is its own mirror image in its middle plane: the mirror takes a downward
-// direction to an upward one and reverses the sense of U (Hovenier 1969). So the kernel from up
-// to up is Δ·(down to down)·Δ, R* = ΔRΔ and T* = ΔTΔ with Δ = diag(1, 1, −1) per stream.
-Eigen::Matrix3d mirrored(const Eigen::Matrix3d& K) {
-  Eigen::Matrix3d M = K;
-  M.block<2, 1>(0, 2) *= -1;
-  M.block<1, 2>(2, 0) *= -1;
+// direction to an upward one and reverses the sense of U and V (Hovenier 1969). So the kernel from
+// up to up is Δ·(down to down)·Δ, R* = ΔRΔ and T* = ΔTΔ with Δ = diag(1, 1, −1, −1) per stream.
+template <int NS>
+Block<NS> mirrored(const Block<NS>& K) {
+  Block<NS> M = K;
+  for (int i = 0; i < NS; ++i)
+    for (int j = 0; j < NS; ++j)
+      if ((i < 2) != (j < 2)) M(i, j) *= -1;
   return M;
 }
 VectorXd mirror_signs(Eigen::Index size, int ns) {
   VectorXd d = VectorXd::Ones(size);
-  if (ns == 3)
-    for (Eigen::Index k = 2; k < size; k += 3) d(k) = -1;
+  for (Eigen::Index k = 0; k < size; ++k)
+    if (k % ns >= 2) d(k) = -1;
   return d;
 }
 MatrixXd mirrored(const MatrixXd& M, int ns) {
@@ -128,7 +203,7 @@ double twice_scattered_path(double delta, double x0, double x1, double x2) {
 // from the identity (T = E + T_minus_E, e = 1 + e_minus_1): a first layer as thin as δ ~ 1e-4
 // would otherwise lose the digits of what it scatters to 1 − δ/μ.
 struct Layer {
-  int ns = kStokes;
+  int ns = 3;
   MatrixXd R, T_minus_E;    // node → node
   VectorXd r_sun, t_sun;    // diffuse response at the nodes to the collimated sun
   double e_sun_minus_1 = 0; // the sun beam's direct transmission, less 1
@@ -153,28 +228,30 @@ struct Geometry {
 // The kernels the thin layer needs, every term at once: outgoing directions are the nodes, then
 // the views; incoming ones the nodes, then the sun. `same` goes from a downward direction into a
 // downward one, `across` from a downward one into an upward one; the other two are mirrored.
+template <int NS>
 struct KernelTable {
   int cols = 0;
-  std::vector<Kernels> same, across, same_mirrored, across_mirrored;
-  const Eigen::Matrix3d& s(int o, int i, int m) const { return same[o * cols + i].K[m]; }
-  const Eigen::Matrix3d& a(int o, int i, int m) const { return across[o * cols + i].K[m]; }
-  const Eigen::Matrix3d& s_mirrored(int o, int i, int m) const { return same_mirrored[o * cols + i].K[m]; }
-  const Eigen::Matrix3d& a_mirrored(int o, int i, int m) const { return across_mirrored[o * cols + i].K[m]; }
+  std::vector<Kernels<NS>> same, across, same_mirrored, across_mirrored;
+  const Block<NS>& s(int o, int i, int m) const { return same[o * cols + i].K[m]; }
+  const Block<NS>& a(int o, int i, int m) const { return across[o * cols + i].K[m]; }
+  const Block<NS>& s_mirrored(int o, int i, int m) const { return same_mirrored[o * cols + i].K[m]; }
+  const Block<NS>& a_mirrored(int o, int i, int m) const { return across_mirrored[o * cols + i].K[m]; }
 };
 
-KernelTable kernel_table(const Geometry& g, double rho) {
+template <int NS>
+KernelTable<NS> kernel_table(const Geometry& g, const Medium& md) {
   const int N = static_cast<int>(g.mu.size());
   std::vector<double> out = g.mu, in = g.mu;
   out.insert(out.end(), g.view_mu.begin(), g.view_mu.end());
   in.push_back(g.mu0);
-  KernelTable t;
+  KernelTable<NS> t;
   t.cols = N + 1;
   for (double mo : out)
     for (double mi : in) {
-      t.same.push_back(fourier_kernels(-mo, -mi, rho));
-      t.across.push_back(fourier_kernels(mo, -mi, rho));
-      Kernels sm = t.same.back(), am = t.across.back();
-      for (int m = 0; m < kRayleighTerms; ++m) sm.K[m] = mirrored(sm.K[m]), am.K[m] = mirrored(am.K[m]);
+      t.same.push_back(fourier_kernels<NS>(md, -mo, -mi));
+      t.across.push_back(fourier_kernels<NS>(md, mo, -mi));
+      Kernels<NS> sm = t.same.back(), am = t.across.back();
+      for (int m = 0; m < md.terms; ++m) sm.K[m] = mirrored<NS>(sm.K[m]), am.K[m] = mirrored<NS>(am.K[m]);
       t.same_mirrored.push_back(sm), t.across_mirrored.push_back(am);
     }
   return t;
@@ -183,21 +260,24 @@ KernelTable kernel_table(const Geometry& g, double rho) {
 // Light entering the top of the thin layer δ downward in direction `in` (decay rate a = 1/μ_in),
 // leaving in the outgoing direction `o` (rate c = 1/μ_o): the reflected (up, at the top) and
 // transmitted (down, at the bottom, diffuse) responses of every term to first and second order of
-// scattering with ϖ = 1. The second order sums over the nodes k (rate b) of the intermediate leg,
-// down then up; each leg's decay is exact, so grazing streams with δ/μ ≫ 1 stay right. The error
-// is O(δ³) per layer, O(δ²) relative after the doublings.
+// scattering (ϖ in the kernels). The second order sums over the nodes k (rate b) of the
+// intermediate leg, down then up; each leg's decay is exact, so grazing streams with δ/μ ≫ 1 stay
+// right. The error is O(δ³) per layer, O(δ²) relative after the doublings.
+template <int NS>
 struct Scattered {
-  Eigen::Matrix3d reflected[kRayleighTerms], transmitted[kRayleighTerms];
+  std::vector<Block<NS>> reflected, transmitted;
 };
 
-Scattered thin_response(const KernelTable& t, const Geometry& g, int o, double mu_o, int in, double mu_in,
-                        double delta) {
+template <int NS>
+Scattered<NS> thin_response(const KernelTable<NS>& t, const Geometry& g, int terms, int o, double mu_o, int in,
+                            double mu_in, double delta) {
   const int N = static_cast<int>(g.mu.size());
   const double a = 1 / mu_in, c = 1 / mu_o;
   const double once_reflected = once_scattered_path(delta, a + c, 0) / mu_o;
   const double once_transmitted = once_scattered_path(delta, a, c) / mu_o;
-  Scattered x;
-  for (int m = 0; m < kRayleighTerms; ++m) {
+  Scattered<NS> x;
+  x.reflected.resize(static_cast<std::size_t>(terms)), x.transmitted.resize(static_cast<std::size_t>(terms));
+  for (int m = 0; m < terms; ++m) {
     x.reflected[m] = t.a(o, in, m) * once_reflected;
     x.transmitted[m] = t.s(o, in, m) * once_transmitted;
   }
@@ -207,9 +287,9 @@ Scattered thin_response(const KernelTable& t, const Geometry& g, int o, double m
     const double r_up = s_k * twice_scattered_path(delta, a + c, a + b, 0);
     const double t_down = s_k * twice_scattered_path(delta, a, b, c);
     const double t_up = s_k * twice_scattered_path(delta, a, a + b + c, c);
-    for (int m = 0; m < kRayleighTerms; ++m) {
-      const Eigen::Matrix3d& down_from_in = t.s(k, in, m);
-      const Eigen::Matrix3d& up_from_in = t.a(k, in, m);
+    for (int m = 0; m < terms; ++m) {
+      const Block<NS>& down_from_in = t.s(k, in, m);
+      const Block<NS>& up_from_in = t.a(k, in, m);
       x.reflected[m].noalias() += t.a(o, k, m) * (r_down * down_from_in);
       x.reflected[m].noalias() += t.s_mirrored(o, k, m) * (r_up * up_from_in);
       x.transmitted[m].noalias() += t.s(o, k, m) * (t_down * down_from_in);
@@ -220,13 +300,14 @@ Scattered thin_response(const KernelTable& t, const Geometry& g, int o, double m
 }
 
 // The thin layer δ for every Fourier term.
-std::vector<Layer> thin_layers(const Geometry& g, double delta, double rho) {
+template <int NS>
+std::vector<Layer> thin_layers(const Geometry& g, double delta, const Medium& md) {
   const int N = static_cast<int>(g.mu.size()), nu = static_cast<int>(g.view_mu.size());
-  const KernelTable table = kernel_table(g, rho);
-  std::vector<Layer> L(kRayleighTerms);
-  for (int m = 0; m < kRayleighTerms; ++m) {
+  const KernelTable<NS> table = kernel_table<NS>(g, md);
+  std::vector<Layer> L(static_cast<std::size_t>(md.terms));
+  for (int m = 0; m < md.terms; ++m) {
     Layer& l = L[m];
-    const int ns = l.ns = stokes_in_term(m), n = N * ns, nv = nu * ns;
+    const int ns = l.ns = stokes_in_term(m, NS), n = N * ns, nv = nu * ns;
     l.R = l.T_minus_E = MatrixXd::Zero(n, n);
     l.r_sun = l.t_sun = VectorXd::Zero(n);
     l.Ru = l.Tu = MatrixXd::Zero(nv, n);
@@ -240,8 +321,8 @@ std::vector<Layer> thin_layers(const Geometry& g, double delta, double rho) {
                   VectorXd Layer::*t_sun, int row) {
     for (int j = 0; j <= N; ++j) {
       const bool sun = j == N;
-      const Scattered x = thin_response(table, g, o, mu_o, j, sun ? g.mu0 : g.mu[j], delta);
-      for (int m = 0; m < kRayleighTerms; ++m) {
+      const Scattered<NS> x = thin_response<NS>(table, g, md.terms, o, mu_o, j, sun ? g.mu0 : g.mu[j], delta);
+      for (int m = 0; m < md.terms; ++m) {
         Layer& l = L[m];
         const int ns = l.ns;
         if (sun) {
@@ -309,7 +390,7 @@ Layer doubled(const Layer& l) {
 // reflects isotropically, L = (A/π)·(downward flux)). Returns the views' down and up coefficients
 // and the nodes' (for fluxes).
 struct Emerging {
-  int ns = kStokes;
+  int ns = 3;
   VectorXd down_nodes, up_nodes, down_views, up_views;
 };
 
@@ -363,13 +444,15 @@ Geometry make_geometry(const VectorRtSettings& s, double mu0, const std::vector<
   return g;
 }
 
-// The first `terms` Fourier terms (the fluxes need m = 0 alone).
-std::vector<Emerging> solve(const VectorRtSettings& s, const Geometry& g, int terms = kRayleighTerms) {
+// The first `terms` Fourier terms of the medium (the fluxes need m = 0 alone).
+std::vector<Emerging> solve(const VectorRtSettings& s, const Geometry& g, Medium md, int terms) {
+  md.terms = std::min(md.terms, terms);
   int doublings = 0;
-  while (s.tau_rayleigh / std::ldexp(1.0, doublings) > kStartDepth) ++doublings;
-  std::vector<Layer> L = thin_layers(g, std::ldexp(s.tau_rayleigh, -doublings), s.depolarization);
+  while (md.tau / std::ldexp(1.0, doublings) > kStartDepth) ++doublings;
+  const double delta = std::ldexp(md.tau, -doublings);
+  std::vector<Layer> L = md.aerosol ? thin_layers<4>(g, delta, md) : thin_layers<3>(g, delta, md);
   std::vector<Emerging> out;
-  for (int m = 0; m < terms; ++m) {
+  for (int m = 0; m < md.terms; ++m) {
     Layer l = std::move(L[m]);
     for (int k = 0; k < doublings; ++k) l = doubled(l);
     out.push_back(with_ground(l, g, s.ground_albedo, m == 0));
@@ -380,7 +463,7 @@ std::vector<Emerging> solve(const VectorRtSettings& s, const Geometry& g, int te
 // The solver's frame → polrig's: the view v = −k has the same e_θ and the opposite e_φ, so U and V
 // change sign; φ(view) − φ(sun) equals the light's relative azimuth.
 Eigen::Vector4d to_view_frame(const VectorXd& x, int u, int ns) {
-  return {x(u * ns), x(u * ns + 1), ns > 2 ? -x(u * ns + 2) : 0.0, 0};
+  return {x(u * ns), x(u * ns + 1), ns > 2 ? -x(u * ns + 2) : 0.0, ns > 3 ? -x(u * ns + 3) : 0.0};
 }
 
 Eigen::Vector4d fourier_sum(const std::vector<std::vector<Eigen::Vector4d>>& c, std::size_t u, double phi) {
@@ -392,46 +475,116 @@ Eigen::Vector4d fourier_sum(const std::vector<std::vector<Eigen::Vector4d>>& c, 
   return out;
 }
 
+// The single-scattering correction (Nakajima & Tanaka 1988): the δ-M layer's once-scattered sky at
+// the views, the sun's column of each term's kernel through the whole layer,
+// ∫₀^τ' e^{−t/μ₀ − (τ'−t)/μ} dt/μ, is taken out of `down`; SingleScatteringSky puts the exact one back.
+void remove_truncated_single(const Medium& md, double mu0, const std::vector<double>& view_mu,
+                             std::vector<Emerging>& e) {
+  for (std::size_t u = 0; u < view_mu.size(); ++u) {
+    const double mu = view_mu[u];
+    const Kernels<4> K = fourier_kernels<4>(md, -mu, -mu0);
+    const double path = once_scattered_path(md.tau, 1 / mu0, 1 / mu) / mu;
+    for (std::size_t m = 0; m < e.size(); ++m) {
+      const int ns = e[m].ns;
+      const double sun_weight = (m == 0 ? 1.0 : 2.0) / (2 * M_PI);
+      e[m].down_views.segment(static_cast<Eigen::Index>(u) * ns, ns) -= K.K[m].col(0).head(ns) * (sun_weight * path);
+    }
+  }
+}
+
 }  // namespace
 
 void check_vector_rt(const VectorRtSettings& s) {
-  if (!(s.tau_rayleigh > 0 && s.tau_rayleigh <= 100))
-    throw std::invalid_argument(fmt::format("vector-rt sky: tau_rayleigh {} is outside (0, 100]", s.tau_rayleigh));
+  if (!(s.tau_rayleigh >= 0 && s.tau_rayleigh <= 100) || (s.tau_rayleigh == 0 && !(s.aerosol.tau > 0)))
+    throw std::invalid_argument(fmt::format("vector-rt sky: tau_rayleigh {} is outside (0, 100] (0 only with an aerosol)",
+                                            s.tau_rayleigh));
   if (!(s.depolarization >= 0 && s.depolarization < 0.5))
     throw std::invalid_argument(fmt::format("vector-rt sky: depolarization {} is outside [0, 0.5)", s.depolarization));
   if (!(s.ground_albedo >= 0 && s.ground_albedo <= 1))
     throw std::invalid_argument(fmt::format("vector-rt sky: ground_albedo {} is outside [0, 1]", s.ground_albedo));
   if (s.streams < 4 || s.streams > 128 || s.streams % 2 != 0)
     throw std::invalid_argument(fmt::format("vector-rt sky: streams {} is not an even number in [4, 128]", s.streams));
+  const AerosolSettings& a = s.aerosol;
+  if (!(a.tau >= 0 && a.tau <= 100))
+    throw std::invalid_argument(fmt::format("vector-rt sky: the aerosol's tau {} is outside [0, 100]", a.tau));
+  if (!(a.ssa > 0 && a.ssa <= 1))
+    throw std::invalid_argument(fmt::format("vector-rt sky: the aerosol's ssa {} is outside (0, 1]", a.ssa));
+  if (a.tau == 0) return;
+  if (!a.phase) throw std::invalid_argument("vector-rt sky: an aerosol of tau > 0 needs its phase matrix");
+  double at_deg = 0;
+  const double lowest = lowest_a1(aerosol_delta_m(s).truncated, &at_deg);
+  if (lowest < 0)
+    throw std::invalid_argument(fmt::format(
+        "vector-rt sky: streams {} are too few for the aerosol's phase matrix ({}): truncated at l = {} by δ-M "
+        "its phase function is {:.3g} at {:.1f} degrees, not a phase function; give more streams",
+        s.streams, a.phase->source, aerosol_order(s.streams), lowest, at_deg));
 }
 
-Eigen::Vector4d DiffuseField::down_at(std::size_t u, double phi) const { return fourier_sum(down, u, phi); }
+SingleScatteringSky::SingleScatteringSky(const VectorRtSettings& s) : settings_(s) {
+  check_vector_rt(s);
+  extinction_tau_ = make_medium(s).tau;
+}
+
+Eigen::Vector4d SingleScatteringSky::down(double mu0, double mu, double phi) const {
+  const VectorRtSettings& s = settings_;
+  const double tau = s.tau_rayleigh + s.aerosol.tau;
+  const Direction in = direction(-mu0, 0), out = direction(-mu, phi);
+  const double x = vec3::dot(in.k, out.k);
+  ScatteringElements P = rayleigh_elements(x, s.depolarization);
+  if (s.aerosol.tau > 0) {
+    const ScatteringElements a = s.aerosol.phase->at(x);
+    const double R = s.tau_rayleigh / tau, A = s.aerosol.ssa * s.aerosol.tau / tau;
+    P = {R * P.a1 + A * a.a1, R * P.a2 + A * a.a2, R * P.a3 + A * a.a3,
+         R * P.a4 + A * a.a4, R * P.b1 + A * a.b1, R * P.b2 + A * a.b2};
+  }
+  const Eigen::Vector4d light =
+      phase_matrix(in, out, P).col(0) * (tau / extinction_tau_ * once_scattered_path(extinction_tau_, 1 / mu0, 1 / mu) /
+                                         (4 * M_PI * mu));
+  return {light(0), light(1), -light(2), -light(3)};  // the view's frame (to_view_frame)
+}
+
+Eigen::Vector4d DiffuseField::down_at(std::size_t u, double phi) const {
+  Eigen::Vector4d out = fourier_sum(down, u, phi);
+  if (single) out += single->down(mu0, mu[u], phi);
+  return out;
+}
 Eigen::Vector4d DiffuseField::up_at(std::size_t u, double phi) const { return fourier_sum(up, u, phi); }
 
 DiffuseField solve_vector_rt(const VectorRtSettings& s, double mu0, const std::vector<double>& view_mu) {
   const Geometry g = make_geometry(s, mu0, view_mu);
-  const std::vector<Emerging> e = solve(s, g);
+  const Medium md = make_medium(s);
+  std::vector<Emerging> e = solve(s, g, md, md.terms);
+  if (md.aerosol) remove_truncated_single(md, mu0, view_mu, e);  // the single-scattering correction
   DiffuseField f;
   f.mu = view_mu;
+  f.mu0 = mu0;
   f.down.resize(e.size()), f.up.resize(e.size());
   for (std::size_t m = 0; m < e.size(); ++m)
     for (int u = 0; u < static_cast<int>(view_mu.size()); ++u) {
       f.down[m].push_back(to_view_frame(e[m].down_views, u, e[m].ns));
       f.up[m].push_back(to_view_frame(e[m].up_views, u, e[m].ns));
     }
+  if (md.aerosol) f.single = std::make_shared<const SingleScatteringSky>(s);
   return f;
+}
+
+std::string atmosphere_text(const VectorRtSettings& s) {
+  std::string text = fmt::format("tau {:.4g}, albedo {:.3g}", s.tau_rayleigh, s.ground_albedo);
+  if (s.aerosol.tau > 0) text += fmt::format(", aerosol tau {:.4g}, ssa {:.3g}", s.aerosol.tau, s.aerosol.ssa);
+  return text;
 }
 
 DiffuseFluxes vector_rt_fluxes(const VectorRtSettings& s, double mu0) {
   const Geometry g = make_geometry(s, mu0, {});
-  const Emerging e = solve(s, g, 1).front();
+  const Medium md = make_medium(s);
+  const Emerging e = solve(s, g, md, 1).front();
   DiffuseFluxes f;
   for (std::size_t j = 0; j < g.mu.size(); ++j) {
     const double weight = 2 * M_PI * g.w[j] * g.mu[j];
     f.up_top += weight * e.up_nodes(static_cast<Eigen::Index>(j) * e.ns);
     f.down_diffuse_bottom += weight * e.down_nodes(static_cast<Eigen::Index>(j) * e.ns);
   }
-  f.down_direct_bottom = mu0 * std::exp(-s.tau_rayleigh / mu0);
+  f.down_direct_bottom = mu0 * std::exp(-md.tau / mu0);
   return f;
 }
 

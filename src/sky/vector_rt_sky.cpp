@@ -85,13 +85,15 @@ SunField VectorRtSky::for_sun(double h) const {
   const std::array<double, 4> w = lagrange4(&elevations[j0], h);
   SunField out;
   const std::size_t n = view_mu().size();
-  for (auto& c : out.coefficients_) c.assign(n, Eigen::Vector3d::Zero());
   for (int i = 0; i < 4; ++i) {
     const std::shared_ptr<const DiffuseField> f = node(j0 + i);
+    out.coefficients_.resize(f->down.size(), std::vector<Eigen::Vector3d>(n, Eigen::Vector3d::Zero()));
     for (std::size_t m = 0; m < f->down.size(); ++m)
       for (std::size_t k = 0; k < n; ++k) out.coefficients_[m][k] += w[i] * f->down[m][k].head<3>();
+    out.single_ = f->single;
   }
-  out.zenith_I_ = out.coefficients_[0].back()(0);
+  out.mu0_ = std::sin(h * kDeg);
+  out.zenith_I_ = out.coefficients_[0].back()(0) + (out.single_ ? out.single_->down(out.mu0_, 1, 0)(0) : 0.0);
   return out;
 }
 
@@ -134,21 +136,29 @@ Eigen::Vector3d SunField::stokes(double mu, double cos_phi, double sin_phi) cons
   const std::array<double, 4>& inv = grid.inverse_denominators[static_cast<std::size_t>(j0)];
   const double d0 = x - t[0], d1 = x - t[1], d2 = x - t[2], d3 = x - t[3];
   const double w[4] = {d1 * d2 * d3 * inv[0], d0 * d2 * d3 * inv[1], d0 * d1 * d3 * inv[2], d0 * d1 * d2 * inv[3]};
-  // cos mφ, sin mφ for m = 0, 1, 2 by the double-angle formulas.
-  const double cm[3] = {1, cos_phi, 2 * cos_phi * cos_phi - 1}, sm[3] = {0, sin_phi, 2 * sin_phi * cos_phi};
+  // cos mφ, sin mφ by Chebyshev's recurrence (for m = 2 the double-angle formulas).
+  double c_prev = 1, s_prev = 0, c_m = 1, s_m = 0;
   Eigen::Vector3d out = Eigen::Vector3d::Zero();
   for (std::size_t m = 0; m < coefficients_.size(); ++m) {
+    if (m == 1) c_m = cos_phi, s_m = sin_phi;
+    if (m >= 2) {
+      const double c_next = 2 * cos_phi * c_m - c_prev, s_next = 2 * cos_phi * s_m - s_prev;
+      c_prev = c_m, s_prev = s_m, c_m = c_next, s_m = s_next;
+    }
     const Eigen::Vector3d* c = &coefficients_[m][static_cast<std::size_t>(j0)];
     const Eigen::Vector3d v = w[0] * c[0] + w[1] * c[1] + w[2] * c[2] + w[3] * c[3];
-    out += Eigen::Vector3d(cm[m] * v(0), cm[m] * v(1), sm[m] * v(2));
+    out += Eigen::Vector3d(c_m * v(0), c_m * v(1), s_m * v(2));
   }
+  if (single_) out += single_->down(mu0_, std::clamp(mu, kHorizonMu, 1.0), std::atan2(sin_phi, cos_phi)).head<3>();
   return out;
 }
 
 std::shared_ptr<const VectorRtSky> vector_rt_sky(const VectorRtSettings& s) {
   static std::mutex mutex;
-  static std::map<std::tuple<double, double, double, int>, std::shared_ptr<const VectorRtSky>> skies;
-  const auto key = std::make_tuple(s.tau_rayleigh, s.depolarization, s.ground_albedo, s.streams);
+  static std::map<std::tuple<double, double, double, int, double, double, const PhaseMatrixTable*>,
+                  std::shared_ptr<const VectorRtSky>> skies;
+  const auto key = std::make_tuple(s.tau_rayleigh, s.depolarization, s.ground_albedo, s.streams, s.aerosol.tau,
+                                   s.aerosol.ssa, s.aerosol.phase.get());
   std::lock_guard<std::mutex> lock(mutex);
   auto& sky = skies[key];
   if (!sky) sky = std::make_shared<const VectorRtSky>(s);

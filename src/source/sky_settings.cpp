@@ -2,7 +2,11 @@
 
 #include "polrig/sky/berry_fit.h"
 #include "polrig/sky/vector_rt_sky.h"
+#include "polrig/source/source.h"
 
+#include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string_view>
@@ -69,16 +73,49 @@ std::optional<double> parse_tau_rayleigh(std::string_view text) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used == 0 || used != text.size() || !(tau > 0 && tau <= 100))
-    throw std::invalid_argument("sky.rt.tau_rayleigh: expected an optical depth in (0, 100] or bodhaine, got '" +
+  if (used == 0 || used != text.size() || !(tau >= 0 && tau <= 100))
+    throw std::invalid_argument("sky.rt.tau_rayleigh: expected an optical depth in [0, 100] or bodhaine, got '" +
                                 std::string(text) + "'");
   return tau;
 }
+
+namespace {
+
+// The process's one table per phase-matrix file, so that every copy of a rig shares one sky
+// (vector_rt_sky() keys on the table).
+std::shared_ptr<const PhaseMatrixTable> shared_phase_matrix(const std::string& path) {
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const PhaseMatrixTable>> tables;
+  std::lock_guard<std::mutex> lock(mutex);
+  auto& t = tables[path];
+  if (!t) t = std::make_shared<const PhaseMatrixTable>(read_phase_matrix(path));
+  return t;
+}
+
+}  // namespace
 
 VectorRtSettings SkySettings::resolved_rt() const {
   VectorRtSettings s = rt;
   const std::optional<double> tau = parse_tau_rayleigh(tau_rayleigh);
   s.tau_rayleigh = tau ? *tau : rayleigh_optical_depth_bodhaine(wavelength_nm, pressure_hPa, s.depolarization);
+  if (s.tau_rayleigh == 0 && !(s.aerosol.tau > 0))
+    throw SourceSettingError("sky.rt.tau_rayleigh",
+                             "expected an optical depth > 0 (0 only under an aerosol, sky.rt.aerosol.tau > 0)");
+  if (s.aerosol.tau > 0 && aerosol_phase_matrix.empty())
+    throw SourceSettingError("sky.rt.aerosol.phase_matrix",
+                             "expected the aerosol's phase-matrix file with sky.rt.aerosol.tau > 0");
+  if (s.aerosol.tau > 0) {
+    try {
+      s.aerosol.phase = shared_phase_matrix(aerosol_phase_matrix);
+    } catch (const PhaseMatrixError& e) {
+      throw SourceSettingError("sky.rt.aerosol.phase_matrix", std::string("cannot read the phase matrix: ") + e.what());
+    }
+    try {
+      check_vector_rt(s);
+    } catch (const std::invalid_argument& e) {
+      throw SourceSettingError("sky.rt.streams", e.what());
+    }
+  }
   check_vector_rt(s);
   return s;
 }

@@ -28,7 +28,10 @@ class SunField {
  private:
   friend class VectorRtSky;
   // coefficients[m][k]: the Fourier coefficients of term m at view node k (I, Q as cos mφ; U as sin mφ).
-  std::array<std::vector<Eigen::Vector3d>, 3> coefficients_;
+  std::vector<std::vector<Eigen::Vector3d>> coefficients_;
+  // With an aerosol: the exact once-scattered sky, added at the view itself (not interpolated).
+  std::shared_ptr<const SingleScatteringSky> single_;
+  double mu0_ = 1;
   double zenith_I_ = 0;
 };
 

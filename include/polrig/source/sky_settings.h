@@ -31,7 +31,10 @@ struct SkySettings {
   // al. 1999's at the wavelength and surface pressure below; ρ, A and the streams in `rt`.
   std::string tau_rayleigh = "0.1";
   double wavelength_nm = 550, pressure_hPa = 1013.25;
-  VectorRtSettings rt;
+  VectorRtSettings rt;  // rt.aerosol.tau, .ssa from sky.rt.aerosol.*; its phase from the file below
+  // sky.rt.aerosol.phase_matrix: the aerosol's phase-matrix file (docs/formats.md §6.22), absolute
+  // once the rig has loaded (relative to the rig file in it).
+  std::string aerosol_phase_matrix;
   // Berry's sky (sky.berry.*; physics.md §22): each distance in degrees, or "fit" (to the
   // vector-RT sky of the sky.rt.* settings at the sun's elevation).
   std::string berry_babinet_deg = "fit", berry_brewster_deg = "fit";
@@ -52,7 +55,10 @@ struct SkySettings {
   // m's kind and what it needs (the solved vector-RT sky, Berry's distances or their fit) from
   // sky.model, sky.rt.* and sky.berry.*; throws as resolved_sky().
   void resolve_kind(SkyModel& m) const;
-  // The vector-RT settings with τ resolved (a number, or Bodhaine's); throws as resolved_sky().
+  // The vector-RT settings with τ resolved (a number, or Bodhaine's) and the aerosol's phase
+  // matrix read (once per file in a process); throws as resolved_sky(), and SourceSettingError
+  // naming sky.rt.aerosol.phase_matrix for a file that cannot be read or is missing, or
+  // sky.rt.streams for streams too few for it.
   VectorRtSettings resolved_rt() const;
   SkyMount resolved_mount() const;
 };

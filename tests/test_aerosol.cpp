@@ -265,3 +265,39 @@ TEST(Aerosol, RigKeysReadTheFileBesideTheRigAndNameTheKeyWhenWrong) {
 
 }  // namespace
 }  // namespace polrig
+
+namespace polrig {
+namespace {
+
+// Chapman's function for x = R/H = 796.4 against its independent forms: 1/μ₀ overhead; the
+// large-x form √(πx/2)·e^{x cos²θ/2}·erfc(√(x/2)·cos θ) (exact to O(1/x)); and at the horizon the
+// series √(πx/2)(1 + 3/(8x) − 15/(128x²)) (Chapman 1931; Smith & Smith 1972).
+TEST(PseudoSpherical, AirMassIsChapmansFunction) {
+  const double x = 6371.0 / 8.0;
+  EXPECT_NEAR(chapman_air_mass(1), 1, 1e-9);
+  EXPECT_NEAR(chapman_air_mass(0) / (std::sqrt(M_PI * x / 2) * (1 + 3 / (8 * x) - 15 / (128 * x * x))), 1, 1e-6);
+  for (double zenith_deg : {30.0, 60.0, 80.0, 85.0, 88.0, 89.0}) {
+    const double c = std::cos(zenith_deg * kDeg);
+    const double large_x = std::sqrt(M_PI * x / 2) * std::exp(x * c * c / 2) * std::erfc(std::sqrt(x / 2) * c);
+    EXPECT_NEAR(chapman_air_mass(c) / large_x, 1, 2e-3) << zenith_deg;
+  }
+}
+
+TEST(PseudoSpherical, TakesALowerSunAndAgreesWithPlaneParallelOverhead) {
+  VectorRtSettings plane, sphere;
+  sphere.pseudo_spherical = true;
+  EXPECT_THROW((void)VectorRtSky(plane).for_sun(1.5), std::invalid_argument);
+  EXPECT_NO_THROW((void)VectorRtSky(sphere).for_sun(1.5));
+  EXPECT_THROW((void)VectorRtSky(sphere).for_sun(0.9), std::invalid_argument);
+  // A high sun's beam is the same (air mass 1.1547 against 1.1545 at 30° zenith).
+  const double mu0 = std::cos(30 * kDeg);
+  const Eigen::Vector4d a = solve_vector_rt(plane, mu0, {1.0}).down_at(0, 0);
+  const Eigen::Vector4d b = solve_vector_rt(sphere, mu0, {1.0}).down_at(0, 0);
+  EXPECT_NEAR(b(0) / a(0), 1, 1e-4);
+  // A low sun's beam crosses less air than 1/μ₀: the sky under it is brighter at the zenith.
+  const double low = std::sin(3 * kDeg);
+  EXPECT_GT(solve_vector_rt(sphere, low, {1.0}).down_at(0, 0)(0), solve_vector_rt(plane, low, {1.0}).down_at(0, 0)(0));
+}
+
+}  // namespace
+}  // namespace polrig

@@ -552,7 +552,8 @@ class Sky:
                  depolarization: float = 0.0279, ground_albedo: float = 0.0, streams: int = 32,
                  babinet_deg: float | str = "fit", brewster_deg: float | str = "fit",
                  aerosol_tau: float = 0.0, aerosol_ssa: float = 1.0,
-                 aerosol_phase_matrix: str | os.PathLike[str] | None = None) -> None: ...
+                 aerosol_phase_matrix: str | os.PathLike[str] | None = None,
+                 direct_beam: str = "plane-parallel") -> None: ...
     @staticmethod
     def from_rig(rig: Rig) -> Sky: ...
     @property

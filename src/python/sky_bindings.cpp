@@ -249,7 +249,8 @@ void bind_sky(py::module_& m) {
                        const py::object& p_max_table, const std::string& model, const py::object& tau_rayleigh,
                        double wavelength_nm, double pressure_hPa, double depolarization, double ground_albedo,
                        int streams, const py::object& babinet_deg, const py::object& brewster_deg,
-                       double aerosol_tau, double aerosol_ssa, const py::object& aerosol_phase_matrix) {
+                       double aerosol_tau, double aerosol_ssa, const py::object& aerosol_phase_matrix,
+                       const std::string& direct_beam) {
              Sky s;
              s.site = site_of(site, "site");
              s.first_stop = utc_time(utc, "utc");
@@ -275,6 +276,7 @@ void bind_sky(py::module_& m) {
              if (!(aerosol_ssa > 0 && aerosol_ssa <= 1))
                throw py::value_error(fmt::format("aerosol_ssa: expected a single-scattering albedo in (0, 1], got {}", aerosol_ssa));
              keys.rt.aerosol.tau = aerosol_tau, keys.rt.aerosol.ssa = aerosol_ssa;
+             keys.direct_beam = direct_beam;
              if (!aerosol_phase_matrix.is_none())
                keys.aerosol_phase_matrix = py::str(aerosol_phase_matrix).cast<std::string>();
              if (!parse_sky_kind(model))
@@ -294,7 +296,7 @@ void bind_sky(py::module_& m) {
            "tau_rayleigh"_a = py::float_(0.1), "wavelength_nm"_a = 550.0, "pressure_hPa"_a = 1013.25,
            "depolarization"_a = 0.0279, "ground_albedo"_a = 0.0, "streams"_a = 32,
            "babinet_deg"_a = "fit", "brewster_deg"_a = "fit", "aerosol_tau"_a = 0.0, "aerosol_ssa"_a = 1.0,
-           "aerosol_phase_matrix"_a = py::none(),
+           "aerosol_phase_matrix"_a = py::none(), "direct_beam"_a = "plane-parallel",
            "A sky at one time and place (the defaults: W19 Outdoor1's first stop on its roof in "
            "Dalian).\n\n"
            "site: (lat_deg, lon_deg) or (lat_deg, lon_deg, height_m): latitude in [-90, 90] "
@@ -320,6 +322,8 @@ void bind_sky(py::module_& m) {
            "os.PathLike; docs/formats.md §6.22): an aerosol mixed with the air (docs/physics.md §24; the "
            "rig keys sky.rt.aerosol.*), its phase matrix truncated by δ-M with the single-scattering "
            "correction; tau_rayleigh may then be 0.\n"
+           "direct_beam: 'plane-parallel' (the sun at 2° or higher) or 'pseudo-spherical' (the Chapman "
+           "air mass; the sun at 1° or higher): the rig key sky.rt.direct_beam.\n"
            "Raises ValueError naming the argument and value (the CLI's ranges; a site out of "
            "range included), and for a date outside ERFA's range.")
       .def_static("from_rig", [](const PyRig& r) {

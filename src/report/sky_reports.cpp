@@ -136,7 +136,8 @@ std::vector<DatasetFile> report_sky_differences(const fs::path& dir, const SkyMa
 // first two's departures from the exact sky.
 std::vector<DatasetFile> report_sky_comparison(const fs::path& dir, const Sky& sky, const VectorRtSettings& atmosphere,
                                                const SkyMap& shown) {
-  if (!(shown.sun.elevation_deg >= VectorRtSky::kMinSunElevationDeg)) return {};
+  if (!(shown.sun.elevation_deg >= std::max(min_sun_elevation_deg(atmosphere), VectorRtSky::kMinSunElevationDeg)))
+    return {};  // Berry's fit, beside the exact sky, starts at 2°
   constexpr int kSize = 400;
   Sky single = sky, berry = sky, exact = sky;
   single.model.kind = SkyKind::SingleScattering;

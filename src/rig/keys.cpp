@@ -365,6 +365,15 @@ void add_vector_rt_keys(std::vector<RigKey>& keys) {
              "discrete ordinates over both hemispheres; 32 meets the exact tables to 6e-6 in I",
              "fewer than 4 cannot hold Rayleigh's m = 2 term; beyond 128 the solve takes seconds",
              [](Rig& r) -> int& { return r.source.sky.rt.streams; }, &integer_within<4, 128, true>));
+  {
+    RigKey k{"sky.rt.direct_beam", K::Text, "", "plane-parallel or pseudo-spherical",
+             "the sun's direct beam through the atmosphere: plane-parallel (air mass 1/mu0, the exact tables' "
+             "geometry; the sun at 2 degrees or higher) or pseudo-spherical (the Chapman air mass of an 8 km "
+             "scale height over the Earth's sphere; the sun at 1 degree or higher; physics §24)"};
+    k.text = [](Rig& r) -> std::string& { return r.source.sky.direct_beam; };
+    k.valid_text = [](std::string_view v) { return v == "plane-parallel" || v == "pseudo-spherical"; };
+    rt(k);
+  }
   rt(real<RealRange{0.0, 100.0}>(
       "sky.rt.aerosol.tau", "", "an optical depth",
       "the aerosol's optical depth, mixed evenly with the air through the layer (physics §24); 0: no aerosol",

@@ -179,10 +179,10 @@ BerryDistances BerryFit::distances(double h) const {
 
 std::shared_ptr<const BerryFit> berry_fit(const VectorRtSettings& s) {
   static std::mutex mutex;
-  static std::map<std::tuple<double, double, double, int, double, double, const PhaseMatrixTable*>,
+  static std::map<std::tuple<double, double, double, int, double, double, const PhaseMatrixTable*, bool>,
                   std::shared_ptr<const BerryFit>> fits;
   const auto key = std::make_tuple(s.tau_rayleigh, s.depolarization, s.ground_albedo, s.streams, s.aerosol.tau,
-                                   s.aerosol.ssa, s.aerosol.phase.get());
+                                   s.aerosol.ssa, s.aerosol.phase.get(), s.pseudo_spherical);
   std::lock_guard<std::mutex> lock(mutex);
   auto& fit = fits[key];
   if (!fit) fit = std::make_shared<const BerryFit>(vector_rt_sky(s));

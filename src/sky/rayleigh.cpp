@@ -88,6 +88,7 @@ double MaxDegree::at(double sun_elevation_deg) const {
 
 double min_sun_elevation_deg(const SkyModel& model) {
   const bool fitted = model.kind == SkyKind::Berry && (!model.berry.babinet_deg || !model.berry.brewster_deg);
+  if (model.kind == SkyKind::VectorRt && model.vector_rt) return model.vector_rt->lowest_sun_elevation_deg();
   return model.kind == SkyKind::VectorRt || fitted ? VectorRtSky::kMinSunElevationDeg : -90.0;
 }
 

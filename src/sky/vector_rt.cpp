@@ -223,6 +223,10 @@ struct Geometry {
   std::vector<double> mu, w;  // quadrature on (0, 1]
   std::vector<double> view_mu;
   double mu0 = 1;
+  double sun_air_mass = 0;  // pseudo-spherical: the beam's air mass; 0: plane-parallel, 1/μ₀
+  // The beam's decay rate per unit optical depth, and its optical path through a depth δ.
+  double sun_rate() const { return sun_air_mass > 0 ? sun_air_mass : 1 / mu0; }
+  double sun_path(double delta) const { return sun_air_mass > 0 ? delta * sun_air_mass : delta / mu0; }
 };
 
 // The kernels the thin layer needs, every term at once: outgoing directions are the nodes, then
@@ -257,7 +261,8 @@ KernelTable<NS> kernel_table(const Geometry& g, const Medium& md) {
   return t;
 }
 
-// Light entering the top of the thin layer δ downward in direction `in` (decay rate a = 1/μ_in),
+// Light entering the top of the thin layer δ downward in direction `in` (decay rate a: 1/μ_in, or
+// the sun's air mass),
 // leaving in the outgoing direction `o` (rate c = 1/μ_o): the reflected (up, at the top) and
 // transmitted (down, at the bottom, diffuse) responses of every term to first and second order of
 // scattering (ϖ in the kernels). The second order sums over the nodes k (rate b) of the
@@ -270,9 +275,9 @@ struct Scattered {
 
 template <int NS>
 Scattered<NS> thin_response(const KernelTable<NS>& t, const Geometry& g, int terms, int o, double mu_o, int in,
-                            double mu_in, double delta) {
+                            double a, double delta) {
   const int N = static_cast<int>(g.mu.size());
-  const double a = 1 / mu_in, c = 1 / mu_o;
+  const double c = 1 / mu_o;
   const double once_reflected = once_scattered_path(delta, a + c, 0) / mu_o;
   const double once_transmitted = once_scattered_path(delta, a, c) / mu_o;
   Scattered<NS> x;
@@ -312,7 +317,7 @@ std::vector<Layer> thin_layers(const Geometry& g, double delta, const Medium& md
     l.r_sun = l.t_sun = VectorXd::Zero(n);
     l.Ru = l.Tu = MatrixXd::Zero(nv, n);
     l.ru_sun = l.tu_sun = VectorXd::Zero(nv);
-    l.e_sun_minus_1 = std::expm1(-delta / g.mu0);
+    l.e_sun_minus_1 = std::expm1(-g.sun_path(delta));
     l.e_view_minus_1.resize(nv);
   }
   // A node column carries its quadrature weight w_j (K already holds the azimuth integral); the
@@ -321,7 +326,7 @@ std::vector<Layer> thin_layers(const Geometry& g, double delta, const Medium& md
                   VectorXd Layer::*t_sun, int row) {
     for (int j = 0; j <= N; ++j) {
       const bool sun = j == N;
-      const Scattered<NS> x = thin_response<NS>(table, g, md.terms, o, mu_o, j, sun ? g.mu0 : g.mu[j], delta);
+      const Scattered<NS> x = thin_response<NS>(table, g, md.terms, o, mu_o, j, sun ? g.sun_rate() : 1 / g.mu[j], delta);
       for (int m = 0; m < md.terms; ++m) {
         Layer& l = L[m];
         const int ns = l.ns;
@@ -441,6 +446,7 @@ Geometry make_geometry(const VectorRtSettings& s, double mu0, const std::vector<
     g.w.push_back(q.w[j] * 2 * q.x[j]);
   }
   g.view_mu = view_mu, g.mu0 = mu0;
+  if (s.pseudo_spherical) g.sun_air_mass = chapman_air_mass(mu0);
   return g;
 }
 
@@ -478,12 +484,11 @@ Eigen::Vector4d fourier_sum(const std::vector<std::vector<Eigen::Vector4d>>& c, 
 // The single-scattering correction (Nakajima & Tanaka 1988): the δ-M layer's once-scattered sky at
 // the views, the sun's column of each term's kernel through the whole layer,
 // ∫₀^τ' e^{−t/μ₀ − (τ'−t)/μ} dt/μ, is taken out of `down`; SingleScatteringSky puts the exact one back.
-void remove_truncated_single(const Medium& md, double mu0, const std::vector<double>& view_mu,
-                             std::vector<Emerging>& e) {
-  for (std::size_t u = 0; u < view_mu.size(); ++u) {
-    const double mu = view_mu[u];
-    const Kernels<4> K = fourier_kernels<4>(md, -mu, -mu0);
-    const double path = once_scattered_path(md.tau, 1 / mu0, 1 / mu) / mu;
+void remove_truncated_single(const Medium& md, const Geometry& g, std::vector<Emerging>& e) {
+  for (std::size_t u = 0; u < g.view_mu.size(); ++u) {
+    const double mu = g.view_mu[u];
+    const Kernels<4> K = fourier_kernels<4>(md, -mu, -g.mu0);
+    const double path = once_scattered_path(md.tau, g.sun_rate(), 1 / mu) / mu;
     for (std::size_t m = 0; m < e.size(); ++m) {
       const int ns = e[m].ns;
       const double sun_weight = (m == 0 ? 1.0 : 2.0) / (2 * M_PI);
@@ -525,7 +530,15 @@ SingleScatteringSky::SingleScatteringSky(const VectorRtSettings& s) : settings_(
   extinction_tau_ = make_medium(s).tau;
 }
 
+double SingleScatteringSky::sun_air_mass(double mu0) const {
+  return settings_.pseudo_spherical ? chapman_air_mass(mu0) : 1 / mu0;
+}
+
 Eigen::Vector4d SingleScatteringSky::down(double mu0, double mu, double phi) const {
+  return down(mu0, sun_air_mass(mu0), mu, phi);
+}
+
+Eigen::Vector4d SingleScatteringSky::down(double mu0, double air_mass, double mu, double phi) const {
   const VectorRtSettings& s = settings_;
   const double tau = s.tau_rayleigh + s.aerosol.tau;
   const Direction in = direction(-mu0, 0), out = direction(-mu, phi);
@@ -538,7 +551,7 @@ Eigen::Vector4d SingleScatteringSky::down(double mu0, double mu, double phi) con
          R * P.a4 + A * a.a4, R * P.b1 + A * a.b1, R * P.b2 + A * a.b2};
   }
   const Eigen::Vector4d light =
-      phase_matrix(in, out, P).col(0) * (tau / extinction_tau_ * once_scattered_path(extinction_tau_, 1 / mu0, 1 / mu) /
+      phase_matrix(in, out, P).col(0) * (tau / extinction_tau_ * once_scattered_path(extinction_tau_, air_mass, 1 / mu) /
                                          (4 * M_PI * mu));
   return {light(0), light(1), -light(2), -light(3)};  // the view's frame (to_view_frame)
 }
@@ -554,7 +567,7 @@ DiffuseField solve_vector_rt(const VectorRtSettings& s, double mu0, const std::v
   const Geometry g = make_geometry(s, mu0, view_mu);
   const Medium md = make_medium(s);
   std::vector<Emerging> e = solve(s, g, md, md.terms);
-  if (md.aerosol) remove_truncated_single(md, mu0, view_mu, e);  // the single-scattering correction
+  if (md.aerosol) remove_truncated_single(md, g, e);  // the single-scattering correction
   DiffuseField f;
   f.mu = view_mu;
   f.mu0 = mu0;
@@ -566,6 +579,26 @@ DiffuseField solve_vector_rt(const VectorRtSettings& s, double mu0, const std::v
     }
   if (md.aerosol) f.single = std::make_shared<const SingleScatteringSky>(s);
   return f;
+}
+
+double min_sun_elevation_deg(const VectorRtSettings& s) { return s.pseudo_spherical ? 1.0 : 2.0; }
+
+double chapman_air_mass(double mu0) {
+  if (!(mu0 >= 0 && mu0 <= 1))
+    throw std::invalid_argument(fmt::format("chapman_air_mass: cos zenith {} is outside [0, 1]", mu0));
+  constexpr double R = 6371, H = 8;  // km
+  constexpr int kIntervals = 4000;   // Simpson on [0, 7]: e^{−49} is far below the rule's error
+  constexpr double kXMax = 7;
+  // h = H x²: ds = (R + h)dh/√((R + h)² − R² sin²θ₀), and dh = 2Hx dx.
+  const auto f = [&](double x) {
+    const double r = R + H * x * x;
+    const double root = std::sqrt(R * R * mu0 * mu0 + 2 * R * H * x * x + H * H * x * x * x * x);
+    return x == 0 ? (mu0 > 0 ? 0.0 : 2 * R / std::sqrt(2 * R * H)) : std::exp(-x * x) * 2 * x * r / root;
+  };
+  const double h = kXMax / kIntervals;
+  double sum = f(0) + f(kXMax);
+  for (int i = 1; i < kIntervals; ++i) sum += (i % 2 ? 4 : 2) * f(i * h);
+  return sum * h / 3;
 }
 
 std::string atmosphere_text(const VectorRtSettings& s) {
@@ -584,7 +617,7 @@ DiffuseFluxes vector_rt_fluxes(const VectorRtSettings& s, double mu0) {
     f.up_top += weight * e.up_nodes(static_cast<Eigen::Index>(j) * e.ns);
     f.down_diffuse_bottom += weight * e.down_nodes(static_cast<Eigen::Index>(j) * e.ns);
   }
-  f.down_direct_bottom = mu0 * std::exp(-md.tau / mu0);
+  f.down_direct_bottom = mu0 * std::exp(-g.sun_path(md.tau));
   return f;
 }
 

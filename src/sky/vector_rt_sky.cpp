@@ -65,20 +65,23 @@ std::shared_ptr<const DiffuseField> VectorRtSky::node(int k) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto& f = nodes_[k];
   if (!f) {
-    const double h = kMinSunElevationDeg + k * kElevationStepDeg;
+    const double h = kGridLowestDeg + k * kElevationStepDeg;
     f = std::make_shared<const DiffuseField>(solve_vector_rt(settings_, std::sin(h * kDeg), view_mu()));
   }
   return f;
 }
 
 SunField VectorRtSky::for_sun(double h) const {
-  if (!(h >= kMinSunElevationDeg && h <= 90))
+  const double lowest = lowest_sun_elevation_deg();
+  if (!(h >= lowest && h <= 90))
     throw std::invalid_argument(fmt::format(
-        "vector-rt sky: the sun's elevation {}° is outside [{}°, 90°] (a plane-parallel atmosphere's direct "
-        "beam is too long below it)", h, kMinSunElevationDeg));
+        "vector-rt sky: the sun's elevation {}° is outside [{}°, 90°] ({})", h, lowest,
+        settings_.pseudo_spherical ? "below it the refraction and the air's profile bend the beam by the sun's own size"
+                                   : "a plane-parallel atmosphere's direct beam is too long below it; "
+                                     "sky.rt.direct_beam: pseudo-spherical goes to 1°"));
   static const std::vector<double> elevations = [] {
     std::vector<double> t;
-    for (double e = kMinSunElevationDeg; e <= 90 + 1e-9; e += kElevationStepDeg) t.push_back(e);
+    for (double e = kGridLowestDeg; e <= 90 + 1e-9; e += kElevationStepDeg) t.push_back(e);
     return t;
   }();
   const int j0 = stencil_start(elevations, h);
@@ -93,7 +96,9 @@ SunField VectorRtSky::for_sun(double h) const {
     out.single_ = f->single;
   }
   out.mu0_ = std::sin(h * kDeg);
-  out.zenith_I_ = out.coefficients_[0].back()(0) + (out.single_ ? out.single_->down(out.mu0_, 1, 0)(0) : 0.0);
+  if (out.single_) out.sun_air_mass_ = out.single_->sun_air_mass(out.mu0_);
+  out.zenith_I_ =
+      out.coefficients_[0].back()(0) + (out.single_ ? out.single_->down(out.mu0_, out.sun_air_mass_, 1, 0)(0) : 0.0);
   return out;
 }
 
@@ -149,16 +154,17 @@ Eigen::Vector3d SunField::stokes(double mu, double cos_phi, double sin_phi) cons
     const Eigen::Vector3d v = w[0] * c[0] + w[1] * c[1] + w[2] * c[2] + w[3] * c[3];
     out += Eigen::Vector3d(c_m * v(0), c_m * v(1), s_m * v(2));
   }
-  if (single_) out += single_->down(mu0_, std::clamp(mu, kHorizonMu, 1.0), std::atan2(sin_phi, cos_phi)).head<3>();
+  if (single_)
+    out += single_->down(mu0_, sun_air_mass_, std::clamp(mu, kHorizonMu, 1.0), std::atan2(sin_phi, cos_phi)).head<3>();
   return out;
 }
 
 std::shared_ptr<const VectorRtSky> vector_rt_sky(const VectorRtSettings& s) {
   static std::mutex mutex;
-  static std::map<std::tuple<double, double, double, int, double, double, const PhaseMatrixTable*>,
+  static std::map<std::tuple<double, double, double, int, double, double, const PhaseMatrixTable*, bool>,
                   std::shared_ptr<const VectorRtSky>> skies;
   const auto key = std::make_tuple(s.tau_rayleigh, s.depolarization, s.ground_albedo, s.streams, s.aerosol.tau,
-                                   s.aerosol.ssa, s.aerosol.phase.get());
+                                   s.aerosol.ssa, s.aerosol.phase.get(), s.pseudo_spherical);
   std::lock_guard<std::mutex> lock(mutex);
   auto& sky = skies[key];
   if (!sky) sky = std::make_shared<const VectorRtSky>(s);

@@ -98,6 +98,10 @@ VectorRtSettings SkySettings::resolved_rt() const {
   VectorRtSettings s = rt;
   const std::optional<double> tau = parse_tau_rayleigh(tau_rayleigh);
   s.tau_rayleigh = tau ? *tau : rayleigh_optical_depth_bodhaine(wavelength_nm, pressure_hPa, s.depolarization);
+  if (direct_beam != "plane-parallel" && direct_beam != "pseudo-spherical")
+    throw SourceSettingError("sky.rt.direct_beam",
+                             "expected plane-parallel or pseudo-spherical, got '" + direct_beam + "'");
+  s.pseudo_spherical = direct_beam == "pseudo-spherical";
   if (s.tau_rayleigh == 0 && !(s.aerosol.tau > 0))
     throw SourceSettingError("sky.rt.tau_rayleigh",
                              "expected an optical depth > 0 (0 only under an aerosol, sky.rt.aerosol.tau > 0)");

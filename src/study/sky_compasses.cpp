@@ -419,7 +419,7 @@ void check_sky_study_settings(const SkyStudySettings& s, const std::function<std
       throw std::invalid_argument(fmt::format("{}: expected an optical depth in (0, 10], got {}", name("tau"), t));
   if (s.tau.empty()) throw std::invalid_argument(fmt::format("{}: expected at least one value", name("tau")));
   list(s.albedo, "albedo", 0, 1, "");
-  list(s.sun_el_deg, "sun_el_deg", VectorRtSky::kMinSunElevationDeg, 89, "°");
+  list(s.sun_el_deg, "sun_el_deg", min_sun_elevation_deg(s.rt), 89, "°");
   list(s.tilt_deg, "tilt_deg", 0, 30, "°");
   list(s.heading_deg, "heading_deg", -360, 360, "°");
   range(s.noise_sd, "noise_sd", 0, 1, "");

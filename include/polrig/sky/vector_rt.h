@@ -27,7 +27,23 @@ struct VectorRtSettings {
   double ground_albedo = 0;       // Lambertian, [0, 1]
   int streams = 32;               // discrete ordinates over both hemispheres (even, 4..128)
   AerosolSettings aerosol;
+  // The sun's direct beam through the layer: false, plane-parallel (air mass 1/μ₀, the exact
+  // tables' geometry); true, pseudo-spherical (chapman_air_mass: the beam crosses spherical
+  // shells; the scattering and the views stay plane-parallel).
+  bool pseudo_spherical = false;
 };
+
+// The lowest sun the settings' sky takes, degrees: 2° plane-parallel (its air mass 1/μ₀ is 45 %
+// above the real one there, Kasten & Young 1989), 1° pseudo-spherical (below it the sun's disk,
+// 0.53°, and the refraction at the horizon, ~0.5°, move the beam by their own size: the path then
+// depends on the refraction and the air's profile, which one homogeneous layer does not have).
+double min_sun_elevation_deg(const VectorRtSettings& s);
+
+// The air mass of a beam at cos zenith mu0 ∈ [0, 1] through an exponential atmosphere of scale
+// height H = 8 km over a sphere of radius R = 6371 km (the Chapman function Ch(R/H, θ₀), Chapman
+// 1931): m = (1/H)∫₀^∞ e^{−h/H} ds along the slanted ray, by Simpson's rule in x = √(h/H), where
+// the integrand is smooth even at the horizon. 1/μ₀ for a high sun, √(πR/2H) ≈ 35.4 at the horizon.
+double chapman_air_mass(double mu0);
 
 // Throws std::invalid_argument naming the value of the first setting outside its range, an
 // aerosol without its phase matrix, or streams too few for it (its δ-M truncation negative at
@@ -44,6 +60,10 @@ class SingleScatteringSky {
  public:
   explicit SingleScatteringSky(const VectorRtSettings& s);
   Eigen::Vector4d down(double mu0, double mu, double phi) const;
+  // The same with the sun beam's air mass already known (sun_air_mass(mu0)): what a sky that asks
+  // for many views under one sun calls.
+  Eigen::Vector4d down(double mu0, double air_mass, double mu, double phi) const;
+  double sun_air_mass(double mu0) const;
 
  private:
   VectorRtSettings settings_;

@@ -31,26 +31,29 @@ class SunField {
   std::vector<std::vector<Eigen::Vector3d>> coefficients_;
   // With an aerosol: the exact once-scattered sky, added at the view itself (not interpolated).
   std::shared_ptr<const SingleScatteringSky> single_;
-  double mu0_ = 1;
+  double mu0_ = 1, sun_air_mass_ = 1;
   double zenith_I_ = 0;
 };
 
 class VectorRtSky {
  public:
   // The plane-parallel direct beam's air mass 1/μ₀ is 3 % above the real one at 10° (Kasten &
-  // Young 1989: 5.60 against 5.76) and 45 % at 2°: below this elevation the sky refuses.
+  // Young 1989: 5.60 against 5.76) and 45 % at 2°: below this elevation the plane-parallel sky
+  // refuses; the pseudo-spherical one goes to 1° (min_sun_elevation_deg(settings)).
   static constexpr double kMinSunElevationDeg = 2;
-  // The interpolation grid: the sun's elevation every kElevationStepDeg from the limit to 90°, the
+  // The interpolation grid: the sun's elevation every kElevationStepDeg from kGridLowestDeg to 90°, the
   // views at kViewNodes nodes uniform in s, θ = (π/2)(1 − s²) (as √μ at the horizon, where the
   // field changes over δμ ~ τ; analytic at the zenith), cubic
   // (4-point Lagrange) in both. Its error against exact solves: docs/validation.md.
   static constexpr double kElevationStepDeg = 1;
+  static constexpr double kGridLowestDeg = 1;
   static constexpr int kViewNodes = 48;
 
   explicit VectorRtSky(const VectorRtSettings& s);  // throws std::invalid_argument (check_vector_rt)
   const VectorRtSettings& settings() const { return settings_; }
+  double lowest_sun_elevation_deg() const { return min_sun_elevation_deg(settings_); }
 
-  // Throws std::invalid_argument for an elevation below kMinSunElevationDeg or above 90°.
+  // Throws std::invalid_argument for an elevation below lowest_sun_elevation_deg() or above 90°.
   SunField for_sun(double sun_elevation_deg) const;
 
   // The views' nodes, cos zenith (for tests and the validation figures).

@@ -35,6 +35,7 @@ struct SkySettings {
   // sky.rt.aerosol.phase_matrix: the aerosol's phase-matrix file (docs/formats.md §6.22), absolute
   // once the rig has loaded (relative to the rig file in it).
   std::string aerosol_phase_matrix;
+  std::string direct_beam = "plane-parallel";  // sky.rt.direct_beam: plane-parallel | pseudo-spherical
   // Berry's sky (sky.berry.*; physics.md §22): each distance in degrees, or "fit" (to the
   // vector-RT sky of the sky.rt.* settings at the sun's elevation).
   std::string berry_babinet_deg = "fit", berry_brewster_deg = "fit";

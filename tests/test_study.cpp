@@ -971,6 +971,11 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
       }
       if (!k.read_by_sky_model(rig.source.sky.model)) rig.source.sky.model = std::string(k.sky_models.substr(0, k.sky_models.find(' ')));  // sky.rt.*
       if (k.path == "sky.rt.wavelength_nm" || k.path == "sky.rt.pressure_hPa") rig.source.sky.tau_rayleigh = "bodhaine";
+      if (k.path.starts_with("sky.rt.aerosol.")) {  // an aerosol of IPRT A4's phase matrix
+        rig.source.sky.aerosol_phase_matrix =
+            std::string(POLRIG_SOURCE_DIR) + "/data/aerosol-phase-matrix/iprt-a4-spheroids-350nm.txt";
+        rig.source.sky.rt.aerosol.tau = 0.2;
+      }
       if (k.kind == RigKey::Kind::Real) k.real(rig) = v;
       else for (double& x : k.array(rig)) x = v;
       if (k.path == "schedule.start_deg" || k.path == "schedule.stop_deg")
@@ -981,7 +986,7 @@ TEST(RigRanges, EveryKeyAtEitherEndOfItsRangeGivesFiniteResults) {
       ++checked;
     }
   }
-  EXPECT_EQ(checked, 2 * (23 + 15));  // every real key (15 of the sky's, 4 of them sky.rt.*), both ends
+  EXPECT_EQ(checked, 2 * (23 + 17));  // every real key (17 of the sky's, 6 of them sky.rt.*), both ends
 }
 
 // Past the ranges (a rig built in code), simulate stops on the first non-finite voltage and says

@@ -362,7 +362,9 @@ void add_vector_rt_keys(std::vector<RigKey>& keys) {
       "a ground reflects between none and all of the light it receives",
       [](Rig& r) -> double& { return r.source.sky.rt.ground_albedo; }));
   rt(integer("sky.rt.streams", "an even integer in [4, 128]",
-             "discrete ordinates over both hemispheres; 32 meets the exact tables to 6e-6 in I",
+             "discrete ordinates over both hemispheres; 32 meets the exact tables to 6e-6 in I; with an aerosol its "
+             "phase matrix is truncated at l = streams/2 - 1 (physics §24), and streams that leave the truncated phase "
+             "function negative are refused (IPRT A4's is negative at 16, 20 and 24 streams; 32, the default, and 64 hold)",
              "fewer than 4 cannot hold Rayleigh's m = 2 term; beyond 128 the solve takes seconds",
              [](Rig& r) -> int& { return r.source.sky.rt.streams; }, &integer_within<4, 128, true>));
   {

@@ -8,7 +8,10 @@
 // δ = τ/2ⁿ ≤ 1e-5 starts as single and double scattering with every leg's decay exact (its error
 // O(δ²) relative, 2e-8 in the flux budget; single scattering alone needed δ ~ 1e-10, 32 doublings
 // instead of 15 at τ = 0.25) and is doubled n times (van de Hulst's adding equations for two identical layers, one
-// factorisation each by the layer's mirror symmetry); the ground is added at the end.
+// factorisation each by the layer's mirror symmetry); the ground is added at the end. With an
+// aerosol (physics §24) the layer's phase matrix is Rayleigh's and the aerosol's δ-M truncation
+// mixed, the terms run to m = streams/2 − 1 with all four Stokes components, and the views'
+// once-scattered light is taken out for SingleScatteringSky's exact one.
 #include "polrig/sky/vector_rt.h"
 
 #include "polrig/quadrature.h"
@@ -34,7 +37,7 @@ constexpr int kRayleighAzimuths = 6;  // > 2·(highest m): the azimuth sums belo
 constexpr double kStartDepth = 1e-5;  // the first layer's δ is at most this (its O(δ²) error)
 
 // The one homogeneous layer the solver sees: Rayleigh alone (exactly three Fourier terms, V
-// decoupled: I, Q, U), or Rayleigh and an aerosol after δ-M (terms m ≤ L = streams − 1, V coupled
+// decoupled: I, Q, U), or Rayleigh and an aerosol after δ-M (terms m ≤ L = streams/2 − 1, V coupled
 // to U by b2: all four).
 struct Medium {
   double tau = 0;              // the solved layer's optical depth (δ-M scaled)

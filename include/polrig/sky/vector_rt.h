@@ -13,7 +13,7 @@
 namespace polrig {
 
 // Aerosol mixed evenly with the air through the one layer (spec skies.md §2 "Aerosols";
-// docs/physics.md §24). Its phase matrix is truncated by δ-M at l = streams − 1 and the
+// docs/physics.md §24). Its phase matrix is truncated by δ-M at l = streams/2 − 1 and the
 // once-scattered sky is then put back exactly (the single-scattering correction).
 struct AerosolSettings {
   double tau = 0;                                 // optical depth, [0, 100]; 0: no aerosol

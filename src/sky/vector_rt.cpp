@@ -36,6 +36,13 @@ constexpr int kRayleighTerms = 3;     // m = 0, 1, 2: Rayleigh's phase matrix ha
 constexpr int kRayleighAzimuths = 6;  // > 2·(highest m): the azimuth sums below are exact
 constexpr double kStartDepth = 1e-5;  // the first layer's δ is at most this (its O(δ²) error)
 
+// The mixed layer's ϖP = R·P_R + A·P_a, with R = τ_R/τ and A = ϖ_aτ_a/τ (δ-M's or the real
+// layer's τ, ϖ_a and P_a).
+ScatteringElements mixed(const ScatteringElements& r, double R, const ScatteringElements& a, double A) {
+  return {R * r.a1 + A * a.a1, R * r.a2 + A * a.a2, R * r.a3 + A * a.a3,
+          R * r.a4 + A * a.a4, R * r.b1 + A * a.b1, R * r.b2 + A * a.b2};
+}
+
 // The one homogeneous layer the solver sees: Rayleigh alone (exactly three Fourier terms, V
 // decoupled: I, Q, U), or Rayleigh and an aerosol after δ-M (terms m ≤ L = streams/2 − 1, V coupled
 // to U by b2: all four).
@@ -51,10 +58,7 @@ struct Medium {
   ScatteringElements omega_P(double x) const {
     const ScatteringElements r = rayleigh_elements(x, rho);
     if (!aerosol) return r;
-    const ScatteringElements a = truncated.at(x);
-    const double R = rayleigh_share, A = aerosol_share;
-    return {R * r.a1 + A * a.a1, R * r.a2 + A * a.a2, R * r.a3 + A * a.a3,
-            R * r.a4 + A * a.a4, R * r.b1 + A * a.b1, R * r.b2 + A * a.b2};
+    return mixed(r, rayleigh_share, truncated.at(x), aerosol_share);
   }
 };
 
@@ -547,12 +551,7 @@ Eigen::Vector4d SingleScatteringSky::down(double mu0, double air_mass, double mu
   const Direction in = direction(-mu0, 0), out = direction(-mu, phi);
   const double x = vec3::dot(in.k, out.k);
   ScatteringElements P = rayleigh_elements(x, s.depolarization);
-  if (s.aerosol.tau > 0) {
-    const ScatteringElements a = s.aerosol.phase->at(x);
-    const double R = s.tau_rayleigh / tau, A = s.aerosol.ssa * s.aerosol.tau / tau;
-    P = {R * P.a1 + A * a.a1, R * P.a2 + A * a.a2, R * P.a3 + A * a.a3,
-         R * P.a4 + A * a.a4, R * P.b1 + A * a.b1, R * P.b2 + A * a.b2};
-  }
+  if (s.aerosol.tau > 0) P = mixed(P, s.tau_rayleigh / tau, s.aerosol.phase->at(x), s.aerosol.ssa * s.aerosol.tau / tau);
   const Eigen::Vector4d light =
       phase_matrix(in, out, P).col(0) * (tau / extinction_tau_ * once_scattered_path(extinction_tau_, air_mass, 1 / mu) /
                                          (4 * M_PI * mu));

@@ -114,13 +114,14 @@ VectorRtSettings SkySettings::resolved_rt() const {
     } catch (const PhaseMatrixError& e) {
       throw SourceSettingError("sky.rt.aerosol.phase_matrix", std::string("cannot read the phase matrix: ") + e.what());
     }
-    try {
-      check_vector_rt(s);
-    } catch (const std::invalid_argument& e) {
-      throw SourceSettingError("sky.rt.streams", e.what());
-    }
   }
-  check_vector_rt(s);
+  try {
+    check_vector_rt(s);
+  } catch (const std::invalid_argument& e) {
+    // The keys have checked every value on its own; what is left under an aerosol is the streams.
+    if (s.aerosol.tau > 0) throw SourceSettingError("sky.rt.streams", e.what());
+    throw;
+  }
   return s;
 }
 

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <functional>
+#include <optional>
+#include <utility>
 
 #include "polrig/sky/berry_fit.h"
 #include "polrig/sky/vector_rt_sky.h"
@@ -67,6 +69,19 @@ double brent_root(const std::function<double(double)>& g, double a, double b, do
   return b;
 }
 
+// A sign change of g between a and b, found in ten equal steps (exact solves): two bracketing
+// points, the first from a; empty if g keeps its sign at all of them.
+std::optional<std::pair<double, double>> exact_bracket(const std::function<double(double)>& g, double a, double b) {
+  constexpr int kSteps = 10;
+  double x0 = a, g0 = g(a);
+  for (int k = 1; k <= kSteps; ++k) {
+    const double x1 = a + (b - a) * k / kSteps, g1 = g(x1);
+    if ((g0 > 0) != (g1 > 0)) return std::make_pair(x0, x1);
+    x0 = x1, g0 = g1;
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 NeutralPoints vector_rt_neutral_points(const VectorRtSettings& s, double h) {
@@ -84,12 +99,13 @@ NeutralPoints vector_rt_neutral_points(const VectorRtSettings& s, double h) {
     for (double g1 = from + step; step > 0 ? g1 <= to + 1e-9 : g1 >= to - 1e-9; g1 += step) {
       const double q1 = coarse(g1);
       if ((q0 > 0) != (q1 > 0)) {
-        // The exact bracket may sit a hair off the interpolated one: widen it by a step each way.
+        // The exact zero may sit a hair off the interpolated one: look for it a step either way.
         double a = g0 - step, b = g1 + step;
         if (step > 0 ? a < from : a > from) a = from;
         if (step > 0 ? b > to : b < to) b = to;
-        if ((exact(a) > 0) == (exact(b) > 0)) a = g0, b = g1;
-        return brent_root(exact, a, b, 1e-4);
+        if (const std::optional<std::pair<double, double>> bracket = exact_bracket(exact, a, b))
+          return brent_root(exact, bracket->first, bracket->second, 1e-4);
+        // No exact sign change there: the interpolated sky's was its own error; walk on.
       }
       g0 = g1, q0 = q1;
     }

@@ -18,10 +18,12 @@ struct NeutralPoints {
   std::optional<double> babinet_deg, brewster_deg, arago_deg;
 };
 
-// Each point bracketed on the rig's interpolated sky (0.1° steps along the meridian), then found
-// to 1e-4° by Brent's method on exact solves (solve_vector_rt at the point's view), so that the
-// interpolation's error does not move it. Throws std::invalid_argument for settings or a sun
-// elevation the vector-RT sky refuses (VectorRtSky::kMinSunElevationDeg).
+// Each point bracketed on the rig's interpolated sky (0.1° steps along the meridian), the bracket
+// then found again on exact solves (solve_vector_rt at the point's view) within a step either way
+// and the point refined there to 1e-4° by Brent's method, so that the interpolation's error does
+// not move it; a sign change of the interpolated sky that the exact sky does not have there is
+// passed over. Throws std::invalid_argument for settings or a sun elevation the vector-RT sky
+// refuses (min_sun_elevation_deg).
 NeutralPoints vector_rt_neutral_points(const VectorRtSettings& s, double sun_el_deg);
 
 // The neutral points of any sky model, what `sky neutral-points` writes: the vector-RT sky's

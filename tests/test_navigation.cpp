@@ -418,6 +418,41 @@ TEST_F(NavigationCli, SimulateThenNavigateWritesEveryMode) {
   EXPECT_HAS(all, sins.substr(sins.find('\n') + 1, 200));
 }
 
+// The third review's finding 3: `navigate DS -o DS --force` deleted the dataset it read (the
+// output swapped into place, the old folder removed). An output that is, contains or lies inside
+// an input is refused before anything runs, for every command, and the input is left whole.
+TEST_F(NavigationCli, AnOutputOverItsInputIsRefusedAndTheInputKept) {
+  ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=20 -o D", cd());
+  const std::string imu = test::read_file(tmp / "D/imu.csv");
+  fs::create_directory_symlink("D", tmp / "L");
+  const std::pair<const char*, const char*> cases[] = {
+      {"navigate D -o D --force", "is the input D"},
+      {"navigate D/ -o ./D --force --no-plots", "is the input D/"},
+      {"navigate L -o D --force", "is the input L"},
+      {"calibrate D --method unit-array -o D --force", "is the input D"},
+      {"navigate D -o D/N", "lies inside the input D"},
+      {"navigate D --rig D/rig.yaml -o N --force", ""},  // apart: runs
+  };
+  for (const auto& [command, says] : cases) {
+    const Result r = polrig(command, cd());
+    if (!*says) {
+      EXPECT_EQ(r.status, 0) << command << r.err;
+      continue;
+    }
+    EXPECT_EQ(r.status, 2) << command;
+    EXPECT_HAS(r.err, says) << command;
+  }
+  EXPECT_EQ(test::read_file(tmp / "D/imu.csv"), imu);
+  EXPECT_FALSE(fs::exists(tmp / "D/N"));
+  // A rig file inside the folder a command would replace.
+  fs::create_directories(tmp / "R");
+  fs::copy_file(std::string(POLRIG_SOURCE_DIR) + "/rigs/wang2019-indoor.yaml", tmp / "R/rig.yaml");
+  const Result r = polrig("simulate R/rig.yaml -o R --force --no-plots", cd());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "the output folder R contains the input R/rig.yaml");
+  EXPECT_TRUE(fs::exists(tmp / "R/rig.yaml"));
+}
+
 TEST_F(NavigationCli, AMeasuredDatasetWithoutTruthNavigates) {
   ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=60 -o D", cd());
   fs::create_directories(tmp / "M");

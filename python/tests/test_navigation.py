@@ -47,6 +47,13 @@ def test_navigate_equals_the_cli(tmp_path):
         polrig.navigate(tmp_path / "d", mode="best")
     with pytest.raises(ValueError, match="no rig.yaml"):
         polrig.navigate(tmp_path)
+    # The third review's finding 3: out= over the input is refused, and the dataset kept.
+    for out in (tmp_path / "d", tmp_path):
+        with pytest.raises(ValueError, match="out: the output folder .* (is|contains) the input"):
+            polrig.navigate(tmp_path / "d", out=out, force=True)
+        with pytest.raises(ValueError, match="out: the output folder .* (is|contains) the input"):
+            polrig.calibrate_unit_array(tmp_path / "d", out=out, force=True)
+    assert (tmp_path / "d" / "imu.csv").exists()
 
 
 def test_calibrate_unit_array_equals_the_cli(tmp_path):

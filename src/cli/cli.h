@@ -138,6 +138,10 @@ void write_stage_times(double total_wall_s, double total_cpu_s);
 // Ends an unfinished progress line, so that the next message starts on its own line.
 void end_progress_line();
 void finish(OutputDir& out);
+// Before a command runs: DataError (exit 2) when its -o/--out folder is, contains or lies inside
+// any existing file or folder given to it (a positional argument, an option's value, a --set
+// KEY=VALUE's value): its inputs (io/output_dir.h, refuse_output_over_inputs).
+void refuse_output_over_inputs(const CLI::App& command);
 
 // Command registration; each returns the function to run when the command was chosen.
 struct Command {

@@ -110,6 +110,25 @@ OutputDir OutputOptions::open(bool plots_needed) const {
   }
 }
 
+void refuse_output_over_inputs(const CLI::App& command) {
+  const CLI::Option* out = command.get_option_no_throw("--out");
+  if (!out || out->count() == 0) return;
+  std::vector<std::filesystem::path> inputs;
+  for (const CLI::Option* o : command.get_options()) {
+    if (o == out) continue;
+    const bool set = o->check_lname("set");
+    for (const std::string& value : o->results()) {
+      const std::size_t eq = value.find('=');
+      inputs.emplace_back(set && eq != std::string::npos ? value.substr(eq + 1) : value);
+    }
+  }
+  try {
+    polrig::refuse_output_over_inputs(out->results().front(), inputs);
+  } catch (const std::invalid_argument& e) {
+    throw DataError(fmt::format("-o/--out: {}", e.what()));
+  }
+}
+
 void RigInput::add_to(CLI::App& app, bool required) {
   auto* r = app.add_option("RIG", path, "rig file (YAML), e.g. rigs/wang2019-indoor.yaml");
   if (required) r->required();

@@ -96,6 +96,7 @@ int main(int argc, char** argv) {
               "its work between ranks (only polrig sweep and polrig study calibration do; "
               "docs/scale.md). Run it without mpirun/srun, or with -np 1",
               command_name(c.app), cli::ranks().size()));
+        cli::refuse_output_over_inputs(*c.app);
         c.run();
         cli::write_stage_times(std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count(),
                                static_cast<double>(std::clock()) / CLOCKS_PER_SEC);

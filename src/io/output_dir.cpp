@@ -14,6 +14,7 @@
 #include <cstring>
 #include <mutex>
 #include <set>
+#include <string_view>
 #include <stdexcept>
 #include <thread>
 
@@ -28,6 +29,42 @@ int rename_no_replace(const fs::path& from, const fs::path& to) noexcept {
 
 int rename_exchange(const fs::path& a, const fs::path& b) noexcept {
   return ::renameat2(AT_FDCWD, a.c_str(), AT_FDCWD, b.c_str(), RENAME_EXCHANGE) == 0 ? 0 : errno;
+}
+
+namespace {
+
+fs::path resolved(const fs::path& p) {
+  std::error_code ec;
+  fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec);
+  if (ec) r = fs::absolute(p, ec).lexically_normal();
+  if (r.filename().empty()) r = r.parent_path();  // "DS/" as "DS"
+  return r;
+}
+
+// True when `inner` is `outer` or lies below it, component by component.
+bool within(const fs::path& inner, const fs::path& outer) {
+  auto i = inner.begin();
+  for (auto o = outer.begin(); o != outer.end(); ++o, ++i)
+    if (i == inner.end() || *i != *o) return false;
+  return true;
+}
+
+}  // namespace
+
+void refuse_output_over_inputs(const fs::path& destination, const std::vector<fs::path>& inputs) {
+  const fs::path out = resolved(destination);
+  for (const fs::path& input : inputs) {
+    std::error_code ec;
+    if (input.empty() || !fs::exists(fs::symlink_status(input, ec))) continue;
+    const fs::path in = resolved(input);
+    const char* how = out == in ? "is" : within(in, out) ? "contains" : within(out, in) ? "lies inside" : nullptr;
+    if (!how) continue;
+    throw std::invalid_argument(fmt::format(
+        "the output folder {} {} the input {} ({}); choose an output folder apart from the inputs",
+        destination.string(), how, input.string(),
+        std::string_view(how) == "lies inside" ? "the output would be written into the input"
+                                               : "replacing the folder would delete the input"));
+  }
 }
 
 namespace {

@@ -28,6 +28,16 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// out= that is, contains or lies inside an input (io/output_dir.h): ValueError, before anything.
+void refuse_out_over_inputs(const std::optional<fs::path>& out, const std::vector<fs::path>& inputs) {
+  if (!out) return;
+  try {
+    refuse_output_over_inputs(*out, inputs);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(fmt::format("out: {}", e.what()));
+  }
+}
+
 // A matrix of rows × columns from a function of (row, column).
 template <class F>
 py::array_t<double> matrix(std::size_t rows, std::size_t columns, F value) {
@@ -353,6 +363,7 @@ void bind_navigation(py::module_& m) {
                        std::optional<fs::path> calibration, bool force, bool plots, std::optional<int> threads,
                        const py::object& progress) {
     check_plots(plots && out.has_value());
+    refuse_out_over_inputs(out, {dir, calibration.value_or(fs::path())});
     const LoadedRig r = dataset_rig(dir, rig, "navigate");
     NavigationOptions options;
     try {
@@ -410,6 +421,7 @@ void bind_navigation(py::module_& m) {
   m.def("calibrate_unit_array", [](const fs::path& dir, std::optional<fs::path> out, std::optional<PyRig> rig, bool force,
                                    bool plots, std::optional<int> threads) {
     check_plots(plots && out.has_value());
+    refuse_out_over_inputs(out, {dir});
     const LoadedRig r = dataset_rig(dir, rig, "calibrate --method unit-array");
     const ThreadLimit limit(threads);
     InstallationRun run;

@@ -81,6 +81,14 @@ class OutputDir {
 // of its own, so the cleanup runs as ordinary code, not in a signal handler).
 void clean_up_outputs_on_signals();
 
+// Throws std::invalid_argument, before anything is written, when the output folder `destination`
+// is one of `inputs` (files or folders the command reads), contains one, or lies inside one: with
+// --force the first two would delete the input when the output is swapped into place (a measured
+// dataset lost), and the third would write into it. Paths are compared after resolving symbolic
+// links and `..` (std::filesystem::weakly_canonical); inputs that do not exist are passed over.
+void refuse_output_over_inputs(const std::filesystem::path& destination,
+                               const std::vector<std::filesystem::path>& inputs);
+
 // Renames `from` to `to` only if `to` does not exist, atomically (renameat2 RENAME_NOREPLACE).
 // Returns 0 or the errno: EEXIST when `to` exists, EINVAL when the file system cannot do it.
 int rename_no_replace(const std::filesystem::path& from, const std::filesystem::path& to) noexcept;

@@ -527,20 +527,86 @@ TEST_F(NavigationCli, BadInputIsNamedAndNothingIsWritten) {
   ok("calibrate D --method unit-array -o C --no-plots", cd());
   EXPECT_HAS(test::read_file(tmp / "C/calibration.yaml"), "units:\n  - unit: 1\n    error_deg: [");
   ok("navigate D --calibration C/calibration.yaml -o K --no-plots", cd());
-  // A calibration whose unit 2 is 12° off (converged: a converged unit must be within ±10°); one
-  // whose unit 1 did not converge keeps its nominal frame; one that says neither is refused.
-  std::string cal = "units:\n";
-  for (int u = 1; u <= 9; ++u)
-    cal += fmt::format("  - unit: {}\n    error_deg: [{}, 0, 0]\n    converged: {}\n", u, u == 2 ? 12 : 0.1,
-                       u == 1 ? "false" : "true");
-  test::write_file(tmp / "C/bad.yaml", cal);
+  // The written file records the layout it was fitted for.
+  const std::string good = test::read_file(tmp / "C/calibration.yaml");
+  // Finding 16: 30 s of a static run fix fewer than three angles of a unit: said, with no
+  // standard error (was exactly 0, termination "Running"), and not used.
+  EXPECT_HAS(good, "    standard_error_deg: [null, null, null]\n");
+  EXPECT_HAS(good, "    termination: RankDeficient\n    converged: false\n");
+  EXPECT_LACKS(good, "Running");
+  EXPECT_HAS(test::read_file(tmp / "C/installation.csv"), ",,,");
+  EXPECT_HAS(good, "    nominal_axes_b: [[");
+  // Hand-made calibrations of D's layout: unit 2 12° off (a converged unit must be within ±10°);
+  // unit 1 not converged (keeps its nominal frame); a `converged` that says neither.
+  const auto axes_line = [&](int unit) {
+    const std::size_t at = good.find(fmt::format("  - unit: {}\n", unit));
+    const std::size_t b = good.find("    nominal_axes_b:", at);
+    return good.substr(b, good.find('\n', b) + 1 - b);
+  };
+  const auto hand_made = [&](const std::vector<int>& order, double unit2_error, const char* unit2_converged) {
+    std::string cal = "units:\n";
+    for (int u : order)
+      cal += fmt::format("  - unit: {}\n    error_deg: [{}, 0, 0]\n    converged: {}\n", u, u == 2 ? unit2_error : 0.1,
+                         u == 1 ? "false" : u == 2 ? unit2_converged : "true") + axes_line(u);
+    return cal;
+  };
+  const std::vector<int> in_order{1, 2, 3, 4, 5, 6, 7, 8, 9};
+  test::write_file(tmp / "C/bad.yaml", hand_made(in_order, 12, "true"));
   r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
-  EXPECT_HAS(r.err, "C/bad.yaml:6: key 'units[1].error_deg (unit 2)': expected a mounting error within ±10°, got 12");
-  cal.replace(cal.find("[12,"), 4, "[0.2,");
-  cal.replace(cal.find("converged: true"), 15, "converged: maybe");
-  test::write_file(tmp / "C/bad.yaml", cal);
+  EXPECT_HAS(r.err, "C/bad.yaml:7: key 'units[1].error_deg (unit 2)': expected a mounting error within ±10°, got 12");
+  test::write_file(tmp / "C/bad.yaml", hand_made(in_order, 0.2, "maybe"));
   r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
   EXPECT_HAS(r.err, "key 'units[1].converged (unit 2)': expected true or false");
+  // The third review's finding 5: entries are taken by their unit number, so a file with its
+  // entries swapped gives the same solution; a number out of range, repeated, or a unit fitted for
+  // another layout is refused.
+  test::write_file(tmp / "C/ordered.yaml", hand_made(in_order, 0.2, "true"));
+  test::write_file(tmp / "C/swapped.yaml", hand_made({3, 2, 1, 4, 5, 6, 9, 8, 7}, 0.2, "true"));
+  ok("navigate D --calibration C/ordered.yaml --mode integrated -o O1 --no-plots", cd());
+  ok("navigate D --calibration C/swapped.yaml --mode integrated -o O2 --no-plots", cd());
+  EXPECT_EQ(test::read_file(tmp / "O1/solution.csv"), test::read_file(tmp / "O2/solution.csv"));
+  bad = hand_made(in_order, 0.2, "true");
+  bad.replace(bad.find("unit: 1\n"), 8, "unit: 7\n");
+  test::write_file(tmp / "C/bad.yaml", bad);
+  r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
+  EXPECT_HAS(r.err, "C/bad.yaml:5: key 'units[0].nominal_axes_b (unit 7)': unit 7 was fitted for another layout");
+  bad = hand_made(in_order, 0.2, "true");
+  bad.replace(bad.find("  - unit: 7\n"), bad.find("  - unit: 8\n") - bad.find("  - unit: 7\n"),
+              bad.substr(bad.find("  - unit: 6\n"), bad.find("  - unit: 7\n") - bad.find("  - unit: 6\n")));
+  test::write_file(tmp / "C/bad.yaml", bad);
+  r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
+  EXPECT_HAS(r.err, "C/bad.yaml:26: key 'units[6].unit': unit 6 is given twice (first as units[5])");
+  bad = hand_made(in_order, 0.2, "true");
+  bad.replace(bad.find("unit: 1\n"), 8, "unit: 10\n");
+  test::write_file(tmp / "C/bad.yaml", bad);
+  r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
+  EXPECT_HAS(r.err, "C/bad.yaml:2: key 'units[0].unit': expected a unit number 1 … 9 (the dataset's layout), got 10");
+  ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=30 --set device.units.ring_tilt_deg=40 -o T", cd());
+  r = polrig("navigate T --calibration C/calibration.yaml -o N", cd());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "unit 2 was fitted for another layout: its nominal axes are 10° from the dataset's unit 2");
+  // Finding 6: a key given twice, an unknown key at the top or in a unit.
+  test::write_file(tmp / "C/bad.yaml", good + "units: []\n");
+  r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
+  EXPECT_HAS(r.err, "key 'units': duplicate key (first at line 3)");
+  test::write_file(tmp / "C/bad.yaml", good + "unit_count: 9\n");
+  r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
+  EXPECT_HAS(r.err, "key 'unit_count': unknown key (expected units, elevation_error_deg)");
+  bad = good;
+  bad.insert(bad.find("    converged:"), "    offset_deg: 1\n");
+  test::write_file(tmp / "C/bad.yaml", bad);
+  r = polrig("navigate D --calibration C/bad.yaml -o N", cd());
+  EXPECT_HAS(r.err, "key 'units[0].offset_deg': unknown key");
+  // Findings 7 and 8: an empty name, a folder.
+  r = polrig("navigate D --calibration '' -o N", cd());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "--calibration '': expected a file name");
+  r = polrig("navigate D --rig '' -o N", cd());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "--rig '': expected a file name");
+  r = polrig("navigate D --calibration C -o N", cd());
+  EXPECT_EQ(r.status, 2);
+  EXPECT_HAS(r.err, "C: cannot read the calibration file: it is a directory (expected a file)");
   r = polrig("navigate D --mode best -o N", cd());
   EXPECT_EQ(r.status, 2);
   EXPECT_FALSE(fs::exists(tmp / "N"));

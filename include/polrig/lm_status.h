@@ -11,7 +11,8 @@ inline const char* lm_status_name(Eigen::LevenbergMarquardtSpace::Status s, bool
   converged = false;
   switch (s) {
     case S::NotStarted: return "NotStarted";
-    case S::Running: return "Running";
+    // The callers' loops stop at their iteration limit while Eigen still says Running.
+    case S::Running: return "IterationLimit";
     case S::UserAsked: return "UserAsked";
     case S::ImproperInputParameters: return "ImproperInputParameters";
     case S::TooManyFunctionEvaluation: return "TooManyFunctionEvaluation";

@@ -13,6 +13,7 @@
 #include "cli.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/navigation_dataset.h"
+#include "polrig/io/installation_yaml.h"
 #include "polrig/report/installation_report.h"
 #include "polrig/report/navigation_report.h"
 #include "polrig/rig/error.h"
@@ -96,11 +97,13 @@ void run_calibrate_unit_array(const std::string& input, const std::string& rig_p
   std::cout << fmt::format("unit-array installation: {} readings, attitude from the {}\n", run.epochs, run.attitude_from);
   for (std::size_t i = 0; i < run.units.size(); ++i) {
     const UnitInstallation& u = run.units[i];
-    std::cout << fmt::format("  unit {}: δ = [{:.3f}, {:.3f}, {:.3f}]° ± [{:.3f}, {:.3f}, {:.3f}]°; AoP rms {:.3f}° → {:.3f}° "
-                             "({} readings, {})\n",
-                             i + 1, u.error_deg[0], u.error_deg[1], u.error_deg[2], u.standard_error_deg[0],
-                             u.standard_error_deg[1], u.standard_error_deg[2], u.rms_before_deg, u.rms_after_deg, u.used,
-                             u.termination);
+    const std::string se = std::isfinite(u.standard_error_deg[0])
+                               ? fmt::format("± [{:.3f}, {:.3f}, {:.3f}]°", u.standard_error_deg[0],
+                                             u.standard_error_deg[1], u.standard_error_deg[2])
+                               : std::string("undetermined");
+    std::cout << fmt::format("  unit {}: δ = [{:.3f}, {:.3f}, {:.3f}]° {}; AoP rms {:.3f}° → {:.3f}° ({} readings, {}{})\n",
+                             i + 1, u.error_deg[0], u.error_deg[1], u.error_deg[2], se, u.rms_before_deg,
+                             u.rms_after_deg, u.used, u.termination, u.converged ? "" : ", not used");
   }
   std::cout << fmt::format("sun elevation error: mean {:.3f}° → {:.3f}°, mean |error| {:.3f}° → {:.3f}° ({} readings)\n",
                            run.elevation_mean_before_deg, run.elevation_mean_after_deg, run.elevation_mae_before_deg,
@@ -135,7 +138,11 @@ std::vector<Command> add_navigation_commands(CLI::App& root, int& threads) {
   add_set_option(*app, o->sets);
   o->out.add_to(*app);
   add_threads_option(*app, threads);
-  commands.push_back({app, [o] { run_navigate(*o); }});
+  commands.push_back({app, [o, app] {
+                        require_file_name(*app, "--rig", o->rig_path);
+                        require_file_name(*app, "--calibration", o->calibration);
+                        run_navigate(*o);
+                      }});
   return commands;
 }
 

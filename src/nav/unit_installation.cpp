@@ -1,6 +1,7 @@
 #include "polrig/nav/unit_installation.h"
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
@@ -130,10 +131,20 @@ std::vector<UnitInstallation> calibrate_installation(std::span<const UnitMount> 
     const Eigen::Matrix3d JtJ = J.transpose() * J;
     const double dof = static_cast<double>(f.values()) - 3.0;
     const double sigma2 = dof > 0 ? r.squaredNorm() / dof : 0.0;
+    // Readings that fix fewer than three angles (a static run confounds a tilted unit's tilt and
+    // roll errors): JᵀJ singular to rounding, no standard error exists, and the fit is not used.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(JtJ);
+    const double lo = eig.eigenvalues().minCoeff(), hi = eig.eigenvalues().maxCoeff();
+    const bool determined = JtJ.allFinite() && hi > 0 && lo > 1e-10 * hi && dof > 0;
     const Eigen::Matrix3d cov = sigma2 * JtJ.inverse();
     for (int a = 0; a < 3; ++a) {
       u.error_deg[static_cast<std::size_t>(a)] = rad2deg(x(a));
-      u.standard_error_deg[static_cast<std::size_t>(a)] = rad2deg(std::sqrt(std::max(0.0, cov(a, a))));
+      u.standard_error_deg[static_cast<std::size_t>(a)] =
+          determined ? rad2deg(std::sqrt(cov(a, a))) : std::numeric_limits<double>::quiet_NaN();
+    }
+    if (!determined) {
+      u.converged = false;
+      u.termination = "RankDeficient";
     }
     const double d[3] = {x(0), x(1), x(2)};
     u.C_mb = with_error(nominal[i].C_mb, d);

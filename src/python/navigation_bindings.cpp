@@ -16,6 +16,7 @@
 #include "polrig/io/navigation_dataset.h"
 #include "polrig/io/output_dir.h"
 #include "polrig/io/plot.h"
+#include "polrig/io/installation_yaml.h"
 #include "polrig/report/installation_report.h"
 #include "polrig/report/navigation_report.h"
 #include "polrig/report/navigation_study_report.h"

@@ -1,10 +1,8 @@
 #include "polrig/report/installation_report.h"
-#include "polrig/quoted.h"
 
 #include <cmath>
 
 #include <fmt/format.h>
-#include <yaml-cpp/yaml.h>
 
 #include "polrig/io/csv.h"
 #include "polrig/io/measured.h"
@@ -13,6 +11,9 @@
 namespace polrig {
 
 namespace {
+
+// A standard error, or what stands for none (a rank-deficient fit): YAML's null, CSV's empty cell.
+std::string standard_error_cell(double se, const char* none) { return std::isfinite(se) ? fmt::format("{}", se) : none; }
 
 std::string calibration_yaml(const InstallationRun& run) {
   std::string out = fmt::format(
@@ -24,9 +25,12 @@ std::string calibration_yaml(const InstallationRun& run) {
     out += fmt::format("  - unit: {}\n    error_deg: [{}, {}, {}]\n    standard_error_deg: [{}, {}, {}]\n"
                        "    rms_before_deg: {}\n    rms_after_deg: {}\n    used: {}\n    iterations: {}\n"
                        "    termination: {}\n    converged: {}\n",
-                       i + 1, u.error_deg[0], u.error_deg[1], u.error_deg[2], u.standard_error_deg[0],
-                       u.standard_error_deg[1], u.standard_error_deg[2], u.rms_before_deg, u.rms_after_deg, u.used,
-                       u.iterations, u.termination, u.converged);
+                       i + 1, u.error_deg[0], u.error_deg[1], u.error_deg[2], standard_error_cell(u.standard_error_deg[0], "null"),
+                       standard_error_cell(u.standard_error_deg[1], "null"), standard_error_cell(u.standard_error_deg[2], "null"),
+                       u.rms_before_deg, u.rms_after_deg, u.used, u.iterations, u.termination, u.converged);
+    const Axes3& a = run.nominal[i].C_mb;
+    out += fmt::format("    nominal_axes_b: [[{}, {}, {}], [{}, {}, {}], [{}, {}, {}]]  # the layout fitted: X, Y, Z\n",
+                       a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2]);
   }
   out += fmt::format("elevation_error_deg:  # H^n of the two highest-DoP units minus the ephemeris'\n"
                      "  mean_before: {}\n  mean_after: {}\n  mae_before: {}\n  mae_after: {}\n  readings: {}\n",
@@ -41,16 +45,11 @@ std::string installation_csv(const InstallationRun& run) {
   for (std::size_t i = 0; i < run.units.size(); ++i) {
     const UnitInstallation& u = run.units[i];
     out += fmt::format("{},{},{},{},{},{},{},{},{},{},{}\n", i + 1, u.error_deg[0], u.error_deg[1], u.error_deg[2],
-                       u.standard_error_deg[0], u.standard_error_deg[1], u.standard_error_deg[2], u.rms_before_deg,
-                       u.rms_after_deg, u.used, u.termination);
+                       standard_error_cell(u.standard_error_deg[0], ""), standard_error_cell(u.standard_error_deg[1], ""),
+                       standard_error_cell(u.standard_error_deg[2], ""), u.rms_before_deg, u.rms_after_deg, u.used,
+                       u.termination);
   }
   return out;
-}
-
-[[noreturn]] void refuse_key(const std::filesystem::path& file, const YAML::Node& node, const std::string& key,
-                         const std::string& problem) {
-  const std::string where = node.Mark().is_null() ? file.string() : fmt::format("{}:{}", file.string(), node.Mark().line + 1);
-  throw DataError(fmt::format("{}: key '{}': {}", where, key, problem));
 }
 
 }  // namespace
@@ -72,46 +71,6 @@ std::vector<DatasetFile> report_installation(const std::filesystem::path& dir, c
     files.push_back({"installation.png", 1, p.title});
   }
   return files;
-}
-
-std::vector<UnitMount> read_installation(const std::filesystem::path& file, const std::vector<UnitMount>& nominal) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(file.string());
-  } catch (const YAML::Exception& e) {
-    throw DataError(fmt::format("{}: {}", file.string(), e.what()));
-  }
-  const YAML::Node units = root["units"];
-  if (!units || !units.IsSequence()) refuse_key(file, root, "units", "expected a list of units (polrig calibrate --method unit-array)");
-  if (units.size() != nominal.size())
-    refuse_key(file, units, "units", fmt::format("expected {} units (the dataset's layout), got {}", nominal.size(), units.size()));
-  std::vector<UnitMount> out;
-  for (std::size_t i = 0; i < units.size(); ++i) {
-    // A unit its fit did not determine (converged: false) keeps its nominal frame, as
-    // InstallationRun::mounts() does.
-    const YAML::Node converged = units[i]["converged"];
-    if (!converged || !converged.IsScalar() || (converged.Scalar() != "true" && converged.Scalar() != "false"))
-      refuse_key(file, units[i], fmt::format("units[{}].converged (unit {})", i, i + 1), "expected true or false");
-    if (converged.Scalar() == "false") {
-      out.push_back(nominal[i]);
-      continue;
-    }
-    const YAML::Node e = units[i]["error_deg"];
-    const std::string key = fmt::format("units[{}].error_deg (unit {})", i, i + 1);
-    if (!e || !e.IsSequence() || e.size() != 3) refuse_key(file, units[i], key, "expected three angles in degrees");
-    std::array<double, 3> d{};
-    for (std::size_t a = 0; a < 3; ++a) {
-      try {
-        d[a] = e[a].as<double>();
-      } catch (const YAML::Exception&) {
-        refuse_key(file, e[a], key, fmt::format("expected a number, got '{}'", quoted_value(e[a].Scalar())));
-      }
-      if (!(std::abs(d[a]) <= 10))
-        refuse_key(file, e[a], key, fmt::format("expected a mounting error within ±10°, got {}", quoted_value(e[a].Scalar())));
-    }
-    out.push_back({installed_frame(nominal[i].C_mb, d)});
-  }
-  return out;
 }
 
 }  // namespace polrig

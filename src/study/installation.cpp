@@ -62,6 +62,7 @@ InstallationRun calibrate_unit_array(const NavigationDataset& data, const Rig& r
   std::vector<InstallationEpoch> fit;
   for (std::size_t k = 0; k < epochs.size(); ++k) fit.push_back({epochs[k].C_bn, epochs[k].sun_enu, data.compass[k].units});
   run.units = calibrate_installation(data.mounts, fit, settings);
+  run.nominal = data.mounts;
   run.epochs = static_cast<int>(fit.size());
   // A mounting error beyond 10° is no mounting error (the rig keys' range): the sequence did not
   // determine the unit (one attitude confounds its tilt and roll errors); said, not used.

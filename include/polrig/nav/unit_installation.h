@@ -32,12 +32,14 @@ struct UnitInstallationSettings {
 // One unit's fit; failures are data.
 struct UnitInstallation {
   std::array<double, 3> error_deg{0, 0, 0};           // δ (x, y, z about the unit's own axes)
-  std::array<double, 3> standard_error_deg{0, 0, 0};  // from σ²·(JᵀJ)⁻¹, σ² = Σr²/(m − 3)
+  std::array<double, 3> standard_error_deg{0, 0, 0};  // from σ²·(JᵀJ)⁻¹, σ² = Σr²/(m − 3); nan when rank deficient
   double rms_before_deg = 0;  // the residuals with δ = 0 (the nominal frame)
   double rms_after_deg = 0;   // at the fit
   int used = 0;               // readings with d ≥ min_dop and a finite angle
   int iterations = 0;
-  std::string termination;    // Eigen's status ("RelativeErrorTooSmall" …), or "too-few-readings" (< 4)
+  // Eigen's status ("RelativeErrorTooSmall" …; "IterationLimit" where Eigen still runs), "RankDeficient"
+  // (JᵀJ singular to 1e-10: the readings fix fewer than three angles), or "too-few-readings" (< 4).
+  std::string termination;
   bool converged = false;
   Axes3 C_mb{};               // the calibrated frame C_mi^b·R(δ)
 };

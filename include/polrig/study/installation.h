@@ -14,6 +14,7 @@ namespace polrig {
 
 struct InstallationRun {
   std::vector<UnitInstallation> units;
+  std::vector<UnitMount> nominal;  // the layout fitted (the dataset's nominal frames), recorded in calibration.yaml
   std::string attitude_from;      // "truth" or "sins"
   int epochs = 0;                 // compass readings used
   // H^n from the two highest-DoP units minus the ephemeris' H at the vehicle, over the readings

@@ -17,7 +17,10 @@
 
 #include "almanac_sun.h"
 #include "polrig/ins/earth.h"
+#include "polrig/io/dataset_folder.h"
+#include "polrig/io/measured.h"
 #include "polrig/io/navigation_dataset.h"
+#include "polrig/io/output_dir.h"
 #include "polrig/io/plot.h"
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/error.h"
@@ -451,6 +454,73 @@ TEST_F(NavigationCli, AnOutputOverItsInputIsRefusedAndTheInputKept) {
   EXPECT_EQ(r.status, 2);
   EXPECT_HAS(r.err, "the output folder R contains the input R/rig.yaml");
   EXPECT_TRUE(fs::exists(tmp / "R/rig.yaml"));
+}
+
+// The third review's findings 9, 13 and 14: a UTF-8 byte-order mark is passed over in every file
+// of the dataset; an empty file names its own header; truth.csv's longitude and height are range
+// checked, naming the file, the line and the column.
+TEST_F(NavigationCli, DatasetFilesTakeAByteOrderMarkAndNameTheirOwnHeader) {
+  ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=20 -o D --no-plots", cd());
+  fs::create_directories(tmp / "B");
+  for (const char* f : {"imu.csv", "units.csv", "truth.csv", "rig.yaml"}) {
+    const std::string text = test::read_file(tmp / "D" / f);
+    test::write_file(tmp / "B" / f, std::string(f).ends_with(".csv") ? "\xEF\xBB\xBF" + text : text);
+  }
+  ok("navigate D -o N1 --no-plots", cd());
+  ok("navigate B -o N2 --no-plots", cd());
+  EXPECT_EQ(test::read_file(tmp / "N1/solution.csv"), test::read_file(tmp / "N2/solution.csv"));
+  const std::pair<const char*, const char*> empty[] = {
+      {"imu.csv", "B/imu.csv: the file is empty; expected a header line such as t_s,dtheta_x_rad,"},
+      {"units.csv", "B/units.csv: the file is empty; expected a header line such as t_s,unit,aop_deg,dop"},
+      {"truth.csv", "B/truth.csv: the file is empty; expected a header line such as t_s,lat_deg,lon_deg,"}};
+  for (const auto& [file, says] : empty) {
+    const std::string kept = test::read_file(tmp / "B" / file);
+    test::write_file(tmp / "B" / file, "");
+    const Result r = polrig("navigate B -o N", cd());
+    EXPECT_EQ(r.status, 2) << file;
+    EXPECT_HAS(r.err, says);
+    EXPECT_LACKS(r.err, "theta_R_deg");
+    test::write_file(tmp / "B" / file, kept);
+  }
+  const std::string truth = test::read_file(tmp / "D/truth.csv");
+  const auto with_cell = [&](int column, const char* value) {
+    std::string t = truth;
+    std::size_t p = t.find('\n', t.find('\n') + 1) + 1;  // line 3
+    for (int c = 0; c < column; ++c) p = t.find(',', p) + 1;
+    t.replace(p, t.find(',', p) - p, value);
+    return t;
+  };
+  test::write_file(tmp / "B/truth.csv", with_cell(2, "1000"));
+  EXPECT_HAS(polrig("navigate B -o N", cd()).err, "B/truth.csv:3: column 'lon_deg': expected a longitude within ±360°, got 1000");
+  test::write_file(tmp / "B/truth.csv", with_cell(3, "1e300"));
+  EXPECT_HAS(polrig("navigate B -o N", cd()).err, "B/truth.csv:3: column 'h_m': expected a height in [-11000, 100000] m");
+  EXPECT_FALSE(fs::exists(tmp / "N"));
+}
+
+// Finding 4: a reader that has opened a dataset's folder reads every file from it even when
+// another process swaps a new dataset into its place (simulate --force's atomic exchange), and
+// fails, naming the file, once the old one is deleted: one dataset, or an error; never a mix.
+TEST_F(NavigationCli, AReaderSeesOneDatasetWhileItIsReplaced) {
+  ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=20 -o D --no-plots", cd());
+  ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=30 -o E --no-plots", cd());
+  const Rig r = load_rig(tmp / "D/rig.yaml").rig;
+  const DatasetFolder folder(tmp / "D");
+  ASSERT_EQ(rename_exchange(tmp / "D", tmp / "E"), 0);  // D's name now holds the 30 s dataset
+  const NavigationDataset old = read_navigation_dataset(folder, r);
+  EXPECT_EQ(old.imu.size(), 2000u);
+  EXPECT_EQ(old.compass.size(), 20u);
+  EXPECT_EQ(read_navigation_dataset(tmp / "D", r).imu.size(), 3000u);
+  fs::remove_all(tmp / "E");  // the old folder, deleted as commit() does
+  EXPECT_THROW(
+      {
+        try {
+          read_navigation_dataset(folder, r);
+        } catch (const DataError& e) {
+          EXPECT_HAS(std::string(e.what()), "imu.csv: cannot read the file: no such file");
+          throw;
+        }
+      },
+      DataError);
 }
 
 TEST_F(NavigationCli, AMeasuredDatasetWithoutTruthNavigates) {

@@ -30,15 +30,27 @@ struct NavigateOptions {
   OutputOptions out;
 };
 
-// The dataset's rig (DIR/rig.yaml, or --rig) with the --set overrides: a unit array under the sky.
-LoadedRig navigation_rig(const NavigateOptions& o) {
-  RigInput in{o.rig_path.empty() ? (std::filesystem::path(o.input) / "rig.yaml").string() : o.rig_path, o.sets};
-  if (!std::filesystem::is_directory(o.input)) throw DataError(fmt::format("{}: not a folder (expected a unit-array dataset)", o.input));
-  if (o.rig_path.empty() && !std::filesystem::exists(in.path))
-    throw DataError(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else give --rig)", o.input));
-  LoadedRig r = in.load();
+// The dataset's rig (DIR/rig.yaml, read through the open folder, or --rig) with the --set
+// overrides: a unit array under the sky.
+LoadedRig navigation_rig(const NavigateOptions& o, const DatasetFolder& folder) {
+  LoadedRig r;
+  if (!o.rig_path.empty()) {
+    r = RigInput{o.rig_path, o.sets}.load();
+  } else {
+    if (!folder.has("rig.yaml"))
+      throw DataError(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else give --rig)", o.input));
+    std::vector<RigOverride> overrides;
+    for (const std::string& s : o.sets) overrides.push_back(RigOverride::parse(s));
+    r = parse_rig(folder.read("rig.yaml"), folder.path("rig.yaml").string(), overrides);
+  }
   require_instrument(r.rig, Instrument::kUnitArray, "navigate", r.origin);
   return r;
+}
+
+// The dataset's folder, opened once for the rig and every file (io/dataset_folder.h).
+DatasetFolder dataset_folder(const std::string& input) {
+  if (!std::filesystem::is_directory(input)) throw DataError(fmt::format("{}: not a folder (expected a unit-array dataset)", input));
+  return DatasetFolder(input);
 }
 
 void print_summary(const NavigationDataset& data, const NavigationRun& run) {
@@ -52,14 +64,15 @@ void print_summary(const NavigationDataset& data, const NavigationRun& run) {
 }
 
 void run_navigate(const NavigateOptions& o) {
-  const LoadedRig r = navigation_rig(o);
+  const DatasetFolder folder = dataset_folder(o.input);
+  const LoadedRig r = navigation_rig(o, folder);
   NavigationOptions options;
   try {
     options.modes = parse_navigation_modes(o.mode);
   } catch (const std::invalid_argument& e) {
     throw DataError(fmt::format("--mode: {}", e.what()));
   }
-  const NavigationDataset data = read_navigation_dataset(o.input, r.rig);
+  const NavigationDataset data = read_navigation_dataset(folder, r.rig);
   if (!o.calibration.empty()) options.mounts = read_installation(o.calibration, data.mounts);
   OutputDir dir = o.out.open();
   NavigationRun run;
@@ -83,8 +96,9 @@ void run_calibrate_unit_array(const std::string& input, const std::string& rig_p
   NavigateOptions o;
   o.input = input;
   o.rig_path = rig_path;
-  const LoadedRig r = navigation_rig(o);
-  const NavigationDataset data = read_navigation_dataset(input, r.rig);
+  const DatasetFolder folder = dataset_folder(input);
+  const LoadedRig r = navigation_rig(o, folder);
+  const NavigationDataset data = read_navigation_dataset(folder, r.rig);
   OutputDir dir = out.open();
   InstallationRun run;
   try {

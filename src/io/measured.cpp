@@ -9,12 +9,15 @@
 
 #include <fmt/format.h>
 
+#include "polrig/io/dataset_folder.h"
 #include "polrig/io/rig_yaml.h"
 
 namespace polrig {
 namespace fs = std::filesystem;
 
 namespace {
+constexpr std::string_view kStopsHeader = "theta_R_deg,V1,V2,V3";
+
 std::vector<std::string> split_fields(const std::string& line) {
   std::vector<std::string> out;
   std::string field;
@@ -29,7 +32,7 @@ std::vector<std::string> split_fields(const std::string& line) {
 }
 }  // namespace
 
-CsvFile CsvFile::read(const fs::path& path) {
+CsvFile CsvFile::read(const fs::path& path, std::string_view expected_header) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec))
     throw DataError(fmt::format("{}: cannot read the file: {}", path.string(),
@@ -37,36 +40,66 @@ CsvFile CsvFile::read(const fs::path& path) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream buf;
   buf << in.rdbuf();
-  return parse(buf.str(), path.string());
+  return parse(buf.str(), path.string(), expected_header);
 }
 
-CsvFile CsvFile::parse(std::string_view content, std::string_view origin) {
+CsvFile CsvFile::read(const DatasetFolder& folder, std::string_view name, std::string_view expected_header) {
+  return parse(folder.read(name), folder.path(name).string(), expected_header);
+}
+
+bool CsvFile::take_line(std::string& text, int n) {
+  if (n == 1 && text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);  // a UTF-8 byte-order mark
+  if (!text.empty() && text.back() == '\r') text.pop_back();
+  if (text.find_first_not_of(" \t") == std::string::npos) return false;  // blank line
+  if (!text.empty() && text[0] == '#') return false;                       // comment
+  if (header.empty()) {
+    header = split_fields(text);
+    header_line = n;
+    return false;
+  }
+  std::vector<std::string> fields = split_fields(text);
+  if (fields.size() != header.size())
+    throw DataError(fmt::format("{}:{}: expected {} fields as in the header, got {}", origin, n, header.size(),
+                                fields.size()));
+  rows.push_back(std::move(fields));
+  line.push_back(n);
+  return true;
+}
+
+void CsvFile::require_header(std::string_view expected_header) const {
+  if (header.empty())
+    throw DataError(fmt::format("{}: the file is empty; expected a header line{}", origin,
+                                expected_header.empty() ? std::string() : fmt::format(" such as {}", expected_header)));
+}
+
+CsvFile CsvFile::parse(std::string_view content, std::string_view origin, std::string_view expected_header) {
   std::istringstream in{std::string(content)};
   CsvFile f;
   f.origin = std::string(origin);
   std::string text;
   int n = 0;
-  while (std::getline(in, text)) {
-    ++n;
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    if (text.find_first_not_of(" \t") == std::string::npos) continue;  // blank line
-    if (!text.empty() && text[0] == '#') continue;                       // comment
-    if (f.header.empty()) {
-      f.header = split_fields(text);
-      f.header_line = n;
-      continue;
-    }
-    std::vector<std::string> fields = split_fields(text);
-    if (fields.size() != f.header.size())
-      throw DataError(fmt::format("{}:{}: expected {} fields as in the header, got {}", f.origin,
-                                  n, f.header.size(), fields.size()));
-    f.rows.push_back(std::move(fields));
-    f.line.push_back(n);
-  }
-  if (f.header.empty())
-    throw DataError(fmt::format("{}: the file is empty; expected a header line such as "
-                                "theta_R_deg,V1,V2,V3", f.origin));
+  while (std::getline(in, text)) f.take_line(text, ++n);
+  f.require_header(expected_header);
   return f;
+}
+
+CsvRows::CsvRows(const DatasetFolder& folder, std::string_view name, std::string_view expected_header)
+    : fd_(folder.open(name)), buf_(fd_, std::ios::in), in_(&buf_) {
+  f_.origin = folder.path(name).string();
+  std::string text;
+  while (f_.header.empty() && std::getline(in_, text)) f_.take_line(text, ++n_);
+  f_.require_header(expected_header);
+}
+
+CsvRows::~CsvRows() = default;  // the filebuf closes the descriptor
+
+bool CsvRows::next() {
+  f_.rows.clear(), f_.line.clear();
+  std::string text;
+  while (std::getline(in_, text))
+    if (f_.take_line(text, ++n_)) return true;
+  if (in_.bad()) throw DataError(fmt::format("{}: cannot read the file", f_.origin));
+  return false;
 }
 
 std::optional<std::size_t> CsvFile::find_column(std::string_view name) const {
@@ -139,7 +172,7 @@ MeasuredData read_stops(const fs::path& input, bool need_angle, std::string_view
       require_instrument(*rig, Instrument::kPairVoltages, what, rig_origin);
     }
   }
-  MeasuredData data = stops_of(CsvFile::read(csv), need_angle);
+  MeasuredData data = stops_of(CsvFile::read(csv, kStopsHeader), need_angle);
   data.rig = std::move(rig);
   data.rig_origin = std::move(rig_origin);
   return data;
@@ -155,7 +188,7 @@ MeasuredData read_voltages(const fs::path& input, std::string_view what) {
 }
 
 MeasuredData parse_measured_csv(std::string_view text, std::string_view origin, bool need_angle) {
-  return stops_of(CsvFile::parse(text, origin), need_angle);
+  return stops_of(CsvFile::parse(text, origin, kStopsHeader), need_angle);
 }
 
 }  // namespace polrig

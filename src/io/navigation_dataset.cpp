@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include "polrig/io/csv.h"
+#include "polrig/io/dataset_folder.h"
 #include "polrig/io/measured.h"
 #include "polrig/units.h"
 
@@ -91,15 +92,22 @@ double optional_number(const CsvFile& f, std::size_t row, std::size_t column) {
 constexpr double kMaxRate_rad_s = 2000.0 * 3.14159265358979323846 / 180.0;
 constexpr double kMaxSpecificForce_mps2 = 50 * kStandardGravity;
 
-std::vector<ImuSample> read_imu(const std::filesystem::path& path, double rate_hz) {
-  const CsvFile f = CsvFile::read(path);
+constexpr std::string_view kImuHeader = "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps";
+constexpr std::string_view kUnitsHeader = "t_s,unit,aop_deg,dop";
+constexpr std::string_view kTruthHeader = "t_s,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,v_e,v_n,v_u";
+
+// Read a row at a time (CsvRows): a long log's memory is its samples', not its text's cells.
+std::vector<ImuSample> read_imu(const DatasetFolder& folder, double rate_hz) {
+  CsvRows rows(folder, "imu.csv", kImuHeader);
+  const CsvFile& f = rows.file();
   const std::size_t t = f.column("t_s", kSection);
   const std::array<const char*, 6> names{"dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_mps", "dv_y_mps", "dv_z_mps"};
   std::array<std::size_t, 6> c{};
   for (std::size_t i = 0; i < 6; ++i) c[i] = f.column(names[i], kSection);
   const double period = 1 / rate_hz;
   std::vector<ImuSample> out;
-  for (std::size_t r = 0; r < f.rows.size(); ++r) {
+  while (rows.next()) {
+    constexpr std::size_t r = 0;  // the current row
     ImuSample s;
     s.t_s = f.number(r, t);
     const double dt = s.t_s - (out.empty() ? 0.0 : out.back().t_s);
@@ -125,12 +133,13 @@ std::vector<ImuSample> read_imu(const std::filesystem::path& path, double rate_h
     }
     out.push_back(s);
   }
-  if (out.empty()) throw DataError(fmt::format("{}: no IMU samples", path.string()));
+  if (out.empty()) throw DataError(fmt::format("{}: no IMU samples", f.origin));
   return out;
 }
 
-std::vector<CompassEpoch> read_units_csv(const std::filesystem::path& path, std::size_t units) {
-  const CsvFile f = CsvFile::read(path);
+std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_t units) {
+  const CsvFile f = CsvFile::read(folder, "units.csv", kUnitsHeader);
+  const std::string path = f.origin;
   const std::size_t t = f.column("t_s", kSection), u = f.column("unit", kSection), a = f.column("aop_deg", kSection),
                     d = f.column("dop", kSection);
   std::vector<CompassEpoch> out;
@@ -153,15 +162,20 @@ std::vector<CompassEpoch> read_units_csv(const std::filesystem::path& path, std:
     if (std::isfinite(aop) && std::abs(aop) > 360) refuse_cell(f, r, "aop_deg", fmt::format("expected an angle within ±360°, got {}", aop));
     out.back().units.push_back({deg2rad(aop), dop});
   }
-  if (out.empty()) throw DataError(fmt::format("{}: no unit readings", path.string()));
+  if (out.empty()) throw DataError(fmt::format("{}: no unit readings", path));
   if (out.back().units.size() != units)
-    throw DataError(fmt::format("{}: the last reading at {} s has {} units, expected {}", path.string(), out.back().t_s,
+    throw DataError(fmt::format("{}: the last reading at {} s has {} units, expected {}", path, out.back().t_s,
                                 out.back().units.size(), units));
   return out;
 }
 
-std::vector<TruthSample> read_truth(const std::filesystem::path& path) {
-  const CsvFile f = CsvFile::read(path);
+// The truth's physical ranges [C]: a longitude within ±360° (wrapped to (−180°, 180°]); a height
+// from the deepest ocean floor to the edge of space; attitude angles within ±360°; a speed below
+// orbital (8 km/s). A truth beyond them is not a vehicle's.
+constexpr double kMinHeight_m = -11000, kMaxHeight_m = 100000, kMaxSpeed_mps = 8000;
+
+std::vector<TruthSample> read_truth(const DatasetFolder& folder) {
+  const CsvFile f = CsvFile::read(folder, "truth.csv", kTruthHeader);
   std::array<std::size_t, 10> c{};
   const std::array<const char*, 10> names{"t_s", "lat_deg", "lon_deg", "h_m", "roll_deg", "pitch_deg", "yaw_deg", "v_e", "v_n", "v_u"};
   for (std::size_t i = 0; i < c.size(); ++i) c[i] = f.column(names[i], kSection);
@@ -170,12 +184,20 @@ std::vector<TruthSample> read_truth(const std::filesystem::path& path) {
     std::array<double, 10> v{};
     for (std::size_t i = 0; i < c.size(); ++i) v[i] = f.number(r, c[i]);
     if (std::abs(v[1]) > 90) refuse_cell(f, r, "lat_deg", fmt::format("expected a latitude in [-90, 90], got {}", v[1]));
+    if (std::abs(v[2]) > 360) refuse_cell(f, r, "lon_deg", fmt::format("expected a longitude within ±360°, got {}", v[2]));
+    if (!(v[3] >= kMinHeight_m && v[3] <= kMaxHeight_m))
+      refuse_cell(f, r, "h_m", fmt::format("expected a height in [{}, {}] m, got {}", kMinHeight_m, kMaxHeight_m, v[3]));
+    for (std::size_t i = 4; i < 7; ++i)
+      if (std::abs(v[i]) > 360) refuse_cell(f, r, names[i], fmt::format("expected an angle within ±360°, got {}", v[i]));
+    for (std::size_t i = 7; i < 10; ++i)
+      if (std::abs(v[i]) > kMaxSpeed_mps)
+        refuse_cell(f, r, names[i], fmt::format("expected a velocity within ±{} m/s, got {}", kMaxSpeed_mps, v[i]));
     if (!out.empty() && !(v[0] > out.back().t_s))
       refuse_cell(f, r, "t_s", fmt::format("time {} s is not after the previous row's {} s", v[0], out.back().t_s));
     TruthSample s;
     s.t_s = v[0];
     s.lat_rad = deg2rad(v[1]);
-    s.lon_rad = deg2rad(v[2]);
+    s.lon_rad = deg2rad(std::remainder(v[2], 360.0));
     s.h_m = v[3];
     s.euler = {deg2rad(v[4]), deg2rad(v[5]), deg2rad(v[6])};
     s.C_bn = C_bn_from_euler(s.euler);
@@ -206,20 +228,24 @@ std::vector<DatasetFile> write_navigation_dataset(const std::filesystem::path& d
 }
 
 NavigationDataset read_navigation_dataset(const std::filesystem::path& dir, const Rig& rig) {
+  return read_navigation_dataset(DatasetFolder(dir), rig);
+}
+
+NavigationDataset read_navigation_dataset(const DatasetFolder& folder, const Rig& rig) {
   NavigationDataset d;
   d.start = rig.source.sky.resolved_sky().first_stop;
   d.initial = initial_state(rig);
   const UnitArrayTruth layout = unit_array_truth(rig.units, rig.seed);
   for (const Axes3& C : layout.nominal) d.mounts.push_back({C});
-  d.imu = read_imu(dir / "imu.csv", rig.imu.rate_hz);
-  d.compass = read_units_csv(dir / "units.csv", d.mounts.size());
-  if (std::filesystem::exists(dir / "truth.csv")) {
+  d.imu = read_imu(folder, rig.imu.rate_hz);
+  d.compass = read_units_csv(folder, d.mounts.size());
+  if (folder.has("truth.csv")) {
     NavigationTruth truth;
-    truth.trajectory = read_truth(dir / "truth.csv");
+    truth.trajectory = read_truth(folder);
     for (const CompassEpoch& e : d.compass)
       if (!find_truth(truth, e.t_s))
         throw DataError(fmt::format("{}: no row at t = {} s (the truth must hold every compass reading's time; a "
-                                    "measured dataset has no truth.csv)", (dir / "truth.csv").string(), e.t_s));
+                                    "measured dataset has no truth.csv)", folder.path("truth.csv").string(), e.t_s));
     d.truth = std::move(truth);
   }
   return d;

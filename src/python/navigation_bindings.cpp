@@ -4,6 +4,7 @@
 // `polrig navigate` and `polrig calibrate --method unit-array` (the same library calls), runs with the
 // GIL released and hands its vectors to NumPy.
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -165,15 +166,20 @@ py::dict filter_dict(const NavigationRun& run) {
 }
 
 // The dataset's rig (DIR/rig.yaml), or the one given: a unit array.
-LoadedRig dataset_rig(const fs::path& dataset, const std::optional<PyRig>& rig, const char* what) {
+// A dataset's folder, opened once for its rig and every file (io/dataset_folder.h).
+std::unique_ptr<DatasetFolder> dataset_folder(const fs::path& dataset) {
   if (!fs::is_directory(dataset)) throw py::value_error(fmt::format("{}: not a folder (expected a unit-array dataset)", dataset.string()));
+  return std::make_unique<DatasetFolder>(dataset);
+}
+
+LoadedRig dataset_rig(const DatasetFolder& dataset, const std::optional<PyRig>& rig, const char* what) {
   LoadedRig r;
   if (rig) {
     r = rig->loaded;
   } else {
-    if (!fs::exists(dataset / "rig.yaml"))
-      throw py::value_error(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else pass rig=)", dataset.string()));
-    r = load_rig(dataset / "rig.yaml");
+    if (!dataset.has("rig.yaml"))
+      throw py::value_error(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else pass rig=)", dataset.path().string()));
+    r = parse_rig(dataset.read("rig.yaml"), dataset.path("rig.yaml").string());
   }
   require_instrument(r.rig, Instrument::kUnitArray, what, r.origin);
   return r;
@@ -350,11 +356,12 @@ void bind_navigation(py::module_& m) {
      py::arg("progress") = py::none());
 
   m.def("read_navigation_dataset", [](const fs::path& dir, std::optional<PyRig> rig) {
-    const LoadedRig r = dataset_rig(dir, rig, "read_navigation_dataset");
+    const std::unique_ptr<DatasetFolder> folder = dataset_folder(dir);
+    const LoadedRig r = dataset_rig(*folder, rig, "read_navigation_dataset");
     NavigationDataset d;
     {
       py::gil_scoped_release release;
-      d = read_navigation_dataset(dir, r.rig);
+      d = read_navigation_dataset(*folder, r.rig);
     }
     return dataset_dict(d);
   }, "A unit-array dataset's files (simulated or measured) as arrays, the keys of Rig.simulate_navigation (truth: "
@@ -365,7 +372,8 @@ void bind_navigation(py::module_& m) {
                        const py::object& progress) {
     check_plots(plots && out.has_value());
     refuse_out_over_inputs(out, {dir, calibration.value_or(fs::path())});
-    const LoadedRig r = dataset_rig(dir, rig, "navigate");
+    const std::unique_ptr<DatasetFolder> folder = dataset_folder(dir);
+    const LoadedRig r = dataset_rig(*folder, rig, "navigate");
     NavigationOptions options;
     try {
       options.modes = parse_navigation_modes(mode);
@@ -378,7 +386,7 @@ void bind_navigation(py::module_& m) {
     NavigationRun run;
     {
       py::gil_scoped_release release;
-      data = read_navigation_dataset(dir, r.rig);
+      data = read_navigation_dataset(*folder, r.rig);
       if (calibration) options.mounts = read_installation(*calibration, data.mounts);
       std::optional<OutputDir> d;
       if (out) d.emplace(*out, force);
@@ -423,12 +431,13 @@ void bind_navigation(py::module_& m) {
                                    bool plots, std::optional<int> threads) {
     check_plots(plots && out.has_value());
     refuse_out_over_inputs(out, {dir});
-    const LoadedRig r = dataset_rig(dir, rig, "calibrate --method unit-array");
+    const std::unique_ptr<DatasetFolder> folder = dataset_folder(dir);
+    const LoadedRig r = dataset_rig(*folder, rig, "calibrate --method unit-array");
     const ThreadLimit limit(threads);
     InstallationRun run;
     {
       py::gil_scoped_release release;
-      const NavigationDataset data = read_navigation_dataset(dir, r.rig);
+      const NavigationDataset data = read_navigation_dataset(*folder, r.rig);
       std::optional<OutputDir> d;
       if (out) d.emplace(*out, force);
       run = calibrate_unit_array(data, r.rig);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "polrig/io/dataset_folder.h"
 #include "polrig/io/manifest.h"
 #include "polrig/study/navigation.h"
 
@@ -26,5 +27,8 @@ std::vector<DatasetFile> write_navigation_dataset(const std::filesystem::path& d
 // reading's time not after the previous one, a unit index outside the layout, a reading without every
 // unit, a DoP outside [0, 1], an AoP beyond ±360°; a truth.csv without a row at every reading's time.
 NavigationDataset read_navigation_dataset(const std::filesystem::path& dir, const Rig& rig);
+// The same from a folder already open (io/dataset_folder.h): every file from the one dataset, even
+// while another process replaces it (a reader of the rig's rig.yaml opens the folder first).
+NavigationDataset read_navigation_dataset(const DatasetFolder& folder, const Rig& rig);
 
 }  // namespace polrig

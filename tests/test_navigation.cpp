@@ -494,6 +494,18 @@ TEST_F(NavigationCli, DatasetFilesTakeAByteOrderMarkAndNameTheirOwnHeader) {
   EXPECT_HAS(polrig("navigate B -o N", cd()).err, "B/truth.csv:3: column 'lon_deg': expected a longitude within ±360°, got 1000");
   test::write_file(tmp / "B/truth.csv", with_cell(3, "1e300"));
   EXPECT_HAS(polrig("navigate B -o N", cd()).err, "B/truth.csv:3: column 'h_m': expected a height in [-11000, 100000] m");
+  // Finding 15: readings past the end of imu.csv, refused by calibrate as by navigate.
+  test::write_file(tmp / "B/truth.csv", truth);
+  const std::string imu = test::read_file(tmp / "D/imu.csv");
+  std::size_t cut = 0;
+  for (int l = 0; l < 1 + 1000; ++l) cut = imu.find('\n', cut) + 1;  // the header and 10 s
+  test::write_file(tmp / "B/imu.csv", imu.substr(0, cut));
+  for (const char* command : {"calibrate B --method unit-array -o N", "navigate B -o N"}) {
+    const Result r = polrig(command, cd());
+    EXPECT_EQ(r.status, 2) << command;
+    EXPECT_HAS(r.err, "B/units.csv:92: column 't_s': the reading at 1") << command;  // the 11th, at 11 s
+    EXPECT_HAS(r.err, "falls on no IMU sample of imu.csv within 1 ms (its samples end at ") << command;
+  }
   EXPECT_FALSE(fs::exists(tmp / "N"));
 }
 

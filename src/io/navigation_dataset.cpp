@@ -137,9 +137,11 @@ std::vector<ImuSample> read_imu(const DatasetFolder& folder, double rate_hz) {
   return out;
 }
 
-std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_t units) {
+// Every reading must fall on an IMU sample (within 1 ms): the INS's state exists only there.
+std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_t units, const std::vector<ImuSample>& imu) {
   const CsvFile f = CsvFile::read(folder, "units.csv", kUnitsHeader);
   const std::string path = f.origin;
+  std::size_t j = 0;  // the IMU sample the latest reading falls on
   const std::size_t t = f.column("t_s", kSection), u = f.column("unit", kSection), a = f.column("aop_deg", kSection),
                     d = f.column("dop", kSection);
   std::vector<CompassEpoch> out;
@@ -151,6 +153,11 @@ std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_
       if (!out.empty() && out.back().units.size() != units)
         refuse_cell(f, r, "unit", fmt::format("the reading at {} s has {} units, expected {} (device.units.*)", out.back().t_s,
                                          out.back().units.size(), units));
+      while (j < imu.size() && imu[j].t_s < t_s - 1e-3) ++j;
+      if (j == imu.size() || std::abs(imu[j].t_s - t_s) > 1e-3)
+        refuse_cell(f, r, "t_s", fmt::format("the reading at {} s falls on no IMU sample of imu.csv within 1 ms ({})", t_s,
+                                         j == imu.size() ? fmt::format("its samples end at {} s", imu.back().t_s)
+                                                         : fmt::format("the nearest after it is at {} s", imu[j].t_s)));
       out.push_back({t_s, {}, {}});
     }
     const int index = csv_whole_number(f.rows[r][u], f.origin, f.line[r], "unit", 1, static_cast<int>(units));
@@ -238,7 +245,7 @@ NavigationDataset read_navigation_dataset(const DatasetFolder& folder, const Rig
   const UnitArrayTruth layout = unit_array_truth(rig.units, rig.seed);
   for (const Axes3& C : layout.nominal) d.mounts.push_back({C});
   d.imu = read_imu(folder, rig.imu.rate_hz);
-  d.compass = read_units_csv(folder, d.mounts.size());
+  d.compass = read_units_csv(folder, d.mounts.size(), d.imu);
   if (folder.has("truth.csv")) {
     NavigationTruth truth;
     truth.trajectory = read_truth(folder);

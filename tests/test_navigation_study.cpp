@@ -283,6 +283,10 @@ TEST_F(CliNavigationStudy, WritesItsFilesAndRefusesBadOptions) {
   refused(base + "--tilts 11", "t", {"--tilts", "11"});
   refused(base + "--durations 10.005", "d", {"--durations", "10.005", "IMU intervals"});
   refused(base + "--ring-tilts 200", "g", {"--ring-tilts", "200"});
+  // The third review's finding 17: a run without a compass reading (every statistic nan) is refused.
+  refused(base + "--durations 0.5", "r", {"--durations 0.5", "a 0.5 s run holds no compass reading"});
+  refused("study navigation " + shell_quote(kStatic) + " --set trajectory.duration_s=0.5 --trials 2", "q",
+          {"trajectory.duration_s", "a 0.5 s run holds no compass reading"});
   refused("study navigation " + shell_quote(kVehicle) + " --trials 1 --durations 60", "v", {"--durations", "segment_s"});
   refused("study navigation " + shell_quote(kDefaultRigFile), "s", {"unit"});
 }

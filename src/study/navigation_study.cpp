@@ -191,6 +191,17 @@ Rig rig_with_value(const Rig& rig, std::string_view path, double value) {
   return out;
 }
 
+namespace {
+// A run without a compass reading has no statistic to give (every one would be nan), and
+// navigate refuses it: so does the study (the third review's finding 17).
+void require_a_reading(const Rig& r, const std::string& what) {
+  const double T = trajectory_spec(r).duration_s(), f = r.units.rate_hz;
+  if (!(std::floor(T * f * (1 + 1e-12)) >= 1))
+    throw RigError(fmt::format("{}: a {} s run holds no compass reading (device.units.rate_hz {} Hz: the first at {} s); "
+                               "the study needs at least one", what, T, f, 1 / f));
+}
+}  // namespace
+
 void check_navigation_study_settings(const Rig& rig, const NavigationStudySettings& s,
                                      const std::function<std::string(std::string_view field)>& name) {
   require_instrument(rig, Instrument::kUnitArray, "study navigation");
@@ -208,12 +219,13 @@ void check_navigation_study_settings(const Rig& rig, const NavigationStudySettin
       throw std::invalid_argument(fmt::format("{}: expected at most 1000 values, got {}", name(sw.field), values.size()));
     for (double v : values) {
       try {
-        rig_with_value(rig, sw.key, v);
+        require_a_reading(rig_with_value(rig, sw.key, v), std::string(sw.key));
       } catch (const RigError& e) {
         throw RigError(fmt::format("{} {}: {}", name(sw.field), value_text(v), e.what()));
       }
     }
   }
+  require_a_reading(rig, "trajectory.duration_s");
 }
 
 Percentiles percentiles(std::vector<double> values) {

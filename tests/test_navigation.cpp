@@ -414,6 +414,10 @@ TEST_F(NavigationCli, SimulateThenNavigateWritesEveryMode) {
     for (const char* png : {"latitude.png", "longitude.png", "position_error.png", "filter.png", "elevation.png"})
       EXPECT_TRUE(fs::exists(tmp / "N" / png)) << png;
   }
+  // A held height stays held in every mode (the integrated one moved ±10 m over 20 minutes when
+  // the filter's δh was fed back; the third review).
+  const test::Csv sol = test::read_csv(tmp / "N/solution.csv");
+  for (const auto& row : sol.rows) EXPECT_EQ(row[sol.col("h_m")], "50") << row[sol.col("mode")] << " at " << row[0];
   // One mode alone gives that mode's rows, the same numbers.
   ok("navigate D --mode sins -o S --no-plots", cd());
   EXPECT_EQ(lines("S/solution.csv"), 1 + 120);

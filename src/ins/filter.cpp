@@ -141,6 +141,10 @@ ScalarUpdate InsFilter::update(const SunElevation& m) {
     R = sage_husa_->update(z - H.dot(filter_.x), H.dot(filter_.P * H.transpose()));
   }
   const ScalarUpdate u = filter_.update(H, z, R);
+  // A held height (Z21's barometer) is the mechanization's, not the filter's: its δh and δv_U are
+  // not fed back, so the solution's height stays the held one (it moved ±10 m over the shipped
+  // static run; the next step's mechanization reset it).
+  if (settings_.mechanization.hold_height_m) filter_.x[kDh] = filter_.x[kDV + 2] = 0;
   feed_back(filter_.x, state_, gyro_bias_, accel_bias_);
   filter_.x.setZero();
   last_R_ = R;

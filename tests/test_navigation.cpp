@@ -108,6 +108,42 @@ TEST(NavigationRig, ARunThatCannotBeFlownIsRefusedByItsKey) {
   EXPECT_HAS(rig_error(r, {{"trajectory.pitch_deg", "85"}}), "key 'trajectory.pitch_deg'");
   EXPECT_HAS(rig_error(r, {{"navigation.tilt_in_measurement", "true"}, {"navigation.integrated_level", "accelerometer"}}),
              "key 'navigation.tilt_in_measurement': expected false with navigation.integrated_level accelerometer");
+  // The third review's finding 2: a start at the pole (inside sky.lat_deg's range) ran with
+  // non-finite filter rows; the INS's domain is refused at load.
+  EXPECT_HAS(rig_error(r, {{"sky.lat_deg", "90"}}), "key 'sky.lat_deg': expected a latitude within ±89° for device.kind unit-array");
+}
+
+// Findings 10 and 11: a trajectory that reaches past ±89° is refused naming the rig's keys (it
+// was "sun position: latitude 90.0017° is outside"); one round a parallel across 180° keeps every
+// longitude in (−180°, 180°] (it was refused at 360°, and truth.csv carried 190°), and the SINS's
+// error across the antimeridian is its drift, not 360°.
+TEST(NavigationRig, TrajectoriesNearThePoleAndAcrossTheAntimeridian) {
+  Rig rig = load("zhang2021-vehicle.yaml");
+  rig.source.sky.sky.site.lat_deg = 88.999, rig.trajectory.heading_deg = 0;
+  try {
+    navigation_scene(rig);
+    ADD_FAILURE() << "a trajectory past 89°";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_HAS(std::string(e.what()), "the trajectory (sky.lat_deg 88.999°, trajectory.heading_deg 0°");
+    EXPECT_HAS(std::string(e.what()), "reaches latitude 89.0000");
+  }
+  rig = load("zhang2021-vehicle.yaml");
+  rig.source.sky.sky.site.lat_deg = 85, rig.source.sky.sky.site.lon_deg = 179.9, rig.trajectory.heading_deg = 90;
+  const NavigationDataset d = simulate_navigation(rig);
+  double west = 0, east = 0;
+  for (const TruthSample& t : d.truth->trajectory) {
+    EXPECT_LE(std::abs(t.lon_rad), std::numbers::pi);
+    west = std::min(west, t.lon_rad), east = std::max(east, t.lon_rad);
+  }
+  EXPECT_LT(west, deg2rad(-179));  // it did cross
+  EXPECT_GT(east, deg2rad(179.9));
+  NavigationOptions o;
+  o.modes = {NavigationMode::Sins};
+  const NavigationRun run = navigate(d, rig, o);
+  for (const NavigationFix& f : run.fixes[0]) {
+    EXPECT_LE(std::abs(f.lon_rad), std::numbers::pi);
+    EXPECT_LT(std::abs(position_error(f, truth_at(*d.truth, f.t_s)).east_m), 100e3) << f.t_s;
+  }
 }
 
 // The vehicle rig's drive against its displacement on a plane, written here segment by segment
@@ -537,6 +573,33 @@ TEST_F(NavigationCli, AReaderSeesOneDatasetWhileItIsReplaced) {
         }
       },
       DataError);
+}
+
+// Finding 1: a legal 5000 s static run drives the integrated solution past the pole (it wrote
+// latitude 90.01° at 4691 s, then nan, status ok, exit 0). The solution says `diverged` from the
+// epoch it leaves the INS's domain, at its last state inside it; the filter's summary says so; no
+// row holds a nan but the PNS's window filling (documented).
+class SlowNavigationCli : public NavigationCli {};
+TEST_F(SlowNavigationCli, ARunPastThePoleIsReportedDiverged) {
+  ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=5000 -o D --no-plots", cd());
+  const Result r = polrig("navigate D -o N --no-plots", cd());
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_HAS(r.out, "integrated filter: diverged:");
+  EXPECT_HAS(r.err, "polrig: warning: integrated diverged at t = ");
+  const test::Csv sol = test::read_csv(tmp / "N/solution.csv");
+  bool diverged = false;
+  for (const auto& row : sol.rows) {
+    const std::string& status = row[sol.col("status")];
+    if (row[sol.col("mode")] == "integrated") {
+      if (diverged) EXPECT_EQ(status, "diverged") << row[0];
+      diverged = diverged || status == "diverged";
+      EXPECT_LE(std::abs(std::stod(row[sol.col("lat_deg")])), 89.0) << row[0];
+    }
+    if (status != "window_filling")
+      for (const std::string& cell : row) EXPECT_NE(cell, "nan") << row[0] << " " << row[1];
+  }
+  EXPECT_TRUE(diverged);
+  EXPECT_LACKS(test::read_file(tmp / "N/filter.csv"), "nan");
 }
 
 TEST_F(NavigationCli, AMeasuredDatasetWithoutTruthNavigates) {

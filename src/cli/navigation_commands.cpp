@@ -13,6 +13,7 @@
 #include "cli.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/navigation_dataset.h"
+#include "polrig/ins/mechanization.h"
 #include "polrig/io/installation_yaml.h"
 #include "polrig/report/installation_report.h"
 #include "polrig/report/navigation_report.h"
@@ -56,6 +57,14 @@ DatasetFolder dataset_folder(const std::string& input) {
 void print_summary(const NavigationDataset& data, const NavigationRun& run) {
   std::cout << fmt::format("{} IMU samples, {} compass readings\n", data.imu.size(), data.compass.size());
   if (!run.filter.empty()) std::cout << "integrated filter: " << run.filter_summary.BriefReport() << "\n";
+  for (std::size_t m = 0; m < run.modes.size(); ++m)
+    for (const NavigationFix& f : run.fixes[m])
+      if (f.status == "diverged") {
+        std::cerr << fmt::format("polrig: warning: {} diverged at t = {:.3f} s (its latitude past ±{}° or not finite); "
+                                 "its rows from then on say `diverged` and repeat its last state inside the domain\n",
+                                 navigation_mode_name(run.modes[m]), f.t_s, kInsMaxLatitudeDeg);
+        break;
+      }
   for (const ModeErrorSummary& s : summarize_navigation(data, run))
     std::cout << fmt::format("{:>10}: latitude MAE/RMSE/STD {:.4f}/{:.4f}/{:.4f}°, longitude {:.4f}/{:.4f}/{:.4f}° "
                              "({} fixes); at the end {:.2f} km north, {:.2f} km east\n",

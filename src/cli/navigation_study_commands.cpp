@@ -77,7 +77,12 @@ std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App&
       throw RigError(fmt::format("{}: {}", r.origin, e.what()));
     }
     OutputDir dir = out->open();
-    const NavigationStudy result = navigation_study(r.rig, settings, progress());
+    NavigationStudy result;
+    try {
+      result = navigation_study(r.rig, settings, progress());
+    } catch (const std::invalid_argument& e) {  // a cell's run its rig cannot fly (a trajectory past the pole)
+      throw RigError(fmt::format("{}: {}", r.origin, e.what()));
+    }
     write_manifest(dir.staging(), {command_line(), &r, report_navigation_study(dir.staging(), result, out->plots())});
     finish(dir);
     for (const NavigationStudySummary& st : result.summary) {

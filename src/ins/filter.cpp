@@ -68,6 +68,7 @@ std::string_view filter_status_name(FilterStatus s) {
     case FilterStatus::NoUpdates: return "no_updates";
     case FilterStatus::Inconsistent: return "inconsistent";
     case FilterStatus::NonFinite: return "non_finite";
+    case FilterStatus::Diverged: return "diverged";
   }
   return "?";
 }

@@ -1,6 +1,7 @@
 #include "polrig/ins/mechanization.h"
 
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -72,7 +73,8 @@ InsState mechanize(const InsState& s, const ImuSample& prev, const ImuSample& cu
   const double h_avg = 0.5 * (s.h_m + n.h_m);
   n.lat_rad = s.lat_rad + v_avg.y() * dt / (mid.r.R_M + h_avg);
   const double L_avg = 0.5 * (s.lat_rad + n.lat_rad);
-  n.lon_rad = s.lon_rad + v_avg.x() * dt / ((mid.r.R_N + h_avg) * std::cos(L_avg));
+  // Wrapped to (−π, π]: a run round a parallel stays a longitude (exact for one already inside).
+  n.lon_rad = std::remainder(s.lon_rad + v_avg.x() * dt / ((mid.r.R_N + h_avg) * std::cos(L_avg)), 2 * std::numbers::pi);
 
   // Attitude: the body's rotation (with coning) and the n-frame's over the interval, at the midpoint.
   const Eigen::Vector3d phi = cur.dtheta + prev.dtheta.cross(cur.dtheta) / 12.0;
@@ -89,6 +91,11 @@ Eigen::Vector3d specific_force_n(const InsState& state, const ImuSample& cur, do
 ImuSample compensate(const ImuSample& s, const Eigen::Vector3d& gyro_bias,
                      const Eigen::Vector3d& accel_bias, double dt_s) {
   return {s.t_s, s.dtheta - gyro_bias * dt_s, s.dv - accel_bias * dt_s};
+}
+
+bool in_ins_domain(const InsState& s) {
+  return std::isfinite(s.lat_rad) && std::isfinite(s.lon_rad) && std::isfinite(s.h_m) && s.v_n.allFinite() &&
+         s.q_bn.coeffs().allFinite() && std::abs(s.lat_rad) <= kInsMaxLatitudeDeg * std::numbers::pi / 180;
 }
 
 }  // namespace polrig

@@ -1,4 +1,6 @@
 #include "polrig/rig/keys.h"
+
+#include "polrig/ins/mechanization.h"
 #include "polrig/quoted.h"
 
 #include <charconv>
@@ -1157,6 +1159,10 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig) {
   if (rig.source.model != "sky")
     return RigProblem{"source.model", fmt::format("expected sky for device.kind unit-array (its units read the "
                                                   "sky), got '{}'", rig.source.model), "device.kind"};
+  if (std::abs(rig.source.sky.sky.site.lat_deg) > kInsMaxLatitudeDeg)
+    return RigProblem{"sky.lat_deg", fmt::format("expected a latitude within ±{}° for device.kind unit-array (its "
+                                                 "INS's local-level frame is singular at the poles), got {}",
+                                                 kInsMaxLatitudeDeg, rig.source.sky.sky.site.lat_deg), "device.kind"};
   const double imu_hz = rig.imu.rate_hz;
   if (!whole(imu_hz / rig.units.rate_hz))
     return RigProblem{"device.units.rate_hz", fmt::format("expected a rate that divides imu.rate_hz ({} Hz) into a "

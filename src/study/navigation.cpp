@@ -156,6 +156,12 @@ NavigationScene navigation_scene(const Rig& rig, const Progress& progress) {
   NavigationScene scene{generate_trajectory(trajectory_spec(rig)), {}};
   progress.finish();
   const std::vector<TruthSample>& truth = scene.trajectory.truth;
+  for (const TruthSample& t : truth)
+    if (!(std::abs(t.lat_rad) <= deg2rad(kInsMaxLatitudeDeg)))
+      throw std::invalid_argument(fmt::format(
+          "the trajectory (sky.lat_deg {}°, trajectory.heading_deg {}°, trajectory.speed_mps and trajectory.segment_*) "
+          "reaches latitude {:.6f}° at t = {:.3f} s, beyond the INS's ±{}° (its local-level frame is singular at the poles)",
+          rig.source.sky.sky.site.lat_deg, rig.trajectory.heading_deg, rad2deg(t.lat_rad), t.t_s, kInsMaxLatitudeDeg));
   const std::size_t step = imu_samples_per_reading(rig);
   scene.sun.resize(scene.trajectory.imu.size() / step);
   progress.begin("navigation: the sun along the trajectory", static_cast<long long>(scene.sun.size()));
@@ -260,6 +266,24 @@ NavigationFix fix_of(const InsState& s) {
   return {s.t_s, s.lat_rad, s.lon_rad, s.h_m, s.euler(), "ok"};
 }
 
+// An INS solution that has left the mechanization's domain (past ±kInsMaxLatitudeDeg, or not
+// finite) is not a position: from then on every epoch reports `diverged` at the last state inside it.
+struct DivergenceWatch {
+  std::optional<InsState> last_good;
+  bool diverged = false;
+  NavigationFix fix(const InsState& s) {
+    if (!diverged && in_ins_domain(s)) {
+      last_good = s;
+      return fix_of(s);
+    }
+    diverged = true;
+    NavigationFix f = last_good ? fix_of(*last_good) : fix_of(s);
+    f.t_s = s.t_s;
+    f.status = "diverged";
+    return f;
+  }
+};
+
 // The INS alone, its state at every compass epoch.
 std::vector<InsState> run_sins(const NavigationDataset& data, const std::vector<std::size_t>& at,
                                const MechanizationOptions& options) {
@@ -311,6 +335,7 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
                     std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
                     std::vector<NavigationFix>& fixes, const Progress& progress) {
   InsFilter filter(data.initial, initial_covariance(rig), filter_settings(rig));
+  DivergenceWatch watch;
   // H^n's level: the filter's attitude (Z21) or the accelerometers (navigation.integrated_level).
   const bool accelerometer = rig.navigation.integrated_level == "accelerometer";
   const double g = normal_gravity(data.initial.lat_rad, data.initial.h_m);
@@ -341,16 +366,26 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
       filter.propagate_covariance();
     }
     const InsState& s = filter.state();
+    fixes.push_back(watch.fix(s));
+    if (watch.diverged) {  // the filter's record ends here (filter.csv); the solution says diverged
+      for (std::size_t k = next; k < at.size(); ++k) {
+        NavigationFix d = fixes.back();
+        d.t_s = data.imu[at[k]].t_s;
+        fixes.push_back(d);
+      }
+      progress.advance(static_cast<long long>(at.size() - next + 1));
+      break;
+    }
     const EarthRadii r = earth_radii(s.lat_rad);
     f.sigma_north_m = std::sqrt(filter.P()(kDLat, kDLat)) * (r.R_M + s.h_m);
     f.sigma_east_m = std::sqrt(filter.P()(kDLon, kDLon)) * (r.R_N + s.h_m) * std::cos(s.lat_rad);
     f.sigma_heading_rad = std::sqrt(filter.P()(kPhi + 2, kPhi + 2));
     f.corr_north_east = filter.P()(kDLat, kDLon) / std::sqrt(filter.P()(kDLat, kDLat) * filter.P()(kDLon, kDLon));
     run.filter.push_back(f);
-    fixes.push_back(fix_of(s));
     progress.advance(1);
   }
   run.filter_summary = filter.summary();
+  if (watch.diverged) run.filter_summary.status = FilterStatus::Diverged;
 }
 
 // PNS: at each epoch the positioning fit over the window's elevations (the SINS's attitude).
@@ -449,7 +484,8 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   for (NavigationMode m : run.modes) {
     if (m == NavigationMode::Sins) {
       std::vector<NavigationFix> fixes;
-      for (const InsState& st : sins) fixes.push_back(fix_of(st));
+      DivergenceWatch watch;
+      for (const InsState& st : sins) fixes.push_back(watch.fix(st));
       run.fixes.push_back(std::move(fixes));
     } else {
       run.fixes.push_back(m == NavigationMode::Pns ? pns : integrated);

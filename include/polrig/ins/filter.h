@@ -98,9 +98,11 @@ enum class FilterStatus {
   Ok,              // every update finite and the NIS consistent
   NoUpdates,       // predicted only
   Inconsistent,    // the mean NIS is outside its 99.9 % χ² band for the number of updates
-  NonFinite        // a measurement, innovation or covariance was not finite: the update was skipped
+  NonFinite,       // a measurement, innovation or covariance was not finite: the update was skipped
+  Diverged         // the state left the mechanization's domain (ins/mechanization.h, in_ins_domain)
 };
-std::string_view filter_status_name(FilterStatus s);  // "ok", "no_updates", "inconsistent", "non_finite"
+// "ok", "no_updates", "inconsistent", "non_finite", "diverged"
+std::string_view filter_status_name(FilterStatus s);
 
 // How a run went (after Ceres's Solver::Summary): failures are data.
 struct FilterSummary {

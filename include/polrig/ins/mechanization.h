@@ -30,10 +30,20 @@ struct InsState {
   Euler euler() const { return euler_from_C_bn(C_bn()); }
 };
 
+// The local-level (ENU, latitude–longitude) mechanization's domain [C]: its longitude rate
+// v_E/((R_N + h)·cos φ) and the frame's rotation about the vertical (ω_ie·sin φ + v_E·tan φ/R)
+// grow without bound at the poles, where polrig, like KF-GINS and PSINS's default, has no wander-
+// azimuth or polar frame. Within 89° a 30 m/s vehicle turns the frame by < 0.02°/s; past it a run
+// is refused at load (sky.lat_deg), in simulate (its trajectory) and reported `diverged` by navigate.
+inline constexpr double kInsMaxLatitudeDeg = 89;
+
 struct MechanizationOptions {
   // Z21 holds the height to its barometer: after each step h = this and v_U = 0.
   std::optional<double> hold_height_m;
 };
+
+// A state inside the mechanization's domain: finite, its latitude within ±kInsMaxLatitudeDeg.
+bool in_ins_domain(const InsState& s);
 
 // One step over cur's interval (dt = cur.t_s − state.t_s, > 0); prev is the sample before cur.
 // Returns the state at cur.t_s. Throws std::invalid_argument for dt ≤ 0.

@@ -12,7 +12,22 @@ namespace polrig {
 
 inline constexpr std::size_t kQuotedChars = 60;
 
-inline std::string quoted_value(std::string_view text) {
+// Control bytes (a NUL, a stray carriage return) are written as \xNN: a NUL would end the message
+// where a C string carries it (Python's exception text, what()).
+inline std::string escaped_controls(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const unsigned char u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7F) out += fmt::format("\\x{:02x}", u);
+    else out += c;
+  }
+  return out;
+}
+
+inline std::string quoted_value(std::string_view raw) {
+  const std::string escaped = escaped_controls(raw);
+  const std::string_view text = escaped;
   if (text.size() <= kQuotedChars + 16) return std::string(text);  // no shorter once cut
   std::size_t cut = kQuotedChars;
   while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;  // a continuation byte

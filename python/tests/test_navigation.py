@@ -54,6 +54,22 @@ def test_navigate_equals_the_cli(tmp_path):
         with pytest.raises(ValueError, match="out: the output folder .* (is|contains) the input"):
             polrig.calibrate_unit_array(tmp_path / "d", out=out, force=True)
     assert (tmp_path / "d" / "imu.csv").exists()
+    # Finding 18: plots= without out=, an empty calibration name, a NUL in a cell (quoted whole).
+    with pytest.raises(ValueError, match="plots=True: the plots are written into out="):
+        polrig.navigate(tmp_path / "d", plots=True)
+    with pytest.raises(ValueError, match="calibration='': expected a file name"):
+        polrig.navigate(tmp_path / "d", calibration="")
+    bad = tmp_path / "bad"
+    bad.mkdir()
+    for f in ("imu.csv", "units.csv", "rig.yaml"):
+        (bad / f).write_bytes((tmp_path / "d" / f).read_bytes())
+    text = (bad / "units.csv").read_text().split("\n")
+    cells = text[1].split(",")
+    cells[2] = "12\x003"
+    text[1] = ",".join(cells)
+    (bad / "units.csv").write_text("\n".join(text))
+    with pytest.raises(Exception, match=r"units.csv:2: column 'aop_deg': expected a finite number, got '12\\x003'"):
+        polrig.navigate(bad)
 
 
 def test_calibrate_unit_array_equals_the_cli(tmp_path):

@@ -185,7 +185,9 @@ LoadedRig dataset_rig(const DatasetFolder& dataset, const std::optional<PyRig>& 
   return r;
 }
 
-void check_plots(bool plots) {
+// plots=True draws into out=: without it there is nowhere to draw, and saying nothing would hide it.
+void check_plots(bool plots, bool out) {
+  if (plots && !out) throw py::value_error("plots=True: the plots are written into out=; give out= or pass plots=False");
   if (plots && !gnuplot_available())
     throw std::runtime_error("plots=True needs gnuplot, which was not found; install it (scripts/setup-deps.sh) or pass plots=False");
 }
@@ -316,7 +318,7 @@ void bind_navigation(py::module_& m) {
                                  std::optional<fs::path> out, bool force, bool plots, std::optional<int> threads,
                                  const py::object& progress) {
     require(self, Instrument::kUnitArray, "study_navigation");
-    check_plots(plots && out.has_value());
+    check_plots(plots, out.has_value());
     NavigationStudySettings settings;
     settings.trials = trials;
     settings.durations_s = values_of(durations_s, "durations_s");
@@ -370,7 +372,8 @@ void bind_navigation(py::module_& m) {
   m.def("navigate", [](const fs::path& dir, const std::string& mode, std::optional<fs::path> out, std::optional<PyRig> rig,
                        std::optional<fs::path> calibration, bool force, bool plots, std::optional<int> threads,
                        const py::object& progress) {
-    check_plots(plots && out.has_value());
+    check_plots(plots, out.has_value());
+    if (calibration && calibration->empty()) throw py::value_error("calibration='': expected a file name");
     refuse_out_over_inputs(out, {dir, calibration.value_or(fs::path())});
     const std::unique_ptr<DatasetFolder> folder = dataset_folder(dir);
     const LoadedRig r = dataset_rig(*folder, rig, "navigate");
@@ -429,7 +432,7 @@ void bind_navigation(py::module_& m) {
 
   m.def("calibrate_unit_array", [](const fs::path& dir, std::optional<fs::path> out, std::optional<PyRig> rig, bool force,
                                    bool plots, std::optional<int> threads) {
-    check_plots(plots && out.has_value());
+    check_plots(plots, out.has_value());
     refuse_out_over_inputs(out, {dir});
     const std::unique_ptr<DatasetFolder> folder = dataset_folder(dir);
     const LoadedRig r = dataset_rig(*folder, rig, "calibrate --method unit-array");

@@ -443,8 +443,9 @@ TEST_F(NavigationCli, SimulateThenNavigateWritesEveryMode) {
   EXPECT_EQ(lines("N/solution.csv"), 1 + 3 * 120);
   EXPECT_EQ(lines("N/filter.csv"), 1 + 120);
   EXPECT_EQ(lines("N/summary.csv"), 1 + 6);
-  EXPECT_HAS(test::read_file(tmp / "N/solution.csv"), "t_s,mode,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,status,"
-                                                      "err_lat_deg,err_lon_deg,err_north_m,err_east_m\n");
+  EXPECT_HAS(test::read_file(tmp / "N/solution.csv"),
+             "t_s,mode,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,v_e_mps,v_n_mps,v_u_mps,status,"
+             "err_lat_deg,err_lon_deg,err_north_m,err_east_m,err_v_e_mps,err_v_n_mps,err_v_u_mps\n");
   EXPECT_HAS(test::read_file(tmp / "N/summary.csv"), "mode,coordinate,mae_deg,rmse_deg,std_deg,count,final_error_m\n");
   if (gnuplot_available()) {
     for (const char* png : {"latitude.png", "longitude.png", "position_error.png", "filter.png", "elevation.png"})
@@ -600,6 +601,38 @@ TEST_F(SlowNavigationCli, ARunPastThePoleIsReportedDiverged) {
   }
   EXPECT_TRUE(diverged);
   EXPECT_LACKS(test::read_file(tmp / "N/filter.csv"), "nan");
+}
+
+// The third review's §1: an IMU log alone (no units.csv, or its header alone) runs SINS from
+// imu.csv and rig.yaml, at every IMU sample or a rate that divides it; a 125.057 Hz log is not
+// refused for a simulate-only key (trajectory.duration_s's whole IMU intervals) it never set.
+TEST_F(NavigationCli, AnImuLogAloneRunsSinsAtItsOwnRate) {
+  ok("simulate " + rig("zhang2021-static.yaml") + " --set trajectory.duration_s=10 -o D --no-plots", cd());
+  fs::create_directories(tmp / "L");
+  fs::copy_file(tmp / "D/rig.yaml", tmp / "L/rig.yaml");
+  const double rate = 125.057, g = 9.80;
+  std::string imu = "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps\n";
+  for (int k = 1; k <= 1250; ++k) imu += fmt::format("{},0,{},{},0,0,{}\n", k / rate, 5.6e-5 / rate, 4.7e-5 / rate, g / rate);
+  test::write_file(tmp / "L/imu.csv", imu);
+  const Result r = ok("navigate L --mode sins --set imu.rate_hz=125.057 -o S --no-plots", cd());
+  EXPECT_HAS(r.out, "1250 IMU samples, 0 compass readings");
+  EXPECT_EQ(lines("S/solution.csv"), 1 + 1250);
+  const test::Csv sol = test::read_csv(tmp / "S/solution.csv");
+  EXPECT_EQ(sol.rows.back()[sol.col("t_s")], fmt::format("{}", 1250 / rate));
+  for (const auto& row : sol.rows) EXPECT_NE(row[sol.col("v_e_mps")], "nan");
+  test::write_file(tmp / "L/units.csv", "t_s,unit,aop_deg,dop\n");
+  ok("navigate L --mode sins --sins-rate-hz 25.0114 --set imu.rate_hz=125.057 -o T --no-plots", cd());
+  EXPECT_EQ(lines("T/solution.csv"), 1 + 250);
+  Result b = polrig("navigate L --set imu.rate_hz=125.057 -o N", cd());
+  EXPECT_EQ(b.status, 2);
+  EXPECT_HAS(b.err, "no compass readings (units.csv): PNS and the integrated mode need them; an IMU log alone runs mode sins");
+  b = polrig("navigate L --mode sins --sins-rate-hz 7 --set imu.rate_hz=125.057 -o N", cd());
+  EXPECT_HAS(b.err, "the SINS output rate 7 Hz does not divide imu.rate_hz (125.057 Hz)");
+  // simulate keeps the run's rules.
+  b = polrig("simulate L/rig.yaml --set imu.rate_hz=125.057 -o N", cd());
+  EXPECT_EQ(b.status, 2);
+  EXPECT_HAS(b.err, "expected a rate that divides imu.rate_hz");
+  EXPECT_FALSE(fs::exists(tmp / "N"));
 }
 
 TEST_F(NavigationCli, AMeasuredDatasetWithoutTruthNavigates) {

@@ -27,6 +27,7 @@ namespace {
 
 struct NavigateOptions {
   std::string input, rig_path, mode = "all", calibration;
+  double sins_rate_hz = 0;
   std::vector<std::string> sets;
   OutputOptions out;
 };
@@ -35,14 +36,14 @@ struct NavigateOptions {
 // overrides: a unit array under the sky.
 LoadedRig navigation_rig(const NavigateOptions& o, const DatasetFolder& folder) {
   LoadedRig r;
+  std::vector<RigOverride> overrides;
+  for (const std::string& s : o.sets) overrides.push_back(RigOverride::parse(s));
   if (!o.rig_path.empty()) {
-    r = RigInput{o.rig_path, o.sets}.load();
+    r = load_rig(o.rig_path, overrides, RigUse::ReadDataset);
   } else {
     if (!folder.has("rig.yaml"))
       throw DataError(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else give --rig)", o.input));
-    std::vector<RigOverride> overrides;
-    for (const std::string& s : o.sets) overrides.push_back(RigOverride::parse(s));
-    r = parse_rig(folder.read("rig.yaml"), folder.path("rig.yaml").string(), overrides);
+    r = parse_rig(folder.read("rig.yaml"), folder.path("rig.yaml").string(), overrides, RigUse::ReadDataset);
   }
   require_instrument(r.rig, Instrument::kUnitArray, "navigate", r.origin);
   return r;
@@ -81,6 +82,7 @@ void run_navigate(const NavigateOptions& o) {
   } catch (const std::invalid_argument& e) {
     throw DataError(fmt::format("--mode: {}", e.what()));
   }
+  options.sins_rate_hz = o.sins_rate_hz;
   const NavigationDataset data = read_navigation_dataset(folder, r.rig);
   if (!o.calibration.empty()) options.mounts = read_installation(o.calibration, data.mounts);
   OutputDir dir = o.out.open();
@@ -90,8 +92,8 @@ void run_navigate(const NavigateOptions& o) {
   } catch (const std::invalid_argument& e) {
     throw DataError(fmt::format("{}: {}", o.input, e.what()));
   }
-  std::vector<std::string> inputs{(std::filesystem::path(o.input) / "imu.csv").string(),
-                                  (std::filesystem::path(o.input) / "units.csv").string()};
+  std::vector<std::string> inputs{folder.path("imu.csv").string()};
+  if (folder.has("units.csv")) inputs.push_back(folder.path("units.csv").string());
   if (data.truth) inputs.push_back((std::filesystem::path(o.input) / "truth.csv").string());
   if (!o.calibration.empty()) inputs.push_back(o.calibration);
   write_manifest(dir.staging(), {command_line(), &r, report_navigation(dir.staging(), data, run, r.rig, o.out.plots()), inputs});
@@ -156,6 +158,10 @@ std::vector<Command> add_navigation_commands(CLI::App& root, int& threads) {
   app->add_option("--mode", o->mode, "sins, pns, integrated or all")
       ->check(CLI::IsMember({"sins", "pns", "integrated", "all"}))->capture_default_str();
   app->add_option("--rig", o->rig_path, "the rig (default: DIR/rig.yaml)");
+  app->add_option("--sins-rate-hz", o->sins_rate_hz,
+                  "the SINS mode's output rate, a rate that divides imu.rate_hz (default: at the compass readings, "
+                  "or every IMU sample of a log without units.csv)")
+      ->check(finite_range(0, 1e4, "Hz"));
   app->add_option("--calibration", o->calibration, "the units' frames from a calibration.yaml (polrig calibrate "
                                                    "--method unit-array); default: the nominal layout");
   add_set_option(*app, o->sets);

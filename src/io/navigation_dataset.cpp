@@ -169,7 +169,7 @@ std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_
     if (std::isfinite(aop) && std::abs(aop) > 360) refuse_cell(f, r, "aop_deg", fmt::format("expected an angle within ±360°, got {}", aop));
     out.back().units.push_back({deg2rad(aop), dop});
   }
-  if (out.empty()) throw DataError(fmt::format("{}: no unit readings", path));
+  if (out.empty()) return out;  // a header alone: an IMU log without compass readings (SINS only)
   if (out.back().units.size() != units)
     throw DataError(fmt::format("{}: the last reading at {} s has {} units, expected {}", path, out.back().t_s,
                                 out.back().units.size(), units));
@@ -245,7 +245,8 @@ NavigationDataset read_navigation_dataset(const DatasetFolder& folder, const Rig
   const UnitArrayTruth layout = unit_array_truth(rig.units, rig.seed);
   for (const Axes3& C : layout.nominal) d.mounts.push_back({C});
   d.imu = read_imu(folder, rig.imu.rate_hz);
-  d.compass = read_units_csv(folder, d.mounts.size(), d.imu);
+  // Without units.csv (or with its header alone) an IMU log: navigate runs SINS only.
+  if (folder.has("units.csv")) d.compass = read_units_csv(folder, d.mounts.size(), d.imu);
   if (folder.has("truth.csv")) {
     NavigationTruth truth;
     truth.trajectory = read_truth(folder);

@@ -28,8 +28,8 @@ struct Origin {
 
 class RigParser {
  public:
-  RigParser(std::string_view origin, const std::vector<RigOverride>& overrides)
-      : file_(origin), overrides_(overrides) {}
+  RigParser(std::string_view origin, const std::vector<RigOverride>& overrides, RigUse use = RigUse::Run)
+      : file_(origin), overrides_(overrides), use_(use) {}
 
   const std::set<std::string>& given() const { return present_; }
 
@@ -47,7 +47,7 @@ class RigParser {
     check_schedule_form();
     load_truth_from(rig);
     make_light(rig);
-    if (auto problem = check_rig(rig)) {
+    if (auto problem = check_rig(rig, use_)) {
       std::string also;
       if (!problem->related_path.empty())
         also = fmt::format(" ('{}' from {})", problem->related_path, where(problem->related_path));
@@ -61,6 +61,7 @@ class RigParser {
  private:
   std::string file_;
   const std::vector<RigOverride>& overrides_;
+  RigUse use_ = RigUse::Run;
   std::map<std::string, int> line_of_;  // key path → 1-based line in the file
   std::set<std::string> present_;
 
@@ -385,14 +386,14 @@ RigOverride RigOverride::parse(std::string_view arg) {
 }
 
 LoadedRig parse_rig(std::string_view text, std::string_view origin,
-                    const std::vector<RigOverride>& overrides) {
-  RigParser parser(origin, overrides);
+                    const std::vector<RigOverride>& overrides, RigUse use) {
+  RigParser parser(origin, overrides, use);
   Rig rig = parser.parse(text);
   return {std::move(rig), std::string(origin), std::string(text), overrides, parser.given()};
 }
 
-LoadedRig load_rig(const std::filesystem::path& file, const std::vector<RigOverride>& overrides) {
-  return parse_rig(read_yaml_file(file, "rig file", kMaxRigYamlBytes), file.string(), overrides);
+LoadedRig load_rig(const std::filesystem::path& file, const std::vector<RigOverride>& overrides, RigUse use) {
+  return parse_rig(read_yaml_file(file, "rig file", kMaxRigYamlBytes), file.string(), overrides, use);
 }
 
 std::string rig_to_yaml(const Rig& rig_in) {

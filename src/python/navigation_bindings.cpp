@@ -107,6 +107,9 @@ py::dict fixes_dict(const NavigationDataset& data, const std::vector<NavigationF
   out["roll_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.attitude.roll_rad); });
   out["pitch_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.attitude.pitch_rad); });
   out["yaw_deg"] = column(fixes, [](const NavigationFix& f) { return rad2deg(f.attitude.yaw_rad); });
+  out["v_e_mps"] = column(fixes, [](const NavigationFix& f) { return f.v_enu.x(); });
+  out["v_n_mps"] = column(fixes, [](const NavigationFix& f) { return f.v_enu.y(); });
+  out["v_u_mps"] = column(fixes, [](const NavigationFix& f) { return f.v_enu.z(); });
   py::list status;
   for (const NavigationFix& f : fixes) status.append(f.status);
   out["status"] = status;
@@ -115,6 +118,10 @@ py::dict fixes_dict(const NavigationDataset& data, const std::vector<NavigationF
     for (const NavigationFix& f : fixes) e.push_back(position_error(f, truth_at(*data.truth, f.t_s)));
     out["err_lat_deg"] = column(e, [](const PositionError& x) { return x.lat_deg; });
     out["err_lon_deg"] = column(e, [](const PositionError& x) { return x.lon_deg; });
+    for (int a = 0; a < 3; ++a)
+      out[py::str(fmt::format("err_v_{}_mps", "enu"[a]))] = column(fixes, [&](const NavigationFix& f) {
+        return f.v_enu[a] - truth_at(*data.truth, f.t_s).v_n[a];
+      });
     out["err_north_m"] = column(e, [](const PositionError& x) { return x.north_m; });
     out["err_east_m"] = column(e, [](const PositionError& x) { return x.east_m; });
   }
@@ -179,7 +186,7 @@ LoadedRig dataset_rig(const DatasetFolder& dataset, const std::optional<PyRig>& 
   } else {
     if (!dataset.has("rig.yaml"))
       throw py::value_error(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else pass rig=)", dataset.path().string()));
-    r = parse_rig(dataset.read("rig.yaml"), dataset.path("rig.yaml").string());
+    r = parse_rig(dataset.read("rig.yaml"), dataset.path("rig.yaml").string(), {}, RigUse::ReadDataset);
   }
   require_instrument(r.rig, Instrument::kUnitArray, what, r.origin);
   return r;
@@ -370,8 +377,8 @@ void bind_navigation(py::module_& m) {
      "truth.csv's columns only).", py::arg("dir"), py::kw_only(), py::arg("rig") = py::none());
 
   m.def("navigate", [](const fs::path& dir, const std::string& mode, std::optional<fs::path> out, std::optional<PyRig> rig,
-                       std::optional<fs::path> calibration, bool force, bool plots, std::optional<int> threads,
-                       const py::object& progress) {
+                       std::optional<fs::path> calibration, double sins_rate_hz, bool force, bool plots,
+                       std::optional<int> threads, const py::object& progress) {
     check_plots(plots, out.has_value());
     if (calibration && calibration->empty()) throw py::value_error("calibration='': expected a file name");
     refuse_out_over_inputs(out, {dir, calibration.value_or(fs::path())});
@@ -383,6 +390,9 @@ void bind_navigation(py::module_& m) {
     } catch (const std::invalid_argument& e) {
       throw py::value_error(fmt::format("mode: {}", e.what()));
     }
+    if (!(std::isfinite(sins_rate_hz) && sins_rate_hz >= 0))
+      throw py::value_error(fmt::format("sins_rate_hz: expected a rate ≥ 0 Hz (0: at the compass readings), got {}", sins_rate_hz));
+    options.sins_rate_hz = sins_rate_hz;
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     NavigationDataset data;
@@ -396,7 +406,8 @@ void bind_navigation(py::module_& m) {
       run = navigate(data, r.rig, options, p);
       if (d) {
         const std::string command = fmt::format("python: polrig.navigate('{}', mode='{}', out='{}')", dir.string(), mode, out->string());
-        std::vector<std::string> inputs{(dir / "imu.csv").string(), (dir / "units.csv").string()};
+        std::vector<std::string> inputs{(dir / "imu.csv").string()};
+        if (folder->has("units.csv")) inputs.push_back((dir / "units.csv").string());
         if (data.truth) inputs.push_back((dir / "truth.csv").string());
         if (calibration) inputs.push_back(calibration->string());
         write_manifest(d->staging(), {command, &r, report_navigation(d->staging(), data, run, r.rig, plots), inputs});
@@ -427,7 +438,7 @@ void bind_navigation(py::module_& m) {
      "columns and its 'summary'), 'summary' (summary.csv: MAE, RMSE, STD per mode; empty without a truth). With out=, the "
      "folder `polrig navigate` writes.",
      py::arg("dir"), py::kw_only(), py::arg("mode") = "all", py::arg("out") = py::none(), py::arg("rig") = py::none(),
-     py::arg("calibration") = py::none(), py::arg("force") = false, py::arg("plots") = false,
+     py::arg("calibration") = py::none(), py::arg("sins_rate_hz") = 0.0, py::arg("force") = false, py::arg("plots") = false,
      py::arg("threads") = py::none(), py::arg("progress") = py::none());
 
   m.def("calibrate_unit_array", [](const fs::path& dir, std::optional<fs::path> out, std::optional<PyRig> rig, bool force,

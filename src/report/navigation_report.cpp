@@ -19,17 +19,21 @@ std::string cell(double v) { return std::isfinite(v) ? fmt::format("{}", v) : st
 
 std::string solution_csv(const NavigationDataset& data, const NavigationRun& run) {
   const bool truth = data.truth.has_value();
-  std::string out = "t_s,mode,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,status";
-  if (truth) out += ",err_lat_deg,err_lon_deg,err_north_m,err_east_m";
+  std::string out = "t_s,mode,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,v_e_mps,v_n_mps,v_u_mps,status";
+  if (truth) out += ",err_lat_deg,err_lon_deg,err_north_m,err_east_m,err_v_e_mps,err_v_n_mps,err_v_u_mps";
   out += '\n';
   for (std::size_t m = 0; m < run.modes.size(); ++m)
     for (const NavigationFix& f : run.fixes[m]) {
-      out += fmt::format("{},{},{},{},{},{},{},{},{}", f.t_s, navigation_mode_name(run.modes[m]), cell(rad2deg(f.lat_rad)),
-                         cell(rad2deg(f.lon_rad)), cell(f.h_m), rad2deg(f.attitude.roll_rad), rad2deg(f.attitude.pitch_rad),
-                         rad2deg(f.attitude.yaw_rad), f.status);
+      out += fmt::format("{},{},{},{},{},{},{},{},{},{},{},{}", f.t_s, navigation_mode_name(run.modes[m]),
+                         cell(rad2deg(f.lat_rad)), cell(rad2deg(f.lon_rad)), cell(f.h_m), rad2deg(f.attitude.roll_rad),
+                         rad2deg(f.attitude.pitch_rad), rad2deg(f.attitude.yaw_rad), cell(f.v_enu.x()), cell(f.v_enu.y()),
+                         cell(f.v_enu.z()), f.status);
       if (truth) {
-        const PositionError e = position_error(f, truth_at(*data.truth, f.t_s));
-        out += fmt::format(",{},{},{},{}", cell(e.lat_deg), cell(e.lon_deg), cell(e.north_m), cell(e.east_m));
+        const TruthSample& t = truth_at(*data.truth, f.t_s);
+        const PositionError e = position_error(f, t);
+        const Eigen::Vector3d dv = f.v_enu - t.v_n;
+        out += fmt::format(",{},{},{},{},{},{},{}", cell(e.lat_deg), cell(e.lon_deg), cell(e.north_m), cell(e.east_m),
+                           cell(dv.x()), cell(dv.y()), cell(dv.z()));
       }
       out += '\n';
     }

@@ -1155,7 +1155,7 @@ bool whole(double n) { return n >= 0.5 && std::abs(n - std::round(n)) <= 1e-9 * 
 // A unit array's run (rig/ins_settings.h): under the sky, a whole number of IMU intervals per
 // compass reading and per segment, one motion per segment, the speed never negative and the pitch
 // within ±80° along the way, and at most 2e6 IMU samples (a run's truth and IMU are held in memory).
-std::optional<RigProblem> unit_array_run_problem(const Rig& rig) {
+std::optional<RigProblem> unit_array_run_problem(const Rig& rig, RigUse use) {
   if (rig.source.model != "sky")
     return RigProblem{"source.model", fmt::format("expected sky for device.kind unit-array (its units read the "
                                                   "sky), got '{}'", rig.source.model), "device.kind"};
@@ -1163,6 +1163,12 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig) {
     return RigProblem{"sky.lat_deg", fmt::format("expected a latitude within ±{}° for device.kind unit-array (its "
                                                  "INS's local-level frame is singular at the poles), got {}",
                                                  kInsMaxLatitudeDeg, rig.source.sky.sky.site.lat_deg), "device.kind"};
+  if (rig.navigation.tilt_in_measurement && rig.navigation.integrated_level == "accelerometer")
+    return RigProblem{"navigation.tilt_in_measurement",
+                      "expected false with navigation.integrated_level accelerometer (the tilt columns model the "
+                      "filter's attitude in the measured elevation, which the accelerometers' level leaves out)",
+                      "navigation.integrated_level"};
+  if (use == RigUse::ReadDataset) return std::nullopt;
   const double imu_hz = rig.imu.rate_hz;
   if (!whole(imu_hz / rig.units.rate_hz))
     return RigProblem{"device.units.rate_hz", fmt::format("expected a rate that divides imu.rate_hz ({} Hz) into a "
@@ -1199,11 +1205,6 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig) {
       return RigProblem{"trajectory.segment_climb_deg_s", fmt::format("expected the pitch within ±80°, segment {} ends "
                                                                       "at {}°", i + 1, pitch)};
   }
-  if (rig.navigation.tilt_in_measurement && rig.navigation.integrated_level == "accelerometer")
-    return RigProblem{"navigation.tilt_in_measurement",
-                      "expected false with navigation.integrated_level accelerometer (the tilt columns model the "
-                      "filter's attitude in the measured elevation, which the accelerometers' level leaves out)",
-                      "navigation.integrated_level"};
   if (total * imu_hz > 2e6)
     return RigProblem{"imu.rate_hz", fmt::format("expected at most 2e6 IMU samples in a run, got {:.0f} ({} s at {} Hz)",
                                                  total * imu_hz, total, imu_hz)};
@@ -1211,7 +1212,7 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig) {
 }
 }  // namespace
 
-std::optional<RigProblem> check_rig(const Rig& rig) {
+std::optional<RigProblem> check_rig(const Rig& rig, RigUse use) {
   const Schedule& s = rig.schedule;
   if (s.angles_deg.size() > kMaxStops)
     return RigProblem{"schedule.angles_deg",
@@ -1264,7 +1265,7 @@ std::optional<RigProblem> check_rig(const Rig& rig) {
   }
   if (rig.instrument().has(Instrument::kUnitArray)) {
     if (auto p = unit_array_problem(rig.units)) return RigProblem{p->path, p->message};
-    if (auto p = unit_array_run_problem(rig)) return p;
+    if (auto p = unit_array_run_problem(rig, use)) return p;
   }
   for (int m = 0; m < 6 && rig.instrument().has(Instrument::kPairVoltages); ++m) {
     // Eq. 15's brackets must stay positive for every θ: (1+kd_m)·d < 1.

@@ -57,6 +57,8 @@ std::vector<UnitMount> InstallationRun::mounts() const {
 
 InstallationRun calibrate_unit_array(const NavigationDataset& data, const Rig& rig,
                                      const UnitInstallationSettings& settings) {
+  if (data.compass.empty())
+    throw std::invalid_argument("no compass readings (units.csv): the installation is fitted to the units' readings");
   InstallationRun run;
   const std::vector<Epoch> epochs = epochs_of(data, rig, run.attitude_from);
   std::vector<InstallationEpoch> fit;

@@ -263,7 +263,22 @@ std::vector<std::size_t> epoch_samples(const NavigationDataset& data, std::size_
 }
 
 NavigationFix fix_of(const InsState& s) {
-  return {s.t_s, s.lat_rad, s.lon_rad, s.h_m, s.euler(), "ok"};
+  return {s.t_s, s.lat_rad, s.lon_rad, s.h_m, s.euler(), "ok", s.v_n};
+}
+
+// The IMU samples the SINS mode reports at: the compass readings' (`at`), or every
+// imu.rate_hz/rate-th sample (every one in a log without readings).
+std::vector<std::size_t> sins_samples(const NavigationDataset& data, const Rig& rig, double rate_hz,
+                                      const std::vector<std::size_t>& at) {
+  if (rate_hz == 0 && !data.compass.empty()) return at;
+  const double ratio = rate_hz == 0 ? 1.0 : rig.imu.rate_hz / rate_hz;
+  const std::size_t step = static_cast<std::size_t>(std::llround(ratio));
+  if (!(rate_hz >= 0) || !std::isfinite(ratio) || step < 1 || std::abs(ratio - static_cast<double>(step)) > 1e-9 * ratio)
+    throw std::invalid_argument(fmt::format("the SINS output rate {} Hz does not divide imu.rate_hz ({} Hz) into a whole "
+                                            "number of IMU samples", rate_hz, rig.imu.rate_hz));
+  std::vector<std::size_t> out;
+  for (std::size_t i = step - 1; i < data.imu.size(); i += step) out.push_back(i);
+  return out;
 }
 
 // An INS solution that has left the mechanization's domain (past ±kInsMaxLatitudeDeg, or not
@@ -456,18 +471,27 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   NavigationRun run;
   run.modes = options.modes;
   const auto wants = [&](NavigationMode m) { return std::find(run.modes.begin(), run.modes.end(), m) != run.modes.end(); };
+  if (data.compass.empty() && (wants(NavigationMode::Pns) || wants(NavigationMode::Integrated)))
+    throw std::invalid_argument("no compass readings (units.csv): PNS and the integrated mode need them; an IMU log "
+                                "alone runs mode sins");
+  const std::vector<std::size_t> sins_at = sins_samples(data, rig, options.sins_rate_hz, at);
   std::string stage = "navigate:";
   for (NavigationMode m : run.modes) stage += fmt::format(" {}", navigation_mode_name(m));
-  progress.begin(stage, static_cast<long long>(at.size() * run.modes.size()));
+  progress.begin(stage, static_cast<long long>(at.size() * (run.modes.size() - (wants(NavigationMode::Sins) ? 1 : 0)) +
+                                                (wants(NavigationMode::Sins) ? sins_at.size() : 0)));
   // The filter beside the SINS and the PNS (which takes the SINS's attitude): independent
   // computations, each the same whichever thread runs it.
-  std::vector<InsState> sins;
+  std::vector<InsState> sins, sins_output;
   std::vector<NavigationFix> pns, integrated;
   tbb::parallel_invoke(
       [&] {
         if (!wants(NavigationMode::Sins) && !wants(NavigationMode::Pns)) return;
-        sins = run_sins(data, at, filter_settings(rig).mechanization);
-        if (wants(NavigationMode::Sins)) progress.advance(static_cast<long long>(at.size()));
+        const MechanizationOptions mech = filter_settings(rig).mechanization;
+        if (wants(NavigationMode::Pns)) sins = run_sins(data, at, mech);
+        if (wants(NavigationMode::Sins)) {
+          sins_output = sins_at == at && wants(NavigationMode::Pns) ? sins : run_sins(data, sins_at, mech);
+          progress.advance(static_cast<long long>(sins_at.size()));
+        }
         if (wants(NavigationMode::Pns)) pns = run_pns(data, at, sins, mounts, rig, sky, progress);
       },
       [&] {
@@ -485,7 +509,7 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
     if (m == NavigationMode::Sins) {
       std::vector<NavigationFix> fixes;
       DivergenceWatch watch;
-      for (const InsState& st : sins) fixes.push_back(watch.fix(st));
+      for (const InsState& st : sins_output) fixes.push_back(watch.fix(st));
       run.fixes.push_back(std::move(fixes));
     } else {
       run.fixes.push_back(m == NavigationMode::Pns ? pns : integrated);

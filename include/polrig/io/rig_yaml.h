@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "polrig/rig/error.h"  // RigError, parse_finite_number
+#include "polrig/rig/keys.h"
 #include "polrig/rig/rig.h"
 
 namespace polrig {
@@ -30,10 +31,12 @@ struct LoadedRig {
 };
 
 // Parses rig text; `origin` names it in error messages.
+// `use`: what the rig is loaded for (rig/keys.h, check_rig): RigUse::ReadDataset passes over a
+// simulated run's own rules (navigate and calibrate --method unit-array of a measured log).
 LoadedRig parse_rig(std::string_view text, std::string_view origin,
-                    const std::vector<RigOverride>& overrides = {});
+                    const std::vector<RigOverride>& overrides = {}, RigUse use = RigUse::Run);
 LoadedRig load_rig(const std::filesystem::path& file,
-                   const std::vector<RigOverride>& overrides = {});
+                   const std::vector<RigOverride>& overrides = {}, RigUse use = RigUse::Run);
 
 // The complete effective rig, every key written: a file that loads back to the same Rig.
 std::string rig_to_yaml(const Rig& rig);

@@ -95,6 +95,11 @@ struct RigProblem {
   std::string message;
   std::string related_path = {};  // the other key of the rule, if any
 };
-std::optional<RigProblem> check_rig(const Rig& rig);
+// What a rig is loaded for: to run it (simulate, every study: all rules), or to read a recorded
+// unit-array dataset with it (navigate, calibrate --method unit-array: a simulated run's own rules,
+// its trajectory's whole IMU intervals and motions and the compass rate dividing the IMU's, do not
+// apply to a measured log, whose own files are checked as they are read).
+enum class RigUse { Run, ReadDataset };
+std::optional<RigProblem> check_rig(const Rig& rig, RigUse use = RigUse::Run);
 
 }  // namespace polrig

@@ -15,6 +15,7 @@
 // (sky/sun.h; the parallax between the site and the vehicle is < 9″).
 #include <optional>
 #include <span>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -93,6 +94,8 @@ struct NavigationFix {
   double lat_rad = 0, lon_rad = 0, h_m = 0;
   Euler attitude;                 // PNS: the SINS's (it has none of its own)
   std::string status = "ok";      // PNS: its fit's termination; "ok" for the INS modes
+  // East, north, up (m/s): the INS modes'; NaN for PNS, which has none.
+  Eigen::Vector3d v_enu = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 // The integrated filter at one compass epoch.
@@ -119,10 +122,16 @@ struct NavigationOptions {
   // The units' frames the sun is computed with (a calibration's, calibrate --method unit-array);
   // empty: the dataset's nominal mounts.
   std::vector<UnitMount> mounts;
+  // The SINS mode's output rate (Hz): 0, at the compass readings (every IMU sample in a dataset
+  // without them); else every 1/rate s, a rate that divides imu.rate_hz. PNS and the integrated
+  // mode stay at the compass readings.
+  double sins_rate_hz = 0;
 };
 
 // Throws std::invalid_argument for a dataset whose times are not increasing, whose compass epochs
-// do not fall on IMU samples (within 1 ms) or whose readings are not one per mount.
+// do not fall on IMU samples (within 1 ms) or whose readings are not one per mount; for PNS or the
+// integrated mode without compass readings (an IMU log alone runs SINS only); for a sins_rate_hz
+// that does not divide imu.rate_hz.
 NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const NavigationOptions& options = {},
                        const Progress& progress = {});
 

@@ -440,6 +440,8 @@ TEST_F(NavigationCli, SimulateThenNavigateWritesEveryMode) {
   EXPECT_EQ(lines("D/truth.csv"), 1 + 12001);
   const Result r = ok("navigate D -o N", cd());
   EXPECT_HAS(r.out, "integrated filter: ");
+  EXPECT_HAS(r.out, "vertical channel: held (navigation.hold_height: h = 50 m (sky.height_m), v_U = 0)");
+  EXPECT_HAS(test::read_file(tmp / "N/filter_summary.yaml"), "\nvertical_channel: held  # navigation.hold_height");
   EXPECT_EQ(lines("N/solution.csv"), 1 + 3 * 120);
   EXPECT_EQ(lines("N/filter.csv"), 1 + 120);
   EXPECT_EQ(lines("N/summary.csv"), 1 + 6);

@@ -55,8 +55,11 @@ DatasetFolder dataset_folder(const std::string& input) {
   return DatasetFolder(input);
 }
 
-void print_summary(const NavigationDataset& data, const NavigationRun& run) {
+void print_summary(const NavigationDataset& data, const NavigationRun& run, const Rig& rig) {
   std::cout << fmt::format("{} IMU samples, {} compass readings\n", data.imu.size(), data.compass.size());
+  std::string channel = vertical_channel_text(rig);
+  if (const std::size_t hash = channel.find("  # "); hash != std::string::npos) channel.replace(hash, 4, " (") += ")";
+  std::cout << "vertical channel: " << channel << "\n";
   if (!run.filter.empty()) std::cout << "integrated filter: " << run.filter_summary.BriefReport() << "\n";
   for (std::size_t m = 0; m < run.modes.size(); ++m)
     for (const NavigationFix& f : run.fixes[m])
@@ -98,7 +101,7 @@ void run_navigate(const NavigateOptions& o) {
   if (!o.calibration.empty()) inputs.push_back(o.calibration);
   write_manifest(dir.staging(), {command_line(), &r, report_navigation(dir.staging(), data, run, r.rig, o.out.plots()), inputs});
   finish(dir);
-  print_summary(data, run);
+  print_summary(data, run, r.rig);
 }
 
 }  // namespace

@@ -73,16 +73,17 @@ std::string summary_csv(const std::vector<ModeErrorSummary>& rows) {
   return out;
 }
 
-std::string filter_summary_yaml(const NavigationRun& run) {
+std::string filter_summary_yaml(const NavigationRun& run, const Rig& rig) {
   const FilterSummary& s = run.filter_summary;
   int no_sun = 0;
   for (const FilterEpoch& f : run.filter) no_sun += f.sun.status == UnitSunStatus::Ok ? 0 : 1;
   return fmt::format(
       "# How the integrated filter ended (ins/filter.h FilterSummary): {}\n"
       "status: {}\npredictions: {}\nupdates: {}\nskipped: {}\nno_sun: {}  # readings without two usable units\n"
-      "innovation_mean: {}\ninnovation_rms: {}\nmean_nis: {}\nnis_outside_95: {}\nfinal_R: {}\n",
+      "innovation_mean: {}\ninnovation_rms: {}\nmean_nis: {}\nnis_outside_95: {}\nfinal_R: {}\n"
+      "vertical_channel: {}\n",
       s.BriefReport(), filter_status_name(s.status), s.predictions, s.updates, s.skipped, no_sun, cell(s.innovation_mean),
-      cell(s.innovation_rms), cell(s.mean_nis), cell(s.nis_outside_95), cell(s.final_R));
+      cell(s.innovation_rms), cell(s.mean_nis), cell(s.nis_outside_95), cell(s.final_R), vertical_channel_text(rig));
 }
 
 std::string mode_series(NavigationMode m, const std::string& column) {
@@ -174,7 +175,7 @@ std::vector<DatasetFile> report_navigation(const std::filesystem::path& dir, con
                                                      "its errors against the truth)"}};
   if (!run.filter.empty()) {
     write_text_file(dir / "filter.csv", filter_csv(data, run, rig.source.sky.resolved_sky()));
-    write_text_file(dir / "filter_summary.yaml", filter_summary_yaml(run));
+    write_text_file(dir / "filter_summary.yaml", filter_summary_yaml(run, rig));
     files.push_back({"filter.csv", 1, "the integrated filter per compass reading: the two units, the elevations, the "
                                       "innovation, its variance, NIS, R and the position and heading σ"});
     files.push_back({"filter_summary.yaml", 1, "how the integrated filter ended"});

@@ -518,6 +518,12 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   return run;
 }
 
+std::string vertical_channel_text(const Rig& rig) {
+  if (rig.navigation.hold_height)
+    return fmt::format("held  # navigation.hold_height: h = {} m (sky.height_m), v_U = 0", sky_of(rig).site.height_m);
+  return "free  # navigation.hold_height false: h and v_U integrated (gravity: docs/physics.md §18.1)";
+}
+
 PositionError position_error(const NavigationFix& fix, const TruthSample& truth) {
   const EarthRadii r = earth_radii(truth.lat_rad);
   const double dL = fix.lat_rad - truth.lat_rad;

@@ -128,6 +128,10 @@ struct NavigationOptions {
   double sins_rate_hz = 0;
 };
 
+// Which vertical channel the INS modes run, for a run's output: "held  # navigation.hold_height:
+// h = H m (sky.height_m), v_U = 0" or "free  # navigation.hold_height false: h and v_U integrated".
+std::string vertical_channel_text(const Rig& rig);
+
 // Throws std::invalid_argument for a dataset whose times are not increasing, whose compass epochs
 // do not fall on IMU samples (within 1 ms) or whose readings are not one per mount; for PNS or the
 // integrated mode without compass readings (an IMU log alone runs SINS only); for a sins_rate_hz

@@ -110,6 +110,29 @@ OutputDir OutputOptions::open(bool plots_needed) const {
   }
 }
 
+namespace {
+// The named options that take a file or folder (the positional arguments all do: DIR, INPUT, RIG,
+// PARAMS, VOLTAGES, SCENE). Any other option's value is a number, a word or a list, which may
+// happen to name a folder (`--mode sins -o sins`) without being an input.
+constexpr std::string_view kPathOptions[] = {"rig", "calibration", "params", "geometry", "films", "response", "sun"};
+
+bool takes_a_path(const CLI::Option& o) {
+  if (!o.nonpositional()) return true;
+  for (std::string_view name : kPathOptions)
+    if (o.check_lname(std::string(name))) return true;
+  return false;
+}
+
+// A --set KEY=VALUE whose key takes a file (rig/keys.h: "a path to …"): its value.
+std::optional<std::string> set_path(const std::string& assignment) {
+  const std::size_t eq = assignment.find('=');
+  if (eq == std::string::npos) return std::nullopt;
+  const RigKey* k = find_rig_key(std::string_view(assignment).substr(0, eq));
+  if (!k || !k->expects.starts_with("a path")) return std::nullopt;
+  return assignment.substr(eq + 1);
+}
+}  // namespace
+
 void refuse_output_over_inputs(const CLI::App& command) {
   const CLI::Option* out = command.get_option_no_throw("--out");
   if (!out || out->count() == 0) return;
@@ -117,9 +140,10 @@ void refuse_output_over_inputs(const CLI::App& command) {
   for (const CLI::Option* o : command.get_options()) {
     if (o == out) continue;
     const bool set = o->check_lname("set");
+    if (!set && !takes_a_path(*o)) continue;
     for (const std::string& value : o->results()) {
-      const std::size_t eq = value.find('=');
-      inputs.emplace_back(set && eq != std::string::npos ? value.substr(eq + 1) : value);
+      if (!set) inputs.emplace_back(value);
+      else if (const std::optional<std::string> path = set_path(value)) inputs.emplace_back(*path);
     }
   }
   try {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -147,6 +148,7 @@ ScalarUpdate InsFilter::update(const SunElevation& m) {
   // static run; the next step's mechanization reset it).
   if (settings_.mechanization.hold_height_m) filter_.x[kDh] = filter_.x[kDV + 2] = 0;
   feed_back(filter_.x, state_, gyro_bias_, accel_bias_);
+  state_.lon_rad = std::remainder(state_.lon_rad, 2 * std::numbers::pi);  // a correction across 180° stays a longitude
   filter_.x.setZero();
   last_R_ = R;
   ++updates_;

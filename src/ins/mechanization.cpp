@@ -73,7 +73,7 @@ InsState mechanize(const InsState& s, const ImuSample& prev, const ImuSample& cu
   const double h_avg = 0.5 * (s.h_m + n.h_m);
   n.lat_rad = s.lat_rad + v_avg.y() * dt / (mid.r.R_M + h_avg);
   const double L_avg = 0.5 * (s.lat_rad + n.lat_rad);
-  // Wrapped to (−π, π]: a run round a parallel stays a longitude (exact for one already inside).
+  // Wrapped to [−π, π]: a run round a parallel stays a longitude (exact for one already inside).
   n.lon_rad = std::remainder(s.lon_rad + v_avg.x() * dt / ((mid.r.R_N + h_avg) * std::cos(L_avg)), 2 * std::numbers::pi);
 
   // Attitude: the body's rotation (with coning) and the n-frame's over the interval, at the midpoint.

@@ -83,7 +83,7 @@ TruthSample truth_of(double t, const Motion& m, const Position& p) {
   TruthSample s;
   s.t_s = t;
   s.lat_rad = p.L;
-  s.lon_rad = std::remainder(p.lon, 2 * std::numbers::pi);  // (−π, π]: a run round a parallel
+  s.lon_rad = std::remainder(p.lon, 2 * std::numbers::pi);  // [−π, π]: a run round a parallel
   s.h_m = p.h;
   s.C_bn = C_bn_from_euler({m.roll, m.pitch, m.yaw});
   s.euler = euler_from_C_bn(s.C_bn);

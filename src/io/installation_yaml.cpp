@@ -1,6 +1,7 @@
 // The unit-array installation calibration's reader (include/polrig/io/installation_yaml.h).
 #include "polrig/io/installation_yaml.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <set>
@@ -70,10 +71,11 @@ void check_layout(const std::filesystem::path& file, const YAML::Node& entry, co
     if (!a[c].IsSequence() || a[c].size() != 3) refuse_key(file, a[c], key, "expected a triple per axis");
     Vec3 v{};
     for (std::size_t k = 0; k < 3; ++k) v[k] = number_at(file, a[c][k], key);
+    if (!(vec3::norm(v) > 0.5 && vec3::norm(v) < 1.5)) refuse_key(file, a[c], key, "expected a unit vector per axis");
     const double cos = std::clamp(vec3::dot(v, nominal[c]) / (vec3::norm(v) * vec3::norm(nominal[c])), -1.0, 1.0);
     worst = std::max(worst, std::acos(cos));
   }
-  if (worst > 1e-6 * kDeg)
+  if (!(worst <= 1e-6 * kDeg))
     refuse_key(file, a, key,
                fmt::format("unit {} was fitted for another layout: its nominal axes are {:.4g}° from the dataset's "
                            "unit {} (the rig's device.units); calibrate this layout's dataset instead",

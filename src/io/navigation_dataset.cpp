@@ -176,7 +176,7 @@ std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_
   return out;
 }
 
-// The truth's physical ranges [C]: a longitude within ±360° (wrapped to (−180°, 180°]); a height
+// The truth's physical ranges [C]: a longitude within ±360° (wrapped to [−180°, 180°]); a height
 // from the deepest ocean floor to the edge of space; attitude angles within ±360°; a speed below
 // orbital (8 km/s). A truth beyond them is not a vehicle's.
 constexpr double kMinHeight_m = -11000, kMaxHeight_m = 100000, kMaxSpeed_mps = 8000;

@@ -107,6 +107,7 @@ std::vector<UnitInstallation> calibrate_installation(std::span<const UnitMount> 
     u.used = static_cast<int>(samples.size());
     if (samples.size() < 4) {
       u.termination = "too-few-readings";
+      u.standard_error_deg.fill(std::numeric_limits<double>::quiet_NaN());  // no fit: none exists
       continue;
     }
     InstallationResiduals f(nominal[i].C_mb, samples);

@@ -1168,12 +1168,6 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig, RigUse use) {
                       "expected false with navigation.integrated_level accelerometer (the tilt columns model the "
                       "filter's attitude in the measured elevation, which the accelerometers' level leaves out)",
                       "navigation.integrated_level"};
-  if (use == RigUse::ReadDataset) return std::nullopt;
-  const double imu_hz = rig.imu.rate_hz;
-  if (!whole(imu_hz / rig.units.rate_hz))
-    return RigProblem{"device.units.rate_hz", fmt::format("expected a rate that divides imu.rate_hz ({} Hz) into a "
-                                                          "whole number of IMU samples, got {} Hz", imu_hz, rig.units.rate_hz),
-                      "imu.rate_hz"};
   const TrajectorySettings& t = rig.trajectory;
   const std::size_t n = t.segment_s.size();
   for (const auto& [path, list] : {std::pair{"trajectory.segment_accel_mps2", &t.segment_accel_mps2},
@@ -1182,6 +1176,12 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig, RigUse use) {
     if (!list->empty() && list->size() != n)
       return RigProblem{path, fmt::format("expected one value per segment of trajectory.segment_s ({}), got {}", n,
                                           list->size()), "trajectory.segment_s"};
+  if (use == RigUse::ReadDataset) return std::nullopt;  // the rest: a simulated run's own rules
+  const double imu_hz = rig.imu.rate_hz;
+  if (!whole(imu_hz / rig.units.rate_hz))
+    return RigProblem{"device.units.rate_hz", fmt::format("expected a rate that divides imu.rate_hz ({} Hz) into a "
+                                                          "whole number of IMU samples, got {} Hz", imu_hz, rig.units.rate_hz),
+                      "imu.rate_hz"};
   const auto at = [](const std::vector<double>& v, std::size_t i) { return v.empty() ? 0.0 : v[i]; };
   double u = t.speed_mps, pitch = t.pitch_deg, total = 0;
   for (std::size_t i = 0; i < std::max<std::size_t>(n, 1); ++i) {

@@ -284,7 +284,7 @@ std::vector<std::size_t> sins_samples(const NavigationDataset& data, const Rig& 
 // An INS solution that has left the mechanization's domain (past ±kInsMaxLatitudeDeg, or not
 // finite) is not a position: from then on every epoch reports `diverged` at the last state inside it.
 struct DivergenceWatch {
-  std::optional<InsState> last_good;
+  std::optional<InsState> last_good;  // the start (which the rig's checks hold inside), then each good state
   bool diverged = false;
   NavigationFix fix(const InsState& s) {
     if (!diverged && in_ins_domain(s)) {
@@ -350,7 +350,7 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
                     std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
                     std::vector<NavigationFix>& fixes, const Progress& progress) {
   InsFilter filter(data.initial, initial_covariance(rig), filter_settings(rig));
-  DivergenceWatch watch;
+  DivergenceWatch watch{data.initial};
   // H^n's level: the filter's attitude (Z21) or the accelerometers (navigation.integrated_level).
   const bool accelerometer = rig.navigation.integrated_level == "accelerometer";
   const double g = normal_gravity(data.initial.lat_rad, data.initial.h_m);
@@ -475,6 +475,11 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
     throw std::invalid_argument("no compass readings (units.csv): PNS and the integrated mode need them; an IMU log "
                                 "alone runs mode sins");
   const std::vector<std::size_t> sins_at = sins_samples(data, rig, options.sins_rate_hz, at);
+  if (data.truth && wants(NavigationMode::Sins))
+    for (std::size_t i : sins_at)
+      if (!find_truth(*data.truth, data.imu[i].t_s))
+        throw std::invalid_argument(fmt::format("truth.csv has no row at t = {} s, a SINS output time (the truth must "
+                                                "hold every time the solution is reported at)", data.imu[i].t_s));
   std::string stage = "navigate:";
   for (NavigationMode m : run.modes) stage += fmt::format(" {}", navigation_mode_name(m));
   progress.begin(stage, static_cast<long long>(at.size() * (run.modes.size() - (wants(NavigationMode::Sins) ? 1 : 0)) +
@@ -508,7 +513,7 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   for (NavigationMode m : run.modes) {
     if (m == NavigationMode::Sins) {
       std::vector<NavigationFix> fixes;
-      DivergenceWatch watch;
+      DivergenceWatch watch{data.initial};
       for (const InsState& st : sins_output) fixes.push_back(watch.fix(st));
       run.fixes.push_back(std::move(fixes));
     } else {

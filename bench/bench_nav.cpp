@@ -1,4 +1,4 @@
-// The closed-form heading (nav/heading, W19 Eq. 25): headings solved per second, without a prior
+// The closed-form heading (compass/heading, W19 Eq. 25): headings solved per second, without a prior
 // (the sun-in-front choice) and with one. Inputs: 1024 random tilted poses (|roll|, |pitch| ≤
 // 15°, h_s 1°–70°) made by the solver's own forward rotations, cycled.
 //   build/bench/polrig_bench --benchmark_filter=Heading
@@ -7,8 +7,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include "polrig/nav/heading.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/heading.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/sky/rayleigh.h"
 #include "polrig/random.h"
 #include "polrig/units.h"
@@ -55,7 +55,7 @@ BENCHMARK(BM_Heading_SolveWithPrior)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
-// Orientation from a DoFP sky image (nav/orientation, H17 Eqs. 6–13): one eigenvector solve over
+// Orientation from a DoFP sky image (compass/orientation, H17 Eqs. 6–13): one eigenvector solve over
 // H17's 19,200 units (target < 1 ms; H17's Matlab R2015b: about 1 ms), the two comparators, and
 // as reference the floor every method pays, one cos and one sin per point. Arg: the points'
 // spacing in px over the whole 640 × 480 image: 4 → 160 × 120 = 19,200 points (H17's count;

@@ -1,4 +1,4 @@
-// Positioning from the sun's zenith angle (nav/positioning, W16 Eq. 17): one fix over W16's static
+// Positioning from the sun's zenith angle (compass/positioning, W16 Eq. 17): one fix over W16's static
 // hour at 1 Hz (3601 sightings, noise-free zenith angles from the full ERFA ephemeris, a prior
 // 100 km away), with both roots (the target: < 50 ms) and the chosen root alone; as
 // references measured in the same run, what one re-linearization costs (a SunTrack at a site and
@@ -9,7 +9,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/positioning.h"
 #include "polrig/sky/sun.h"
 
 namespace {

@@ -55,7 +55,7 @@ pybind11_add_module(polrig_python MODULE NO_EXTRAS
   src/python/four_camera_geometry_bindings.cpp
   src/python/calibration_bindings.cpp
   src/python/sky_bindings.cpp
-  src/python/nav_bindings.cpp src/python/dofp_calibration_bindings.cpp
+  src/python/compass_bindings.cpp src/python/dofp_calibration_bindings.cpp
   src/python/orientation_bindings.cpp
   src/python/position_bindings.cpp
   src/python/four_camera_calibration_bindings.cpp

@@ -189,7 +189,7 @@ TEST(Architecture, ThePartsTableMakesItsIncludesOnlyPromises) {
   EXPECT_EQ(promises.at("sky"), (std::set<std::string>{kTopLevel, "optics"}));
   EXPECT_EQ(promises.at("spectral"), (std::set<std::string>{kTopLevel}));
   EXPECT_EQ(promises.at("ins"), (std::set<std::string>{kTopLevel}));
-  EXPECT_EQ(promises.at("nav"), (std::set<std::string>{kTopLevel, "sky"}));
+  EXPECT_EQ(promises.at("compass"), (std::set<std::string>{kTopLevel, "sky"}));
 }
 
 TEST(Architecture, NoIncludeRunsBackUpThePartsTable) {
@@ -237,18 +237,18 @@ TEST(Architecture, AnyIncludeSpellingIsChecked) {
 // The promises: sky/ may include optics/ and top-level headers, not geometry/, which the
 // table's order alone would allow (it sits below sky/ here).
 TEST(Architecture, AnIncludeBreakingAPromiseIsNamed) {
-  const std::vector<std::string> order{kTopLevel, "optics", "geometry", "sky", "nav", "cli"};
+  const std::vector<std::string> order{kTopLevel, "optics", "geometry", "sky", "compass", "cli"};
   const std::map<std::string, std::set<std::string>> promises{{"sky", {kTopLevel, "optics"}},
-                                                              {"nav", {kTopLevel, "sky"}}};
+                                                              {"compass", {kTopLevel, "sky"}}};
   const auto bad = violations(order, {{"src/sky/a.cpp", "#include \"polrig/optics/lens.h\"\n"
                                                         "#include \"polrig/units.h\"\n"
                                                         "#include \"polrig/geometry/turn.h\"\n"},
-                                      {"src/nav/b.cpp", "#include \"polrig/sky/sun.h\"\n"
-                                                        "#include \"polrig/optics/lens.h\"\n"}},
+                                      {"src/compass/b.cpp", "#include \"polrig/sky/sun.h\"\n"
+                                                            "#include \"polrig/optics/lens.h\"\n"}},
                               promises);
   ASSERT_EQ(bad.size(), 2u) << ::testing::PrintToString(bad);
   EXPECT_EQ(bad[0], "src/sky/a.cpp:3: sky → geometry (polrig/geometry/turn.h): the Parts table says sky/ includes only optics/, top level");
-  EXPECT_EQ(bad[1], "src/nav/b.cpp:2: nav → optics (polrig/optics/lens.h): the Parts table says nav/ includes only sky/, top level");
+  EXPECT_EQ(bad[1], "src/compass/b.cpp:2: compass → optics (polrig/optics/lens.h): the Parts table says compass/ includes only sky/, top level");
 }
 
 }  // namespace

@@ -20,7 +20,7 @@ class CliNav : public PolrigTest {
 
 double rad(double d) { return d * std::numbers::pi / 180.0; }
 
-// θ_b of a sensor looking along Z_b (spec §1.5 frames; Eigen, independent of nav/).
+// θ_b of a sensor looking along Z_b (spec §1.5 frames; Eigen, independent of compass/).
 double theta_b(double H, double roll, double pitch, const Eigen::Vector3d& s) {
   using Eigen::AngleAxisd;
   using Eigen::Vector3d;

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "polrig/io/rig_yaml.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/sim/four_camera_frames.h"
 #include "polrig/units.h"
 

@@ -14,7 +14,7 @@
 #include "polrig/device/four_camera.h"
 #include "polrig/io/four_camera_dataset.h"
 #include "polrig/io/rig_yaml.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/report/four_camera_dataset.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/keys.h"
@@ -239,7 +239,7 @@ TEST(FourCameraFrames, OnAPixelGridTheFusedImageIsTheSkyTo1e9) {
 }
 
 TEST(FourCameraFrames, TheFusedAopGivesTheSunByTheEigenvectorMethod) {
-  // Independent route: nav/orientation.h's eigenvector method (W16 Eqs. 6–14) on the fused AoP of
+  // Independent route: compass/orientation.h's eigenvector method (W16 Eqs. 6–14) on the fused AoP of
   // the virtual camera 1 recovers the ephemeris' sun in camera 1's frame (the contract with the
   // locate glue), within the resampling's error.
   const Rig rig = parse_rig(sky_rig_text(scaled(0.25, true), 35.0), "q").rig;
@@ -302,7 +302,7 @@ TEST(FourCameraFrames, NoInterpolationLeftTheFusedImageGivesTheSunTo1e9) {
 TEST(FourCameraFrames, HeadingSignTestOfSpec0) {
   // Spec §0: turn the device +10° anticlockwise seen from above (camera 1's X from azimuth 35° to
   // 25°: sky.mount_deg is X's geographic azimuth, clockwise): the heading from the fused image
-  // (eigenvector sun, H = A_s + α_S, nav/orientation's camera_heading_deg) falls by 10°, and each
+  // (eigenvector sun, H = A_s + α_S, compass/orientation's camera_heading_deg) falls by 10°, and each
   // equals the true heading of stops.csv (dofp_true_heading_deg: X's azimuth).
   std::array<double, 2> heading{};
   for (int k = 0; k < 2; ++k) {

@@ -15,7 +15,7 @@
 #include "polrig/io/exr.h"
 #include "polrig/io/four_camera_calibration.h"
 #include "polrig/io/rig_yaml.h"
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/positioning.h"
 #include "polrig/report/four_camera_dataset.h"
 #include "polrig/report/locate_report.h"
 #include "polrig/sim/four_camera_frames.h"

@@ -1,4 +1,4 @@
-// nav/heading: the closed-form heading from one E-vector (W19 Eqs. 22–25, spec §1.5), checked
+// compass/heading: the closed-form heading from one E-vector (W19 Eqs. 22–25, spec §1.5), checked
 // against a forward model written here with Eigen's AngleAxis (independent of the solver's own
 // rotation helpers), and the sign conventions of spec §0.
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 #include "polrig/random.h"
 #include "polrig/units.h"
 

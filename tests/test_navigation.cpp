@@ -181,8 +181,8 @@ TEST(NavigationRig, TheVehicleDriveEndsWhereItsSegmentsSay) {
   EXPECT_EQ(tr.imu.size(), 120000u);
 }
 
-// ins/'s attitude (Eigen, C_b^n = Rz(−yaw)·Rx(pitch)·Ry(roll)) and nav/'s (Axes3, body_axes_enu from
-// nav/heading.h's body_to_enu) are one convention: the same matrix for the same angles, to rounding.
+// ins/'s attitude (Eigen, C_b^n = Rz(−yaw)·Rx(pitch)·Ry(roll)) and compass/'s (Axes3, body_axes_enu from
+// compass/heading.h's body_to_enu) are one convention: the same matrix for the same angles, to rounding.
 TEST(NavigationAttitude, InsAndNavGiveTheSameBodyAxes) {
   double worst = 0;
   for (double yaw : {0.0, 30.0, 135.0, 251.0, 359.0})

@@ -1,4 +1,4 @@
-// nav/orientation: the sun vector and heading from a DoFP camera's sky image (H17 Eqs. 6–14,
+// compass/orientation: the sun vector and heading from a DoFP camera's sky image (H17 Eqs. 6–14,
 // spec §2.5). The sky images are rendered here from sky/'s single-scattering Rayleigh sky
 // (sky_light: its AoP in the local meridian frame, or its E-vector), projected into the image
 // with a few lines of this file's own (φ in frame i from the sky, then φ_pix = φ + α), never with
@@ -18,8 +18,8 @@
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
-#include "polrig/nav/heading.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/heading.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/report/orientation_report.h"
 #include "polrig/sky/rayleigh.h"
 #include "polrig/units.h"

@@ -1,4 +1,4 @@
-// nav/positioning: position from the sun's zenith angle (W16 Eqs. 15–17) and the heading at the
+// compass/positioning: position from the sun's zenith angle (W16 Eqs. 15–17) and the heading at the
 // fix (Eq. 18), spec sky-and-compasses.md §3.4–3.6. The data come from sky/sun.h's full ERFA
 // sun_position at the true site (what the sky source simulates), never from the fit's own model;
 // the sun vectors of a level camera are built here from ENU with this file's own frame.
@@ -9,8 +9,8 @@
 
 #include <gtest/gtest.h>
 
-#include "polrig/nav/orientation.h"
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/orientation.h"
+#include "polrig/compass/positioning.h"
 #include "polrig/report/positioning_reports.h"
 #include "polrig/sky/sun.h"
 #include "polrig/study/positioning.h"

@@ -42,7 +42,7 @@ SkyStudySettings small_settings() {
 }
 
 // Under the single-scattering sky every method is exact: each E-vector is ⊥ the sun (the
-// forward models of device/ and the inverses of nav/ meet), whatever the tilt and heading.
+// forward models of device/ and the inverses of compass/ meet), whatever the tilt and heading.
 TEST(SkyStudy, EveryMethodIsExactUnderTheSkyItAssumes) {
   for (const char* name : {"wang2019-outdoor1.yaml", "han2017-outdoor.yaml", "wang2016-static.yaml",
                            "zhang2021-static.yaml"}) {

@@ -1,6 +1,6 @@
 // Z21's unit-array polarization compass (spec sky-and-compasses.md §4.1–4.2; docs/physics.md §19):
 // the layout (device/unit_array.h), what each unit reads (calib/unit_array.h, the six-photodiode
-// chain) and the sun from two units (nav/unit_array.h), against references written here: the
+// chain) and the sun from two units (compass/unit_array.h), against references written here: the
 // textbook E-vector e ∝ s × v, the spec's angle formula (§1.3) and the ERFA ephemeris.
 #include <gtest/gtest.h>
 
@@ -18,9 +18,9 @@
 #include "polrig/device/unit_array.h"
 #include "polrig/instrument/instrument.h"
 #include "polrig/io/rig_yaml.h"
-#include "polrig/nav/heading.h"
-#include "polrig/nav/unit_array.h"
-#include "polrig/nav/unit_installation.h"
+#include "polrig/compass/heading.h"
+#include "polrig/compass/unit_array.h"
+#include "polrig/compass/unit_installation.h"
 #include "polrig/rig/keys.h"
 #include "polrig/sky/sun.h"
 #include "polrig/units.h"

@@ -1,7 +1,7 @@
 #pragma once
 // The name of how Eigen's Levenberg–Marquardt (unsupported/Eigen/LevenbergMarquardt) ended, and
 // whether that is convergence (a tolerance met) rather than a limit or bad input: for the fits
-// below calib/ that report it (nav/unit_installation, sky/berry_fit).
+// below calib/ that report it (compass/unit_installation, sky/berry_fit).
 #include <unsupported/Eigen/LevenbergMarquardt>
 
 namespace polrig {

@@ -87,7 +87,7 @@ class Rig:
                          ring_tilts_deg: ArrayLike | None = None, tilts_deg: ArrayLike | None = None,
                          out: str | os.PathLike[str] | None = None, force: bool = False, plots: bool = False,
                          threads: int | None = None, progress: Progress = None) -> dict[str, Any]: ...
-    # ---- navigation on a rig (nav_bindings.cpp)
+    # ---- navigation on a rig (compass_bindings.cpp)
     def study_heading(self, *, trials: int = 1000, site: Sequence[float] | None = None, utc: Any = None,
                       refraction: bool | None = None, ut1_minus_utc_s: float | None = None,
                       roll_sd_deg: float = 5.0, pitch_sd_deg: float = 5.0, sync_max_s: float = 0.1,
@@ -616,7 +616,7 @@ def fit_four_camera_geometry(dir: str | os.PathLike[str], *, out: str | os.PathL
 # ---- end of sky
 
 
-# ---- navigation (nav_bindings.cpp)
+# ---- navigation (compass_bindings.cpp)
 HEADING_STATUS: tuple[str, ...]
 
 class HeadingSolution:

@@ -1,6 +1,6 @@
 """The first-order response of the eigenvector method's sun vector (H17 Eqs. 10-13) to small
 errors in the cells' AoP, for a Rayleigh sky: an independent implementation in NumPy (none of
-nav/orientation's code), used by test_dofp_pipeline.py (the noise's heading SD) and
+compass/orientation's code), used by test_dofp_pipeline.py (the noise's heading SD) and
 test_orientation.py (the bias of the cells' footprint).
 
 The method takes the sun s as the eigenvector of the smallest eigenvalue of M = Σ eᵢeᵢᵀ over the

@@ -1,5 +1,5 @@
 """polrig.sun_vector, polrig.orient and polrig.camera_heading: orientation from a DoFP camera's sky
-image (nav/orientation.h, H17 Eqs. 6-14). The sky images are rendered here with polrig.Sky.light
+image (compass/orientation.h, H17 Eqs. 6-14). The sky images are rendered here with polrig.Sky.light
 (the Rayleigh sky's AoP chi in the local meridian frame), projected into the image in NumPy:
 phi_pix = chi + alpha for a level camera, to exercise the API. The sign test of spec §0 does not
 re-render: it takes polrig's own simulated frames and an independent sun (the AA formula). The CLI

@@ -31,7 +31,7 @@ class FourCamera final : public Instrument {
   unsigned flags() const override { return kFrames | kCameraArray; }
 };
 
-// Z21's unit-array compass: device/unit_array.h, calib/unit_array.h, nav/unit_array.h.
+// Z21's unit-array compass: device/unit_array.h, calib/unit_array.h, compass/unit_array.h.
 class UnitArray final : public Instrument {
  public:
   std::string_view kind() const override { return "unit-array"; }

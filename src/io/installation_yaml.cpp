@@ -11,7 +11,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "polrig/io/measured.h"
-#include "polrig/nav/unit_installation.h"
+#include "polrig/compass/unit_installation.h"
 #include "polrig/quoted.h"
 #include "polrig/units.h"
 #include "yaml_load.h"

@@ -15,7 +15,7 @@ void bind_rig(pybind11::module_& m);          // rig_bindings.cpp: Rig, its keys
 void bind_studies(pybind11::module_& m);      // study_bindings.cpp: simulate, CS study, sweep, adc, trials
 void bind_calibration(pybind11::module_& m);  // calibration_bindings.cpp: calibrate, params, apply
 void bind_sky(pybind11::module_& m);          // sky_bindings.cpp: sun, sky, drift, spectral
-void bind_nav(pybind11::module_& m);          // nav_bindings.cpp: heading, study heading
+void bind_compass(pybind11::module_& m);          // compass_bindings.cpp: heading, study heading
 void bind_orientation(pybind11::module_& m);  // orientation_bindings.cpp: DoFP sun vector, orient
 void bind_dofp_calibration(pybind11::module_& m);          // dofp_calibration_bindings.cpp: the DoFP camera's calibration
 void bind_dofp_polarization(pybind11::module_& m);         // dofp_calibration_bindings.cpp: a frame's per-cell AoP, DoP

@@ -48,7 +48,7 @@ PYBIND11_MODULE(_polrig, m) {
   polrig::python::bind_studies(m);
   polrig::python::bind_calibration(m);
   polrig::python::bind_sky(m);
-  polrig::python::bind_nav(m);
+  polrig::python::bind_compass(m);
   polrig::python::bind_orientation(m);
   polrig::python::bind_dofp_calibration(m);
   polrig::python::bind_dofp_polarization(m);

@@ -1,6 +1,6 @@
 // polrig.sun_vector, polrig.orient and polrig.camera_heading: orientation from a DoFP camera's sky
-// image (nav/orientation.h, H17 Eqs. 6–14, spec sky-and-compasses.md §2.5) on NumPy AoP (and DoP)
-// images. Frames and senses are nav/orientation.h's.
+// image (compass/orientation.h, H17 Eqs. 6–14, spec sky-and-compasses.md §2.5) on NumPy AoP (and DoP)
+// images. Frames and senses are compass/orientation.h's.
 #include <optional>
 #include <string>
 #include <utility>
@@ -12,7 +12,7 @@
 
 #include "bindings.h"
 #include "convert.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/report/orientation_report.h"
 #include "sky_args.h"
 
@@ -22,7 +22,7 @@ using namespace pybind11::literals;
 namespace {
 
 constexpr const char* kFrames =
-    "Frames (nav/orientation.h): camera frame l right-handed, Z_l along the optical axis (the "
+    "Frames (compass/orientation.h): camera frame l right-handed, Z_l along the optical axis (the "
     "zenith for a level camera), X_l = image +x (columns), Y_l = image +y (rows grow); every "
     "image angle (the AoP, the sun's azimuth α_S) runs from X_l towards Y_l (anticlockwise seen "
     "from above for a level camera looking up). Pixel (col, row)'s centre is at (col + 0.5, "
@@ -104,7 +104,7 @@ constexpr const char* kCameraArgs =
 
 void bind_orientation(py::module_& m) {
   py::class_<SunVectorSolution>(m, "SunVector",
-                                "The eigenvector method's sun (nav/orientation.h, H17 Eqs. 10–13).")
+                                "The eigenvector method's sun (compass/orientation.h, H17 Eqs. 10–13).")
       .def_property_readonly("status", [](const SunVectorSolution& s) {
              return std::string(sun_vector_status_name(s.status));
            }, "'ok', 'near-horizon', 'too-few-vectors' or 'degenerate'.")

@@ -1,6 +1,6 @@
 // polrig.fix_position (W16 Eq. 17 from zenith angles), polrig.locate (the locate core on a level
 // camera's sun vectors: the fix and the heading, Eq. 18), polrig.two_sighting_error (Eq. 15) and
-// Rig.study_positioning (docs/python.md). Frames and senses are nav/positioning.h's.
+// Rig.study_positioning (docs/python.md). Frames and senses are compass/positioning.h's.
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -13,7 +13,7 @@
 
 #include "bindings.h"
 #include "convert.h"
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/positioning.h"
 #include "polrig/io/four_camera_calibration.h"
 #include "polrig/report/locate_report.h"
 #include "polrig/rig/error.h"
@@ -251,7 +251,7 @@ void bind_position(py::module_& m) {
         return fix_record(fix, t);
       }, "utc"_a, "zenith_deg"_a, "prior"_a, py::kw_only(), "weight"_a = py::none(), "refraction"_a = false,
       "ut1_minus_utc_s"_a = 0.0, "second_root"_a = true, "truth"_a = py::none(),
-      "W16 Eq. 17: the site from the sun's zenith angles over a window (nav/positioning.h): "
+      "W16 Eq. 17: the site from the sun's zenith angles over a window (compass/positioning.h): "
       "Levenberg–Marquardt from the prior with the analytic Jacobian, the exact topocentric sun of "
       "sky/sun.h re-linearized at each estimate, and the mirror root from a start reflected about "
       "the sun's ground track; the root nearest the prior is chosen.\n\n"
@@ -294,7 +294,7 @@ void bind_position(py::module_& m) {
       }, "utc"_a, "sun_camera"_a, "prior"_a, py::kw_only(), "weight"_a = py::none(), "refraction"_a = false,
       "ut1_minus_utc_s"_a = 0.0, "second_root"_a = true, "truth"_a = py::none(),
       "true_heading_deg"_a = py::none(),
-      "The locate core (nav/positioning.h): sun vectors of a LEVEL camera (frame l: Z_l up, X_l, Y_l "
+      "The locate core (compass/positioning.h): sun vectors of a LEVEL camera (frame l: Z_l up, X_l, Y_l "
       "anticlockwise seen from above; any length > 0), shape (N, 3), at N times → θ_S per sighting, "
       "the Eq. 17 fix (fix_position), and at the fix the sun's azimuth β and the heading ψ = β − α_S "
       "with W16's clockwise α_S = −atan2(s_y, s_x) (Eq. 18). truth, true_heading_deg: optional, for "

@@ -13,7 +13,7 @@
 #include "polrig/io/rig_yaml.h"
 #include "polrig/rig/rig.h"
 #include "polrig/io/plot.h"
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 #include "polrig/side_by_side.h"
 
 namespace polrig {

@@ -31,7 +31,7 @@ using Eigen::Vector3d;
 Vector3d to_eigen(const Vec3& v) { return {v[0], v[1], v[2]}; }
 Vec3 to_vec3(const Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-// C_b^n as a matrix, from nav's own rotation (columns: the body axes in n).
+// C_b^n as a matrix, from compass/'s own rotation (columns: the body axes in n).
 Matrix3d body_to_n(double heading_deg, const Tilt& tilt) {
   Matrix3d C;
   for (int k = 0; k < 3; ++k) {

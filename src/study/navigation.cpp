@@ -426,7 +426,7 @@ std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vec
   }
   PositionOptions options;
   options.sun = sky.sun;
-  // One track for every window, at the start's site (nav/positioning.h: the parallax over the PNS's
+  // One track for every window, at the start's site (compass/positioning.h: the parallax over the PNS's
   // few km is far below its noise), and the root nearest the prior only: a fix per reading.
   const double end = data.compass.empty() ? 1.0 : data.compass.back().t_s + 1.0;
   options.ephemeris = std::make_shared<const SunTrack>(

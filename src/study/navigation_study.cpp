@@ -10,7 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
-#include "polrig/nav/unit_array.h"
+#include "polrig/compass/unit_array.h"
 #include "polrig/random.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/keys.h"

@@ -11,7 +11,7 @@
 #include "polrig/device/dofp_camera.h"
 #include "polrig/device/four_camera.h"
 #include "polrig/device/unit_array.h"
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 #include "polrig/random.h"
 #include "polrig/sky/vector_rt_sky.h"
 #include "polrig/statistics.h"
@@ -34,7 +34,7 @@ std::vector<Vec3> camera_grid(const CameraIntrinsics& camera, int width, int hei
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) {
       const double x = (c + 0.5) * width / cols, y = (r + 0.5) * height / rows;
-      const PointView p = point_view(x, y, camera);  // Eq. 9, nav/orientation.h's own mapping
+      const PointView p = point_view(x, y, camera);  // Eq. 9, compass/orientation.h's own mapping
       x_px.push_back(x);
       y_px.push_back(y);
       views.push_back({std::sin(p.gamma_rad) * std::cos(p.alpha_rad), std::sin(p.gamma_rad) * std::sin(p.alpha_rad),
@@ -115,7 +115,7 @@ SkyEstimate eigenvector_estimate(const SkyCompass& c, const SkySeen& seen, SkyMe
   return from_sun_vector(sun_vector_eigen(p, c.camera, orientation_for(m, s, prior)));
 }
 
-// The units' readings φ_i in their own frames (nav/unit_array.h's sense), noisy for trial ≥ 0.
+// The units' readings φ_i in their own frames (compass/unit_array.h's sense), noisy for trial ≥ 0.
 std::vector<UnitReading> unit_readings(const SkyCompass& c, const SkySeen& seen, const SkyStudySettings& s,
                                        std::uint64_t seed, int trial) {
   std::vector<UnitReading> r;

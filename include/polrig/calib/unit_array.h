@@ -10,7 +10,7 @@
 //
 // Sense: the chain's θ is polrig's sensor frame (physics.md §1, §10: from X_m towards Y_m,
 // right-handed about the view); a unit reports the spec's sense (§0: right-handed about k = −v),
-// φ = −θ mod π, which nav/unit_array.h's E^m = [cos φ, −sin φ, 0] expects.
+// φ = −θ mod π, which compass/unit_array.h's E^m = [cos φ, −sin φ, 0] expects.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -33,7 +33,7 @@ struct UnitSample {
   Vec3 view_enu{};                 // the unit's true view in n
 };
 
-// Each unit of `truth` at time t, the body's axes C_bn (C_b^n by columns: nav/unit_array.h's
+// Each unit of `truth` at time t, the body's axes C_bn (C_b^n by columns: compass/unit_array.h's
 // body_axes_enu) under `sky` (its site, sun settings and model; sky.first_stop is not used).
 // Noise: standard_normal(seed, sample_index, 3·unit + pair, k) for sample k: a pure function of
 // its counters, bit-identical for any thread count and order. The rig gives device.truth,

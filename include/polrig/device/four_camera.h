@@ -17,7 +17,7 @@
 // k4θ⁸), pixel (u, v) = (f_x·θ_d·cos α + c_x, f_y·θ_d·sin α + c_y). With k = 0 it is the
 // equidistant projection r = f·θ that fits W16's stated field (77° × 57.7°) with f ≈ 770 px at both
 // the width and the height, which no pinhole does (spec §3.1; docs/physics.md §16). Pixel
-// (col, row)'s centre is at (col + ½, row + ½), as for the DoFP camera and nav/orientation.h.
+// (col, row)'s centre is at (col + ½, row + ½), as for the DoFP camera and compass/orientation.h.
 #include <array>
 #include <cstdint>
 #include <span>
@@ -130,7 +130,7 @@ inline FusedStokes fuse_pixel(const std::array<double, 12>& W, const std::array<
 
 // The virtual camera 1: camera 1's undistorted pinhole grid (same size, f_c = f_x of camera 1,
 // principal point (c_x, c_y) of camera 1), the image the fused layers and the eigenvector method
-// (nav/orientation.h, W16 Eqs. 6–8) use.
+// (compass/orientation.h, W16 Eqs. 6–8) use.
 struct VirtualCamera {
   int width = 0, height = 0;
   double f_c = 0, cx = 0, cy = 0;

@@ -3,7 +3,7 @@
 // sky-and-compasses.md §4.1): n six-photodiode units on a hemisphere, each looking along its own
 // axis. This file is the geometry: the layout, each unit's frame m_i in the body frame b and the
 // true mounting errors. What each unit reads: calib/unit_array.h (the six-photodiode chain, REUSED);
-// the sun from two units: nav/unit_array.h. docs/physics.md §19.
+// the sun from two units: compass/unit_array.h. docs/physics.md §19.
 //
 // Frames: b is RFU (X_b right, Y_b forward, Z_b up). Unit i's frame m_i: Z_m along its view, X_m
 // its zero direction (the six-photodiode sensor's x-axis, through photodiode 1), Y_m = Z_m × X_m.

@@ -2,7 +2,7 @@
 // Attitude of the body b (RFU: X right, Y forward, Z up) in n (ENU), as the direction cosine
 // matrix C_b^n (v^n = C_b^n·v^b) or its quaternion, and the Euler angles polrig reports.
 //
-// Euler angles (the same convention as nav/heading.h's body_to_enu):
+// Euler angles (the same convention as compass/heading.h's body_to_enu):
 //   C_b^n = Rz(−yaw)·Rx(pitch)·Ry(roll)
 // yaw = heading, clockwise from north seen from above (geographic, spec §0); pitch about X_b,
 // nose up positive; roll about Y_b, right wing down positive. Rz, Rx, Ry are right-handed
@@ -23,7 +23,7 @@ struct Euler {
 Eigen::Matrix3d C_bn_from_euler(const Euler& e);
 Euler euler_from_C_bn(const Eigen::Matrix3d& C_bn);
 
-// C_b^n by its columns (vec3.h's Axes3, the form nav/ takes attitudes in: nav/unit_array.h's
+// C_b^n by its columns (vec3.h's Axes3, the form compass/ takes attitudes in: compass/unit_array.h's
 // body_axes_enu gives the same matrix for the same angles, tests/test_navigation.cpp).
 Axes3 axes_of(const Eigen::Matrix3d& C);
 

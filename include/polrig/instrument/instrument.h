@@ -29,7 +29,7 @@ class Instrument {
     kCameraArray = 1u << 3,
     // Several six-photodiode units, each looking along its own axis and reporting an AoP and a
     // DoP in its own frame (Z21's nine-unit compass, device/unit_array.h, calib/unit_array.h): the
-    // sun vector from two units (nav/unit_array.h). No pair voltages of one turntable sensor.
+    // sun vector from two units (compass/unit_array.h). No pair voltages of one turntable sensor.
     kUnitArray = 1u << 4,
   };
 

@@ -11,7 +11,7 @@
 #include <string>
 
 #include "polrig/device/four_camera.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/vec3.h"
 
 namespace polrig {

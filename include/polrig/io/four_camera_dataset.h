@@ -11,7 +11,7 @@
 
 #include "polrig/device/four_camera.h"
 #include "polrig/geometry/checkerboard.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/vec3.h"
 
 namespace polrig {
@@ -46,7 +46,7 @@ FourCameraDataset read_four_camera_dataset(const std::filesystem::path& dir);
 
 // A stop's fused AoP (degrees, camera 1's image frame, [0°, 180°)) and DoP on the virtual grid,
 // row-major, top row first; NaN where no camera array pixel covers it (valid = 0), as
-// nav/orientation.h's SkyPoints leave points out. Both stop readers decompress on the calling
+// compass/orientation.h's SkyPoints leave points out. Both stop readers decompress on the calling
 // thread (ExrThreads::ThisThread): read several stops side by side (side_by_side.h) to use more
 // cores.
 struct FusedAopDop {

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "polrig/nav/unit_array.h"
+#include "polrig/compass/unit_array.h"
 
 namespace polrig {
 

@@ -1,8 +1,8 @@
 #pragma once
 // `polrig locate DIR` (issue 13 §3): W16's position and heading from a four-camera dataset's fused
 // sky images. Per stop the sun vector by the eigenvector method over the fused AoP on the virtual
-// camera 1 (nav/orientation.h, W16 Eqs. 6–14), then the Eq. 17 fix over all stops and the heading
-// ψ = β − α_S per stop (nav/positioning.h: locate). Only glue: the physics is in nav/.
+// camera 1 (compass/orientation.h, W16 Eqs. 6–14), then the Eq. 17 fix over all stops and the heading
+// ψ = β − α_S per stop (compass/positioning.h: locate). Only glue: the physics is in compass/.
 #include <filesystem>
 #include <optional>
 #include <vector>
@@ -10,8 +10,8 @@
 #include "polrig/device/four_camera.h"
 #include "polrig/io/four_camera_dataset.h"
 #include "polrig/io/manifest.h"
-#include "polrig/nav/orientation.h"
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/orientation.h"
+#include "polrig/compass/positioning.h"
 #include "polrig/progress.h"
 #include "polrig/sky/sun.h"
 

@@ -9,13 +9,13 @@
 #include "polrig/device/dofp_camera.h"
 #include "polrig/io/dofp_dataset.h"
 #include "polrig/io/manifest.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/progress.h"
 #include "polrig/sky/sky.h"
 
 namespace polrig {
 
-// One frame's three estimates (nav/orientation.h: orient_frame) and its true heading, if known.
+// One frame's three estimates (compass/orientation.h: orient_frame) and its true heading, if known.
 struct FrameOrientation {
   int frame = 0;
   std::array<OrientationEstimate, 3> estimates{};

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "polrig/io/manifest.h"
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/positioning.h"
 #include "polrig/study/positioning.h"
 
 namespace polrig {

@@ -24,7 +24,7 @@ struct FourCameraSignal {
 };
 
 // What the sky (or the port) gives along the virtual camera 1's views (its undistorted pinhole
-// grid; nav/orientation.h's camera), double, row-major: S0, S1 = S0·d·cos 2φ, S2 = S0·d·sin 2φ,
+// grid; compass/orientation.h's camera), double, row-major: S0, S1 = S0·d·cos 2φ, S2 = S0·d·sin 2φ,
 // AoP φ in [0°, 180°) from camera 1's X towards Y (the image-plane angle), DoP d.
 struct FourCameraTruthLayers {
   std::vector<double> S0, S1, S2, AoP, DoP;

@@ -95,7 +95,7 @@ class SunTrack {
   // The sun's topocentric declination δ and Greenwich hour angle GHA at t, as at() gives them
   // (declination_deg, gha_deg: the same interpolated direction and Earth rotation angle), as
   // sines and cosines and without the horizon transformation: for a fit that evaluates
-  // cos θ_s = sin φ·sin δ + cos φ·cos δ·cos(GHA + λ) at many times (nav/positioning.h).
+  // cos θ_s = sin φ·sin δ + cos φ·cos δ·cos(GHA + λ) at many times (compass/positioning.h).
   // Throws as at().
   struct HourAngle {
     double sin_dec = 0, cos_dec = 1, sin_gha = 0, cos_gha = 1;

@@ -2,7 +2,7 @@
 // Monte-Carlo of the heading error of the W19 compass on a moving platform (spec
 // sky-and-compasses.md §1.5, W19 §5.2): per trial a random attitude, a time-sync error during a
 // turn, a mount misalignment, the sky's P_max and sensor noise through the device model
-// (device/sensor pair voltages, ADC, calib/angles), then the heading from nav/heading.
+// (device/sensor pair voltages, ADC, calib/angles), then the heading from compass/heading.
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -11,7 +11,7 @@
 #include <string_view>
 #include <vector>
 
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 #include "polrig/progress.h"
 #include "polrig/rig/rig.h"
 #include "polrig/sky/sun.h"

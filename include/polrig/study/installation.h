@@ -1,13 +1,13 @@
 #pragma once
 // Z21's installation calibration of a unit-array dataset (Z21 §3.2.2, Table 2, Fig. 15; spec
 // sky-and-compasses.md §4.6 item 5; docs/physics.md §20.1): every unit's mounting errors δ fitted
-// (nav/unit_installation.h) to its readings against the ephemeris sun over the dataset, with the
+// (compass/unit_installation.h) to its readings against the ephemeris sun over the dataset, with the
 // attitude of the truth (a simulation) or of the SINS (a measured, static dataset), then the sun's
 // elevation from the two highest-DoP units before (nominal frames) and after (calibrated frames).
 #include <string>
 #include <vector>
 
-#include "polrig/nav/unit_installation.h"
+#include "polrig/compass/unit_installation.h"
 #include "polrig/study/navigation.h"
 
 namespace polrig {

@@ -6,11 +6,11 @@
 // measured:
 //   SINS        the INS alone (ins/mechanization.h), height held when the rig says so;
 //   PNS         the position from the sun elevations of the last navigation.pns_window_s
-//               (nav/positioning.h's Eq. 17 fit, the vehicle assumed still over the window), each
+//               (compass/positioning.h's Eq. 17 fit, the vehicle assumed still over the window), each
 //               elevation H^n = asin((C_b^n s^b)_z) with the SINS's attitude;
 //   integrated  the INS with the 15-state filter (ins/filter.h) updated by H^n at every reading,
 //               with its own attitude.
-// The sun of a reading: the two highest-DoP units (nav/unit_array.h, Eqs. 3–8) with their nominal
+// The sun of a reading: the two highest-DoP units (compass/unit_array.h, Eqs. 3–8) with their nominal
 // frames, or a calibration's. Dec and GHA of the filter's model: one SunTrack at the start's site
 // (sky/sun.h; the parallax between the site and the vehicle is < 9″).
 #include <optional>
@@ -24,8 +24,8 @@
 #include "polrig/ins/filter.h"
 #include "polrig/ins/imu.h"
 #include "polrig/ins/trajectory.h"
-#include "polrig/nav/positioning.h"
-#include "polrig/nav/unit_array.h"
+#include "polrig/compass/positioning.h"
+#include "polrig/compass/unit_array.h"
 #include "polrig/progress.h"
 #include "polrig/rig/rig.h"
 #include "polrig/sky/sun.h"

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/positioning.h"
 #include "polrig/progress.h"
 #include "polrig/sky/sun.h"
 

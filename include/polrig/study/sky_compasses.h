@@ -7,15 +7,15 @@
 //
 // The compass of each instrument, with its own method:
 // - six-photodiode (W19): the one E-vector along the sensor's axis Z_b, the heading from W19
-//   Eq. 25 with the attitude's roll and pitch known (nav/heading.h);
+//   Eq. 25 with the attitude's roll and pitch known (compass/heading.h);
 // - dofp-camera (H17) and four-camera (W16): the E-vectors of a grid of points over the image (the
 //   DoFP camera's pinhole image; W16's fused image on camera 1's virtual pinhole grid), the sun by
-//   the eigenvector method (nav/orientation.h);
+//   the eigenvector method (compass/orientation.h);
 // - unit-array (Z21): the units' E-vectors, the sun from the two with the highest DoP crossed
-//   (nav/unit_array.h).
+//   (compass/unit_array.h).
 // Frames: the body b is the compass's own frame with Z_b its axis (up when level): RFU for W19 and
 // Z21, the camera frame l for H17 and W16 (X_l along the image's columns). Its attitude C_b^n =
-// Rz(−H)·Rx(0)·Ry(γ) (nav/heading.h) with the roll γ the tilt; the sun at geographic azimuth 180°
+// Rz(−H)·Rx(0)·Ry(γ) (compass/heading.h) with the roll γ the tilt; the sun at geographic azimuth 180°
 // [C], the heading H = 180° + the row's heading (relative to the sun).
 //
 // Errors, estimate − truth: the heading error H_est − H = A_s − A′, A′ the geographic azimuth that
@@ -32,8 +32,8 @@
 #include <string_view>
 #include <vector>
 
-#include "polrig/nav/orientation.h"
-#include "polrig/nav/unit_array.h"
+#include "polrig/compass/orientation.h"
+#include "polrig/compass/unit_array.h"
 #include "polrig/progress.h"
 #include "polrig/rig/rig.h"
 #include "polrig/sky/rayleigh.h"
@@ -52,7 +52,7 @@ enum class SkyCompassKind {
 // The compass of a rig's instrument: its views in the body frame (unit, Z_b up) and, for a unit
 // array, each unit's frame. Cameras: a grid of `grid_cols` points across the image (rows in
 // proportion), each point a pixel centre of the real image with its pixel coordinates (for
-// nav/orientation.h) in `x_px`, `y_px` and the camera in `camera`.
+// compass/orientation.h) in `x_px`, `y_px` and the camera in `camera`.
 struct SkyCompass {
   SkyCompassKind kind = SkyCompassKind::ZenithEVector;
   std::string device;  // the rig's device.kind
@@ -116,7 +116,7 @@ struct SkyBiasRow {
   SkyCase sky;
   double sun_el_deg = 0, tilt_deg = 0, heading_deg = 0;
   SkyMethod method = SkyMethod::Published;
-  // The noise-free reading: its status (the nav/ method's status name, or "antisun" where the
+  // The noise-free reading: its status (the compass/ method's status name, or "antisun" where the
   // method's sign rule took the antisun, as Z21's s_z^b > 0 does for a sun near the body's
   // horizon) and errors (NaN where it gave none or took the antisun; sun_el for W19 always NaN:
   // one E-vector fixes no elevation).

@@ -1,4 +1,4 @@
-#include "polrig/nav/heading_rows.h"
+#include "polrig/compass/heading_rows.h"
 
 #include <stdexcept>
 #include <string>

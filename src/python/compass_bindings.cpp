@@ -1,5 +1,5 @@
 // polrig.heading (the W19 compass over arrays), solve_heading, the forward model sky_view_body and
-// study_heading (docs/python.md §6). Frames and senses are nav/heading.h's (spec
+// study_heading (docs/python.md §6). Frames and senses are compass/heading.h's (spec
 // sky-and-compasses.md §0): ENU; body X right, Y forward, Z up; θ_b from X_b towards Y_b
 // (anticlockwise seen from above); heading clockwise from north seen from above; pitch nose up,
 // roll right side down positive.
@@ -16,8 +16,8 @@
 
 #include "bindings.h"
 #include "convert.h"
-#include "polrig/nav/heading.h"
-#include "polrig/nav/heading_rows.h"
+#include "polrig/compass/heading.h"
+#include "polrig/compass/heading_rows.h"
 #include "polrig/study/heading_trials.h"
 #include "records.h"
 #include "rig_handle.h"
@@ -92,18 +92,18 @@ RecordOf<HeadingCdfTag> cdf_record(HeadingErrorCdf c) {
 }
 
 constexpr const char* kFrames =
-    "Frames and senses (nav/heading.h, spec sky-and-compasses.md §0): ENU (x east, y north, z "
+    "Frames and senses (compass/heading.h, spec sky-and-compasses.md §0): ENU (x east, y north, z "
     "up); body X right, Y forward, Z up, the sensor looking along +Z_b; heading clockwise from "
     "north seen from above; roll γ right side down positive; pitch λ nose up positive; θ_b (aop) "
     "from X_b towards Y_b, anticlockwise seen from above, axial (mod 180°).";
 
 }  // namespace
 
-void bind_nav(py::module_& m) {
+void bind_compass(py::module_& m) {
   m.attr("HEADING_STATUS") = status_names();
 
   py::class_<HeadingSolution>(m, "HeadingSolution",
-                              "One solve of W19 Eq. 25 (nav/heading.h): both roots and the choice.")
+                              "One solve of W19 Eq. 25 (compass/heading.h): both roots and the choice.")
       .def_property_readonly("status", [](const HeadingSolution& s) {
              return std::string(heading_status_name(s.status));
            }, "'ok', 'clamped', 'sun-near-zenith-or-vertical-e' or 'inconsistent'.")
@@ -145,7 +145,7 @@ void bind_nav(py::module_& m) {
       {"sun_forward", "s_b,y at the chosen root (NaN without a heading)."},
       {"from_prior", "bool: chosen as the root nearest the prior."}});
   bind_record<BodySkyViewTag>(m, "BodySkyView",
-      "What a sensor looking along +Z_b sees of the single-scattering sky (nav/heading.h).", {
+      "What a sensor looking along +Z_b sees of the single-scattering sky (compass/heading.h).", {
       {"aop_body_deg", "θ_b, degrees, [0, 180), from X_b towards Y_b (anticlockwise seen from "
                        "above); NaN where the view is along the sun's line."},
       {"dop", "degree of linear polarization P(γ)."}});
@@ -276,7 +276,7 @@ void bind_nav(py::module_& m) {
        "NaN for none: the root nearest it is chosen, else the one with the sun in front). All "
        "broadcast to the result's shape S.\n"
        "refraction, ut1_minus_utc_s ([-1, 1] s): the sun's settings. min_horizontal, "
-       "tangent_tolerance: HeadingSettings (nav/heading.h; the CLI uses the defaults).\n" +
+       "tangent_tolerance: HeadingSettings (compass/heading.h; the CLI uses the defaults).\n" +
        kThreadsDoc + "\n" + kProgressDoc +
        "\nReturns polrig.Headings: sun_az_deg, sun_el_deg, heading_deg, heading_alt_deg (NaN "
        "without a heading), status (str, the CSV's), status_code (int8 codes into "
@@ -300,7 +300,7 @@ void bind_nav(py::module_& m) {
       "prior_deg"_a = py::none(), py::kw_only(),
       "min_horizontal"_a = HeadingSettings{}.min_horizontal,
       "tangent_tolerance"_a = HeadingSettings{}.tangent_tolerance,
-      (std::string("Solves W19 Eq. 25 once (nav/heading.h's solve_heading): a·cos H + b·sin H = c.\n\n") +
+      (std::string("Solves W19 Eq. 25 once (compass/heading.h's solve_heading): a·cos H + b·sin H = c.\n\n") +
        kFrames +
        "\n\nsun_enu: the unit vector to the sun in ENU, shape (3,) (e.g. Sky.sun().enu), its length within 1e-9 of 1; "
        "aop_body_deg: θ_b, degrees; roll_deg, pitch_deg: the tilt, degrees; prior_deg: None or a "
@@ -333,7 +333,7 @@ void bind_nav(py::module_& m) {
         return RecordOf<BodySkyViewTag>(std::move(r));
       }, "sun_enu"_a, "heading_deg"_a, "roll_deg"_a = 0.0, "pitch_deg"_a = 0.0, py::kw_only(),
       "p_max"_a = 0.7,
-      (std::string("The forward model (nav/heading.h's sky_view_body): the E-vector angle θ_b and "
+      (std::string("The forward model (compass/heading.h's sky_view_body): the E-vector angle θ_b and "
                    "the degree of polarization a sensor looking along +Z_b sees of the "
                    "single-scattering sky, vectorised.\n\n") +
        kFrames +

@@ -2,7 +2,7 @@
 // Installation calibration of a unit-array compass (Z21 §3.2.2 and Table 2; spec sky-and-compasses.md
 // §4.6 item 5; docs/physics.md §19.1): each unit's three mounting errors δ_i, fitted by
 // Levenberg–Marquardt to its readings over a static sequence whose sun is known (the ephemeris)
-// and whose attitude is known (the INS or a turntable). Frames and senses as nav/unit_array.h.
+// and whose attitude is known (the INS or a turntable). Frames and senses as compass/unit_array.h.
 //
 // Model: unit i truly at C_mi^b·Rx(δx)·Ry(δy)·Rz(δz); at epoch k the sun in b is
 // s_k^b = C_n^b,k·s_k^n and the unit's view v = C·Z; its predicted reading is the spec's angle (§1.3)
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "polrig/nav/unit_array.h"
+#include "polrig/compass/unit_array.h"
 
 namespace polrig {
 

@@ -1,4 +1,4 @@
-#include "polrig/nav/unit_array.h"
+#include "polrig/compass/unit_array.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include <fmt/format.h>
 
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 
 namespace polrig {
 

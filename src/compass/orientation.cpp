@@ -1,4 +1,4 @@
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/orientation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,7 +11,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 #include "polrig/units.h"
 
 namespace polrig {

@@ -1,4 +1,4 @@
-#include "polrig/nav/positioning.h"
+#include "polrig/compass/positioning.h"
 
 #include <algorithm>
 #include <cmath>
@@ -11,8 +11,8 @@
 #include <fmt/format.h>
 #include <unsupported/Eigen/LevenbergMarquardt>
 
-#include "polrig/nav/heading.h"
-#include "polrig/nav/orientation.h"
+#include "polrig/compass/heading.h"
+#include "polrig/compass/orientation.h"
 #include "polrig/units.h"
 
 namespace polrig {

@@ -1,4 +1,4 @@
-#include "polrig/nav/unit_installation.h"
+#include "polrig/compass/unit_installation.h"
 
 #include <cmath>
 #include <limits>

@@ -6,7 +6,7 @@
 // Frames and senses (spec §0): latitude L north positive, longitude λ east positive (degrees at
 // the interface, radians inside); the sun's azimuth β is geographic (clockwise from north); hour
 // angles run westwards. The sun vector of a sighting is in the frame l of a LEVEL camera (Z_l up,
-// X_l, Y_l anticlockwise seen from above; nav/orientation.h): θ_S = acos(s_z/|s|), and W16's
+// X_l, Y_l anticlockwise seen from above; compass/orientation.h): θ_S = acos(s_z/|s|), and W16's
 // clockwise α_S = −atan2(s_y, s_x), so ψ = β − α_S = β + atan2(s_y, s_x) (camera_heading_deg).
 //
 // The model (Eq. 17): cos θ_S(L, λ, t) = sin L·sin δ(t) + cos L·cos δ(t)·cos(GHA(t) + λ), with δ and

@@ -2,7 +2,7 @@
 // The sun from a unit-array polarization compass (Z21 §3.2.1, Eqs. 3–8; spec sky-and-compasses.md
 // §4.2; docs/physics.md §19): the E-vectors of the two units with the highest DoP, crossed. The
 // units as plain numbers (their readings and their frames in the body); what reads them is
-// calib/unit_array.h, their layout device/unit_array.h (nav/ includes neither).
+// calib/unit_array.h, their layout device/unit_array.h (compass/ includes neither).
 //
 // Frames: n = ENU, b = RFU (X_b right, Y_b forward, Z_b up). Unit i's frame m_i: Z_m along its
 // view v, X_m its zero direction, Y_m = Z_m × X_m; C_mi^b by its columns (vec3.h's Axes3).
@@ -66,7 +66,7 @@ struct UnitSun {
 UnitSun sun_from_units(std::span<const UnitReading> readings, std::span<const UnitMount> mounts,
                        const UnitSunSettings& settings = {});
 
-// The sun in n: s^n = C_b^n·s^b, H^n = asin(s_z^n). C_bn: the body's axes in ENU (nav/heading.h's
+// The sun in n: s^n = C_b^n·s^b, H^n = asin(s_z^n). C_bn: the body's axes in ENU (compass/heading.h's
 // C_b^n = Rz(−H)·Rx(λ)·Ry(γ), body_axes_enu).
 struct UnitSunNav {
   Vec3 s_n{};
@@ -74,7 +74,7 @@ struct UnitSunNav {
 };
 UnitSunNav sun_in_nav(const Vec3& s_b, const Axes3& C_bn);
 
-// C_b^n by its columns for a heading (clockwise from north), roll and pitch (nav/heading.h's Tilt
+// C_b^n by its columns for a heading (clockwise from north), roll and pitch (compass/heading.h's Tilt
 // as two numbers, degrees).
 Axes3 body_axes_enu(double heading_deg, double roll_deg, double pitch_deg);
 

@@ -1,4 +1,4 @@
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 
 #include <algorithm>
 #include <cmath>

@@ -8,7 +8,7 @@
 // - camera frame l: right-handed, Z_l along the optical axis (the zenith for a level camera),
 //   X_l = image +x (columns), Y_l = image +y (rows grow). An image angle (a pixel's AoP φ_pix,
 //   the view's azimuth α, the sun's azimuth α_S) runs from X_l towards Y_l: for a level camera
-//   looking up that is anticlockwise seen from above. (device/dofp_camera.h states the same; nav/
+//   looking up that is anticlockwise seen from above. (device/dofp_camera.h states the same; compass/
 //   takes the camera as plain numbers and never includes device/.)
 // - pixel coordinates: pixel (col, row)'s centre is at (col + 0.5, row + 0.5); the principal
 //   point (x_c, y_c) is in the same coordinates; a view through (x_p, y_p) is

@@ -1,9 +1,9 @@
-// The forward model of nav/heading.h through the sky model (kept apart from the solver, which
+// The forward model of compass/heading.h through the sky model (kept apart from the solver, which
 // needs no sky).
 #include <cmath>
 #include <limits>
 
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 
 namespace polrig {
 

@@ -6,7 +6,7 @@
 #include <span>
 #include <vector>
 
-#include "polrig/nav/heading.h"
+#include "polrig/compass/heading.h"
 #include "polrig/progress.h"
 #include "polrig/sky/sun_rows.h"
 

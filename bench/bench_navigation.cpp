@@ -69,7 +69,7 @@ struct CovarianceStepCase {
   Matrix15 F, Qc;
   CovarianceStepCase() {
     const Rig& rig = z21_rig();
-    const InsState s = initial_state(rig);
+    const InsState s = initial_state(rig, StartErrors::Stated);
     F = error_dynamics(s, Eigen::Vector3d(0, 0, normal_gravity(s.lat_rad, s.h_m)), filter_settings(rig).noise);
     Qc = process_noise_density(s, filter_settings(rig).noise);
   }

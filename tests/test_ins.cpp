@@ -884,6 +884,8 @@ Z21Run run_z21(double duration_s, double sigma_meas_deg, FilterSettings settings
   const CorruptedImu imu = corrupt_imu(tr.imu, spec, 2021);
   settings.mechanization.hold_height_m = 50;
   settings.noise = error_model_noise(spec);
+  // The elevations below are the true ones plus noise, through no attitude: Z21's position-only H.
+  settings.measurement = FilterSettings::SunMeasurement::ElevationZ21;
   Matrix15 P0 = LinearZ21().P0;
   P0(kDh, kDh) = 0;  // held
   const InsState start = state_of(tr.truth[0]);

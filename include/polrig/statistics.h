@@ -42,4 +42,14 @@ inline double quantile_of_sorted(std::span<const double> sorted, double q) {
   return sorted[lo] + (pos - static_cast<double>(lo)) * (sorted[hi] - sorted[lo]);
 }
 
+// The p-quantile of χ²(n)/n from the normal quantile z_p, by Wilson and Hilferty's cube-root
+// normal approximation (against the tables: < 0.8 % relative in the 2.5 % tail at n = 10, < 0.05 %
+// for n ≥ 40; the 97.5 % tail < 1e-4 from n = 10).
+inline double chi2_mean_quantile(double n, double z_p) {
+  const double a = 2.0 / (9.0 * n);
+  const double c = 1 - a + z_p * std::sqrt(a);
+  return c * c * c;
+}
+inline constexpr double kNormalQuantile975 = 1.959963984540054;
+
 }  // namespace polrig

@@ -94,10 +94,13 @@ def test_study_navigation_equals_the_cli(tmp_path):
     r = rig.study_navigation(trials=2, p_max=[0.5], out=tmp_path / "py")
     run_cli("study", "navigation", RIG, "--set", "trajectory.duration_s=360", "--trials", "2", "--p-max", "0.5",
             "-o", tmp_path / "cli", "--no-plots", "--quiet")
-    for f in ("trials.csv", "summary.csv", "error_vs_time.csv", "tilt.csv", "dop.csv"):
+    for f in ("trials.csv", "summary.csv", "error_vs_time.csv", "tilt.csv", "dop.csv", "consistency.csv"):
         assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
     trials = read_csv(tmp_path / "cli" / "trials.csv")
     np.testing.assert_array_equal(r["trials"]["final_error_m"], trials["final_error_m"])
+    np.testing.assert_array_equal(r["trials"]["nees_position"], trials["nees_position"])
+    consistency = read_csv(tmp_path / "cli" / "consistency.csv")
+    assert r["consistency"][0]["nees_position"]["mean"] == consistency["mean"][0]
     assert len(r["cells"]) == 2
     with pytest.raises(ValueError):
         rig.study_navigation(trials=0)

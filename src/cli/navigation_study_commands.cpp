@@ -94,6 +94,15 @@ std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App&
                                st.final_error_m.p75, st.final_error_m.count, st.trials, st.lat_mae_deg.p50,
                                st.lon_mae_deg.p50);
     }
+    for (const NavigationConsistency& c : result.consistency) {
+      const NavigationStudyCell& cell = result.cells[static_cast<std::size_t>(c.cell)];
+      const auto text = [](const ConsistencyBand& b) {
+        return fmt::format("{:.3g} (95 % band {:.3g}–{:.3g}: {})", b.mean, b.lo, b.hi, b.inside() ? "inside" : "outside");
+      };
+      std::cout << fmt::format("{} consistency over {} trials: NEES position {}, attitude {}; NIS {}\n",
+                               cell.index == 0 ? std::string("rig") : fmt::format("{}={}", cell.key, cell.value),
+                               c.trials, text(c.nees_position), text(c.nees_attitude), text(c.nis));
+    }
     for (const TiltErrorRow& t : result.tilt)
       std::cout << fmt::format("tilt {}°: mean |elevation error| {:.3f}° (standard error {:.3f}°, {} readings; (2/π)·τ = {:.3f}°, "
                                "exact at H = {:.1f}°: {:.3f}°{})\n",

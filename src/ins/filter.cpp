@@ -7,18 +7,14 @@
 
 #include <fmt/format.h>
 
+#include "polrig/statistics.h"
+
 namespace polrig {
 namespace {
 
 // χ²(1)'s 2.5 % and 97.5 % quantiles.
 constexpr double kChi2Lo95 = 0.000982069, kChi2Hi95 = 5.023886;
 
-// Wilson–Hilferty: the p-quantile of χ²(n)/n from the normal quantile z_p.
-double chi2_mean_quantile(int n, double z) {
-  const double a = 2.0 / (9.0 * n);
-  const double c = 1 - a + z * std::sqrt(a);
-  return c * c * c;
-}
 
 }  // namespace
 
@@ -86,6 +82,9 @@ InsFilter::InsFilter(const InsState& initial, const Matrix15& P0, const FilterSe
   filter_.P = P0;
   if (!(settings.sigma_H_rad > 0))
     throw std::invalid_argument(fmt::format("filter: σ_H {} rad must be > 0", settings.sigma_H_rad));
+  if (!(settings.sigma_A_rad > 0))
+    throw std::invalid_argument(fmt::format("filter: σ_A {} rad must be > 0", settings.sigma_A_rad));
+
 }
 
 void InsFilter::predict(const ImuSample& raw) {
@@ -116,33 +115,27 @@ void InsFilter::propagate_covariance() {
   pending_s_ = 0;
 }
 
-ScalarUpdate InsFilter::update(const SunElevation& m) {
-  propagate_covariance();
-  if (!(std::abs(m.t_s - state_.t_s) <= 1e-3))
-    throw std::invalid_argument(fmt::format("filter: a measurement at {} s for the state at {} s", m.t_s, state_.t_s));
-  const SunElevationModel model = sun_elevation_model(state_.lat_rad, state_.lon_rad, m.dec_rad, m.gha_rad);
-  RowVector15 H = RowVector15::Zero();
-  H[kDLat] = model.d_lat;
-  H[kDLon] = model.d_lon;
-  if (settings_.tilt_in_measurement) {
-    if (!std::isfinite(m.sun_east) || !std::isfinite(m.sun_north))
-      throw std::invalid_argument("filter: tilt_in_measurement needs the sun's east and north components");
-    H[kPhi] = m.sun_north;
-    H[kPhi + 1] = -m.sun_east;
+std::string_view sun_measurement_name(FilterSettings::SunMeasurement m) {
+  using M = FilterSettings::SunMeasurement;
+  switch (m) {
+    case M::ElevationZ21: return "elevation-z21";
+    case M::Elevation: return "elevation";
+    case M::Azimuth: return "azimuth";
+    case M::SunVector: return "sun-vector";
   }
-  const double z = model.sin_H - std::sin(m.elevation_rad);
-  const double R_nominal = std::pow(std::cos(m.elevation_rad) * settings_.sigma_H_rad, 2);
-  if (!std::isfinite(z) || !filter_.P.allFinite()) {
-    ++skipped_;
-    return {z, std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN(), R_nominal};
-  }
-  double R = R_nominal;
-  if (settings_.adaptive) {
-    if (!sage_husa_)
-      sage_husa_.emplace(R_nominal, settings_.sage_husa_b, settings_.R_min_factor, settings_.R_max_factor);
-    R = sage_husa_->update(z - H.dot(filter_.x), H.dot(filter_.P * H.transpose()));
-  }
-  const ScalarUpdate u = filter_.update(H, z, R);
+  return "?";
+}
+
+SunAzimuthModel sun_azimuth_model(double L, double lon, double dec, double gha) {
+  const double lha = gha + lon;
+  const double sL = std::sin(L), cL = std::cos(L), sD = std::sin(dec), cD = std::cos(dec);
+  const double sH = sL * sD + cL * cD * std::cos(lha);
+  const double sE = -cD * std::sin(lha), sN = sD * cL - cD * sL * std::cos(lha);
+  const double rho2 = sE * sE + sN * sN;
+  return {std::atan2(sE, sN), sE * sH / rho2, -cD * (sN * std::cos(lha) + sE * sL * std::sin(lha)) / rho2, sE, sN, sH};
+}
+
+void InsFilter::feed_back_and_reset() {
   // A held height (Z21's barometer) is the mechanization's, not the filter's: its δh and δv_U are
   // not fed back, so the solution's height stays the held one (it moved ±10 m over the shipped
   // static run; the next step's mechanization reset it).
@@ -150,6 +143,19 @@ ScalarUpdate InsFilter::update(const SunElevation& m) {
   feed_back(filter_.x, state_, gyro_bias_, accel_bias_);
   state_.lon_rad = std::remainder(state_.lon_rad, 2 * std::numbers::pi);  // a correction across 180° stays a longitude
   filter_.x.setZero();
+}
+
+ScalarUpdate InsFilter::scalar_update(const RowVector15& H, double z, double R_nominal, std::optional<SageHusaR>& adaptive) {
+  if (!std::isfinite(z) || !std::isfinite(R_nominal) || !H.allFinite() || !filter_.P.allFinite()) {
+    ++skipped_;
+    return {z, kNaNUpdate, kNaNUpdate, R_nominal};
+  }
+  double R = R_nominal;
+  if (settings_.adaptive) {
+    if (!adaptive) adaptive.emplace(R_nominal, settings_.sage_husa_b, settings_.R_min_factor, settings_.R_max_factor);
+    R = adaptive->update(z - H.dot(filter_.x), H.dot(filter_.P * H.transpose()));
+  }
+  const ScalarUpdate u = filter_.update(H, z, R);
   last_R_ = R;
   ++updates_;
   sum_r_ += u.innovation;
@@ -158,6 +164,49 @@ ScalarUpdate InsFilter::update(const SunElevation& m) {
   if (u.nis < kChi2Lo95 || u.nis > kChi2Hi95) ++nis_outside_;
   return u;
 }
+
+SunUpdate InsFilter::update(const SunObservation& m) {
+  using M = FilterSettings::SunMeasurement;
+  propagate_covariance();
+  if (!(std::abs(m.t_s - state_.t_s) <= 1e-3))
+    throw std::invalid_argument(fmt::format("filter: a measurement at {} s for the state at {} s", m.t_s, state_.t_s));
+  const M kind = settings_.measurement;
+  const bool elevation = kind != M::Azimuth, azimuth = kind == M::Azimuth || kind == M::SunVector;
+  const bool tilt = kind != M::ElevationZ21;
+  if (tilt && (!std::isfinite(m.sun_east) || !std::isfinite(m.sun_north)) && std::isfinite(m.elevation_rad))
+    throw std::invalid_argument(fmt::format("filter: the {} measurement needs the sun's east and north components",
+                                            sun_measurement_name(kind)));
+  SunUpdate out;
+  // The two components in turn, each fed back before the next is linearized at the corrected state.
+  if (elevation) {
+    const SunElevationModel model = sun_elevation_model(state_.lat_rad, state_.lon_rad, m.dec_rad, m.gha_rad);
+    RowVector15 H = RowVector15::Zero();
+    H[kDLat] = model.d_lat;
+    H[kDLon] = model.d_lon;
+    if (tilt) {
+      H[kPhi] = m.sun_north;
+      H[kPhi + 1] = -m.sun_east;
+    }
+    const double z = model.sin_H - std::sin(m.elevation_rad);
+    out.elevation = scalar_update(H, z, std::pow(std::cos(m.elevation_rad) * settings_.sigma_H_rad, 2), sage_husa_);
+    if (std::isfinite(out.elevation.nis)) feed_back_and_reset();
+  }
+  if (azimuth) {
+    const SunAzimuthModel model = sun_azimuth_model(state_.lat_rad, state_.lon_rad, m.dec_rad, m.gha_rad);
+    const double rho2 = m.sun_east * m.sun_east + m.sun_north * m.sun_north, s_up = std::sin(m.elevation_rad);
+    RowVector15 H = RowVector15::Zero();
+    H[kDLat] = model.d_lat;
+    H[kDLon] = model.d_lon;
+    H[kPhi] = s_up * m.sun_east / rho2;
+    H[kPhi + 1] = s_up * m.sun_north / rho2;
+    H[kPhi + 2] = -1;
+    const double z = std::remainder(model.azimuth - std::atan2(m.sun_east, m.sun_north), 2 * std::numbers::pi);
+    out.azimuth = scalar_update(H, z, settings_.sigma_A_rad * settings_.sigma_A_rad, sage_husa_azimuth_);
+    if (std::isfinite(out.azimuth.nis)) feed_back_and_reset();
+  }
+  return out;
+}
+
 
 FilterSummary InsFilter::summary() const {
   FilterSummary s;

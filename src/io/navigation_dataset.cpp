@@ -241,7 +241,9 @@ NavigationDataset read_navigation_dataset(const std::filesystem::path& dir, cons
 NavigationDataset read_navigation_dataset(const DatasetFolder& folder, const Rig& rig) {
   NavigationDataset d;
   d.start = rig.source.sky.resolved_sky().first_stop;
-  d.initial = initial_state(rig);
+  // A dataset with a truth (simulated) starts as simulate's did, with the drawn start errors of
+  // navigation.initial_errors; a measured log where its rig says.
+  d.initial = initial_state(rig, folder.has("truth.csv") ? StartErrors::DrawnFromP0 : StartErrors::Stated);
   const UnitArrayTruth layout = unit_array_truth(rig.units, rig.seed);
   for (const Axes3& C : layout.nominal) d.mounts.push_back({C});
   d.imu = read_imu(folder, rig.imu.rate_hz);

@@ -144,6 +144,11 @@ py::dict filter_dict(const NavigationRun& run) {
   out["innovation_var"] = column(f, [](const FilterEpoch& e) { return e.update.variance; });
   out["nis"] = column(f, [](const FilterEpoch& e) { return e.update.nis; });
   out["R"] = column(f, [](const FilterEpoch& e) { return e.update.R; });
+  out["azimuth_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.azimuth_rad); });
+  out["model_azimuth_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.model_azimuth_rad); });
+  out["azimuth_innovation"] = column(f, [](const FilterEpoch& e) { return e.azimuth_update.innovation; });
+  out["azimuth_nis"] = column(f, [](const FilterEpoch& e) { return e.azimuth_update.nis; });
+  out["azimuth_R"] = column(f, [](const FilterEpoch& e) { return e.azimuth_update.R; });
   out["sigma_north_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_north_m; });
   out["sigma_east_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_east_m; });
   out["corr_north_east"] = column(f, [](const FilterEpoch& e) { return e.corr_north_east; });
@@ -235,6 +240,8 @@ py::dict study_dict(const NavigationStudy& st) {
   trials["lon_rmse_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lon_deg.rmse; });
   trials["lon_std_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lon_deg.std; });
   trials["filter_nis_mean"] = column(tr, [](const NavigationTrialResult& t) { return t.filter_nis_mean; });
+  trials["nees_position"] = column(tr, [](const NavigationTrialResult& t) { return t.nees_position; });
+  trials["nees_attitude"] = column(tr, [](const NavigationTrialResult& t) { return t.nees_attitude; });
   out["trials"] = trials;
   py::list cells;
   for (const NavigationStudyCell& c : st.cells) {
@@ -273,6 +280,23 @@ py::dict study_dict(const NavigationStudy& st) {
   dop["sd_abs_deg"] = column(st.dop, [](const DopBin& b) { return b.sd_abs_deg; });
   dop["mean_true_dop"] = column(st.dop, [](const DopBin& b) { return b.mean_true_dop; });
   out["dop"] = dop;
+  py::list consistency;  // per cell: consistency.csv's rows
+  for (const NavigationConsistency& c : st.consistency) {
+    py::dict row;
+    row["cell"] = c.cell;
+    row["trials"] = c.trials;
+    for (auto [b, name] : {std::pair{&c.nees_position, "nees_position"}, {&c.nees_attitude, "nees_attitude"}, {&c.nis, "nis"}}) {
+      py::dict band;
+      band["mean"] = b->mean;
+      band["lo"] = b->lo;
+      band["hi"] = b->hi;
+      band["dof"] = b->dof;
+      band["inside"] = b->inside();
+      row[name] = band;
+    }
+    consistency.append(row);
+  }
+  out["consistency"] = consistency;
   py::dict bands;
   for (const NavigationErrorBand& b : st.bands) {
     py::dict d = percentiles_dict(b.error_m);

@@ -54,7 +54,8 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
 
   std::string trials =
       "cell,factor,key,value,duration_s,trial,seed,mode,final_t_s,final_north_m,final_east_m,final_error_m,"
-      "lat_mae_deg,lat_rmse_deg,lat_std_deg,lon_mae_deg,lon_rmse_deg,lon_std_deg,fixes,mean_nis\n";
+      "lat_mae_deg,lat_rmse_deg,lat_std_deg,lon_mae_deg,lon_rmse_deg,lon_std_deg,fixes,mean_nis,updates,"
+      "nees_position,nees_attitude\n";
   for (std::size_t i = 0; i < study.trials.size(); ++i) {
     const NavigationTrialResult& t = study.trials[i];
     trials += cell_cells(study.cells[static_cast<std::size_t>(t.cell)], i);
@@ -65,7 +66,9 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
                            {t.lat_deg.std, "lat_std_deg"}, {t.lon_deg.mae, "lon_mae_deg"},
                            {t.lon_deg.rmse, "lon_rmse_deg"}, {t.lon_deg.std, "lon_std_deg"}})
       (trials += ',') += checked_cell(v, name, i, true);
-    trials += fmt::format(",{},{}\n", t.lat_deg.count, checked_cell(t.filter_nis_mean, "mean_nis", i, true));
+    trials += fmt::format(",{},{},{},{},{}\n", t.lat_deg.count, checked_cell(t.filter_nis_mean, "mean_nis", i, true),
+                          t.filter_updates, checked_cell(t.nees_position, "nees_position", i, true),
+                          checked_cell(t.nees_attitude, "nees_attitude", i, true));
   }
 
   std::string summary = "cell,factor,key,value,duration_s,mode,trials,finite" +
@@ -121,17 +124,32 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
     dop += "\n";
   }
 
+  std::string consistency = "cell,factor,key,value,duration_s,trials,quantity,dof,mean,band_lo,band_hi,inside\n";
+  for (std::size_t i = 0; i < study.consistency.size(); ++i) {
+    const NavigationConsistency& c = study.consistency[i];
+    for (auto [b, name] : {std::pair{&c.nees_position, "nees_position"}, {&c.nees_attitude, "nees_attitude"},
+                           {&c.nis, "nis"}})
+      consistency += cell_cells(study.cells[static_cast<std::size_t>(c.cell)], i) +
+                     fmt::format(",{},{},{},{},{},{},{}\n", c.trials, name, b->dof, checked_cell(b->mean, name, i, true),
+                                 checked_cell(b->lo, "band_lo", i), checked_cell(b->hi, "band_hi", i),
+                                 b->inside() ? "true" : "false");
+  }
+
   // Every table built (and checked) before the first is written.
   write_text_file(dir / "trials.csv", trials);
   write_text_file(dir / "summary.csv", summary);
   write_text_file(dir / "error_vs_time.csv", time);
   write_text_file(dir / "tilt.csv", tilt);
   write_text_file(dir / "dop.csv", dop);
+  write_text_file(dir / "consistency.csv", consistency);
   std::vector<DatasetFile> files{
-      {"trials.csv", 1, "per cell (the rig, or one sweep value), trial and mode: the trial's seed, the north, east "
+      {"trials.csv", 2, "per cell (the rig, or one sweep value), trial and mode: the trial's seed, the north, east "
                         "and horizontal error at the last compass reading (m), the latitude and longitude "
                         "errors' MAE, RMSE and STD over the run (°, Z21 §5), the usable fixes and the "
-                        "integrated filter's mean NIS"},
+                        "integrated filter's mean NIS, its scalar updates, and the NEES of its last fix's "
+                        "horizontal position (2 dof) and attitude (3 dof)"},
+      {"consistency.csv", 1, "per cell: the integrated filter's mean NEES (position, attitude) over the trials "
+                             "and mean NIS over every update, with the χ² 95 % band of a consistent filter"},
       {"summary.csv", 1, "per cell and mode: the 5/25/50/75/95 % percentiles over the trials of the final "
                          "horizontal error and of the latitude and longitude MAE"},
       {"error_vs_time.csv", 1, "the rig's own trials: per compass reading, the percentiles over the trials of "

@@ -254,6 +254,12 @@ void add_ins_keys(std::vector<RigKey>& keys) {
            "the compass' sun-elevation σ the filter assumes: R = (cos H·σ_H)² [C: 0.1, Z21 Table 1]",
            "positive; beyond 10° the elevation tells nothing of the position",
            [](Rig& r) -> double& { return r.navigation.sigma_H_deg; }), kNav);
+  push(real<RealRange{0.0, 10.0, true, false}>(
+           "navigation.sigma_A_deg", "deg", "a standard deviation",
+           "the compass' sun-azimuth σ in n the filter assumes (navigation.measurement azimuth or sun-vector): R = σ_A² "
+           "[C: 0.046, what the shipped Z21 rigs' chain delivers beside its 0.1° in elevation; docs/validation.md]",
+           "positive; beyond 10° the azimuth tells nothing of the heading",
+           [](Rig& r) -> double& { return r.navigation.sigma_A_deg; }), kNav);
   push(boolean("navigation.adaptive", "Sage–Husa's adaptive R (spec §4.7) [C: true]",
                [](Rig& r) -> bool& { return r.navigation.adaptive; }), kNav);
   push(real<RealRange{0.5, 1.0, false, true}>(
@@ -301,10 +307,28 @@ void add_ins_keys(std::vector<RigKey>& keys) {
     k.valid_text = [](std::string_view v) { return v == "ins" || v == "accelerometer"; };
     push(k, kNav);
   }
-  push(boolean("navigation.tilt_in_measurement",
-               "the integrated filter's H with the tilt columns: the INS's tilt error enters the measured H^n and is "
-               "estimated (ins/filter.h) [C: false, Z21's position-only H]",
-               [](Rig& r) -> bool& { return r.navigation.tilt_in_measurement; }), kNav);
+  {
+    RigKey k{"navigation.measurement", K::Text, "", "elevation, elevation-z21, azimuth or sun-vector",
+             "what the SINS/PNS filter takes from the compass (ins/filter.h): elevation, the sun's elevation with the "
+             "tilt columns (the INS's tilt the measured elevation carries is estimated); elevation-z21, Z21's "
+             "position-only H; azimuth, the sun's azimuth in n (the heading, the tilt and the position); sun-vector, "
+             "both as two updates [C: elevation]"};
+    k.text = [](Rig& r) -> std::string& { return r.navigation.measurement; };
+    k.valid_text = [](std::string_view v) {
+      return v == "elevation" || v == "elevation-z21" || v == "azimuth" || v == "sun-vector";
+    };
+    push(k, kNav);
+  }
+  {
+    RigKey k{"navigation.initial_errors", K::Text, "", "drawn or none",
+             "a simulated run's INS start: the truth plus errors drawn from P0 (navigation.attitude_sigma_deg, "
+             "velocity_sigma_mps, position_sigma_m) with the rig's seed, so that the filter's P0 is true, or the "
+             "truth itself; navigation.initial_attitude_error_deg is added to either. A measured log's INS starts "
+             "where its rig says [C: drawn]"};
+    k.text = [](Rig& r) -> std::string& { return r.navigation.initial_errors; };
+    k.valid_text = [](std::string_view v) { return v == "drawn" || v == "none"; };
+    push(k, kNav);
+  }
 }
 
 // --- sky.model and sky.rt.* (source/sky_settings.h; docs/physics.md §21): which sky, and the
@@ -1163,10 +1187,11 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig, RigUse use) {
     return RigProblem{"sky.lat_deg", fmt::format("expected a latitude within ±{}° for device.kind unit-array (its "
                                                  "INS's local-level frame is singular at the poles), got {}",
                                                  kInsMaxLatitudeDeg, rig.source.sky.sky.site.lat_deg), "device.kind"};
-  if (rig.navigation.tilt_in_measurement && rig.navigation.integrated_level == "accelerometer")
-    return RigProblem{"navigation.tilt_in_measurement",
-                      "expected false with navigation.integrated_level accelerometer (the tilt columns model the "
-                      "filter's attitude in the measured elevation, which the accelerometers' level leaves out)",
+  if (rig.navigation.measurement != "elevation-z21" && rig.navigation.integrated_level == "accelerometer")
+    return RigProblem{"navigation.measurement",
+                      "expected elevation-z21 with navigation.integrated_level accelerometer (the tilt columns and "
+                      "the azimuth model the filter's attitude in the measured sun, which the accelerometers' level "
+                      "leaves out)",
                       "navigation.integrated_level"};
   const TrajectorySettings& t = rig.trajectory;
   const std::size_t n = t.segment_s.size();

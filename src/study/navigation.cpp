@@ -24,7 +24,7 @@ namespace {
 
 
 // Stream indices of derive_seed: the IMU's errors and the units' noise draw from separate streams.
-constexpr std::uint64_t kImuStream = 0x494D55, kUnitStream = 0x554E4954;
+constexpr std::uint64_t kImuStream = 0x494D55, kUnitStream = 0x554E4954, kStartStream = 0x5354415254;
 
 Eigen::Vector3d si(const std::array<double, 3>& v, double scale) {
   return Eigen::Vector3d(v[0], v[1], v[2]) * scale;
@@ -105,9 +105,13 @@ FilterSettings filter_settings(const Rig& rig) {
   const NavigationSettings& n = rig.navigation;
   FilterSettings s;
   s.sigma_H_rad = deg2rad(n.sigma_H_deg);
+  s.sigma_A_rad = deg2rad(n.sigma_A_deg);
   s.adaptive = n.adaptive;
   s.sage_husa_b = n.forgetting_factor;
-  s.tilt_in_measurement = n.tilt_in_measurement;
+  using M = FilterSettings::SunMeasurement;
+  for (M m : {M::ElevationZ21, M::Elevation, M::Azimuth, M::SunVector})
+    if (n.measurement == sun_measurement_name(m)) s.measurement = m;
+
   // P once per compass reading by van Loan (ins/filter.h): the state is mechanized at the IMU rate.
   s.covariance_step = FilterSettings::CovarianceStep::AtUpdates;
   if (n.hold_height) s.mechanization.hold_height_m = sky_of(rig).site.height_m;
@@ -115,7 +119,7 @@ FilterSettings filter_settings(const Rig& rig) {
   return s;
 }
 
-InsState initial_state(const Rig& rig) {
+InsState initial_state(const Rig& rig, StartErrors errors) {
   const TrajectorySpec spec = trajectory_spec(rig);
   const auto& e = rig.navigation.initial_attitude_error_deg;
   InsState s;
@@ -127,6 +131,20 @@ InsState initial_state(const Rig& rig) {
   s.lat_rad = spec.lat_rad;
   s.lon_rad = spec.lon_rad;
   s.h_m = spec.h_m;
+  if (errors == StartErrors::DrawnFromP0 && rig.navigation.initial_errors == "drawn") {
+    // The error state x ~ N(0, P0) for φ, δV and δL, δλ, δh (the biases are the IMU's own draws);
+    // the INS's start is the truth with x put in: feed_back's inverse (ins/error_model.h).
+    const Matrix15 P0 = initial_covariance(rig);
+    const std::uint64_t seed = derive_seed(rig.seed, kStartStream);
+    Vector15 x = Vector15::Zero();
+    for (int i = kPhi; i <= kDh; ++i) x[i] = std::sqrt(P0(i, i)) * standard_normal(seed, 0, 0, static_cast<std::uint64_t>(i));
+    if (rig.navigation.hold_height) x[kDV + 2] = x[kDh] = 0;  // held: v_U = 0 and h the barometer's
+    s.q_bn = (quaternion_from_rotation_vector(-x.segment<3>(kPhi)) * s.q_bn).normalized();
+    s.v_n += x.segment<3>(kDV);
+    s.lat_rad += x[kDLat];
+    s.lon_rad += x[kDLon];
+    s.h_m += x[kDh];
+  }
   return s;
 }
 
@@ -139,7 +157,7 @@ Matrix15 initial_covariance(const Rig& rig) {
   Vector15 sd;
   for (int i = 0; i < 3; ++i) {
     sd[kPhi + i] = deg2rad(n.attitude_sigma_deg[static_cast<std::size_t>(i)]);
-    sd[kDV + i] = n.velocity_sigma_mps;
+    sd[kDV + i] = n.velocity_sigma_mps;  // δv_U's too when held: it is never fed back (ins/filter.cpp)
     sd[kGyroBias + i] = std::hypot(imu.gyro.bias[i], imu.gyro.turn_on_bias_sigma[i], imu.gyro.bias_instability[i]);
     sd[kAccelBias + i] = std::hypot(imu.accel.bias[i], imu.accel.turn_on_bias_sigma[i], imu.accel.bias_instability[i]);
   }
@@ -197,7 +215,7 @@ NavigationDataset simulate_navigation(const Rig& rig, const NavigationScene& sce
 
   NavigationDataset d;
   d.start = sky.first_stop;
-  d.initial = initial_state(rig);
+  d.initial = initial_state(rig, StartErrors::DrawnFromP0);
   d.imu = std::move(imu.samples);
   NavigationTruth truth{tr.truth, unit_array_truth(rig.units, rig.seed), imu.drawn, {}};
   for (const Axes3& C : truth.units.nominal) d.mounts.push_back({C});
@@ -373,11 +391,16 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
     const auto [dec, gha] = sun.dec_gha_rad(e.t_s);
     f.model_elevation_rad =
         std::asin(sun_elevation_model(filter.state().lat_rad, filter.state().lon_rad, dec, gha).sin_H);
+    f.model_azimuth_rad = sun_azimuth_model(filter.state().lat_rad, filter.state().lon_rad, dec, gha).azimuth;
+    f.azimuth_rad = kNaN;
     if (std::isfinite(f.elevation_rad)) {
       const Vec3 s_n = sun_in_nav(f.sun.s_b, axes_of(filter.state().C_bn())).s_n;
-      f.update = filter.update({f.t_s, f.elevation_rad, dec, gha, s_n[0], s_n[1]});
+      f.azimuth_rad = std::atan2(s_n[0], s_n[1]);
+      const SunUpdate u = filter.update({f.t_s, f.elevation_rad, dec, gha, s_n[0], s_n[1]});
+      f.update = u.elevation;
+      f.azimuth_update = u.azimuth;
     } else {
-      f.update = {kNaN, kNaN, kNaN, kNaN};
+      f.update = f.azimuth_update = {kNaN, kNaN, kNaN, kNaN};
       filter.propagate_covariance();
     }
     const InsState& s = filter.state();
@@ -400,6 +423,7 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
     progress.advance(1);
   }
   run.filter_summary = filter.summary();
+  run.final_P = filter.P();
   if (watch.diverged) run.filter_summary.status = FilterStatus::Diverged;
 }
 

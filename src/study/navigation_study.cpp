@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <tuple>
 
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -15,6 +16,7 @@
 #include "polrig/rig/error.h"
 #include "polrig/rig/keys.h"
 #include "polrig/source/source.h"
+#include "polrig/statistics.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -58,6 +60,29 @@ double z21_tilt_deg(double tilt) {
   if (tilt == 1) return 0.221;
   if (tilt == 2) return 0.887;
   return kNaN;
+}
+
+// The NEES of the integrated solution's last fix against the filter's P (NavigationTrialResult).
+std::pair<double, double> final_nees(const NavigationFix& fix, const Matrix15& P, const NavigationTruth& truth) {
+  const TruthSample& t = truth_at(truth, fix.t_s);
+  const Eigen::Vector2d e_pos(fix.lat_rad - t.lat_rad, std::remainder(fix.lon_rad - t.lon_rad, 2 * kPi));
+  const Eigen::Matrix2d P_pos = P.block<2, 2>(kDLat, kDLat);
+  // C̃_b^n·C_n^b = I − [φ×]: φ from its antisymmetric part (small angles; exact to O(φ²)).
+  const Eigen::Matrix3d D = C_bn_from_euler(fix.attitude) * t.C_bn.transpose();
+  const Eigen::Vector3d phi(0.5 * (D(1, 2) - D(2, 1)), 0.5 * (D(2, 0) - D(0, 2)), 0.5 * (D(0, 1) - D(1, 0)));
+  const Eigen::Matrix3d P_att = P.block<3, 3>(kPhi, kPhi);
+  return {e_pos.dot(P_pos.ldlt().solve(e_pos)), phi.dot(P_att.ldlt().solve(phi))};
+}
+
+ConsistencyBand band_of(double sum, long long count, long long dof) {
+  ConsistencyBand b;
+  b.dof = dof;
+  if (count == 0 || dof == 0) return b;
+  b.mean = sum / static_cast<double>(count);
+  const double per = static_cast<double>(dof) / static_cast<double>(count);  // d
+  b.lo = per * chi2_mean_quantile(static_cast<double>(dof), -kNormalQuantile975);
+  b.hi = per * chi2_mean_quantile(static_cast<double>(dof), kNormalQuantile975);
+  return b;
 }
 
 // What one trial gives: its rows, and for cell 0 the per-reading detail the rig's figures need.
@@ -104,7 +129,11 @@ TrialOutput run_trial(const Rig& cell_rig, const NavigationScene& scene, int cel
     r.final_error_m = std::hypot(last.north_m, last.east_m);
     r.lat_deg = error_statistics(lat);
     r.lon_deg = error_statistics(lon);
-    if (r.mode == NavigationMode::Integrated) r.filter_nis_mean = run.filter_summary.mean_nis;
+    if (r.mode == NavigationMode::Integrated) {
+      r.filter_nis_mean = run.filter_summary.mean_nis;
+      r.filter_updates = run.filter_summary.updates;
+      if (!fixes.empty() && fixes.back().status == "ok") std::tie(r.nees_position, r.nees_attitude) = final_nees(fixes.back(), run.final_P, truth);
+    }
     out.rows.push_back(r);
     if (detail) out.horizontal_m.push_back(std::move(horizontal));
   }
@@ -291,6 +320,28 @@ NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& 
       }
       study.summary.push_back({static_cast<int>(c), study.modes[m], settings.trials, percentiles(final_m),
                                percentiles(lat), percentiles(lon)});
+    }
+
+  // The integrated filter's consistency per cell.
+  const auto integrated = std::find(study.modes.begin(), study.modes.end(), NavigationMode::Integrated);
+  if (integrated != study.modes.end())
+    for (std::size_t c = 0; c < rigs.size(); ++c) {
+      const std::size_t m = static_cast<std::size_t>(integrated - study.modes.begin());
+      double pos = 0, att = 0, nis = 0;
+      long long n = 0, updates = 0;
+      for (std::size_t t = 0; t < trials; ++t) {
+        const NavigationTrialResult& r = outputs[c * trials + t].rows[m];
+        if (r.filter_updates > 0 && std::isfinite(r.filter_nis_mean)) {
+          nis += r.filter_nis_mean * r.filter_updates;
+          updates += r.filter_updates;
+        }
+        if (!std::isfinite(r.nees_position) || !std::isfinite(r.nees_attitude)) continue;
+        pos += r.nees_position;
+        att += r.nees_attitude;
+        ++n;
+      }
+      study.consistency.push_back({static_cast<int>(c), static_cast<int>(n), band_of(pos, n, 2 * n),
+                                   band_of(att, n, 3 * n), band_of(nis, updates, updates)});
     }
 
   // Cell 0's figures.

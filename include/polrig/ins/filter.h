@@ -5,7 +5,7 @@
 // by the sun's elevation,
 //   z = sin H_c − sin H^n,   sin H_c = sin L̃ sin Dec + cos L̃ cos Dec cos LHA,   LHA = GHA + λ̃,
 //   H = [0₁ₓ₆, ∂sinH/∂L, ∂sinH/∂λ, 0₁ₓ₇]  (spec §4.3's corrected Eq. 15),
-//   R = (cos H^n·σ_H)²,
+//   R = (cos H^n·σ_H)² (the azimuth's: σ_A²),
 // with the Joseph-form covariance update, optionally Sage–Husa's adaptive R, and closed-loop
 // feedback into the INS state and the bias estimates after every update. Dec and GHA (the sun's
 // declination and Greenwich hour angle, radians) are plain numbers here: sky/ supplies them.
@@ -32,6 +32,17 @@ struct SunElevationModel {
 };
 SunElevationModel sun_elevation_model(double lat_rad, double lon_rad, double dec_rad, double gha_rad);
 
+// The sun's azimuth A (clockwise from north, radians) at (L, λ) and its partial derivatives, from the
+// sun's direction in ENU (s_E = −cos Dec sin LHA, s_N = sin Dec cos L − cos Dec sin L cos LHA,
+// s_U = sin H, ρ² = s_E² + s_N²; docs/physics.md §18.6):
+//   ∂A/∂L = s_E·sin H/ρ²,   ∂A/∂λ = −cos Dec·(s_N cos LHA + s_E sin L sin LHA)/ρ².
+struct SunAzimuthModel {
+  double azimuth = 0;
+  double d_lat = 0, d_lon = 0;
+  double s_east = 0, s_north = 0, s_up = 0;
+};
+SunAzimuthModel sun_azimuth_model(double lat_rad, double lon_rad, double dec_rad, double gha_rad);
+
 // The Sage–Husa estimate of a scalar R (spec §4.7; PSINS kfupdate.m):
 //   R_k = min((1 − β_k)·R_{k−1} + β_k·s_k, R_max),   s_k = max(r² − H P⁻ Hᵀ, R_min),
 //   β_1 = 1,   β_{k+1} = β_k/(β_k + b).
@@ -49,6 +60,7 @@ class SageHusaR {
   double R_, b_, R_min_, R_max_, beta_ = 1.0;
 };
 
+inline constexpr double kNaNUpdate = std::numeric_limits<double>::quiet_NaN();
 struct ScalarUpdate {
   double innovation = 0;   // z − H x⁻
   double variance = 0;     // S = H P⁻ Hᵀ + R
@@ -68,14 +80,22 @@ struct ErrorFilter {
 
 struct FilterSettings {
   double sigma_H_rad = deg2rad(0.1);  // the compass' elevation σ [C]
+  double sigma_A_rad = deg2rad(0.046);  // its azimuth σ (SunMeasurement Azimuth, SunVector) [C]
   bool adaptive = true;            // Sage–Husa R [C]
   double sage_husa_b = 0.98;       // Z21's forgetting factor as b (spec §4.7)
   double R_min_factor = 0.01, R_max_factor = 100;  // PSINS's clamp on R, times R0
   MechanizationOptions mechanization;  // Z21 holds the height to its barometer
-  // H^n is measured through the INS's attitude, C̃_b^n = (I − [φ×])·C_b^n, so sin H̃^n = sin H^n −
-  // φ_E·s_N + φ_N·s_E: with this on, H gains the tilt columns [s_N, −s_E] on φ_E, φ_N and the filter
-  // estimates the tilt the measurement carries; off, H is Z21's (position only, spec §4.3).
-  bool tilt_in_measurement = false;
+  // What the compass's sun updates (docs/physics.md §18.6). The sun is measured through the INS's
+  // attitude, C̃_b^n = (I − [φ×])·C_b^n, so s̃^n = s^n + s^n × φ:
+  //   ElevationZ21  z = sin H_c − sin H̃^n, H = [∂sinH/∂L, ∂sinH/∂λ] only (Z21 Eq. 15): the tilt the
+  //                 measurement carries is not modelled;
+  //   Elevation     the same z with the tilt columns [s_N, −s_E] on φ_E, φ_N (sin H̃^n = sin H^n −
+  //                 φ_E·s_N + φ_N·s_E) [C]: the filter estimates the tilt the measurement carries;
+  //   Azimuth       z = A_c − Ã^n (wrapped), Ã^n = A^n + φ_U − s_U·(s_E φ_E + s_N φ_N)/ρ²: the
+  //                 heading (what these compasses are for), the tilt, and the position through A_c;
+  //   SunVector     both, as two scalar updates (the two components' errors independent).
+  enum class SunMeasurement { ElevationZ21, Elevation, Azimuth, SunVector };
+  SunMeasurement measurement = SunMeasurement::Elevation;
   // When P is propagated: at every IMU sample with Φ = I + F·Δt (PSINS's form, Z21's), or once per
   // update interval T with van Loan's exact Φ = e^{F̄T} and Q, F̄ at the interval's end state and its
   // mean specific force (F changes little over T at rest or in steady motion; 100× less work at
@@ -85,13 +105,22 @@ struct FilterSettings {
   ErrorModelNoise noise = error_model_noise(z21_imu_errors());  // Z21's Table 1 [C]
 };
 
-struct SunElevation {
+// "elevation-z21", "elevation", "azimuth", "sun-vector"
+std::string_view sun_measurement_name(FilterSettings::SunMeasurement m);
+
+// One compass reading as the filter takes it: the measured sun in n, s̃^n = C̃_b^n·s^b.
+struct SunObservation {
   double t_s = 0;
-  double elevation_rad = 0;  // H^n, measured
+  double elevation_rad = 0;  // H̃^n = asin s̃_U
   double dec_rad = 0, gha_rad = 0;  // the sun's, at t_s
-  // The measured sun's east and north components in n (s^n = C_b^n·s^b): the tilt columns of H
-  // (FilterSettings::tilt_in_measurement); NaN without them.
+  // s̃^n's east and north components: the tilt columns and the azimuth Ã^n = atan2(s̃_E, s̃_N).
   double sun_east = std::numeric_limits<double>::quiet_NaN(), sun_north = std::numeric_limits<double>::quiet_NaN();
+};
+
+// The scalar updates of one reading (NaN where the measurement has no such component).
+struct SunUpdate {
+  ScalarUpdate elevation{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
+  ScalarUpdate azimuth{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
 };
 
 enum class FilterStatus {
@@ -108,7 +137,7 @@ std::string_view filter_status_name(FilterStatus s);
 struct FilterSummary {
   FilterStatus status = FilterStatus::NoUpdates;
   int predictions = 0;
-  int updates = 0;
+  int updates = 0;                  // scalar sun updates (two a reading for the sun vector)
   int skipped = 0;                  // non-finite measurements or innovations
   double innovation_mean = 0;       // of z − Hx⁻
   double innovation_rms = 0;
@@ -130,10 +159,10 @@ class InsFilter {
   // Brings P to the current state's time (with CovarianceStep::AtUpdates; otherwise it already is).
   // update() calls it first; call it before reading P() between updates.
   void propagate_covariance();
-  // A sun-elevation update at the current state, with feedback. Throws std::invalid_argument when
-  // m.t_s is more than 1 ms from the state's time (a programming error); a non-finite measurement
-  // is data: skipped and counted in the summary.
-  ScalarUpdate update(const SunElevation& m);
+  // The sun's update(s) at the current state (FilterSettings::measurement), with feedback. Throws
+  // std::invalid_argument when m.t_s is more than 1 ms from the state's time (a programming error);
+  // a non-finite measurement is data: skipped and counted in the summary.
+  SunUpdate update(const SunObservation& m);
 
   const InsState& state() const { return state_; }
   const Eigen::Vector3d& gyro_bias() const { return gyro_bias_; }
@@ -144,6 +173,10 @@ class InsFilter {
   FilterSummary summary() const;
 
  private:
+  // One scalar update (Sage–Husa's R when adaptive), counted in the summary; skipped when not finite.
+  ScalarUpdate scalar_update(const RowVector15& H, double z, double R_nominal, std::optional<SageHusaR>& adaptive);
+  void feed_back_and_reset();  // x into the state and the bias estimates, then x = 0
+
   InsState state_;
   ImuSample prev_;
   bool has_prev_ = false;
@@ -151,6 +184,7 @@ class InsFilter {
   ErrorFilter filter_;
   FilterSettings settings_;
   std::optional<SageHusaR> sage_husa_;  // started at the first update's (cos H^n σ_H)²
+  std::optional<SageHusaR> sage_husa_azimuth_;  // the azimuth's, from σ_A²
   double last_R_ = std::numeric_limits<double>::quiet_NaN();
   Eigen::Vector3d f_dt_sum_ = Eigen::Vector3d::Zero();  // ∫f^n dt since P was last propagated (AtUpdates)
   double pending_s_ = 0;                               // and that interval's length

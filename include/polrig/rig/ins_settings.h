@@ -54,10 +54,14 @@ struct ImuSettings {
 // P0 from the 1σ settings and, for the biases, the IMU's own turn-on and constant biases.
 struct NavigationSettings {
   double sigma_H_deg = 0.1;       // the compass' elevation σ (Z21 Table 1)
+  double sigma_A_deg = 0.046;     // its azimuth σ in n (navigation.measurement azimuth, sun-vector)
   bool adaptive = true;           // Sage–Husa R
   double forgetting_factor = 0.98;  // Z21's b
   bool hold_height = true;        // Z21's barometer: h held at the start's height
   std::array<double, 3> initial_attitude_error_deg{0, 0, 0};  // roll, pitch, heading added to the truth
+  // A simulated run's INS starts at the truth plus errors drawn from P0 with the rig's seed ("drawn")
+  // or at the truth ("none"); a measured log's starts where its rig says [C: drawn].
+  std::string initial_errors = "drawn";
   std::array<double, 3> attitude_sigma_deg{0.05, 0.05, 0.5};  // P0: φ_E, φ_N, φ_U
   double velocity_sigma_mps = 0.02;                          // P0: δV per axis
   double position_sigma_m = 200;                             // P0: north and east
@@ -66,8 +70,10 @@ struct NavigationSettings {
   // each reading's interval (a vehicle at rest or in straight, steady motion), or "sins", the free
   // INS's attitude (which drifts with the gyro biases) [C: accelerometer].
   std::string pns_level = "accelerometer";
-  // The integrated filter's H with the tilt columns (ins/filter.h FilterSettings) [C: false, Z21's H].
-  bool tilt_in_measurement = false;
+  // What the integrated filter takes from the compass (ins/filter.h FilterSettings::SunMeasurement):
+  // "elevation" (with the tilt columns) [C], "elevation-z21" (Z21's position-only H), "azimuth" (the
+  // sun's azimuth: heading), "sun-vector" (both).
+  std::string measurement = "elevation";
   // The integrated filter's level for H^n: "ins", its own attitude (Z21, spec §4.2), or
   // "accelerometer", as PNS's (unsteady readings give no update) [C: ins].
   std::string integrated_level = "ins";

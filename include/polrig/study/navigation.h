@@ -37,8 +37,12 @@ TrajectorySpec trajectory_spec(const Rig& rig);  // the start at the sky's site
 ImuErrorSpec imu_error_spec(const ImuSettings& imu);
 FilterSettings filter_settings(const Rig& rig);
 // The state the INS starts from: the sky's site and first_stop_utc, the trajectory's start attitude
-// plus navigation.initial_attitude_error_deg, its speed along the heading and pitch.
-InsState initial_state(const Rig& rig);
+// plus navigation.initial_attitude_error_deg, its speed along the heading and pitch; for a simulated
+// run (DrawnFromP0) with navigation.initial_errors drawn, plus an error x ~ N(0, P0) in attitude,
+// velocity and position drawn with the rig's seed (the height's and v_U's zero when held), so that
+// a Monte-Carlo's NEES tests the filter fairly. A measured log's start is Stated.
+enum class StartErrors { Stated, DrawnFromP0 };
+InsState initial_state(const Rig& rig, StartErrors errors);
 // P0 (diagonal): the navigation.*_sigma keys and the IMU's turn-on and constant biases.
 Matrix15 initial_covariance(const Rig& rig);
 
@@ -104,7 +108,10 @@ struct FilterEpoch {
   UnitSun sun;                     // the two units, the angle between their E-vectors, s^b, H^b
   double elevation_rad = 0;        // H^n measured (NaN without a sun)
   double model_elevation_rad = 0;  // H^n of the filter's position before the update
-  ScalarUpdate update;             // innovation, S, NIS, R (NaN when skipped)
+  ScalarUpdate update;             // the elevation's innovation, S, NIS, R (NaN when skipped or not measured)
+  ScalarUpdate azimuth_update;     // the azimuth's (measurement azimuth or sun-vector), rad
+  double azimuth_rad = 0;          // A^n measured, clockwise from north (NaN without a sun)
+  double model_azimuth_rad = 0;    // A^n of the filter's position before the update
   double sigma_north_m = 0, sigma_east_m = 0, sigma_heading_rad = 0;  // after the update
   double corr_north_east = 0;  // the correlation of the north and east errors after the update
 };
@@ -114,6 +121,7 @@ struct NavigationRun {
   std::vector<std::vector<NavigationFix>> fixes;  // per mode in `modes`, one per compass epoch
   std::vector<FilterEpoch> filter;               // integrated only
   FilterSummary filter_summary;
+  Matrix15 final_P = Matrix15::Zero();           // integrated: P after the last reading
   int pns_usable = 0;                            // PNS epochs with a converged fix
 };
 

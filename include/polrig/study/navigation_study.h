@@ -76,6 +76,27 @@ struct NavigationTrialResult {
   double final_t_s = 0, final_north_m = 0, final_east_m = 0, final_error_m = 0;
   ErrorStatistics lat_deg, lon_deg;  // over the run's fixes (error_statistics)
   double filter_nis_mean = std::numeric_limits<double>::quiet_NaN();  // integrated only
+  int filter_updates = 0;                                              // integrated: scalar sun updates
+  // Integrated, at the last reading: the normalized estimation error squared against the filter's P,
+  // e^T P^-1 e, of the horizontal position (δL, δλ: 2 degrees of freedom) and of the attitude
+  // (φ_E, φ_N, φ_U from C̃_b^n·C_n^b = I − [φ×]: 3); NaN for the other modes or a diverged run.
+  double nees_position = std::numeric_limits<double>::quiet_NaN();
+  double nees_attitude = std::numeric_limits<double>::quiet_NaN();
+};
+
+// The integrated filter's consistency over one cell's trials (Bar-Shalom, Li & Kirubarajan 2001,
+// §5.4.2): the mean NEES over N trials times N is χ²(N·d) for a consistent filter, so its two-sided
+// 95 % band is [χ²_0.025(N·d), χ²_0.975(N·d)]/N; the mean NIS over every update of every trial
+// likewise with N·d the updates' count (Wilson–Hilferty's quantiles, statistics.h).
+struct ConsistencyBand {
+  double mean = std::numeric_limits<double>::quiet_NaN(), lo = 0, hi = 0;
+  long long dof = 0;  // N·d
+  bool inside() const { return mean >= lo && mean <= hi; }
+};
+struct NavigationConsistency {
+  int cell = 0;
+  int trials = 0;  // with a finite NEES
+  ConsistencyBand nees_position, nees_attitude, nis;
 };
 
 // Five percentiles (type 7, as NumPy's default) of the finite values; NaN without any.
@@ -131,6 +152,7 @@ struct NavigationStudy {
   std::vector<NavigationStudyCell> cells;
   std::vector<NavigationTrialResult> trials;     // cell-major, then trial, then mode
   std::vector<NavigationStudySummary> summary;   // cell-major, then mode
+  std::vector<NavigationConsistency> consistency;  // per cell
   std::vector<NavigationErrorBand> bands;        // per mode, cell 0
   std::vector<TiltErrorRow> tilt;                // per settings.tilts_deg
   double tilt_mean_elevation_deg = NAN;          // the readings' mean true-attitude H^n (cell 0)

@@ -379,6 +379,109 @@ TEST(InsMechanization, IdealImuHeldStaticForAnHourStaysPut) {
   std::printf("static hour: position %.3g m, attitude %.3g°, velocity %.3g m/s\n", worst_m, worst_deg, worst_v);
 }
 
+// pyins's integration tests (pyins/tests/test_strapdown.py, run_integration_test): the largest
+// |difference| from the truth over every epoch, in pyins's columns and units.
+struct PyinsDifference {
+  double north_m = 0, east_m = 0, down_m = 0;
+  double v_n = 0, v_e = 0, v_d = 0;  // m/s
+  double roll_deg = 0, pitch_deg = 0, heading_deg = 0;
+};
+
+PyinsDifference pyins_difference(const Trajectory& tr, const std::vector<InsState>& s) {
+  PyinsDifference d;
+  const auto wrap_deg = [](double a) { return std::abs(deg(std::remainder(a, 2 * kPi))); };
+  for (std::size_t k = 0; k < s.size(); ++k) {
+    const TruthSample& t = tr.truth[k];
+    const Euler e = euler_from_C_bn(s[k].C_bn());
+    d.north_m = std::max(d.north_m, std::abs(north_error_m(t, s[k])));
+    d.east_m = std::max(d.east_m, std::abs(east_error_m(t, s[k])));
+    d.down_m = std::max(d.down_m, std::abs(s[k].h_m - t.h_m));
+    d.v_n = std::max(d.v_n, std::abs(s[k].v_n.y() - t.v_n.y()));
+    d.v_e = std::max(d.v_e, std::abs(s[k].v_n.x() - t.v_n.x()));
+    d.v_d = std::max(d.v_d, std::abs(s[k].v_n.z() - t.v_n.z()));
+    d.roll_deg = std::max(d.roll_deg, wrap_deg(e.roll_rad - t.euler.roll_rad));
+    d.pitch_deg = std::max(d.pitch_deg, wrap_deg(e.pitch_rad - t.euler.pitch_rad));
+    d.heading_deg = std::max(d.heading_deg, wrap_deg(e.yaw_rad - t.euler.yaw_rad));
+  }
+  std::printf("pyins's columns: north %.3g east %.3g down %.3g m; VN %.3g VE %.3g VD %.3g m/s; "
+              "roll %.3g pitch %.3g heading %.3g deg\n", d.north_m, d.east_m, d.down_m, d.v_n, d.v_e, d.v_d,
+              d.roll_deg, d.pitch_deg, d.heading_deg);
+  return d;
+}
+
+void expect_within(const PyinsDifference& d, const PyinsDifference& bound) {
+  EXPECT_LT(d.north_m, bound.north_m);
+  EXPECT_LT(d.east_m, bound.east_m);
+  EXPECT_LT(d.down_m, bound.down_m);
+  EXPECT_LT(d.v_n, bound.v_n);
+  EXPECT_LT(d.v_e, bound.v_e);
+  EXPECT_LT(d.v_d, bound.v_d);
+  EXPECT_LT(d.roll_deg, bound.roll_deg);
+  EXPECT_LT(d.pitch_deg, bound.pitch_deg);
+  EXPECT_LT(d.heading_deg, bound.heading_deg);
+}
+
+TEST(InsMechanization, PyinsStationaryScenarioWithItsThresholds) {
+  // test_integrate_stationary: an hour at 10 Hz at 55° N 37° E, 150 m, roll −5°, pitch 10°, heading
+  // 110°, the height integrated and held (pyins's with_altitude True/False); its thresholds.
+  TrajectorySpec spec;
+  spec.lat_rad = rad(55);
+  spec.lon_rad = rad(37);
+  spec.h_m = 150;
+  spec.attitude = {rad(-5), rad(10), rad(110)};
+  spec.imu_rate_hz = 10;
+  spec.segments = {{SegmentKind::Static, 3600, 0}};
+  const Trajectory tr = generate_trajectory(spec);
+  const PyinsDifference pyins_bound{1e-3, 1e-3, 1e-2, 1e-6, 1e-6, 1e-5, 1e-8, 1e-8, 1e-8};
+  for (const bool with_altitude : {true, false}) {
+    SCOPED_TRACE(with_altitude ? "height integrated" : "height held");
+    MechanizationOptions options;
+    if (!with_altitude) options.hold_height_m = spec.h_m;
+    expect_within(pyins_difference(tr, run_ins(state_of(tr.truth[0]), tr.imu, options)), pyins_bound);
+  }
+}
+
+TEST(InsMechanization, PyinsSineVelocityScenarioWithItsIncrementThresholds) {
+  // test_integrate_sine_velocity, sensor_type "increment" (polrig's IMU gives increments): an hour
+  // at 100 Hz from 55° N 37° E, 1500 m, V_NED = (5, −3, 0.2) + 1·sin(2π t/60 s + (0°, 90°, 0°)) m/s,
+  // the height integrated; its thresholds. In ENU: v_E phase 90°, v_U = −0.2 − sin(…) = −0.2 +
+  // sin(… + 180°).
+  SineVelocitySpec spec;
+  spec.lat_rad = rad(55);
+  spec.lon_rad = rad(37);
+  spec.h_m = 1500;
+  spec.v_mean_enu = {-3, 5, -0.2};
+  spec.amplitude_enu = {1, 1, 1};
+  spec.phase_rad = {rad(90), 0, kPi};
+  spec.period_s = 60;
+  spec.duration_s = 3600;
+  spec.imu_rate_hz = 100;
+  const Trajectory tr = generate_sine_velocity_trajectory(spec);
+  // The generator itself: the truth's velocity is the formula's (NED (5, −3, 0.2) + … at t = 15 s:
+  // sin(90°) = 1 for north and down, sin(180°) = 0 for east).
+  const TruthSample& q = tr.truth[1500];
+  EXPECT_NEAR(q.v_n.y(), 6, 1e-12);
+  EXPECT_NEAR(q.v_n.x(), -3, 1e-12);
+  EXPECT_NEAR(q.v_n.z(), -1.2, 1e-12);
+  EXPECT_NEAR(q.euler.roll_rad, 0, 1e-12);
+  EXPECT_NEAR(deg(q.euler.yaw_rad), 360 + deg(std::atan2(-3, 6)), 1e-9);
+  const PyinsDifference pyins_bound{0.1, 0.1, 3, 1e-3, 1e-3, 1e-2, 1e-6, 1e-6, 1e-5};
+  expect_within(pyins_difference(tr, run_ins(state_of(tr.truth[0]), tr.imu)), pyins_bound);
+}
+
+TEST(InsTrajectory, SineVelocityRefusesAnUndefinedHeadingAndOffGridDurations) {
+  SineVelocitySpec spec;
+  spec.v_mean_enu = {1, 0, 0};
+  spec.amplitude_enu = {1, 0.5, 0};
+  spec.duration_s = 10;
+  EXPECT_THROW(generate_sine_velocity_trajectory(spec), std::invalid_argument);
+  spec.amplitude_enu = {0.5, 0.5, 0};
+  spec.duration_s = 10.005;
+  EXPECT_THROW(generate_sine_velocity_trajectory(spec), std::invalid_argument);
+  spec.duration_s = 10;
+  EXPECT_EQ(generate_sine_velocity_trajectory(spec).imu.size(), 1000u);
+}
+
 TEST(InsMechanization, IdealImuOnAMovingTrajectoryReproducesTheTruth) {
   // 240 s of accelerating, turning and climbing at 100 Hz. The two-sample algorithm's residuals:
   // in the 3°/s turn at 20 m/s (f ≈ 1 m/s² rotating with the body at ω Δt = 5e-4) the sculling

@@ -23,6 +23,7 @@
 #include "polrig/io/output_dir.h"
 #include "polrig/io/plot.h"
 #include "polrig/io/rig_yaml.h"
+#include "polrig/io/start_yaml.h"
 #include "polrig/rig/error.h"
 #include "polrig/rig/keys.h"
 #include "polrig/study/installation.h"
@@ -279,6 +280,91 @@ TEST(NavigationDataset, FilesReadBackToTheSameRun) {
         EXPECT_NEAR(a.fixes[m][k].lat_rad, b.fixes[m][k].lat_rad, 1e-12);
       }
     }
+}
+
+// A measured log's start stated in start.yaml (docs/formats.md §6.17): the INS starts there, with
+// its velocity in ENU (not along the nose) and its P0 blocks, whatever the rig's start says.
+TEST(NavigationDataset, AStartYamlStatesTheStartAndItsP0) {
+  test::TempDir dir("polrig-nav-start");
+  // A cruise at 10 m/s towards 30° on a perfect IMU, the truth the reference.
+  std::vector<RigOverride> cruise = {{"trajectory.speed_mps", "10"}, {"trajectory.segment_s", "[60]"},
+                                     {"trajectory.segment_accel_mps2", "[0]"}, {"trajectory.segment_turn_deg_s", "[0]"}};
+  for (const RigOverride& o : ideal(60))
+    if (o.path != "trajectory.duration_s") cruise.push_back(o);
+  const NavigationDataset d = simulate_navigation(load("zhang2021-vehicle.yaml", cruise));
+  write_navigation_dataset(dir.path(), d);
+  fs::remove(dir.path() / "truth.csv");
+  fs::remove(dir.path() / "truth.yaml");
+  // The rig the log is read with says something else: at rest, heading 80°.
+  std::vector<RigOverride> wrong = cruise;
+  wrong[0] = {"trajectory.speed_mps", "0"};
+  wrong.push_back({"trajectory.heading_deg", "80"});
+  const Rig rig = load("zhang2021-vehicle.yaml", wrong);
+  NavigationOptions sins;
+  sins.modes = {NavigationMode::Sins};
+  const TruthSample& end = d.truth->trajectory.back();
+  const auto miss_m = [&](const NavigationDataset& data) {
+    const PositionError e = position_error(navigate(data, rig, sins).fixes[0].back(), end);
+    return std::hypot(e.north_m, e.east_m);
+  };
+  EXPECT_GT(miss_m(read_navigation_dataset(dir.path(), rig)), 300.0);  // the rig's start: 600 m of cruise lost
+
+  const TruthSample& t0 = d.truth->trajectory.front();
+  test::write_file(dir.path() / "start.yaml",
+                   fmt::format("lat_deg: {}\nlon_deg: {}\nh_m: {}\nv_enu_mps: [{}, {}, {}]\nattitude_deg: [0, 0, 30]\n"
+                               "sigma:\n  attitude_deg: [0.05, 0.05, 0.5]\n  v_enu_mps: [0.02, 0.02, 0.02]\n"
+                               "  position_m: [5000, 3000, 10]\n",
+                               rad2deg(t0.lat_rad), rad2deg(t0.lon_rad), t0.h_m, 10 * std::sin(std::numbers::pi / 6),
+                               10 * std::cos(std::numbers::pi / 6), 0));
+  const NavigationDataset stated = read_navigation_dataset(dir.path(), rig);
+  ASSERT_TRUE(stated.stated_start.has_value());
+  EXPECT_NEAR((stated.initial.v_n - t0.v_n).norm(), 0, 1e-12);
+  const double m = miss_m(stated);
+  std::printf("start.yaml: the SINS ends %.3g m from the truth after a minute's cruise\n", m);
+  EXPECT_LT(m, 0.01);  // a perfect IMU from the true start (the mechanization's mm: test_ins)
+  // P0's position block: north 5000 m, east 3000 m at the start's latitude (a metre of latitude
+  // and of longitude from WGS-84's radii of curvature, ins/earth.h).
+  const Matrix15 P0 = initial_covariance(rig, stated);
+  const EarthRadii r = earth_radii(t0.lat_rad);
+  EXPECT_NEAR(std::sqrt(P0(kDLat, kDLat)) * (r.R_M + t0.h_m), 5000, 1e-6);
+  EXPECT_NEAR(std::sqrt(P0(kDLon, kDLon)) * (r.R_N + t0.h_m) * std::cos(t0.lat_rad), 3000, 1e-6);
+  EXPECT_EQ(P0(kDh, kDh), 0.0);  // held (navigation.hold_height)
+  EXPECT_EQ(P0(kGyroBias, kGyroBias), initial_covariance(rig)(kGyroBias, kGyroBias));  // the IMU's blocks stay
+  EXPECT_HAS(start_text(stated, rig), "start.yaml");
+  EXPECT_HAS(vertical_channel_text(rig, stated), "start.yaml's h_m");
+}
+
+TEST(NavigationDataset, ABadStartYamlIsNamedWithItsLineAndKey) {
+  const std::string good =
+      "lat_deg: 40\nlon_deg: 116\nh_m: 50\nv_enu_mps: [0, 0, 0]\nattitude_deg: [0, 0, 30]\n"
+      "sigma:\n  attitude_deg: [0.05, 0.05, 0.5]\n  v_enu_mps: [0.02, 0.02, 0.02]\n  position_m: [200, 200, 10]\n";
+  EXPECT_NEAR(rad2deg(parse_start_yaml(good, "start.yaml").state.lat_rad), 40, 1e-12);
+  const auto error = [](const std::string& text) {
+    try {
+      parse_start_yaml(text, "D/start.yaml");
+    } catch (const DataError& e) {
+      return std::string(e.what());
+    }
+    ADD_FAILURE() << "accepted:\n" << text;
+    return std::string();
+  };
+  const auto with = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    t.replace(t.find(from), from.size(), to);
+    return t;
+  };
+  EXPECT_HAS(error(with("lat_deg: 40", "lat_deg: 89.5")), "D/start.yaml:1: key 'lat_deg': expected [-89, 89]");
+  EXPECT_HAS(error(with("lon_deg: 116", "lon_deg: 1000")), "D/start.yaml:2: key 'lon_deg'");
+  EXPECT_HAS(error(with("h_m: 50", "h_m: 1e300")), "D/start.yaml:3: key 'h_m'");
+  EXPECT_HAS(error(with("h_m: 50", "h_m: nan")), "key 'h_m': expected a number, got 'nan'");
+  EXPECT_HAS(error(with("h_m: 50", "h_m: .inf")), "key 'h_m': expected a finite number, got '.inf'");
+  EXPECT_HAS(error(with("[0, 0, 0]", "[0, 400, 0]")), "D/start.yaml:4: key 'v_enu_mps[1]'");
+  EXPECT_HAS(error(with("[0, 0, 30]", "[0, 0]")), "key 'attitude_deg': expected a list of three");
+  EXPECT_HAS(error(with("position_m: [200, 200, 10]", "position_m: [200, 0, 10]")), "D/start.yaml:9: key 'sigma.position_m[1]'");
+  EXPECT_HAS(error(with("h_m: 50\n", "")), "key 'h_m': missing");
+  EXPECT_HAS(error(good + "speed_mps: 3\n"), "D/start.yaml:10: key 'speed_mps': unknown key");
+  EXPECT_HAS(error(good + "h_m: 60\n"), "D/start.yaml:10: key 'h_m': duplicate key (first at line 3)");
+  EXPECT_HAS(error("lat_deg: [\n"), "D/start.yaml:");
 }
 
 // Same rig and seed, the same bits whatever the thread count (the readings and the PNS fits run

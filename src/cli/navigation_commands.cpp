@@ -57,9 +57,10 @@ DatasetFolder dataset_folder(const std::string& input) {
 
 void print_summary(const NavigationDataset& data, const NavigationRun& run, const Rig& rig) {
   std::cout << fmt::format("{} IMU samples, {} compass readings\n", data.imu.size(), data.compass.size());
-  std::string channel = vertical_channel_text(rig);
+  std::string channel = run.vertical_channel;
   if (const std::size_t hash = channel.find("  # "); hash != std::string::npos) channel.replace(hash, 4, " (") += ")";
   std::cout << "vertical channel: " << channel << "\n";
+  std::cout << "start: " << run.start.substr(0, run.start.find("  # ")) << "\n";
   if (!run.filter.empty()) std::cout << "integrated filter: " << run.filter_summary.BriefReport() << "\n";
   for (std::size_t m = 0; m < run.modes.size(); ++m)
     for (const NavigationFix& f : run.fixes[m])

@@ -100,6 +100,7 @@ void InsFilter::predict(const ImuSample& raw) {
     const Matrix15 F = error_dynamics(state_, f_n, settings_.noise);
     const Discretized d = discretize_first_order(F, process_noise_density(state_, settings_.noise), dt);
     filter_.predict(d.Phi, d.Q);
+    Phi_since_epoch_ = d.Phi * Phi_since_epoch_;
   }
   prev_ = cur;
   has_prev_ = true;
@@ -111,6 +112,7 @@ void InsFilter::propagate_covariance() {
   const Matrix15 F = error_dynamics(state_, f_dt_sum_ / pending_s_, settings_.noise);
   const Discretized d = discretize_van_loan(F, process_noise_density(state_, settings_.noise), pending_s_);
   filter_.predict(d.Phi, d.Q);
+  Phi_since_epoch_ = d.Phi * Phi_since_epoch_;
   f_dt_sum_.setZero();
   pending_s_ = 0;
 }
@@ -141,6 +143,7 @@ void InsFilter::feed_back_and_reset() {
   // static run; the next step's mechanization reset it).
   if (settings_.mechanization.hold_height_m) filter_.x[kDh] = filter_.x[kDV + 2] = 0;
   feed_back(filter_.x, state_, gyro_bias_, accel_bias_);
+  correction_ += filter_.x;
   state_.lon_rad = std::remainder(state_.lon_rad, 2 * std::numbers::pi);  // a correction across 180° stays a longitude
   filter_.x.setZero();
 }
@@ -165,9 +168,19 @@ ScalarUpdate InsFilter::scalar_update(const RowVector15& H, double z, double R_n
   return u;
 }
 
+InsFilterEpoch InsFilter::end_epoch() {
+  propagate_covariance();
+  InsFilterEpoch e{Phi_since_epoch_, P_prior_.value_or(filter_.P), filter_.P, correction_};
+  Phi_since_epoch_.setIdentity();
+  P_prior_.reset();
+  correction_.setZero();
+  return e;
+}
+
 SunUpdate InsFilter::update(const SunObservation& m) {
   using M = FilterSettings::SunMeasurement;
   propagate_covariance();
+  if (!P_prior_) P_prior_ = filter_.P;
   if (!(std::abs(m.t_s - state_.t_s) <= 1e-3))
     throw std::invalid_argument(fmt::format("filter: a measurement at {} s for the state at {} s", m.t_s, state_.t_s));
   const M kind = settings_.measurement;

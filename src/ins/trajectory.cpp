@@ -1,5 +1,6 @@
 #include "polrig/ins/trajectory.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -79,6 +80,30 @@ Motion motion_at(const Motion& start, const Segment& s, double t) {
   return m;
 }
 
+// One IMU interval [t0, t0 + dt] of the truth motion(t): ω_ib^b and f^b integrated by Simpson's
+// rule over M substeps, the position p carried between the nodes by RK4 (and left at the end).
+template <class MotionAt>
+ImuSample integrate_interval(const MotionAt& motion, double t0, double dt, int M, Position& p) {
+  const double hs = dt / M;
+  const BodyRates r0 = body_rates(motion(t0), p);
+  Eigen::Vector3d sum_w = r0.omega_ib_b, sum_f = r0.f_b;
+  const auto rate = [&](double tt, const Position& q) { return position_rate(q, velocity_n(motion(tt))); };
+  for (int j = 1; j <= M; ++j) {
+    const double ta = t0 + (j - 1) * hs;
+    const Position k1 = rate(ta, p);
+    const Position k2 = rate(ta + hs / 2, add(p, k1, hs / 2));
+    const Position k3 = rate(ta + hs / 2, add(p, k2, hs / 2));
+    const Position k4 = rate(ta + hs, add(p, k3, hs));
+    p = {p.L + hs / 6 * (k1.L + 2 * k2.L + 2 * k3.L + k4.L), p.lon + hs / 6 * (k1.lon + 2 * k2.lon + 2 * k3.lon + k4.lon),
+         p.h + hs / 6 * (k1.h + 2 * k2.h + 2 * k3.h + k4.h)};
+    const BodyRates r = body_rates(motion(ta + hs), p);
+    const double w = (j == M) ? 1.0 : (j % 2 == 1 ? 4.0 : 2.0);
+    sum_w += w * r.omega_ib_b;
+    sum_f += w * r.f_b;
+  }
+  return {t0 + dt, sum_w * hs / 3, sum_f * hs / 3};
+}
+
 TruthSample truth_of(double t, const Motion& m, const Position& p) {
   TruthSample s;
   s.t_s = t;
@@ -126,7 +151,6 @@ Trajectory generate_trajectory(const TrajectorySpec& spec) {
   check(spec);
   const double dt = 1.0 / spec.imu_rate_hz;
   const int M = spec.substeps;
-  const double hs = dt / M;
   Trajectory out;
   Motion seg_start{spec.speed_mps, 0, spec.attitude.yaw_rad, 0, spec.attitude.pitch_rad, 0, spec.attitude.roll_rad};
   Position p{spec.lat_rad, spec.lon_rad, spec.h_m};
@@ -155,30 +179,77 @@ Trajectory generate_trajectory(const TrajectorySpec& spec) {
       }
       continue;
     }
+    const auto motion = [&](double tau) { return motion_at(seg_start, s, tau); };  // tau from the segment's start
     for (long k = 0; k < n; ++k) {
-      // Simpson over M substeps of the interval; RK4 carries the position between the nodes.
       const double tau0 = static_cast<double>(k) * dt;
-      BodyRates r0 = body_rates(motion_at(seg_start, s, tau0), p);
-      Eigen::Vector3d sum_w = r0.omega_ib_b, sum_f = r0.f_b;
-      for (int j = 1; j <= M; ++j) {
-        const double ta = tau0 + (j - 1) * hs;
-        const auto rate = [&](double tt, const Position& q) { return position_rate(q, velocity_n(motion_at(seg_start, s, tt))); };
-        const Position k1 = rate(ta, p);
-        const Position k2 = rate(ta + hs / 2, add(p, k1, hs / 2));
-        const Position k3 = rate(ta + hs / 2, add(p, k2, hs / 2));
-        const Position k4 = rate(ta + hs, add(p, k3, hs));
-        p = {p.L + hs / 6 * (k1.L + 2 * k2.L + 2 * k3.L + k4.L), p.lon + hs / 6 * (k1.lon + 2 * k2.lon + 2 * k3.lon + k4.lon),
-             p.h + hs / 6 * (k1.h + 2 * k2.h + 2 * k3.h + k4.h)};
-        const BodyRates r = body_rates(motion_at(seg_start, s, ta + hs), p);
-        const double w = (j == M) ? 1.0 : (j % 2 == 1 ? 4.0 : 2.0);
-        sum_w += w * r.omega_ib_b;
-        sum_f += w * r.f_b;
-      }
+      out.imu.push_back(integrate_interval(motion, tau0, dt, M, p));
       t += dt;
-      out.imu.push_back({t, sum_w * hs / 3, sum_f * hs / 3});
-      out.truth.push_back(truth_of(t, motion_at(seg_start, s, tau0 + dt), p));
+      out.imu.back().t_s = t;
+      out.truth.push_back(truth_of(t, motion(tau0 + dt), p));
     }
     seg_start = motion_at(seg_start, s, static_cast<double>(n) * dt);
+  }
+  return out;
+}
+
+namespace {
+
+// The sine-velocity truth at t: speed, yaw and pitch along v^n and their rates, from v and v̇:
+//   u̇ = v·v̇/u,   ψ̇ = (v_N v̇_E − v_E v̇_N)/ρ²,   θ̇ = (ρ² v̇_U − v_U (v_E v̇_E + v_N v̇_N))/(ρ u²),
+// ρ² = v_E² + v_N² (θ = atan2(v_U, ρ), ψ = atan2(v_E, v_N)).
+Motion sine_velocity_motion(const SineVelocitySpec& spec, double t) {
+  const double w = 2 * std::numbers::pi / spec.period_s;
+  Eigen::Vector3d v, a;
+  for (int i = 0; i < 3; ++i) {
+    v[i] = spec.v_mean_enu[i] + spec.amplitude_enu[i] * std::sin(w * t + spec.phase_rad[i]);
+    a[i] = spec.amplitude_enu[i] * w * std::cos(w * t + spec.phase_rad[i]);
+  }
+  const double rho2 = v.x() * v.x() + v.y() * v.y(), rho = std::sqrt(rho2), u = v.norm();
+  Motion m;
+  m.u = u;
+  m.du = v.dot(a) / u;
+  m.yaw = std::atan2(v.x(), v.y());
+  m.dyaw = (v.y() * a.x() - v.x() * a.y()) / rho2;
+  m.pitch = std::atan2(v.z(), rho);
+  m.dpitch = (rho2 * a.z() - v.z() * (v.x() * a.x() + v.y() * a.y())) / (rho * u * u);
+  return m;
+}
+
+void check(const SineVelocitySpec& spec) {
+  if (!(spec.imu_rate_hz > 0))
+    throw std::invalid_argument(fmt::format("sine-velocity trajectory: IMU rate {} Hz must be > 0", spec.imu_rate_hz));
+  if (spec.substeps < 2 || spec.substeps % 2 != 0)
+    throw std::invalid_argument(fmt::format("sine-velocity trajectory: substeps {} must be even and ≥ 2", spec.substeps));
+  if (!(spec.period_s > 0))
+    throw std::invalid_argument(fmt::format("sine-velocity trajectory: period {} s must be > 0", spec.period_s));
+  const double intervals = spec.duration_s * spec.imu_rate_hz;
+  if (!(spec.duration_s > 0) || std::abs(intervals - std::round(intervals)) > 1e-9 * std::max(1.0, intervals))
+    throw std::invalid_argument(fmt::format(
+        "sine-velocity trajectory: {} s is not a positive whole number of IMU intervals at {} Hz", spec.duration_s,
+        spec.imu_rate_hz));
+  // ρ ≥ |v̄_h| − |A_h| > 0: the heading is defined throughout.
+  const double mean_h = spec.v_mean_enu.head<2>().norm(), amplitude_h = spec.amplitude_enu.head<2>().norm();
+  if (!(mean_h > amplitude_h))
+    throw std::invalid_argument(fmt::format(
+        "sine-velocity trajectory: the mean horizontal speed {} m/s must exceed the amplitude {} m/s "
+        "(the heading follows the velocity)", mean_h, amplitude_h));
+}
+
+}  // namespace
+
+Trajectory generate_sine_velocity_trajectory(const SineVelocitySpec& spec) {
+  check(spec);
+  const double dt = 1.0 / spec.imu_rate_hz;
+  const long n = std::lround(spec.duration_s * spec.imu_rate_hz);
+  const auto motion = [&](double t) { return sine_velocity_motion(spec, t); };
+  Trajectory out;
+  Position p{spec.lat_rad, spec.lon_rad, spec.h_m};
+  out.truth.push_back(truth_of(0, motion(0), p));
+  for (long k = 0; k < n; ++k) {
+    const double t0 = static_cast<double>(k) * dt, t1 = static_cast<double>(k + 1) * dt;
+    out.imu.push_back(integrate_interval(motion, t0, dt, spec.substeps, p));
+    out.imu.back().t_s = t1;
+    out.truth.push_back(truth_of(t1, motion(t1), p));
   }
   return out;
 }

@@ -20,31 +20,6 @@ namespace polrig {
 
 namespace {
 
-[[noreturn]] void refuse_key(const std::filesystem::path& file, const YAML::Node& node, const std::string& key,
-                             const std::string& problem) {
-  const std::string where = node.Mark().is_null() ? file.string() : fmt::format("{}:{}", file.string(), node.Mark().line + 1);
-  throw DataError(fmt::format("{}: key '{}': {}", where, key, problem));
-}
-
-void refuse_unknown_keys(const std::filesystem::path& file, const YAML::Node& map, const std::set<std::string>& known,
-                         const std::string& prefix, const std::string& expected) {
-  for (const auto& kv : map) {
-    const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
-    if (!known.contains(key)) refuse_key(file, kv.first, prefix + key, "unknown key (expected " + expected + ")");
-  }
-}
-
-double number_at(const std::filesystem::path& file, const YAML::Node& n, const std::string& key) {
-  double v = 0;
-  try {
-    v = n.as<double>();
-  } catch (const YAML::Exception&) {
-    refuse_key(file, n, key, fmt::format("expected a number, got '{}'", quoted_value(n.IsScalar() ? n.Scalar() : "")));
-  }
-  if (!std::isfinite(v)) refuse_key(file, n, key, fmt::format("expected a finite number, got '{}'", quoted_value(n.Scalar())));
-  return v;
-}
-
 // The unit's `unit:` number, 1 … n.
 std::size_t unit_number(const std::filesystem::path& file, const YAML::Node& entry, std::size_t i, std::size_t n) {
   const YAML::Node u = entry["unit"];

@@ -9,6 +9,7 @@
 #include "polrig/io/csv.h"
 #include "polrig/io/dataset_folder.h"
 #include "polrig/io/measured.h"
+#include "polrig/io/start_yaml.h"
 #include "polrig/units.h"
 
 namespace polrig {
@@ -244,6 +245,12 @@ NavigationDataset read_navigation_dataset(const DatasetFolder& folder, const Rig
   // A dataset with a truth (simulated) starts as simulate's did, with the drawn start errors of
   // navigation.initial_errors; a measured log where its rig says.
   d.initial = initial_state(rig, folder.has("truth.csv") ? StartErrors::DrawnFromP0 : StartErrors::Stated);
+  // A start.yaml states the start and its P0 blocks itself (io/start_yaml.h): it replaces the rig's.
+  if (folder.has("start.yaml")) {
+    const StatedStart stated = parse_start_yaml(folder.read("start.yaml"), folder.path("start.yaml").string());
+    d.initial = stated.state;
+    d.stated_start = stated.sigma;
+  }
   const UnitArrayTruth layout = unit_array_truth(rig.units, rig.seed);
   for (const Axes3& C : layout.nominal) d.mounts.push_back({C});
   d.imu = read_imu(folder, rig.imu.rate_hz);

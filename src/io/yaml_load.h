@@ -11,10 +11,12 @@
 // - refuse_duplicate_keys: a key given twice in one mapping (yaml-cpp keeps both and returns the
 //   first), "FILE:LINE: key 'K': duplicate key (first at line N)".
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <string_view>
@@ -27,6 +29,7 @@
 
 #include "polrig/io/measured.h"
 #include "polrig/io/rig_yaml.h"
+#include "polrig/quoted.h"
 
 namespace polrig {
 
@@ -181,6 +184,33 @@ void refuse_duplicate_keys(const YAML::Node& node, std::string_view file) {
       throw Error(fmt::format("{}:{}: key '{}': duplicate key (first at line {})", file, line, key, at->second));
     refuse_duplicate_keys<Error>(it->second, file);
   }
+}
+
+// A YAML data file's problems (calibration.yaml, start.yaml), "FILE:LINE: key 'K': problem":
+// `node` gives the line (the file alone where it has none).
+[[noreturn]] inline void refuse_key(const std::filesystem::path& file, const YAML::Node& node, const std::string& key,
+                                    const std::string& problem) {
+  const std::string where = node.Mark().is_null() ? file.string() : fmt::format("{}:{}", file.string(), node.Mark().line + 1);
+  throw DataError(fmt::format("{}: key '{}': {}", where, key, problem));
+}
+
+inline void refuse_unknown_keys(const std::filesystem::path& file, const YAML::Node& map, const std::set<std::string>& known,
+                                const std::string& prefix, const std::string& expected) {
+  for (const auto& kv : map) {
+    const std::string key = kv.first.IsScalar() ? kv.first.Scalar() : "?";
+    if (!known.contains(key)) refuse_key(file, kv.first, prefix + key, "unknown key (expected " + expected + ")");
+  }
+}
+
+inline double number_at(const std::filesystem::path& file, const YAML::Node& n, const std::string& key) {
+  double v = 0;
+  try {
+    v = n.as<double>();
+  } catch (const YAML::Exception&) {
+    refuse_key(file, n, key, fmt::format("expected a number, got '{}'", quoted_value(n.IsScalar() ? n.Scalar() : "")));
+  }
+  if (!std::isfinite(v)) refuse_key(file, n, key, fmt::format("expected a finite number, got '{}'", quoted_value(n.Scalar())));
+  return v;
 }
 
 }  // namespace polrig

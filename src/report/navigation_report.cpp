@@ -85,10 +85,10 @@ std::string filter_summary_yaml(const NavigationRun& run, const Rig& rig) {
       "# How the integrated filter ended (ins/filter.h FilterSummary): {}\n"
       "status: {}\npredictions: {}\nupdates: {}\nskipped: {}\nno_sun: {}  # readings without two usable units\n"
       "innovation_mean: {}\ninnovation_rms: {}\nmean_nis: {}\nnis_outside_95: {}\nfinal_R: {}\n"
-      "vertical_channel: {}\nmeasurement: {}  # navigation.measurement\n",
+      "vertical_channel: {}\nmeasurement: {}  # navigation.measurement\nstart: {}\n",
       s.BriefReport(), filter_status_name(s.status), s.predictions, s.updates, s.skipped, no_sun, cell(s.innovation_mean),
-      cell(s.innovation_rms), cell(s.mean_nis), cell(s.nis_outside_95), cell(s.final_R), vertical_channel_text(rig),
-      rig.navigation.measurement);
+      cell(s.innovation_rms), cell(s.mean_nis), cell(s.nis_outside_95), cell(s.final_R), run.vertical_channel,
+      rig.navigation.measurement, run.start);
 }
 
 std::string mode_series(NavigationMode m, const std::string& column) {

@@ -167,6 +167,27 @@ Matrix15 initial_covariance(const Rig& rig) {
   return sd.cwiseAbs2().asDiagonal();
 }
 
+Matrix15 initial_covariance(const Rig& rig, const NavigationDataset& data) {
+  Matrix15 P0 = initial_covariance(rig);
+  if (!data.stated_start) return P0;
+  const StartSigma& s = *data.stated_start;
+  const EarthRadii r = earth_radii(data.initial.lat_rad);
+  Vector15 sd = Vector15::Zero();
+  sd.segment<3>(kPhi) = s.attitude_rad;
+  sd.segment<3>(kDV) = s.velocity_mps;
+  sd[kDLat] = s.position_m.x() / (r.R_M + data.initial.h_m);
+  sd[kDLon] = s.position_m.y() / ((r.R_N + data.initial.h_m) * std::cos(data.initial.lat_rad));
+  sd[kDh] = rig.navigation.hold_height ? 0.0 : s.position_m.z();
+  for (int i = kPhi; i <= kDh; ++i) P0(i, i) = sd[i] * sd[i];
+  return P0;
+}
+
+FilterSettings filter_settings(const Rig& rig, const NavigationDataset& data) {
+  FilterSettings s = filter_settings(rig);
+  if (data.stated_start && rig.navigation.hold_height) s.mechanization.hold_height_m = data.initial.h_m;
+  return s;
+}
+
 NavigationScene navigation_scene(const Rig& rig, const Progress& progress) {
   require_instrument(rig, Instrument::kUnitArray, "a navigation run");
   const Sky sky = sky_of(rig);
@@ -367,7 +388,7 @@ Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at
 void run_integrated(const NavigationDataset& data, const std::vector<std::size_t>& at,
                     std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
                     std::vector<NavigationFix>& fixes, const Progress& progress) {
-  InsFilter filter(data.initial, initial_covariance(rig), filter_settings(rig));
+  InsFilter filter(data.initial, initial_covariance(rig, data), filter_settings(rig, data));
   DivergenceWatch watch{data.initial};
   // H^n's level: the filter's attitude (Z21) or the accelerometers (navigation.integrated_level).
   const bool accelerometer = rig.navigation.integrated_level == "accelerometer";
@@ -494,6 +515,8 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   const Sky sky = sky_of(rig);
   NavigationRun run;
   run.modes = options.modes;
+  run.vertical_channel = vertical_channel_text(rig, data);
+  run.start = start_text(data, rig);
   const auto wants = [&](NavigationMode m) { return std::find(run.modes.begin(), run.modes.end(), m) != run.modes.end(); };
   if (data.compass.empty() && (wants(NavigationMode::Pns) || wants(NavigationMode::Integrated)))
     throw std::invalid_argument("no compass readings (units.csv): PNS and the integrated mode need them; an IMU log "
@@ -515,7 +538,7 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   tbb::parallel_invoke(
       [&] {
         if (!wants(NavigationMode::Sins) && !wants(NavigationMode::Pns)) return;
-        const MechanizationOptions mech = filter_settings(rig).mechanization;
+        const MechanizationOptions mech = filter_settings(rig, data).mechanization;
         if (wants(NavigationMode::Pns)) sins = run_sins(data, at, mech);
         if (wants(NavigationMode::Sins)) {
           sins_output = sins_at == at && wants(NavigationMode::Pns) ? sins : run_sins(data, sins_at, mech);
@@ -547,10 +570,19 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   return run;
 }
 
-std::string vertical_channel_text(const Rig& rig) {
+std::string vertical_channel_text(const Rig& rig, const NavigationDataset& data) {
+  if (rig.navigation.hold_height && data.stated_start)
+    return fmt::format("held  # navigation.hold_height: h = {} m (start.yaml's h_m), v_U = 0", data.initial.h_m);
   if (rig.navigation.hold_height)
     return fmt::format("held  # navigation.hold_height: h = {} m (sky.height_m), v_U = 0", sky_of(rig).site.height_m);
   return "free  # navigation.hold_height false: h and v_U integrated (gravity: docs/physics.md §18.1)";
+}
+
+std::string start_text(const NavigationDataset& data, const Rig& rig) {
+  if (data.stated_start) return "start.yaml  # the dataset's stated start and its P0 blocks";
+  if (data.truth && rig.navigation.initial_errors == "drawn")
+    return "rig  # the truth's start plus errors drawn from P0 (navigation.initial_errors drawn)";
+  return "rig  # sky.lat_deg/lon_deg/height_m, trajectory.heading/pitch/roll_deg and speed_mps, navigation.*_sigma*";
 }
 
 PositionError position_error(const NavigationFix& fix, const TruthSample& truth) {

@@ -147,6 +147,14 @@ struct FilterSummary {
   std::string BriefReport() const;  // one line
 };
 
+// One compass epoch of the filter as the RTS smoother needs it (ins/smoother.h's FilterRecord).
+struct InsFilterEpoch {
+  Matrix15 Phi = Matrix15::Identity();      // Φ since the previous epoch (the product of every step's)
+  Matrix15 P_prior = Matrix15::Zero();      // P before this epoch's updates
+  Matrix15 P_post = Matrix15::Zero();       // P after them (= P_prior without one)
+  Vector15 correction = Vector15::Zero();   // the sum of what its updates fed back
+};
+
 // The INS with the filter in closed loop.
 class InsFilter {
  public:
@@ -163,6 +171,9 @@ class InsFilter {
   // std::invalid_argument when m.t_s is more than 1 ms from the state's time (a programming error);
   // a non-finite measurement is data: skipped and counted in the summary.
   SunUpdate update(const SunObservation& m);
+  // Ends a compass epoch at the current state (after its updates, or none) and returns its record
+  // for a smoother; the next epoch's Φ and correction start from here.
+  InsFilterEpoch end_epoch();
 
   const InsState& state() const { return state_; }
   const Eigen::Vector3d& gyro_bias() const { return gyro_bias_; }
@@ -186,6 +197,9 @@ class InsFilter {
   std::optional<SageHusaR> sage_husa_;  // started at the first update's (cos H^n σ_H)²
   std::optional<SageHusaR> sage_husa_azimuth_;  // the azimuth's, from σ_A²
   double last_R_ = std::numeric_limits<double>::quiet_NaN();
+  Matrix15 Phi_since_epoch_ = Matrix15::Identity();  // for end_epoch
+  std::optional<Matrix15> P_prior_;                  // P at the epoch's first update
+  Vector15 correction_ = Vector15::Zero();           // fed back since the epoch began
   Eigen::Vector3d f_dt_sum_ = Eigen::Vector3d::Zero();  // ∫f^n dt since P was last propagated (AtUpdates)
   double pending_s_ = 0;                               // and that interval's length
   int predictions_ = 0, updates_ = 0, skipped_ = 0, nis_outside_ = 0;

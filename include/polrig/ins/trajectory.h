@@ -66,4 +66,23 @@ struct Trajectory {
 // or non-positive substeps, a non-positive rate.
 Trajectory generate_trajectory(const TrajectorySpec& spec);
 
+// pyins's sine-velocity motion (pyins.sim.generate_sine_velocity_motion, whose tests polrig's
+// reproduce): each ENU component of the velocity a sine about its mean,
+//   v_i(t) = v̄_i + A_i·sin(2π t/T + φ_i),
+// roll 0, yaw and pitch along v^n (no side-slip), the IMU as generate_trajectory's.
+struct SineVelocitySpec {
+  double lat_rad = 0, lon_rad = 0, h_m = 0;
+  Eigen::Vector3d v_mean_enu = Eigen::Vector3d::Zero();     // v̄ (m/s)
+  Eigen::Vector3d amplitude_enu = Eigen::Vector3d::Zero();  // A (m/s)
+  Eigen::Vector3d phase_rad = Eigen::Vector3d::Zero();      // φ
+  double period_s = 60;                                     // T
+  double duration_s = 0;
+  double imu_rate_hz = 100;
+  int substeps = 8;  // per IMU interval, even (Simpson)
+};
+// Throws std::invalid_argument: a duration that is not a whole number of IMU intervals, odd or
+// non-positive substeps, a non-positive period, or a mean horizontal speed not above the
+// horizontal amplitude (the heading would be undefined).
+Trajectory generate_sine_velocity_trajectory(const SineVelocitySpec& spec);
+
 }  // namespace polrig

@@ -2,7 +2,7 @@
 // A unit-array navigation dataset's files (docs/formats.md §6.17): imu.csv, units.csv and, when
 // simulated, truth.csv and truth.yaml; the rig beside them (rig.yaml) gives the start (sky.* and
 // trajectory.*), the layout (device.units.*) and the filter's settings. A measured dataset is the
-// same files without the truth.
+// same files without the truth, and may state its own start in start.yaml (io/start_yaml.h).
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -19,7 +19,8 @@ namespace polrig {
 std::vector<DatasetFile> write_navigation_dataset(const std::filesystem::path& dir, const NavigationDataset& data);
 
 // Reads DIR's imu.csv and units.csv (and truth.csv when present) for the rig (DIR/rig.yaml, loaded by
-// the caller): the start from the rig (study/navigation.h's initial_state), the units' nominal
+// the caller): the start from DIR/start.yaml when it has one, else from the rig (study/navigation.h's
+// initial_state), the units' nominal
 // frames from its layout. Throws DataError naming the file, the line, the column and the value:
 // a missing file or column, a value that is not a finite number (a unit's aop_deg and dop may be
 // nan or empty: no reading), an IMU interval other than 1/imu.rate_hz within 10 % (a gap, time going

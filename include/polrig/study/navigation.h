@@ -46,6 +46,14 @@ InsState initial_state(const Rig& rig, StartErrors errors);
 // P0 (diagonal): the navigation.*_sigma keys and the IMU's turn-on and constant biases.
 Matrix15 initial_covariance(const Rig& rig);
 
+// A start stated with a measured log (its dataset's start.yaml, docs/formats.md §6.17): P0's
+// attitude, velocity and position standard deviations, in place of the navigation.*_sigma keys.
+struct StartSigma {
+  Eigen::Vector3d attitude_rad = Eigen::Vector3d::Zero();  // φ_E, φ_N, φ_U
+  Eigen::Vector3d velocity_mps = Eigen::Vector3d::Zero();  // δv_E, δv_N, δv_U
+  Eigen::Vector3d position_m = Eigen::Vector3d::Zero();    // north, east, up
+};
+
 // One reading of every unit.
 struct CompassEpoch {
   double t_s = 0;
@@ -64,6 +72,8 @@ struct NavigationTruth {
 struct NavigationDataset {
   UtcTime start;                 // t = 0
   InsState initial;              // the vehicle at t = 0 as the user knows it (truth for a simulation)
+  // Set when `initial` is the dataset's own statement (start.yaml) rather than the rig's start.
+  std::optional<StartSigma> stated_start;
   std::vector<ImuSample> imu;    // IMU samples, t_s the end of each interval
   std::vector<CompassEpoch> compass;
   std::vector<UnitMount> mounts;  // the units' nominal frames C_mi^b (the layout the user knows)
@@ -123,6 +133,8 @@ struct NavigationRun {
   FilterSummary filter_summary;
   Matrix15 final_P = Matrix15::Zero();           // integrated: P after the last reading
   int pns_usable = 0;                            // PNS epochs with a converged fix
+  std::string vertical_channel;                  // vertical_channel_text
+  std::string start;                             // start_text
 };
 
 struct NavigationOptions {
@@ -136,9 +148,18 @@ struct NavigationOptions {
   double sins_rate_hz = 0;
 };
 
+// P0 for the dataset: initial_covariance(rig) with a stated start's attitude, velocity and position
+// blocks (at its latitude) when it has one.
+Matrix15 initial_covariance(const Rig& rig, const NavigationDataset& data);
+// filter_settings(rig) with the held height a stated start's h (the rig's site height otherwise).
+FilterSettings filter_settings(const Rig& rig, const NavigationDataset& data);
+
 // Which vertical channel the INS modes run, for a run's output: "held  # navigation.hold_height:
-// h = H m (sky.height_m), v_U = 0" or "free  # navigation.hold_height false: h and v_U integrated".
-std::string vertical_channel_text(const Rig& rig);
+// h = H m (sky.height_m), v_U = 0" (start.yaml's h_m for a stated start) or "free  #
+// navigation.hold_height false: h and v_U integrated".
+std::string vertical_channel_text(const Rig& rig, const NavigationDataset& data);
+// Where the INS's start came from: "start.yaml" or "rig  # sky.*, trajectory.*, navigation.*_sigma ...".
+std::string start_text(const NavigationDataset& data, const Rig& rig);
 
 // Throws std::invalid_argument for a dataset whose times are not increasing, whose compass epochs
 // do not fall on IMU samples (within 1 ms) or whose readings are not one per mount; for PNS or the

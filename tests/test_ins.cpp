@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <random>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -22,6 +23,7 @@
 #include "polrig/ins/filter.h"
 #include "polrig/ins/imu.h"
 #include "polrig/ins/mechanization.h"
+#include "polrig/ins/smoother.h"
 #include "polrig/ins/trajectory.h"
 #include "polrig/random.h"
 #include "polrig/units.h"
@@ -810,6 +812,93 @@ TEST(InsErrorModel, VanLoanAgainstPadeOfTheBlockMatrix) {
 // ---------------------------------------------------------------------------------------------
 // The filter
 // ---------------------------------------------------------------------------------------------
+
+// ---------------------------------------------------------------------------------------------
+// The RTS smoother
+// ---------------------------------------------------------------------------------------------
+
+TEST(InsSmoother, TheClosedLoopRtsSmootherIsTheBatchLeastSquaresSolution) {
+  // A linear Gaussian system, run as ins/'s filter runs: a nominal state propagated on its own and an
+  // error state x = nominal − truth estimated at each measurement, fed back (nominal −= δ) and reset
+  // to 0. Its smoothed states must be the minimum of the whole run's quadratic cost
+  //   (x₀ − m₀)ᵀP₀⁻¹(x₀ − m₀) + Σ (x_k − Φx_{k−1})ᵀQ⁻¹(·) + Σ (z_k − Hx_k)²/r,
+  // solved here directly by its normal equations A·X = b, and their covariances A⁻¹'s diagonal blocks.
+  // Position and velocity, the position measured, 40 epochs.
+  constexpr int N = 40;
+  const double T = 1.0, q = 0.05, r = 0.3;
+  Eigen::Matrix2d Phi, Q, P0;
+  Phi << 1, T, 0, 1;
+  Q << q * T * T * T / 3, q * T * T / 2, q * T * T / 2, q * T;
+  P0 << 4, 0.5, 0.5, 1;
+  const Eigen::RowVector2d H(1, 0);
+  const Eigen::Vector2d m0(0, 1);
+  std::mt19937_64 rng(20240601);
+  std::normal_distribution<double> n01;
+  const auto draw = [&](const Eigen::Matrix2d& C) {
+    return Eigen::Vector2d(Eigen::LLT<Eigen::Matrix2d>(C).matrixL() * Eigen::Vector2d(n01(rng), n01(rng)));
+  };
+  std::vector<double> z(N);
+  Eigen::Vector2d x = m0 + draw(P0);
+  for (int k = 0; k < N; ++k) {
+    if (k > 0) x = Phi * x + draw(Q);
+    z[k] = H * x + std::sqrt(r) * n01(rng);
+  }
+  // The closed-loop filter, its record per epoch.
+  std::vector<FilterRecord> records(N);
+  std::vector<Eigen::Vector2d> filtered(N);
+  Eigen::Vector2d nominal = m0;
+  Eigen::Matrix2d P = P0;
+  for (int k = 0; k < N; ++k) {
+    if (k > 0) {
+      nominal = Phi * nominal;
+      P = Phi * P * Phi.transpose() + Q;
+      records[k].Phi = Phi;
+    }
+    records[k].P_prior = P;
+    const double S = H * P * H.transpose() + r;
+    const Eigen::Vector2d K = P * H.transpose() / S;
+    const Eigen::Vector2d delta = K * (H * nominal - z[k]);  // the measured error: model minus measurement
+    nominal -= delta;
+    P = (Eigen::Matrix2d::Identity() - K * H) * P;
+    records[k].P_post = P;
+    records[k].correction = delta;
+    filtered[k] = nominal;
+  }
+  const std::vector<SmoothedEpoch> smoothed = rts_smooth(records);
+  // The batch solution.
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(2 * N, 2 * N);
+  Eigen::VectorXd b = Eigen::VectorXd::Zero(2 * N);
+  const Eigen::Matrix2d P0i = P0.inverse(), Qi = Q.inverse();
+  A.block<2, 2>(0, 0) += P0i;
+  b.segment<2>(0) += P0i * m0;
+  for (int k = 1; k < N; ++k) {
+    Eigen::Matrix<double, 2, 4> J;
+    J << -Phi, Eigen::Matrix2d::Identity();
+    A.block<4, 4>(2 * (k - 1), 2 * (k - 1)) += J.transpose() * Qi * J;
+  }
+  for (int k = 0; k < N; ++k) {
+    A.block<2, 2>(2 * k, 2 * k) += H.transpose() * H / r;
+    b.segment<2>(2 * k) += H.transpose() * z[k] / r;
+  }
+  const Eigen::MatrixXd Ainv = A.inverse();
+  const Eigen::VectorXd X = Ainv * b;
+  double worst_x = 0, worst_P = 0, first_shift = 0;
+  for (int k = 0; k < N; ++k) {
+    const Eigen::Vector2d xs = filtered[k] - smoothed[k].correction;  // as feed_back applies a correction
+    worst_x = std::max(worst_x, (xs - X.segment<2>(2 * k)).cwiseAbs().maxCoeff());
+    worst_P = std::max(worst_P, (smoothed[k].P - Ainv.block(2 * k, 2 * k, 2, 2)).cwiseAbs().maxCoeff());
+  }
+  first_shift = (smoothed[0].correction).norm();
+  std::printf("RTS against the batch solution: states within %.2g, covariances within %.2g; the first epoch moved %.3g\n",
+              worst_x, worst_P, first_shift);
+  EXPECT_LT(worst_x, 1e-10);
+  EXPECT_LT(worst_P, 1e-10);
+  EXPECT_GT(first_shift, 0.05);  // the smoother changed something: the first epoch learns from the later ones
+  EXPECT_EQ(smoothed[N - 1].correction.norm(), 0.0);
+  EXPECT_LT(smoothed[0].P(0, 0), records[0].P_post(0, 0));
+  records[3].P_prior.resize(3, 3);
+  EXPECT_THROW(rts_smooth(records), std::invalid_argument);
+}
 
 TEST(InsFilter, SunElevationAtZ21sStartAndItsRowAgainstFiniteDifferences) {
   // Dec and GHA from the Astronomical Almanac's low-precision sun (tests/almanac_sun.h, not ERFA);

@@ -43,8 +43,13 @@ def test_navigate_equals_the_cli(tmp_path):
     assert r["filter"]["summary"]["updates"] == 120
     assert set(r["summary"]) == {"sins", "pns", "integrated"}
     assert r["pns"]["status"][0] == "window_filling"
-    with pytest.raises(ValueError, match="mode 'best': expected sins, pns, integrated or all"):
+    with pytest.raises(ValueError, match="mode 'best': expected sins, pns, integrated, smoothed or all"):
         polrig.navigate(tmp_path / "d", mode="best")
+    # The smoother, asked for by name; the last reading is the filter's own.
+    s = polrig.navigate(tmp_path / "d", mode="integrated,smoothed")
+    assert set(s) >= {"integrated", "smoothed"} and "sins" not in s
+    assert s["smoothed"]["lat_deg"][-1] == s["integrated"]["lat_deg"][-1]
+    np.testing.assert_array_equal(s["integrated"]["lat_deg"], r["integrated"]["lat_deg"])
     with pytest.raises(ValueError, match="no rig.yaml"):
         polrig.navigate(tmp_path)
     # The third review's finding 3: out= over the input is refused, and the dataset kept.

@@ -55,7 +55,7 @@ DatasetFolder dataset_folder(const std::string& input) {
   return DatasetFolder(input);
 }
 
-void print_summary(const NavigationDataset& data, const NavigationRun& run, const Rig& rig) {
+void print_summary(const NavigationDataset& data, const NavigationRun& run) {
   std::cout << fmt::format("{} IMU samples, {} compass readings\n", data.imu.size(), data.compass.size());
   std::string channel = run.vertical_channel;
   if (const std::size_t hash = channel.find("  # "); hash != std::string::npos) channel.replace(hash, 4, " (") += ")";
@@ -102,7 +102,7 @@ void run_navigate(const NavigateOptions& o) {
   if (!o.calibration.empty()) inputs.push_back(o.calibration);
   write_manifest(dir.staging(), {command_line(), &r, report_navigation(dir.staging(), data, run, r.rig, o.out.plots()), inputs});
   finish(dir);
-  print_summary(data, run, r.rig);
+  print_summary(data, run);
 }
 
 }  // namespace
@@ -159,8 +159,10 @@ std::vector<Command> add_navigation_commands(CLI::App& root, int& threads) {
   auto o = std::make_shared<NavigateOptions>();
   app->add_option("DIR", o->input, "a unit-array dataset: polrig simulate's folder, or measured imu.csv and units.csv "
                                    "with a rig.yaml")->required();
-  app->add_option("--mode", o->mode, "sins, pns, integrated or all")
-      ->check(CLI::IsMember({"sins", "pns", "integrated", "all"}))->capture_default_str();
+  app->add_option("--mode", o->mode,
+                  "sins, pns, integrated, smoothed (integrated after the RTS smoother) or all (sins, pns and integrated), "
+                  "or a comma-separated list (e.g. all,smoothed)")
+      ->capture_default_str();
   app->add_option("--rig", o->rig_path, "the rig (default: DIR/rig.yaml)");
   app->add_option("--sins-rate-hz", o->sins_rate_hz,
                   "the SINS mode's output rate, a rate that divides imu.rate_hz (default: at the compass readings, "

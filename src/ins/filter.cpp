@@ -16,6 +16,19 @@ namespace {
 constexpr double kChi2Lo95 = 0.000982069, kChi2Hi95 = 5.023886;
 
 
+// A held height (Z21's barometer; MechanizationOptions::hold_height_m) resets h and v_U after
+// every step: their errors are 0 whatever the rest does, so δh and δv_U are constants of the error
+// dynamics and carry no noise. P's rows and columns for them then stay as P0's (zero) and no update
+// or smoother gains information about the horizontal from a vertical channel that does not move.
+void pin_vertical(Matrix15& F, Matrix15& Qc) {
+  for (const int i : {kDV + 2, kDh}) {
+    F.row(i).setZero();
+    F.col(i).setZero();
+    Qc.row(i).setZero();
+    Qc.col(i).setZero();
+  }
+}
+
 }  // namespace
 
 SunElevationModel sun_elevation_model(double L, double lon, double dec, double gha) {
@@ -97,8 +110,9 @@ void InsFilter::predict(const ImuSample& raw) {
     f_dt_sum_ += f_n * dt;
     pending_s_ += dt;
   } else {
-    const Matrix15 F = error_dynamics(state_, f_n, settings_.noise);
-    const Discretized d = discretize_first_order(F, process_noise_density(state_, settings_.noise), dt);
+    Matrix15 F = error_dynamics(state_, f_n, settings_.noise), Qc = process_noise_density(state_, settings_.noise);
+    if (settings_.mechanization.hold_height_m) pin_vertical(F, Qc);
+    const Discretized d = discretize_first_order(F, Qc, dt);
     filter_.predict(d.Phi, d.Q);
     Phi_since_epoch_ = d.Phi * Phi_since_epoch_;
   }
@@ -109,8 +123,10 @@ void InsFilter::predict(const ImuSample& raw) {
 
 void InsFilter::propagate_covariance() {
   if (!(pending_s_ > 0)) return;
-  const Matrix15 F = error_dynamics(state_, f_dt_sum_ / pending_s_, settings_.noise);
-  const Discretized d = discretize_van_loan(F, process_noise_density(state_, settings_.noise), pending_s_);
+  Matrix15 F = error_dynamics(state_, f_dt_sum_ / pending_s_, settings_.noise);
+  Matrix15 Qc = process_noise_density(state_, settings_.noise);
+  if (settings_.mechanization.hold_height_m) pin_vertical(F, Qc);
+  const Discretized d = discretize_van_loan(F, Qc, pending_s_);
   filter_.predict(d.Phi, d.Q);
   Phi_since_epoch_ = d.Phi * Phi_since_epoch_;
   f_dt_sum_.setZero();

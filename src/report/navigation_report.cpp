@@ -95,9 +95,10 @@ std::string mode_series(NavigationMode m, const std::string& column) {
   return fmt::format("($t_s/60):(@mode eq '{}' ? {} : NaN)", navigation_mode_name(m), column);
 }
 
-constexpr std::string_view kModeStyle[3] = {"lines lw 2 lc rgb '#d62728'", "points pt 7 ps 0.4 lc rgb '#2ca02c'",
-                                            "lines lw 2 lc rgb '#1f77b4'"};
-constexpr std::string_view kModeTitle[3] = {"SINS", "PNS", "SINS/PNS"};
+// Per NavigationMode, in its order.
+constexpr std::string_view kModeStyle[4] = {"lines lw 2 lc rgb '#d62728'", "points pt 7 ps 0.4 lc rgb '#2ca02c'",
+                                            "lines lw 2 lc rgb '#1f77b4'", "lines lw 2 lc rgb '#9467bd'"};
+constexpr std::string_view kModeTitle[4] = {"SINS", "PNS", "SINS/PNS", "SINS/PNS smoothed (RTS)"};
 
 std::vector<Plot> navigation_plots(const NavigationDataset& data, const NavigationRun& run) {
   const bool truth = data.truth.has_value();

@@ -33,12 +33,13 @@ std::string percentile_header(const char* prefix, const char* unit) {
   return out;
 }
 
-// One colour per mode, in NavigationMode's order (SINS, PNS, integrated).
+// One colour per mode, in NavigationMode's order (SINS, PNS, integrated, smoothed).
 const char* colour(NavigationMode m) {
   switch (m) {
     case NavigationMode::Sins: return "#d62728";
     case NavigationMode::Pns: return "#2ca02c";
     case NavigationMode::Integrated: return "#1f77b4";
+    case NavigationMode::Smoothed: return "#9467bd";
   }
   return "black";
 }

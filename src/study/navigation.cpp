@@ -13,6 +13,7 @@
 #include <tbb/parallel_invoke.h>
 
 #include "polrig/ins/earth.h"
+#include "polrig/ins/smoother.h"
 #include "polrig/random.h"
 #include "polrig/rig/error.h"
 #include "polrig/sky/sun.h"
@@ -157,13 +158,14 @@ Matrix15 initial_covariance(const Rig& rig) {
   Vector15 sd;
   for (int i = 0; i < 3; ++i) {
     sd[kPhi + i] = deg2rad(n.attitude_sigma_deg[static_cast<std::size_t>(i)]);
-    sd[kDV + i] = n.velocity_sigma_mps;  // δv_U's too when held: it is never fed back (ins/filter.cpp)
+    sd[kDV + i] = n.velocity_sigma_mps;
     sd[kGyroBias + i] = std::hypot(imu.gyro.bias[i], imu.gyro.turn_on_bias_sigma[i], imu.gyro.bias_instability[i]);
     sd[kAccelBias + i] = std::hypot(imu.accel.bias[i], imu.accel.turn_on_bias_sigma[i], imu.accel.bias_instability[i]);
   }
   sd[kDLat] = n.position_sigma_m / (r.R_M + site.height_m);
   sd[kDLon] = n.position_sigma_m / ((r.R_N + site.height_m) * std::cos(L));
-  sd[kDh] = n.hold_height ? 0.0 : n.position_sigma_m;
+  sd[kDh] = n.position_sigma_m;
+  if (n.hold_height) sd[kDV + 2] = sd[kDh] = 0;  // pinned: held h and v_U have no error (ins/filter.cpp)
   return sd.cwiseAbs2().asDiagonal();
 }
 
@@ -177,7 +179,8 @@ Matrix15 initial_covariance(const Rig& rig, const NavigationDataset& data) {
   sd.segment<3>(kDV) = s.velocity_mps;
   sd[kDLat] = s.position_m.x() / (r.R_M + data.initial.h_m);
   sd[kDLon] = s.position_m.y() / ((r.R_N + data.initial.h_m) * std::cos(data.initial.lat_rad));
-  sd[kDh] = rig.navigation.hold_height ? 0.0 : s.position_m.z();
+  sd[kDh] = s.position_m.z();
+  if (rig.navigation.hold_height) sd[kDV + 2] = sd[kDh] = 0;
   for (int i = kPhi; i <= kDh; ++i) P0(i, i) = sd[i] * sd[i];
   return P0;
 }
@@ -266,15 +269,33 @@ std::string_view navigation_mode_name(NavigationMode m) {
     case NavigationMode::Sins: return "sins";
     case NavigationMode::Pns: return "pns";
     case NavigationMode::Integrated: return "integrated";
+    case NavigationMode::Smoothed: return "smoothed";
   }
   return "?";
 }
 
 std::vector<NavigationMode> parse_navigation_modes(std::string_view text) {
-  if (text == "all") return {NavigationMode::Sins, NavigationMode::Pns, NavigationMode::Integrated};
-  for (NavigationMode m : {NavigationMode::Sins, NavigationMode::Pns, NavigationMode::Integrated})
-    if (text == navigation_mode_name(m)) return {m};
-  throw std::invalid_argument(fmt::format("mode '{}': expected sins, pns, integrated or all", text));
+  constexpr NavigationMode kAll[] = {NavigationMode::Sins, NavigationMode::Pns, NavigationMode::Integrated,
+                                     NavigationMode::Smoothed};
+  bool wanted[std::size(kAll)] = {};
+  std::size_t from = 0;
+  while (true) {
+    const std::size_t comma = std::min(text.find(',', from), text.size());
+    const std::string_view name = text.substr(from, comma - from);
+    bool known = name == "all";
+    if (known) wanted[0] = wanted[1] = wanted[2] = true;
+    for (std::size_t i = 0; i < std::size(kAll); ++i)
+      if (name == navigation_mode_name(kAll[i])) known = wanted[i] = true;
+    if (!known)
+      throw std::invalid_argument(fmt::format("mode '{}': expected sins, pns, integrated, smoothed or all, or a "
+                                              "comma-separated list of them (e.g. all,smoothed)", text));
+    if (comma == text.size()) break;
+    from = comma + 1;
+  }
+  std::vector<NavigationMode> out;
+  for (std::size_t i = 0; i < std::size(kAll); ++i)
+    if (wanted[i]) out.push_back(kAll[i]);
+  return out;
 }
 
 namespace {
@@ -385,11 +406,43 @@ Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at
 }
 
 // The INS with the filter, its state and the filter's record at every compass epoch.
+// The filtered state at a compass epoch, with the bias estimates feed_back moves too.
+struct FilteredEpoch {
+  InsState state;
+  Eigen::Vector3d gyro_bias, accel_bias;
+};
+
+// The RTS smoother over the filter's epochs (ins/smoother.h): each filtered state with its smoothed
+// correction fed back as the filter's own are (a held height's δh and δv_U not: the filter's are
+// not either); the epochs past a divergence keep the filter's rows.
+std::vector<NavigationFix> smoothed_fixes(const std::vector<FilterRecord>& records,
+                                          const std::vector<FilteredEpoch>& filtered,
+                                          const std::vector<NavigationFix>& integrated, bool held, const InsState& start,
+                                          std::vector<Matrix15>& P) {
+  const std::vector<SmoothedEpoch> smoothed = rts_smooth(records);
+  P.clear();
+  for (const SmoothedEpoch& e : smoothed) P.push_back(e.P);
+  std::vector<NavigationFix> out;
+  DivergenceWatch watch{start};
+  for (std::size_t k = 0; k < smoothed.size(); ++k) {
+    FilteredEpoch e = filtered[k];
+    Vector15 y = smoothed[k].correction;
+    if (held) y[kDh] = y[kDV + 2] = 0;
+    feed_back(y, e.state, e.gyro_bias, e.accel_bias);
+    e.state.lon_rad = std::remainder(e.state.lon_rad, 2 * std::numbers::pi);
+    out.push_back(watch.fix(e.state));
+  }
+  for (std::size_t k = out.size(); k < integrated.size(); ++k) out.push_back(integrated[k]);
+  return out;
+}
+
 void run_integrated(const NavigationDataset& data, const std::vector<std::size_t>& at,
                     std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
-                    std::vector<NavigationFix>& fixes, const Progress& progress) {
+                    std::vector<NavigationFix>& fixes, std::vector<NavigationFix>* smoothed, const Progress& progress) {
   InsFilter filter(data.initial, initial_covariance(rig, data), filter_settings(rig, data));
   DivergenceWatch watch{data.initial};
+  std::vector<FilterRecord> records;    // for the smoother
+  std::vector<FilteredEpoch> filtered;
   // H^n's level: the filter's attitude (Z21) or the accelerometers (navigation.integrated_level).
   const bool accelerometer = rig.navigation.integrated_level == "accelerometer";
   const double g = normal_gravity(data.initial.lat_rad, data.initial.h_m);
@@ -425,7 +478,12 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
       filter.propagate_covariance();
     }
     const InsState& s = filter.state();
+    const InsFilterEpoch record = filter.end_epoch();
     fixes.push_back(watch.fix(s));
+    if (smoothed && !watch.diverged) {
+      records.push_back({record.Phi, record.P_prior, record.P_post, record.correction});
+      filtered.push_back({s, filter.gyro_bias(), filter.accel_bias()});
+    }
     if (watch.diverged) {  // the filter's record ends here (filter.csv); the solution says diverged
       for (std::size_t k = next; k < at.size(); ++k) {
         NavigationFix d = fixes.back();
@@ -446,6 +504,8 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
   run.filter_summary = filter.summary();
   run.final_P = filter.P();
   if (watch.diverged) run.filter_summary.status = FilterStatus::Diverged;
+  if (smoothed)
+    *smoothed = smoothed_fixes(records, filtered, fixes, rig.navigation.hold_height, data.initial, run.smoothed_P);
 }
 
 // PNS: at each epoch the positioning fit over the window's elevations (the SINS's attitude).
@@ -518,7 +578,8 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
   run.vertical_channel = vertical_channel_text(rig, data);
   run.start = start_text(data, rig);
   const auto wants = [&](NavigationMode m) { return std::find(run.modes.begin(), run.modes.end(), m) != run.modes.end(); };
-  if (data.compass.empty() && (wants(NavigationMode::Pns) || wants(NavigationMode::Integrated)))
+  if (data.compass.empty() && (wants(NavigationMode::Pns) || wants(NavigationMode::Integrated) ||
+                               wants(NavigationMode::Smoothed)))
     throw std::invalid_argument("no compass readings (units.csv): PNS and the integrated mode need them; an IMU log "
                                 "alone runs mode sins");
   const std::vector<std::size_t> sins_at = sins_samples(data, rig, options.sins_rate_hz, at);
@@ -529,12 +590,14 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
                                                 "hold every time the solution is reported at)", data.imu[i].t_s));
   std::string stage = "navigate:";
   for (NavigationMode m : run.modes) stage += fmt::format(" {}", navigation_mode_name(m));
-  progress.begin(stage, static_cast<long long>(at.size() * (run.modes.size() - (wants(NavigationMode::Sins) ? 1 : 0)) +
+  // The filter's epochs once for the integrated and the smoothed modes (one run of the filter).
+  const bool filter_runs = wants(NavigationMode::Integrated) || wants(NavigationMode::Smoothed);
+  progress.begin(stage, static_cast<long long>(at.size() * ((wants(NavigationMode::Pns) ? 1 : 0) + (filter_runs ? 1 : 0)) +
                                                 (wants(NavigationMode::Sins) ? sins_at.size() : 0)));
   // The filter beside the SINS and the PNS (which takes the SINS's attitude): independent
   // computations, each the same whichever thread runs it.
   std::vector<InsState> sins, sins_output;
-  std::vector<NavigationFix> pns, integrated;
+  std::vector<NavigationFix> pns, integrated, smoothed;
   tbb::parallel_invoke(
       [&] {
         if (!wants(NavigationMode::Sins) && !wants(NavigationMode::Pns)) return;
@@ -547,13 +610,14 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
         if (wants(NavigationMode::Pns)) pns = run_pns(data, at, sins, mounts, rig, sky, progress);
       },
       [&] {
-        if (!wants(NavigationMode::Integrated)) return;
+        if (!filter_runs) return;
         const double end = data.imu.empty() ? 1.0 : data.imu.back().t_s + 1.0;
         const SunModel sun{SunTrack(data.start, data.start.plus_seconds(end),
                                     {rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m},
                                     sky.sun),
                            data.start};
-        run_integrated(data, at, mounts, rig, sun, run, integrated, progress);
+        run_integrated(data, at, mounts, rig, sun, run, integrated,
+                       wants(NavigationMode::Smoothed) ? &smoothed : nullptr, progress);
       });
   progress.finish();
   for (const NavigationFix& f : pns) run.pns_usable += std::isfinite(f.lat_rad) ? 1 : 0;
@@ -564,7 +628,7 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
       for (const InsState& st : sins_output) fixes.push_back(watch.fix(st));
       run.fixes.push_back(std::move(fixes));
     } else {
-      run.fixes.push_back(m == NavigationMode::Pns ? pns : integrated);
+      run.fixes.push_back(m == NavigationMode::Pns ? pns : m == NavigationMode::Smoothed ? smoothed : integrated);
     }
   }
   return run;

@@ -97,9 +97,13 @@ NavigationDataset simulate_navigation(const Rig& rig, const Progress& progress =
 // above. Throws std::invalid_argument when the scene's sample or epoch count is not the rig's.
 NavigationDataset simulate_navigation(const Rig& rig, const NavigationScene& scene, const Progress& progress = {});
 
-enum class NavigationMode { Sins, Pns, Integrated };
-std::string_view navigation_mode_name(NavigationMode m);  // "sins", "pns", "integrated"
-// "sins", "pns", "integrated" or "all" → the modes; throws std::invalid_argument naming the text.
+// Smoothed: the integrated filter's run after the fixed-interval RTS smoother (ins/smoother.h), a
+// post-processing of the whole run (each epoch's estimate uses every reading, later ones too).
+enum class NavigationMode { Sins, Pns, Integrated, Smoothed };
+std::string_view navigation_mode_name(NavigationMode m);  // "sins", "pns", "integrated", "smoothed"
+// A comma-separated list of "sins", "pns", "integrated", "smoothed" and "all" (sins, pns,
+// integrated: the modes a vehicle has in real time) → the modes in NavigationMode's order, each
+// once; throws std::invalid_argument naming the text.
 std::vector<NavigationMode> parse_navigation_modes(std::string_view text);
 
 // One mode's solution at a compass epoch.
@@ -132,6 +136,7 @@ struct NavigationRun {
   std::vector<FilterEpoch> filter;               // integrated only
   FilterSummary filter_summary;
   Matrix15 final_P = Matrix15::Zero();           // integrated: P after the last reading
+  std::vector<Matrix15> smoothed_P;              // smoothed: Pˢ per compass epoch (to a divergence)
   int pns_usable = 0;                            // PNS epochs with a converged fix
   std::string vertical_channel;                  // vertical_channel_text
   std::string start;                             // start_text

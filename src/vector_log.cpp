@@ -126,20 +126,38 @@ namespace polrig {
 HWY_EXPORT(LogArray);
 
 namespace {
-std::atomic<bool> baseline_only{false};
+std::atomic<SimdPaths> widest_allowed{SimdPaths::Avx512};
+
+SimdPaths cpu_paths() {
+  static const SimdPaths cpu = __builtin_cpu_supports("avx512f") ? SimdPaths::Avx512
+                               : __builtin_cpu_supports("avx2")  ? SimdPaths::Avx2
+                                                                 : SimdPaths::Baseline;
+  return cpu;
+}
 }  // namespace
 
-bool avx2_paths() {
-  static const bool cpu_has_avx2 = __builtin_cpu_supports("avx2");
-  return cpu_has_avx2 && !baseline_only.load(std::memory_order_relaxed);
-}
-
-void set_baseline_paths_only(bool on) { baseline_only.store(on); }
+SimdPaths simd_paths() { return std::min(cpu_paths(), widest_allowed.load(std::memory_order_relaxed)); }
+bool avx2_paths() { return simd_paths() >= SimdPaths::Avx2; }
+bool avx512_paths() { return simd_paths() >= SimdPaths::Avx512; }
+void set_widest_paths(SimdPaths w) { widest_allowed.store(w); }
+void set_baseline_paths_only(bool on) { set_widest_paths(on ? SimdPaths::Baseline : SimdPaths::Avx512); }
 
 void log_array(const double* x, double* y, std::size_t n) {
+  switch (simd_paths()) {
+    case SimdPaths::Baseline:
 #if HWY_TARGETS & HWY_SCALAR
-  if (baseline_only.load(std::memory_order_relaxed)) return N_SCALAR::LogArray(x, y, n);
+      return N_SCALAR::LogArray(x, y, n);
+#else
+      break;
 #endif
+    case SimdPaths::Avx2:
+#if HWY_TARGETS & HWY_AVX2
+      return N_AVX2::LogArray(x, y, n);
+#else
+      break;
+#endif
+    case SimdPaths::Avx512: break;
+  }
   HWY_DYNAMIC_DISPATCH(LogArray)(x, y, n);
 }
 

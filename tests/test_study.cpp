@@ -35,6 +35,7 @@
 #include "polrig/study/sweep.h"
 #include "polrig/vector_log.h"
 #include "polrig/side_by_side.h"
+#include "polrig/statistics.h"
 #include "polrig/units.h"
 #include "thread_ranks.h"
 
@@ -776,29 +777,57 @@ TEST(Sweep, IsBitIdenticalForAnyThreadCount) {
     }
 }
 
-// The AVX2 code paths of the CS study (vector_log.h) do the IEEE operations of the baseline
-// x86-64 ones in the same order: every summary and curve has the same bits, so a sweep gives the
-// same file on any x86-64 machine (MPI ranks may run on different CPUs).
-TEST(Cs, BaselineAndAvx2PathsGiveTheSameBits) {
+// The AVX2 and AVX-512 code paths of the CS study (vector_log.h) do the IEEE operations of the
+// baseline x86-64 ones in the same order: every summary and curve has the same bits, so a sweep
+// gives the same file on any x86-64 machine (MPI ranks may run on different CPUs).
+TEST(Cs, EveryCodePathGivesTheSameBits) {
   if (!avx2_paths()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline paths exist";
   const std::vector<GridAxis> axes{GridAxis::parse("eccentricity.L_IS=0:2:9"),
                                    GridAxis::parse("eccentricity.L_S=0:1.5:7"),
                                    GridAxis::parse("eccentricity.alpha_S=0:359:37")};
   const Rig rig;
-  const SweepResult best = sweep(rig, axes, CsTurn(360));
-  const CsStudy best_study = cs_study(rig, CsTurn(720));
   set_baseline_paths_only(true);
   const SweepResult baseline = sweep(rig, axes, CsTurn(360));
   const CsStudy baseline_study = cs_study(rig, CsTurn(720));
-  set_baseline_paths_only(false);
-  ASSERT_EQ(best.points(), baseline.points());
-  std::size_t differing = 0;
-  for (std::size_t p = 0; p < best.points(); ++p)
-    differing += std::memcmp(&best.summaries[p], &baseline.summaries[p], sizeof(CsSummary)) != 0;
-  EXPECT_EQ(differing, 0u) << "of " << best.points() << " grid points";
-  for (int i = 0; i < 3; ++i) {
-    EXPECT_EQ(best_study.dv_br_V[i], baseline_study.dv_br_V[i]);
-    EXPECT_EQ(best_study.dv_mr_V[i], baseline_study.dv_mr_V[i]);
+  std::vector<SimdPaths> wider{SimdPaths::Avx2};
+  set_widest_paths(SimdPaths::Avx512);
+  if (avx512_paths()) wider.push_back(SimdPaths::Avx512);
+  for (const SimdPaths paths : wider) {
+    SCOPED_TRACE(paths == SimdPaths::Avx512 ? "AVX-512" : "AVX2");
+    set_widest_paths(paths);
+    const SweepResult best = sweep(rig, axes, CsTurn(360));
+    const CsStudy best_study = cs_study(rig, CsTurn(720));
+    ASSERT_EQ(best.points(), baseline.points());
+    std::size_t differing = 0;
+    for (std::size_t p = 0; p < best.points(); ++p)
+      differing += std::memcmp(&best.summaries[p], &baseline.summaries[p], sizeof(CsSummary)) != 0;
+    EXPECT_EQ(differing, 0u) << "of " << best.points() << " grid points";
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(best_study.dv_br_V[i], baseline_study.dv_br_V[i]);
+      EXPECT_EQ(best_study.dv_mr_V[i], baseline_study.dv_mr_V[i]);
+    }
+  }
+  set_widest_paths(SimdPaths::Avx512);
+}
+
+// The study's six moments, summed side by side in its own loop (src/study/cs.cpp), are
+// mean_and_population_sd's of each curve bit for bit (the same interleaved order, statistics.h),
+// for turns whose length is and is not a multiple of the eight lanes.
+TEST(Cs, TheSummaryIsMeanAndPopulationSdOfItsCurves) {
+  Rig rig;
+  rig.eccentricity = {0.3, 20, 0.7, 110};
+  for (const int steps : {360, 362, 6}) {
+    SCOPED_TRACE(steps);
+    const CsStudy study = cs_study(rig, CsTurn(steps));
+    std::vector<double> scratch;
+    const CsSummary summary = cs_summary(rig, CsTurn(steps), scratch);
+    for (int i = 0; i < 3; ++i) {
+      const MeanAndSpread br = mean_and_population_sd(study.dv_br_V[i]), mr = mean_and_population_sd(study.dv_mr_V[i]);
+      EXPECT_EQ(summary[i].bsd_mV, br.sd * 1e3);
+      EXPECT_EQ(summary[i].mean_br_mV, br.mean * 1e3);
+      EXPECT_EQ(summary[i].asd_mV, mr.sd * 1e3);
+      EXPECT_EQ(summary[i].mean_mr_mV, mr.mean * 1e3);
+    }
   }
 }
 
@@ -845,22 +874,29 @@ TEST(Cs, Cos4LogRatiosMatchTheIrradiancesWithinRounding) {
   RecordProperty("worst_fraction_of_bound", std::to_string(worst));
 }
 
-// The closed form's AVX2 and baseline paths give the same bits, value by value.
-TEST(Cs, Cos4LogRatiosBaselineAndAvx2GiveTheSameBits) {
+// The closed form's AVX-512, AVX2 and baseline paths give the same bits, value by value.
+TEST(Cs, Cos4LogRatiosGiveTheSameBitsOnEveryPath) {
   if (!avx2_paths()) GTEST_SKIP() << "this CPU has no AVX2: only the baseline paths exist";
+  const bool avx512 = avx512_paths();
   std::mt19937_64 rng(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (int trial = 0; trial < 100; ++trial) {
     Rig rig;
     rig.eccentricity = {3.0 * unit(rng), 360.0 * unit(rng), 3.0 * unit(rng), 360.0 * unit(rng)};
     const CsTurn turn(2 * (1 + trial * 7));
-    std::vector<double> best(static_cast<std::size_t>(3 * turn.steps())), baseline(best.size());
-    rig.light->log_ratio_over_turn(rig.source_view(), turn, best);
-    set_baseline_paths_only(true);
+    std::vector<double> baseline(static_cast<std::size_t>(3 * turn.steps()));
+    set_widest_paths(SimdPaths::Baseline);
     rig.light->log_ratio_over_turn(rig.source_view(), turn, baseline);
-    set_baseline_paths_only(false);
-    ASSERT_EQ(std::memcmp(best.data(), baseline.data(), best.size() * sizeof(double)), 0) << "trial " << trial;
+    for (const SimdPaths paths : {SimdPaths::Avx2, SimdPaths::Avx512}) {
+      if (paths == SimdPaths::Avx512 && !avx512) continue;
+      std::vector<double> wide(baseline.size());
+      set_widest_paths(paths);
+      rig.light->log_ratio_over_turn(rig.source_view(), turn, wide);
+      ASSERT_EQ(std::memcmp(wide.data(), baseline.data(), wide.size() * sizeof(double)), 0)
+          << "trial " << trial << (paths == SimdPaths::Avx512 ? " AVX-512" : " AVX2");
+    }
   }
+  set_widest_paths(SimdPaths::Avx512);
 }
 
 // ---- Progress reports ---------------------------------------------------------------------

@@ -1,7 +1,9 @@
 #include "polrig/io/csv.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -10,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include <fmt/compile.h>
 #include <fmt/format.h>
 
 #include "polrig/io/measured.h"
@@ -17,6 +20,19 @@
 #include "polrig/sky/sun.h"
 
 namespace polrig {
+
+void append_csv_line(std::string& out, std::span<const double> values) {
+  constexpr std::size_t kMaxNumber = 25;  // a double's shortest form is at most 24 characters, then ',' or '\n'
+  const std::size_t at = out.size();
+  out.resize(at + std::max<std::size_t>(1, values.size()) * kMaxNumber);
+  char* p = out.data() + at;
+  for (std::size_t c = 0; c < values.size(); ++c) {
+    if (c) *p++ = ',';
+    p = fmt::format_to(p, FMT_COMPILE("{}"), values[c]);
+  }
+  *p++ = '\n';
+  out.resize(static_cast<std::size_t>(p - out.data()));
+}
 
 CsvTable::CsvTable(std::vector<std::string> header)
     : header_(std::move(header)), may_be_nan_(header_.size(), false) {}
@@ -37,9 +53,7 @@ void CsvTable::add_row(const std::vector<double>& values) {
           "a result is not finite: column '{}' of row {} ({} = {}) is {}; the inputs are beyond "
           "what the model can represent, and nothing was written",
           header_[c], rows_ + 1, header_[0], values[0], values[c]));
-  for (std::size_t c = 0; c < values.size(); ++c)
-    fmt::format_to(std::back_inserter(body_), "{}{}", c ? "," : "", values[c]);
-  body_ += '\n';
+  append_csv_line(body_, values);
   ++rows_;
 }
 
@@ -83,6 +97,19 @@ std::uint64_t TextFileWriter::sync() {
   const long at = std::ftell(file_);
   if (at < 0) fail("cannot tell the file's length", errno);
   return static_cast<std::uint64_t>(at);
+}
+
+void TextFileWriter::start_writeback() {
+  if (!file_) throw std::logic_error(fmt::format("{}: written after close", path_.string()));
+  errno = 0;
+  if (std::fflush(file_) != 0) fail("cannot write the file", errno ? errno : EIO);
+  const long at = std::ftell(file_);
+  if (at < 0) fail("cannot tell the file's length", errno);
+  // Linux: start writing the new pages out without waiting for them (a hint: a failure here is
+  // found by the next sync's fsync).
+  if (at > writeback_from_)
+    ::sync_file_range(::fileno(file_), writeback_from_, at - writeback_from_, SYNC_FILE_RANGE_WRITE);
+  writeback_from_ = at;
 }
 
 TextFileWriter::~TextFileWriter() {

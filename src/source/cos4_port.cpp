@@ -24,9 +24,10 @@ std::array<double, 6> Cos4PortSource::ideal_irradiance(const SourceView& rig, co
 }
 
 namespace {
-// cos⁴φ of channel m over the turn: compiled twice, below, for baseline x86-64 and for AVX2, with
-// the same operations in the same order (no FMA: this file is built with -ffp-contract=off and
-// AVX2 alone brings none), so both give the same bits (test Cs.BaselineAndAvx2PathsGiveTheSameBits).
+// cos⁴φ of channel m over the turn: compiled three times, below, for baseline x86-64, AVX2 and
+// AVX-512, with the same operations in the same order (no FMA: this file is built with
+// -ffp-contract=off and the target attributes name no FMA), so all give the same bits (test
+// Cs.EveryCodePathGivesTheSameBits).
 [[gnu::always_inline]] inline void falloffs_over_turn(const Cos4Source& source, const double* c, const double* s,
                                                       const std::array<Point2, 6>& p0, const Point2& port,
                                                       double* E, int n) {
@@ -42,6 +43,18 @@ namespace {
   }
 }
 
+// The widest of three compilations of one loop that this CPU runs (vector_log.h's simd_paths):
+// each does the same operations in the same order.
+template <class F>
+F widest(F avx512, F avx2, F baseline) {
+  return avx512_paths() ? avx512 : avx2_paths() ? avx2 : baseline;
+}
+
+__attribute__((target("avx512f"))) void falloffs_over_turn_avx512(const Cos4Source& source, const double* c,
+                                                                  const double* s, const std::array<Point2, 6>& p0,
+                                                                  const Point2& port, double* E, int n) {
+  falloffs_over_turn(source, c, s, p0, port, E, n);
+}
 __attribute__((target("avx2"))) void falloffs_over_turn_avx2(const Cos4Source& source, const double* c,
                                                              const double* s, const std::array<Point2, 6>& p0,
                                                              const Point2& port, double* E, int n) {
@@ -57,7 +70,7 @@ void Cos4PortSource::irradiance_over_turn(const SourceView& rig, const CsTurn& t
                                           const Progress&) const {
   const Point2 port = port_centre(rig.eccentricity);
   const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
-  (avx2_paths() ? falloffs_over_turn_avx2 : falloffs_over_turn_baseline)(
+  widest(falloffs_over_turn_avx512, falloffs_over_turn_avx2, falloffs_over_turn_baseline)(
       rig.settings.cos4, turn.cos_theta(), turn.sin_theta(), p0, port, E.data(), turn.steps());
 }
 
@@ -68,9 +81,9 @@ namespace {
 // one division per value where the irradiances took three (two falloffs and their ratio), and a
 // value at least as exact: D_m are the falloffs' own denominators, computed with the same
 // operations, and one rounding (the quotient) replaces seven; ×2 is exact.
-// Here the quotients D_h/D_j of the three pairs into out[i·n + k]; compiled twice, below, for
-// baseline x86-64 and AVX2 with the same operations in the same order (no FMA): the same bits
-// (tests Cos4.LogRatiosBaselineAndAvx2GiveTheSameBits, Cs.BaselineAndAvx2PathsGiveTheSameBits).
+// Here the quotients D_h/D_j of the three pairs into out[i·n + k]; compiled three times, below,
+// for baseline x86-64, AVX2 and AVX-512 with the same operations in the same order (no FMA): the
+// same bits (tests Cs.Cos4LogRatiosGiveTheSameBitsOnEveryPath, Cs.EveryCodePathGivesTheSameBits).
 [[gnu::always_inline]] inline void distance_ratios_over_turn(double L_o2, const double* c, const double* s,
                                                              const std::array<Point2, 6>& p0, const Point2& port,
                                                              double* out, int n) {
@@ -90,13 +103,19 @@ namespace {
   }
 }
 
-// ×2, exact (the 2 of 2·ln(D_h/D_j)), twice compiled for the same reason.
+// ×2, exact (the 2 of 2·ln(D_h/D_j)), compiled three times for the same reason.
 [[gnu::always_inline]] inline void doubled(double* v, std::size_t n) {
   for (std::size_t k = 0; k < n; ++k) v[k] += v[k];
 }
+__attribute__((target("avx512f"))) void doubled_avx512(double* v, std::size_t n) { doubled(v, n); }
 __attribute__((target("avx2"))) void doubled_avx2(double* v, std::size_t n) { doubled(v, n); }
 void doubled_baseline(double* v, std::size_t n) { doubled(v, n); }
 
+__attribute__((target("avx512f"))) void distance_ratios_over_turn_avx512(double L_o2, const double* c,
+                                                                        const double* s, const std::array<Point2, 6>& p0,
+                                                                        const Point2& port, double* out, int n) {
+  distance_ratios_over_turn(L_o2, c, s, p0, port, out, n);
+}
 __attribute__((target("avx2"))) void distance_ratios_over_turn_avx2(double L_o2, const double* c, const double* s,
                                                                     const std::array<Point2, 6>& p0,
                                                                     const Point2& port, double* out, int n) {
@@ -113,11 +132,11 @@ void Cos4PortSource::log_ratio_over_turn(const SourceView& rig, const CsTurn& tu
   const Point2 port = port_centre(rig.eccentricity);
   const auto p0 = photodiode_positions(rig.sensor.ring, rig.eccentricity, 0.0);
   const double L_o2 = rig.settings.cos4.L_o * rig.settings.cos4.L_o;
-  (avx2_paths() ? distance_ratios_over_turn_avx2 : distance_ratios_over_turn_baseline)(
+  widest(distance_ratios_over_turn_avx512, distance_ratios_over_turn_avx2, distance_ratios_over_turn_baseline)(
       L_o2, turn.cos_theta(), turn.sin_theta(), p0, port, out.data(), n);
   const std::size_t values = static_cast<std::size_t>(3 * n);
   log_array(out.data(), out.data(), values);
-  (avx2_paths() ? doubled_avx2 : doubled_baseline)(out.data(), values);
+  widest(doubled_avx512, doubled_avx2, doubled_baseline)(out.data(), values);
 }
 
 namespace {

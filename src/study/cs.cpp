@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -22,17 +23,19 @@ struct CurveMoments {
 
 // One pass's arithmetic from ln(E_j/E_h) of the three pairs in br[i·n + k]: ΔV_br (Eq. 5) in
 // place; ΔV_mr(θ_R) = [ΔV_br(θ_R) + ΔV_br(θ_R + 180°)]/2 into mr (in two halves, so no index wraps
-// inside a loop); and the moments of the six curves, each summed in the same order as
-// mean_and_population_sd but the six side by side (independent sums, so the processor overlaps
-// them instead of waiting for each add).
-// Compiled twice, below: for baseline x86-64 and for AVX2, with the same operations in the same
-// order (no FMA, no reordered sums); AVX2 only takes more values at a time, so both give the same
-// bits (test Cs.BaselineAndAvx2PathsGiveTheSameBits).
+// inside a loop); and the moments of the six curves, each summed in mean_and_population_sd's
+// interleaved order (statistics.h: eight partial sums, k mod 8), the six side by side.
+// Compiled three times, below: for baseline x86-64, AVX2 and AVX-512, with the same operations in
+// the same order (no FMA, no reordered sums); the wider paths only take more values at a time (the
+// eight partial sums of a curve are one AVX-512 register), so all give the same bits (test
+// Cs.EveryCodePathGivesTheSameBits).
 [[gnu::always_inline]] inline void curves_and_moments(const Rig& rig, double* br, double* mr, int n,
                                                       CurveMoments& m) {
-  for (int i = 0; i < 3; ++i)
-    for (int k = 0; k < n; ++k)
-      br[i * n + k] = eccentricity_bias_of_log(rig.device.truth, rig.electronics, i, br[i * n + k]);
+  for (int i = 0; i < 3; ++i) {
+    const double gain = eccentricity_bias_gain(rig.device.truth, rig.electronics, i);  // held in a register
+    double* b = br + i * n;
+    for (int k = 0; k < n; ++k) b[k] = eccentricity_bias_of_gain(gain, b[k]);
+  }
   const int half = n / 2;
   for (int i = 0; i < 3; ++i) {
     const double* b = br + i * n;
@@ -42,13 +45,45 @@ struct CurveMoments {
   }
   constexpr int kCurves = 6;
   const double* curve[kCurves] = {br, br + n, br + 2 * n, mr, mr + n, mr + 2 * n};
-  double sum[kCurves] = {}, ss[kCurves] = {};
-  for (int k = 0; k < n; ++k)
-    for (int c = 0; c < kCurves; ++c) sum[c] += curve[c][k];
-  for (int c = 0; c < kCurves; ++c) m.mean[c] = sum[c] / static_cast<double>(n);
-  for (int k = 0; k < n; ++k)
-    for (int c = 0; c < kCurves; ++c) ss[c] += (curve[c][k] - m.mean[c]) * (curve[c][k] - m.mean[c]);
-  for (int c = 0; c < kCurves; ++c) m.sd[c] = std::sqrt(ss[c] / static_cast<double>(n));
+  const int whole = n - n % kSumLanes;
+  // Eight lanes as one GCC vector (one AVX-512 register, two AVX2 or four SSE2 ones: the same
+  // lane-by-lane adds on every target), the curves innermost: six independent chains, so the adds
+  // overlap instead of waiting for each other.
+  typedef double Lanes __attribute__((vector_size(kSumLanes * sizeof(double))));
+  Lanes sum[kCurves] = {}, ss[kCurves] = {};
+  for (int k = 0; k < whole; k += kSumLanes)
+    for (int c = 0; c < kCurves; ++c) {
+      Lanes v;
+      std::memcpy(&v, curve[c] + k, sizeof v);
+      sum[c] += v;
+    }
+  for (int c = 0; c < kCurves; ++c) {
+    double s[kSumLanes];
+    for (int j = 0; j < kSumLanes; ++j) s[j] = sum[c][j];
+    for (int k = whole; k < n; ++k) s[k - whole] += curve[c][k];
+    m.mean[c] = combine_lanes(s) / static_cast<double>(n);
+  }
+  Lanes mean[kCurves];
+  for (int c = 0; c < kCurves; ++c)
+    for (int j = 0; j < kSumLanes; ++j) mean[c][j] = m.mean[c];
+  for (int k = 0; k < whole; k += kSumLanes)
+    for (int c = 0; c < kCurves; ++c) {
+      Lanes d;
+      std::memcpy(&d, curve[c] + k, sizeof d);
+      d -= mean[c];
+      ss[c] += d * d;
+    }
+  for (int c = 0; c < kCurves; ++c) {
+    double s[kSumLanes];
+    for (int j = 0; j < kSumLanes; ++j) s[j] = ss[c][j];
+    for (int k = whole; k < n; ++k) s[k - whole] += (curve[c][k] - m.mean[c]) * (curve[c][k] - m.mean[c]);
+    m.sd[c] = std::sqrt(combine_lanes(s) / static_cast<double>(n));
+  }
+}
+
+__attribute__((target("avx512f"))) void curves_and_moments_avx512(const Rig& rig, double* br, double* mr, int n,
+                                                                 CurveMoments& m) {
+  curves_and_moments(rig, br, mr, n, m);
 }
 
 __attribute__((target("avx2"))) void curves_and_moments_avx2(const Rig& rig, double* br, double* mr, int n,
@@ -107,7 +142,8 @@ CsSummary one_pass(const Rig& rig, const CsTurn& turn, const double* E, std::vec
   else
     rig.light->log_ratio_over_turn(rig.source_view(), turn, {br, static_cast<std::size_t>(3 * n)});
   CurveMoments m;
-  (avx2_paths() ? curves_and_moments_avx2 : curves_and_moments_baseline)(rig, br, mr, n, m);
+  (avx512_paths() ? curves_and_moments_avx512
+                  : avx2_paths() ? curves_and_moments_avx2 : curves_and_moments_baseline)(rig, br, mr, n, m);
   return summary_of(rig, m);
 }
 

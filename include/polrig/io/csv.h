@@ -4,11 +4,17 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace polrig {
+
+// One CSV line of numbers, "v1,v2,…,vn\n", appended to `out`: each in its shortest exact form
+// ({fmt}'s "{}", compiled: no format string parsed per number). The one formatter of every CSV
+// row polrig writes (CsvTable::add_row, sweep.csv's rows formatted in parallel); no check here.
+void append_csv_line(std::string& out, std::span<const double> values);
 
 // Every value must be finite: add_row throws std::runtime_error naming the column and row of a
 // NaN or infinity, so that no result leaves as one. A column whose NaN is documented to mean
@@ -46,12 +52,17 @@ class TextFileWriter {
   void write(std::string_view text);
   // Makes what was written durable (fflush, fsync); returns the file's length.
   std::uint64_t sync();
+  // Hands what was written to the kernel and starts writing it to the disk without waiting
+  // (sync_file_range), so that the next sync() waits for little: a long file written between
+  // checkpoints then goes out at the disk's pace beside the work instead of at the checkpoint.
+  void start_writeback();
   void close();
 
  private:
   [[noreturn]] void fail(const char* what, int err);
   std::filesystem::path path_;
   std::FILE* file_ = nullptr;
+  long writeback_from_ = 0;  // the first byte start_writeback has not handed on
 };
 
 // Writes a whole file or throws std::runtime_error naming the path and the reason.

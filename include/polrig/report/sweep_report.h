@@ -61,7 +61,8 @@ class SweepReport {
   std::size_t points_ = 0;
   // 64-bit FNV-1a of the values written to sweep.h5 (point after point, each point's columns in
   // order) and of the bytes written to sweep.csv.
-  std::uint64_t h5_hash_ = kFnvBasis, csv_hash_ = kFnvBasis;
+  FnvWords h5_hash_, csv_hash_;  // the files' fingerprints so far (polrig/fnv.h)
+  std::vector<std::string> csv_parts_;  // sweep.csv's lines of a block, formatted in parallel chunks
 
   void check_resume(const Resume& resume, bool csv);
 };

@@ -114,19 +114,33 @@ namespace {
 // formatting, not the disk, set a CSV sweep's pace (issue 35), so chunks of lines are formatted
 // on TBB's threads and written in order, the bytes those of one thread.
 // `parts` keeps its strings' memory from block to block; part k holds points k·kCsvChunk onwards.
+// `axis_text[a][i]` is axis a's value i as append_csv_line writes it, with its comma: formatted
+// once, not once a line.
 constexpr std::size_t kCsvChunk = 1024;
-void csv_lines(const std::vector<GridAxis>& axes, std::size_t first, std::size_t n, const std::vector<double>& columns,
-               std::vector<std::string>& parts) {
+std::vector<std::vector<std::string>> axis_csv_text(const std::vector<GridAxis>& axes) {
+  std::vector<std::vector<std::string>> text(axes.size());
+  for (std::size_t a = 0; a < axes.size(); ++a)
+    for (int i = 0; i < axes[a].count; ++i) {
+      std::string t;
+      const double v = axes[a].value(i);
+      append_csv_line(t, std::span<const double>(&v, 1));
+      t.back() = ',';  // its line end, as the separator before the next column
+      text[a].push_back(std::move(t));
+    }
+  return text;
+}
+void csv_lines(const std::vector<GridAxis>& axes, const std::vector<std::vector<std::string>>& axis_text,
+               std::size_t first, std::size_t n, const std::vector<double>& columns, std::vector<std::string>& parts) {
   const std::size_t chunks = (n + kCsvChunk - 1) / kCsvChunk;
   if (parts.size() < chunks) parts.resize(chunks);
   tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t ch) {
-    std::vector<double> row(axes.size() + kColumns);
+    double row[kColumns];
     std::string& out = parts[ch];
     out.clear();
     for (std::size_t k = ch * kCsvChunk; k < std::min(n, (ch + 1) * kCsvChunk); ++k) {
       const std::vector<int> idx = grid_indices(axes, first + k);
-      for (std::size_t a = 0; a < axes.size(); ++a) row[a] = axes[a].value(idx[a]);
-      for (std::size_t c = 0; c < kColumns; ++c) row[axes.size() + c] = columns[c * n + k];
+      for (std::size_t a = 0; a < axes.size(); ++a) out += axis_text[a][static_cast<std::size_t>(idx[a])];
+      for (std::size_t c = 0; c < kColumns; ++c) row[c] = columns[c * n + k];
       append_csv_line(out, row);
     }
   });
@@ -240,7 +254,8 @@ void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
   h5_->write(first, n, columns_);
   for (std::size_t k = 0; k < n; ++k) add_point(h5_hash_, columns_.data() + k, n, kColumns);
   if (csv_) {
-    csv_lines(axes_, first, n, columns_, csv_parts_);
+    if (csv_axis_text_.empty()) csv_axis_text_ = axis_csv_text(axes_);
+    csv_lines(axes_, csv_axis_text_, first, n, columns_, csv_parts_);
     for (std::size_t ch = 0; ch * kCsvChunk < n; ++ch) {
       csv_->write(csv_parts_[ch]);
       csv_hash_.add(csv_parts_[ch]);

@@ -63,6 +63,7 @@ class SweepReport {
   // order) and of the bytes written to sweep.csv.
   FnvWords h5_hash_, csv_hash_;  // the files' fingerprints so far (polrig/fnv.h)
   std::vector<std::string> csv_parts_;  // sweep.csv's lines of a block, formatted in parallel chunks
+  std::vector<std::vector<std::string>> csv_axis_text_;  // each axis value as sweep.csv writes it
 
   void check_resume(const Resume& resume, bool csv);
 };

@@ -335,6 +335,21 @@ TEST(NavigationDataset, AStartYamlStatesTheStartAndItsP0) {
   EXPECT_HAS(vertical_channel_text(rig, stated), "start.yaml's h_m");
 }
 
+// The third review's §4 leftover: a whole-file read from a dataset's folder has a limit, checked
+// before anything is read (a 2 MB start.yaml against 1 MiB; rig.yaml's is 32 MiB).
+TEST(NavigationDataset, AFolderReadRefusesAFileOverItsLimitNamingIt) {
+  test::TempDir dir("polrig-nav-cap");
+  test::write_file(dir.path() / "start.yaml", std::string(2'000'000, '#'));
+  const DatasetFolder folder(dir.path());
+  try {
+    folder.read("start.yaml", 1u << 20);
+    ADD_FAILURE() << "read";
+  } catch (const DataError& e) {
+    EXPECT_HAS(std::string(e.what()), "start.yaml: 2000000 bytes, more than the 1048576 bytes its reader takes");
+  }
+  EXPECT_EQ(folder.read("start.yaml", 2'000'000).size(), 2'000'000u);
+}
+
 TEST(NavigationDataset, ABadStartYamlIsNamedWithItsLineAndKey) {
   const std::string good =
       "lat_deg: 40\nlon_deg: 116\nh_m: 50\nv_enu_mps: [0, 0, 0]\nattitude_deg: [0, 0, 30]\n"

@@ -13,6 +13,7 @@
 #include "cli.h"
 #include "polrig/io/measured.h"
 #include "polrig/io/navigation_dataset.h"
+#include "polrig/io/rig_yaml.h"
 #include "polrig/ins/mechanization.h"
 #include "polrig/io/installation_yaml.h"
 #include "polrig/report/installation_report.h"
@@ -43,7 +44,7 @@ LoadedRig navigation_rig(const NavigateOptions& o, const DatasetFolder& folder) 
   } else {
     if (!folder.has("rig.yaml"))
       throw DataError(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else give --rig)", o.input));
-    r = parse_rig(folder.read("rig.yaml"), folder.path("rig.yaml").string(), overrides, RigUse::ReadDataset);
+    r = parse_rig(folder.read("rig.yaml", kMaxRigYamlBytes), folder.path("rig.yaml").string(), overrides, RigUse::ReadDataset);
   }
   require_instrument(r.rig, Instrument::kUnitArray, "navigate", r.origin);
   return r;

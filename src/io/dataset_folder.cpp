@@ -43,8 +43,14 @@ int DatasetFolder::open(std::string_view name) const {
   return fd;
 }
 
-std::string DatasetFolder::read(std::string_view name) const {
+std::string DatasetFolder::read(std::string_view name, std::uintmax_t max_bytes) const {
   const int fd = open(name);
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && static_cast<std::uintmax_t>(st.st_size) > max_bytes) {
+    ::close(fd);
+    throw DataError(fmt::format("{}: {} bytes, more than the {} bytes its reader takes", path(name).string(),
+                                static_cast<std::uintmax_t>(st.st_size), max_bytes));
+  }
   std::string text;
   char buf[1 << 16];
   for (;;) {

@@ -43,10 +43,6 @@ CsvFile CsvFile::read(const fs::path& path, std::string_view expected_header) {
   return parse(buf.str(), path.string(), expected_header);
 }
 
-CsvFile CsvFile::read(const DatasetFolder& folder, std::string_view name, std::string_view expected_header) {
-  return parse(folder.read(name), folder.path(name).string(), expected_header);
-}
-
 bool CsvFile::take_line(std::string& text, int n) {
   if (n == 1 && text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);  // a UTF-8 byte-order mark
   if (!text.empty() && text.back() == '\r') text.pop_back();

@@ -11,6 +11,7 @@
 #include "polrig/io/measured.h"
 #include "polrig/io/start_yaml.h"
 #include "polrig/units.h"
+#include "yaml_load.h"
 
 namespace polrig {
 
@@ -97,7 +98,8 @@ constexpr std::string_view kImuHeader = "t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_
 constexpr std::string_view kUnitsHeader = "t_s,unit,aop_deg,dop";
 constexpr std::string_view kTruthHeader = "t_s,lat_deg,lon_deg,h_m,roll_deg,pitch_deg,yaw_deg,v_e,v_n,v_u";
 
-// Read a row at a time (CsvRows): a long log's memory is its samples', not its text's cells.
+// imu.csv, units.csv and truth.csv are read a row at a time (CsvRows): a long log's memory is its
+// samples', not its text's cells.
 std::vector<ImuSample> read_imu(const DatasetFolder& folder, double rate_hz) {
   CsvRows rows(folder, "imu.csv", kImuHeader);
   const CsvFile& f = rows.file();
@@ -140,13 +142,15 @@ std::vector<ImuSample> read_imu(const DatasetFolder& folder, double rate_hz) {
 
 // Every reading must fall on an IMU sample (within 1 ms): the INS's state exists only there.
 std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_t units, const std::vector<ImuSample>& imu) {
-  const CsvFile f = CsvFile::read(folder, "units.csv", kUnitsHeader);
+  CsvRows rows(folder, "units.csv", kUnitsHeader);
+  const CsvFile& f = rows.file();
   const std::string path = f.origin;
   std::size_t j = 0;  // the IMU sample the latest reading falls on
   const std::size_t t = f.column("t_s", kSection), u = f.column("unit", kSection), a = f.column("aop_deg", kSection),
                     d = f.column("dop", kSection);
   std::vector<CompassEpoch> out;
-  for (std::size_t r = 0; r < f.rows.size(); ++r) {
+  while (rows.next()) {
+    constexpr std::size_t r = 0;  // the current row
     const double t_s = f.number(r, t);
     if (out.empty() || t_s != out.back().t_s) {
       if (!out.empty() && !(t_s > out.back().t_s))
@@ -183,12 +187,14 @@ std::vector<CompassEpoch> read_units_csv(const DatasetFolder& folder, std::size_
 constexpr double kMinHeight_m = -11000, kMaxHeight_m = 100000, kMaxSpeed_mps = 8000;
 
 std::vector<TruthSample> read_truth(const DatasetFolder& folder) {
-  const CsvFile f = CsvFile::read(folder, "truth.csv", kTruthHeader);
+  CsvRows rows(folder, "truth.csv", kTruthHeader);
+  const CsvFile& f = rows.file();
   std::array<std::size_t, 10> c{};
   const std::array<const char*, 10> names{"t_s", "lat_deg", "lon_deg", "h_m", "roll_deg", "pitch_deg", "yaw_deg", "v_e", "v_n", "v_u"};
   for (std::size_t i = 0; i < c.size(); ++i) c[i] = f.column(names[i], kSection);
   std::vector<TruthSample> out;
-  for (std::size_t r = 0; r < f.rows.size(); ++r) {
+  while (rows.next()) {
+    constexpr std::size_t r = 0;  // the current row
     std::array<double, 10> v{};
     for (std::size_t i = 0; i < c.size(); ++i) v[i] = f.number(r, c[i]);
     if (std::abs(v[1]) > 90) refuse_cell(f, r, "lat_deg", fmt::format("expected a latitude in [-90, 90], got {}", v[1]));
@@ -247,7 +253,7 @@ NavigationDataset read_navigation_dataset(const DatasetFolder& folder, const Rig
   d.initial = initial_state(rig, folder.has("truth.csv") ? StartErrors::DrawnFromP0 : StartErrors::Stated);
   // A start.yaml states the start and its P0 blocks itself (io/start_yaml.h): it replaces the rig's.
   if (folder.has("start.yaml")) {
-    const StatedStart stated = parse_start_yaml(folder.read("start.yaml"), folder.path("start.yaml").string());
+    const StatedStart stated = parse_start_yaml(folder.read("start.yaml", kMaxYamlBytes), folder.path("start.yaml").string());
     d.initial = stated.state;
     d.stated_start = stated.sigma;
   }

@@ -35,7 +35,6 @@ namespace polrig {
 
 // A polrig YAML file is a few kilobytes; a rig may list up to kMaxStops table angles.
 inline constexpr std::uintmax_t kMaxYamlBytes = 1u << 20;       // 1 MiB
-inline constexpr std::uintmax_t kMaxRigYamlBytes = 32u << 20;   // 32 MiB: a million-stop schedule
 inline constexpr std::size_t kMaxYamlNodes = 2'000'000;         // with every alias expanded
 inline constexpr int kMaxYamlDepth = 500;                       // yaml-cpp's own depth guard
 

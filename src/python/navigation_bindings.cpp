@@ -15,6 +15,7 @@
 #include "bindings.h"
 #include "convert.h"
 #include "polrig/io/navigation_dataset.h"
+#include "polrig/io/rig_yaml.h"
 #include "polrig/io/output_dir.h"
 #include "polrig/io/plot.h"
 #include "polrig/io/installation_yaml.h"
@@ -191,7 +192,7 @@ LoadedRig dataset_rig(const DatasetFolder& dataset, const std::optional<PyRig>& 
   } else {
     if (!dataset.has("rig.yaml"))
       throw py::value_error(fmt::format("{}: no rig.yaml (a unit-array dataset holds its rig; else pass rig=)", dataset.path().string()));
-    r = parse_rig(dataset.read("rig.yaml"), dataset.path("rig.yaml").string(), {}, RigUse::ReadDataset);
+    r = parse_rig(dataset.read("rig.yaml", kMaxRigYamlBytes), dataset.path("rig.yaml").string(), {}, RigUse::ReadDataset);
   }
   require_instrument(r.rig, Instrument::kUnitArray, what, r.origin);
   return r;

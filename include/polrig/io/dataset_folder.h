@@ -4,6 +4,7 @@
 // (io/output_dir.h), so a reader that opens imu.csv, then units.csv, while `simulate --force`
 // replaces the dataset reads both from the old folder, or fails (its files deleted) with a
 // message naming the file; it never mixes two datasets.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <string_view>
@@ -26,8 +27,9 @@ class DatasetFolder {
   // A read-only descriptor of the named regular file (the caller closes it), or DataError naming
   // DIR/name: no such file, not a regular file, cannot be opened.
   int open(std::string_view name) const;
-  // The whole file.
-  std::string read(std::string_view name) const;
+  // The whole file, of at most max_bytes (checked before it is read: DataError naming DIR/name,
+  // its size and the limit, so that a reader's memory never follows a file it cannot take).
+  std::string read(std::string_view name, std::uintmax_t max_bytes) const;
 
  private:
   std::filesystem::path dir_;

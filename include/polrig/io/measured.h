@@ -36,8 +36,6 @@ struct CsvFile {
   // A UTF-8 byte-order mark, blank lines and lines starting with '#' are passed over. An empty file
   // is refused, the message giving `expected_header` as the header it lacks.
   static CsvFile read(const std::filesystem::path& path, std::string_view expected_header = {});
-  // The named file of a dataset's folder (io/dataset_folder.h).
-  static CsvFile read(const DatasetFolder& folder, std::string_view name, std::string_view expected_header = {});
   // The same from the file's text; `origin` names it in error messages.
   static CsvFile parse(std::string_view text, std::string_view origin, std::string_view expected_header = {});
   // Index of a column, or DataError naming the file, the missing column and the section of

@@ -1,6 +1,7 @@
 #pragma once
 // Reading and writing rig files (YAML). Every key is described in polrig/rig/keys.h and in
 // docs/formats.md. Errors name the file, the line, the key and what was expected.
+#include <cstdint>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
@@ -13,6 +14,10 @@
 #include "polrig/rig/rig.h"
 
 namespace polrig {
+
+// The largest rig file a reader takes (32 MiB: a million-stop schedule).
+inline constexpr std::uintmax_t kMaxRigYamlBytes = 32u << 20;
+
 
 // One `--set key.path=value`; the value is read as YAML ("3", "[1, 2, 3]", "cos4").
 struct RigOverride {

@@ -93,6 +93,11 @@ std::string FilterSummary::BriefReport() const {
 InsFilter::InsFilter(const InsState& initial, const Matrix15& P0, const FilterSettings& settings)
     : state_(initial), settings_(settings) {
   filter_.P = P0;
+  if (settings.mechanization.hold_height_m)  // pinned (pin_vertical): held h and v_U have no error
+    for (const int i : {kDV + 2, kDh}) {
+      filter_.P.row(i).setZero();
+      filter_.P.col(i).setZero();
+    }
   if (!(settings.sigma_H_rad > 0))
     throw std::invalid_argument(fmt::format("filter: σ_H {} rad must be > 0", settings.sigma_H_rad));
   if (!(settings.sigma_A_rad > 0))

@@ -158,6 +158,8 @@ struct InsFilterEpoch {
 // The INS with the filter in closed loop.
 class InsFilter {
  public:
+  // With a held height (settings.mechanization.hold_height_m) δv_U and δh are pinned: P0's rows and
+  // columns for them are taken as zero, and F's and Q's are zeroed at every step.
   InsFilter(const InsState& initial, const Matrix15& P0, const FilterSettings& settings = {});
 
   // Mechanizes one raw sample (the bias estimates removed) over Δt = cur.t_s − state().t_s and

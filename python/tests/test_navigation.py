@@ -109,3 +109,21 @@ def test_study_navigation_equals_the_cli(tmp_path):
     assert len(r["cells"]) == 2
     with pytest.raises(ValueError):
         rig.study_navigation(trials=0)
+
+
+def test_a_rig_loaded_for_a_dataset_navigates_a_125_hz_log_and_refuses_to_simulate(tmp_path):
+    """The third review's §4 leftover: Rig.load(dataset=True) reads a rig as navigate --rig does."""
+    run_cli("simulate", RIG, "--set", "trajectory.duration_s=10", "-o", tmp_path / "d", "--no-plots", "--quiet")
+    log = tmp_path / "log"
+    log.mkdir()
+    rate = 125.057
+    lines = ["t_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_mps,dv_y_mps,dv_z_mps"]
+    lines += [f"{k / rate!r},0,{5.6e-5 / rate!r},{4.7e-5 / rate!r},0,0,{9.8 / rate!r}" for k in range(1, 1251)]
+    (log / "imu.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(polrig.RigError, match="divides imu.rate_hz"):
+        polrig.Rig.load(tmp_path / "d" / "rig.yaml", set={"imu.rate_hz": rate})
+    r = polrig.Rig.load(tmp_path / "d" / "rig.yaml", set={"imu.rate_hz": rate}, dataset=True)
+    n = polrig.navigate(log, mode="sins", rig=r)
+    assert len(n["sins"]["t_s"]) == 1250
+    with pytest.raises(polrig.RigError, match=r"simulate_navigation simulates a run; the rig was read for a dataset"):
+        r.simulate_navigation()

@@ -29,6 +29,14 @@
 namespace polrig::python {
 namespace {
 
+// A rig loaded for a dataset (Rig.load(dataset=True)) met only a dataset's rules; a simulation
+// needs a run's too (rig/keys.h, check_rig): the same message a rig file would have had.
+void require_run_rules(const PyRig& r, std::string_view what) {
+  if (const std::optional<RigProblem> p = check_rig(r.rig(), RigUse::Run))
+    throw RigError(fmt::format("{}: key '{}': {} ({} simulates a run; the rig was read for a dataset, "
+                               "Rig.load(dataset=True))", r.loaded.origin, p->path, p->message, what));
+}
+
 namespace fs = std::filesystem;
 
 // out= that is, contains or lies inside an input (io/output_dir.h): ValueError, before anything.
@@ -320,6 +328,7 @@ void bind_navigation(py::module_& m) {
   rig.def("simulate_navigation", [](const PyRig& self, std::optional<fs::path> out, bool force, std::optional<int> threads,
                                     const py::object& progress) {
     require(self, Instrument::kUnitArray, "simulate_navigation");
+    require_run_rules(self, "simulate_navigation");
     const ThreadLimit limit(threads);
     const Progress p = progress_from(progress);
     NavigationDataset d;
@@ -350,6 +359,7 @@ void bind_navigation(py::module_& m) {
                                  std::optional<fs::path> out, bool force, bool plots, std::optional<int> threads,
                                  const py::object& progress) {
     require(self, Instrument::kUnitArray, "study_navigation");
+    require_run_rules(self, "study_navigation");
     check_plots(plots, out.has_value());
     NavigationStudySettings settings;
     settings.trials = trials;

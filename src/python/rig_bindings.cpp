@@ -127,22 +127,26 @@ CLI's --set: a bad value raises polrig.RigError and leaves the rig unchanged.
 )doc");
   rig.def(py::init([] { return PyRig{parse_rig("", "(default rig)")}; }),
           "The default rig (the values of rigs/wang2019-indoor.yaml).")
-      .def_static("load", [](const std::filesystem::path& path, const std::optional<py::dict>& set) {
-            return PyRig{load_rig(path, overrides_of(set))};
-          }, py::arg("path"), py::kw_only(), py::arg("set") = py::none(),
+      .def_static("load", [](const std::filesystem::path& path, const std::optional<py::dict>& set, bool dataset) {
+            return PyRig{load_rig(path, overrides_of(set), dataset ? RigUse::ReadDataset : RigUse::Run)};
+          }, py::arg("path"), py::kw_only(), py::arg("set") = py::none(), py::arg("dataset") = false,
           R"doc(Reads a rig file (YAML).
 
 path: the rig file (str or os.PathLike), e.g. "rigs/wang2019-indoor.yaml"; a scene it names is
       found relative to it.
 set: overrides, as the CLI's --set: {"eccentricity.L_S": 0.05} or nested
      {"eccentricity": {"L_S": 0.05}}; values in the key's unit.
+dataset: read it for a recorded unit-array dataset, as navigate --rig does (a simulated run's own
+     rules, such as a trajectory of whole IMU intervals, are not applied: a 125.057 Hz log's rig
+     loads); simulate_navigation and study_navigation then check those rules themselves.
 Raises polrig.RigError naming the file, line, key and value.)doc")
-      .def_static("from_yaml", [](const std::string& text, const std::optional<py::dict>& set, const std::string& origin) {
-            return PyRig{parse_rig(text, origin, overrides_of(set))};
+      .def_static("from_yaml", [](const std::string& text, const std::optional<py::dict>& set, const std::string& origin,
+                                  bool dataset) {
+            return PyRig{parse_rig(text, origin, overrides_of(set), dataset ? RigUse::ReadDataset : RigUse::Run)};
           }, py::arg("text"), py::kw_only(), py::arg("set") = py::none(),
-          py::arg("origin") = "(yaml string)",
+          py::arg("origin") = "(yaml string)", py::arg("dataset") = false,
           "A rig from YAML text; `origin` names it in error messages (and is the folder a "
-          "relative scene path is read from when it is a file path).")
+          "relative scene path is read from when it is a file path); `dataset` as Rig.load's.")
       .def_static("from_dict", [](const py::dict& d, const std::optional<py::dict>& set) {
             std::vector<RigOverride> o;
             flatten(d, "", o);

@@ -159,10 +159,8 @@ SunAzimuthModel sun_azimuth_model(double L, double lon, double dec, double gha) 
 }
 
 void InsFilter::feed_back_and_reset() {
-  // A held height (Z21's barometer) is the mechanization's, not the filter's: its δh and δv_U are
-  // not fed back, so the solution's height stays the held one (it moved ±10 m over the shipped
-  // static run; the next step's mechanization reset it).
-  if (settings_.mechanization.hold_height_m) filter_.x[kDh] = filter_.x[kDV + 2] = 0;
+  // A held height (Z21's barometer) is the mechanization's, not the filter's: pinned, its δh and
+  // δv_U rows of P are 0, so x's are too and nothing moves the held height.
   feed_back(filter_.x, state_, gyro_bias_, accel_bias_);
   correction_ += filter_.x;
   state_.lon_rad = std::remainder(state_.lon_rad, 2 * std::numbers::pi);  // a correction across 180° stays a longitude

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string_view>
 
 #include <fmt/format.h>
 
@@ -116,11 +117,15 @@ TruthSample truth_of(double t, const Motion& m, const Position& p) {
   return s;
 }
 
+// The IMU's sampling both generators share; `what` names the generator in the message.
+void check_sampling(std::string_view what, double imu_rate_hz, int substeps) {
+  if (!(imu_rate_hz > 0)) throw std::invalid_argument(fmt::format("{}: IMU rate {} Hz must be > 0", what, imu_rate_hz));
+  if (substeps < 2 || substeps % 2 != 0)
+    throw std::invalid_argument(fmt::format("{}: substeps {} must be even and ≥ 2", what, substeps));
+}
+
 void check(const TrajectorySpec& spec) {
-  if (!(spec.imu_rate_hz > 0))
-    throw std::invalid_argument(fmt::format("trajectory: IMU rate {} Hz must be > 0", spec.imu_rate_hz));
-  if (spec.substeps < 2 || spec.substeps % 2 != 0)
-    throw std::invalid_argument(fmt::format("trajectory: substeps {} must be even and ≥ 2", spec.substeps));
+  check_sampling("trajectory", spec.imu_rate_hz, spec.substeps);
   if (spec.speed_mps < 0)
     throw std::invalid_argument(fmt::format("trajectory: speed {} m/s must be ≥ 0", spec.speed_mps));
 }
@@ -216,10 +221,7 @@ Motion sine_velocity_motion(const SineVelocitySpec& spec, double t) {
 }
 
 void check(const SineVelocitySpec& spec) {
-  if (!(spec.imu_rate_hz > 0))
-    throw std::invalid_argument(fmt::format("sine-velocity trajectory: IMU rate {} Hz must be > 0", spec.imu_rate_hz));
-  if (spec.substeps < 2 || spec.substeps % 2 != 0)
-    throw std::invalid_argument(fmt::format("sine-velocity trajectory: substeps {} must be even and ≥ 2", spec.substeps));
+  check_sampling("sine-velocity trajectory", spec.imu_rate_hz, spec.substeps);
   if (!(spec.period_s > 0))
     throw std::invalid_argument(fmt::format("sine-velocity trajectory: period {} s must be > 0", spec.period_s));
   const double intervals = spec.duration_s * spec.imu_rate_hz;

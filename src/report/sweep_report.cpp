@@ -156,6 +156,7 @@ SweepReport::SweepReport(const fs::path& dir, std::vector<GridAxis> axes, bool e
   h5_.emplace(resume ? SweepH5Writer::reopen(h5, layout_) : SweepH5Writer::create(h5, layout_));
   if (csv) {
     table_.emplace(csv_header(axes_));
+    csv_axis_text_ = axis_csv_text(axes_);
     for (const SweepH5Column& c : layout_.columns)
       if (c.may_be_nan) table_->allow_undefined(c.name);
     csv_ = resume ? std::make_unique<TextFileWriter>(csv_path, resume->csv_bytes)
@@ -254,7 +255,6 @@ void SweepReport::write(std::size_t first, std::span<const CsSummary> block) {
   h5_->write(first, n, columns_);
   for (std::size_t k = 0; k < n; ++k) add_point(h5_hash_, columns_.data() + k, n, kColumns);
   if (csv_) {
-    if (csv_axis_text_.empty()) csv_axis_text_ = axis_csv_text(axes_);
     csv_lines(axes_, csv_axis_text_, first, n, columns_, csv_parts_);
     for (std::size_t ch = 0; ch * kCsvChunk < n; ++ch) {
       csv_->write(csv_parts_[ch]);

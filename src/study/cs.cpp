@@ -31,11 +31,9 @@ struct CurveMoments {
 // Cs.EveryCodePathGivesTheSameBits).
 [[gnu::always_inline]] inline void curves_and_moments(const Rig& rig, double* br, double* mr, int n,
                                                       CurveMoments& m) {
-  for (int i = 0; i < 3; ++i) {
-    const double gain = eccentricity_bias_gain(rig.device.truth, rig.electronics, i);  // held in a register
-    double* b = br + i * n;
-    for (int k = 0; k < n; ++k) b[k] = eccentricity_bias_of_gain(gain, b[k]);
-  }
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < n; ++k)
+      br[i * n + k] = eccentricity_bias_of_log(rig.device.truth, rig.electronics, i, br[i * n + k]);
   const int half = n / 2;
   for (int i = 0; i < 3; ++i) {
     const double* b = br + i * n;

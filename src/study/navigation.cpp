@@ -139,7 +139,7 @@ InsState initial_state(const Rig& rig, StartErrors errors) {
     const std::uint64_t seed = derive_seed(rig.seed, kStartStream);
     Vector15 x = Vector15::Zero();
     for (int i = kPhi; i <= kDh; ++i) x[i] = std::sqrt(P0(i, i)) * standard_normal(seed, 0, 0, static_cast<std::uint64_t>(i));
-    if (rig.navigation.hold_height) x[kDV + 2] = x[kDh] = 0;  // held: v_U = 0 and h the barometer's
+    // Held: P0's v_U and h entries are 0 (pinned), so their draws are 0 too.
     s.q_bn = (quaternion_from_rotation_vector(-x.segment<3>(kPhi)) * s.q_bn).normalized();
     s.v_n += x.segment<3>(kDV);
     s.lat_rad += x[kDLat];
@@ -413,11 +413,11 @@ struct FilteredEpoch {
 };
 
 // The RTS smoother over the filter's epochs (ins/smoother.h): each filtered state with its smoothed
-// correction fed back as the filter's own are (a held height's δh and δv_U not: the filter's are
-// not either); the epochs past a divergence keep the filter's rows.
+// correction fed back as the filter's own are (a held height's δh and δv_U get none: their rows of
+// P, hence of C, are 0); the epochs past a divergence keep the filter's rows.
 std::vector<NavigationFix> smoothed_fixes(const std::vector<FilterRecord>& records,
                                           const std::vector<FilteredEpoch>& filtered,
-                                          const std::vector<NavigationFix>& integrated, bool held, const InsState& start,
+                                          const std::vector<NavigationFix>& integrated, const InsState& start,
                                           std::vector<Matrix15>& P) {
   const std::vector<SmoothedEpoch> smoothed = rts_smooth(records);
   P.clear();
@@ -426,9 +426,7 @@ std::vector<NavigationFix> smoothed_fixes(const std::vector<FilterRecord>& recor
   DivergenceWatch watch{start};
   for (std::size_t k = 0; k < smoothed.size(); ++k) {
     FilteredEpoch e = filtered[k];
-    Vector15 y = smoothed[k].correction;
-    if (held) y[kDh] = y[kDV + 2] = 0;
-    feed_back(y, e.state, e.gyro_bias, e.accel_bias);
+    feed_back(smoothed[k].correction, e.state, e.gyro_bias, e.accel_bias);
     e.state.lon_rad = std::remainder(e.state.lon_rad, 2 * std::numbers::pi);
     out.push_back(watch.fix(e.state));
   }
@@ -505,7 +503,7 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
   run.final_P = filter.P();
   if (watch.diverged) run.filter_summary.status = FilterStatus::Diverged;
   if (smoothed)
-    *smoothed = smoothed_fixes(records, filtered, fixes, rig.navigation.hold_height, data.initial, run.smoothed_P);
+    *smoothed = smoothed_fixes(records, filtered, fixes, data.initial, run.smoothed_P);
 }
 
 // PNS: at each epoch the positioning fit over the window's elevations (the SINS's attitude).

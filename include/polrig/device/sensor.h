@@ -48,18 +48,11 @@ double pair_voltage(const CalibrationParams& p, const Electronics& e, int i, dou
 std::array<double, 3> pair_voltages(const CalibrationParams& p, const Electronics& e,
                                     const std::array<double, 6>& E, double theta_deg, double d);
 
-// Eq. 5: the part of V_i due to unequal irradiance alone, kv_i·v_dec·log10(E_j/E_h), as
-// gain·(ln(E_j/E_h)·(1/ln 10)) with gain = kv_i·v_dec (the CS study's loop takes the gain once per
-// pair: the same operations). Inline: it is the inner loop of the CS study and of sweeps.
-inline double eccentricity_bias_gain(const CalibrationParams& p, const Electronics& e, int i) {
-  return p.kv[i] * e.volts_per_decade;
-}
-inline double eccentricity_bias_of_gain(double gain, double ln_Ej_over_Eh) {
-  return gain * (ln_Ej_over_Eh * (1.0 / std::numbers::ln10));
-}
+// Eq. 5: the part of V_i due to unequal irradiance alone, kv_i·v_dec·log10(E_j/E_h).
+// Inline: it is the inner loop of the CS study and of sweeps.
 inline double eccentricity_bias_of_log(const CalibrationParams& p, const Electronics& e, int i,
                                        double ln_Ej_over_Eh) {
-  return eccentricity_bias_of_gain(eccentricity_bias_gain(p, e, i), ln_Ej_over_Eh);
+  return p.kv[i] * e.volts_per_decade * (ln_Ej_over_Eh * (1.0 / std::numbers::ln10));
 }
 // The same from the irradiances (the CS study takes the logarithms of its ratios in vectors and
 // calls eccentricity_bias_of_log).

@@ -84,10 +84,12 @@ std::string_view filter_status_name(FilterStatus s) {
 }
 
 std::string FilterSummary::BriefReport() const {
+  const std::string zupt = zero_velocity_updates == 0 ? std::string() :
+      fmt::format("; {} zero-velocity updates, mean NIS {:.3g}", zero_velocity_updates, zero_velocity_mean_nis);
   return fmt::format("{}: {} predictions, {} updates ({} skipped), innovation mean {:.3g} rms {:.3g}, "
                      "mean NIS {:.3g}, {:.1f} % outside χ²(1) 95 %, R {:.3g}",
                      filter_status_name(status), predictions, updates, skipped, innovation_mean,
-                     innovation_rms, mean_nis, 100 * nis_outside_95, final_R);
+                     innovation_rms, mean_nis, 100 * nis_outside_95, final_R) + zupt;
 }
 
 InsFilter::InsFilter(const InsState& initial, const Matrix15& P0, const FilterSettings& settings)
@@ -239,6 +241,29 @@ SunUpdate InsFilter::update(const SunObservation& m) {
   return out;
 }
 
+ZeroVelocityUpdate InsFilter::update_zero_velocity(double sigma_mps) {
+  if (!(sigma_mps > 0) || !std::isfinite(sigma_mps))
+    throw std::invalid_argument(fmt::format("filter: a zero-velocity σ of {} m/s (expected > 0)", sigma_mps));
+  propagate_covariance();
+  if (!P_prior_) P_prior_ = filter_.P;
+  ZeroVelocityUpdate out;
+  ScalarUpdate* component[3] = {&out.east, &out.north, &out.up};
+  const int axes = settings_.mechanization.hold_height_m ? 2 : 3;  // held: δv_U pinned at 0
+  for (int i = 0; i < axes; ++i) {
+    RowVector15 H = RowVector15::Zero();
+    H[kDV + i] = 1;
+    const double z = state_.v_n[i];  // δv = v̂ − v, v = 0
+    if (!std::isfinite(z) || !filter_.P.allFinite()) {
+      ++skipped_;
+      continue;
+    }
+    *component[i] = filter_.update(H, z, sigma_mps * sigma_mps);
+    ++zero_velocity_updates_;
+    zero_velocity_nis_ += component[i]->nis;
+    feed_back_and_reset();
+  }
+  return out;
+}
 
 FilterSummary InsFilter::summary() const {
   FilterSummary s;
@@ -246,6 +271,8 @@ FilterSummary InsFilter::summary() const {
   s.updates = updates_;
   s.skipped = skipped_;
   s.final_R = last_R_;
+  s.zero_velocity_updates = zero_velocity_updates_;
+  if (zero_velocity_updates_ > 0) s.zero_velocity_mean_nis = zero_velocity_nis_ / zero_velocity_updates_;
   if (updates_ > 0) {
     s.innovation_mean = sum_r_ / updates_;
     s.innovation_rms = std::sqrt(sum_r2_ / updates_);

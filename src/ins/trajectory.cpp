@@ -128,6 +128,8 @@ void check(const TrajectorySpec& spec) {
   check_sampling("trajectory", spec.imu_rate_hz, spec.substeps);
   if (spec.speed_mps < 0)
     throw std::invalid_argument(fmt::format("trajectory: speed {} m/s must be ≥ 0", spec.speed_mps));
+  if (!(spec.vibration_mps2 >= 0) || !std::isfinite(spec.vibration_mps2))
+    throw std::invalid_argument(fmt::format("trajectory: vibration {} m/s² must be finite and ≥ 0", spec.vibration_mps2));
 }
 
 long intervals_of(const Segment& s, double rate_hz, std::size_t index) {
@@ -151,6 +153,27 @@ std::string_view segment_kind_name(SegmentKind k) {
   }
   return "?";
 }
+
+namespace {
+
+// The vibration's velocity in b at a truth sample, v_i = s·√2·a/ω_i·sin(ω_i t), s = min(1, u/1 m/s):
+// each IMU interval's Δv gains v(t_k) − v(t_{k−1}), the exact integral of its acceleration.
+Eigen::Vector3d vibration_velocity(const TruthSample& at, double rms_mps2) {
+  const double scale = std::min(1.0, at.v_n.norm() / 1.0);
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i) {
+    const double w = 2 * std::numbers::pi * kVibrationHz[i];
+    v[i] = scale * std::sqrt(2.0) * rms_mps2 / w * std::sin(w * at.t_s);
+  }
+  return v;
+}
+
+void add_vibration(Trajectory& out, double rms_mps2) {
+  for (std::size_t k = 0; k < out.imu.size(); ++k)
+    out.imu[k].dv += vibration_velocity(out.truth[k + 1], rms_mps2) - vibration_velocity(out.truth[k], rms_mps2);
+}
+
+}  // namespace
 
 Trajectory generate_trajectory(const TrajectorySpec& spec) {
   check(spec);
@@ -194,6 +217,7 @@ Trajectory generate_trajectory(const TrajectorySpec& spec) {
     }
     seg_start = motion_at(seg_start, s, static_cast<double>(n) * dt);
   }
+  if (spec.vibration_mps2 > 0) add_vibration(out, spec.vibration_mps2);
   return out;
 }
 

@@ -158,6 +158,10 @@ py::dict filter_dict(const NavigationRun& run) {
   out["azimuth_innovation"] = column(f, [](const FilterEpoch& e) { return e.azimuth_update.innovation; });
   out["azimuth_nis"] = column(f, [](const FilterEpoch& e) { return e.azimuth_update.nis; });
   out["azimuth_R"] = column(f, [](const FilterEpoch& e) { return e.azimuth_update.R; });
+  out["rest_statistic"] = column(f, [](const FilterEpoch& e) { return e.rest_statistic; });
+  out["zero_velocity_nis_e"] = column(f, [](const FilterEpoch& e) { return e.zero_velocity.east.nis; });
+  out["zero_velocity_nis_n"] = column(f, [](const FilterEpoch& e) { return e.zero_velocity.north.nis; });
+  out["zero_velocity_nis_u"] = column(f, [](const FilterEpoch& e) { return e.zero_velocity.up.nis; });
   out["sigma_north_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_north_m; });
   out["sigma_east_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_east_m; });
   out["corr_north_east"] = column(f, [](const FilterEpoch& e) { return e.corr_north_east; });

@@ -45,7 +45,8 @@ std::string filter_csv(const NavigationDataset& data, const NavigationRun& run, 
   std::string out = "t_s,unit_i,unit_j,e_angle_deg,elevation_body_deg,elevation_deg,model_elevation_deg";
   if (truth) out += ",true_elevation_deg";
   out += ",innovation,innovation_var,nis,R,sigma_north_m,sigma_east_m,corr_north_east,sigma_heading_deg,sun_status";
-  out += ",azimuth_deg,model_azimuth_deg,azimuth_innovation,azimuth_innovation_var,azimuth_nis,azimuth_R\n";
+  out += ",azimuth_deg,model_azimuth_deg,azimuth_innovation,azimuth_innovation_var,azimuth_nis,azimuth_R";
+  out += ",rest_statistic,zero_velocity,zero_velocity_nis_e,zero_velocity_nis_n,zero_velocity_nis_u\n";
   for (const FilterEpoch& f : run.filter) {
     const bool ok = f.sun.status == UnitSunStatus::Ok;
     out += fmt::format("{},{},{},{},{},{},{}", f.t_s, ok ? std::to_string(f.sun.i + 1) : "nan", ok ? std::to_string(f.sun.j + 1) : "nan",
@@ -59,9 +60,13 @@ std::string filter_csv(const NavigationDataset& data, const NavigationRun& run, 
     out += fmt::format(",{},{},{},{},{},{},{},{},{}", cell(f.update.innovation), cell(f.update.variance), cell(f.update.nis),
                        cell(f.update.R), f.sigma_north_m, f.sigma_east_m, cell(f.corr_north_east), rad2deg(f.sigma_heading_rad),
                        unit_sun_status_name(f.sun.status));
-    out += fmt::format(",{},{},{},{},{},{}\n", cell(rad2deg(f.azimuth_rad)), cell(rad2deg(f.model_azimuth_rad)),
+    out += fmt::format(",{},{},{},{},{},{}", cell(rad2deg(f.azimuth_rad)), cell(rad2deg(f.model_azimuth_rad)),
                        cell(f.azimuth_update.innovation), cell(f.azimuth_update.variance), cell(f.azimuth_update.nis),
                        cell(f.azimuth_update.R));
+    const ZeroVelocityUpdate& z = f.zero_velocity;
+    const bool zupt = std::isfinite(z.east.nis) || std::isfinite(z.north.nis) || std::isfinite(z.up.nis);
+    out += fmt::format(",{},{},{},{},{}\n", cell(f.rest_statistic), zupt ? 1 : 0, cell(z.east.nis), cell(z.north.nis),
+                       cell(z.up.nis));
   }
   return out;
 }
@@ -85,9 +90,12 @@ std::string filter_summary_yaml(const NavigationRun& run, const Rig& rig) {
       "# How the integrated filter ended (ins/filter.h FilterSummary): {}\n"
       "status: {}\npredictions: {}\nupdates: {}\nskipped: {}\nno_sun: {}  # readings without two usable units\n"
       "innovation_mean: {}\ninnovation_rms: {}\nmean_nis: {}\nnis_outside_95: {}\nfinal_R: {}\n"
+      "zero_velocity_updates: {}  # navigation.zupt: scalar updates, one per velocity component\n"
+      "zero_velocity_mean_nis: {}\n"
       "vertical_channel: {}\nmeasurement: {}  # navigation.measurement\nstart: {}\n",
       s.BriefReport(), filter_status_name(s.status), s.predictions, s.updates, s.skipped, no_sun, cell(s.innovation_mean),
-      cell(s.innovation_rms), cell(s.mean_nis), cell(s.nis_outside_95), cell(s.final_R), run.vertical_channel,
+      cell(s.innovation_rms), cell(s.mean_nis), cell(s.nis_outside_95), cell(s.final_R),
+      s.zero_velocity_updates, cell(s.zero_velocity_mean_nis), run.vertical_channel,
       rig.navigation.measurement, run.start);
 }
 
@@ -182,8 +190,9 @@ std::vector<DatasetFile> report_navigation(const std::filesystem::path& dir, con
   if (!run.filter.empty()) {
     write_text_file(dir / "filter.csv", filter_csv(data, run, rig.source.sky.resolved_sky()));
     write_text_file(dir / "filter_summary.yaml", filter_summary_yaml(run, rig));
-    files.push_back({"filter.csv", 2, "the integrated filter per compass reading: the two units, the elevations, the "
-                                      "innovation, its variance, NIS, R and the position and heading σ; the azimuth's"});
+    files.push_back({"filter.csv", 3, "the integrated filter per compass reading: the two units, the elevations, the "
+                                      "innovation, its variance, NIS, R and the position and heading σ; the azimuth's; "
+                                      "the rest detector and the zero-velocity update"});
     files.push_back({"filter_summary.yaml", 1, "how the integrated filter ended"});
   }
   if (data.truth) {

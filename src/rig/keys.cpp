@@ -184,6 +184,13 @@ void add_ins_keys(std::vector<RigKey>& keys) {
        "each segment's pitch rate, nose up positive (one per segment, or none: 0); the pitch stays within ±80°",
        "a vehicle's pitch changes by degrees per second at most",
        [](Rig& r) -> std::vector<double>& { return r.trajectory.segment_climb_deg_s; }, &within<RealRange{-10.0, 10.0}>);
+  push(real<RealRange{0.0, 10.0}>(
+           "trajectory.vibration_mps2", "m/s^2", "an rms acceleration",
+           "the vehicle's vibration while it moves: a body-fixed oscillation in the IMU's Δv, rms per axis from 1 m/s "
+           "on and in proportion to the speed below, none at rest (ins/trajectory.h); without it steady motion "
+           "looks like rest to navigation.zupt's detector [C: 0]",
+           "0 (a smooth ride) to 1 g; a car body on a paved road ~0.1–0.5 m/s²",
+           [](Rig& r) -> double& { return r.trajectory.vibration_mps2; }), kSimulate);
   // The IMU (ins/imu.h), per axis x, y, z of the body.
   push(real<RealRange{1.0, 2000.0}>("imu.rate_hz", "Hz", "a rate", "the IMU's output rate [C: 100]",
                                     "strapdown IMUs output 1 Hz to 2 kHz",
@@ -257,7 +264,7 @@ void add_ins_keys(std::vector<RigKey>& keys) {
   push(real<RealRange{0.0, 10.0, true, false}>(
            "navigation.sigma_A_deg", "deg", "a standard deviation",
            "the compass' sun-azimuth σ in n the filter assumes (navigation.measurement azimuth or sun-vector): R = σ_A² "
-           "[C: 0.046, what the shipped Z21 rigs' chain delivers beside its 0.1° in elevation; docs/validation.md]",
+           "[C: 0.040, what the shipped Z21 rigs' chain delivers beside its 0.1° in elevation; docs/validation.md]",
            "positive; beyond 10° the azimuth tells nothing of the heading",
            [](Rig& r) -> double& { return r.navigation.sigma_A_deg; }), kNav);
   push(boolean("navigation.adaptive", "Sage–Husa's adaptive R (spec §4.7) [C: true]",
@@ -268,6 +275,14 @@ void add_ins_keys(std::vector<RigKey>& keys) {
            [](Rig& r) -> double& { return r.navigation.forgetting_factor; }), kNav);
   push(boolean("navigation.hold_height", "hold the height at the start's, as Z21's barometer does [C: true]",
                [](Rig& r) -> bool& { return r.navigation.hold_height; }), kNav);
+  push(boolean("navigation.zupt", "zero-velocity updates of the integrated filter at every compass reading whose "
+               "IMU interval passes the rest detector (ins/zupt.h; needs the IMU's white noise, imu.gyro.arw_deg_rt_h "
+               "and imu.accel.vrw_ug_rt_hz) [C: false, Z21 has none]",
+               [](Rig& r) -> bool& { return r.navigation.zupt; }), kNav);
+  push(real<RealRange{0.0, 1.0, true, false}>(
+           "navigation.zupt_sigma_mps", "m/s", "a standard deviation",
+           "the velocity a zero-velocity update allows per axis: R = σ² [C: 0.001, a vehicle standing on its wheels]",
+           "positive; 1 m/s is no rest at all", [](Rig& r) -> double& { return r.navigation.zupt_sigma_mps; }), kNav);
   keys.push_back(reads(only(array<RealRange{-10.0, 10.0}>(
       "navigation.initial_attitude_error_deg", "deg", "3 angles",
       "roll, pitch and heading errors of the INS's start: added to the start attitude of trajectory.* the INS starts from [C: 0, 0, 0]",
@@ -1193,6 +1208,13 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig, RigUse use) {
                       "the azimuth model the filter's attitude in the measured sun, which the accelerometers' level "
                       "leaves out)",
                       "navigation.integrated_level"};
+  if (rig.navigation.zupt)
+    for (const auto& [path, noise] : {std::pair{"imu.gyro.arw_deg_rt_h", &rig.imu.gyro.white_noise},
+                                      {"imu.accel.vrw_ug_rt_hz", &rig.imu.accel.white_noise}})
+      if (!(std::min({(*noise)[0], (*noise)[1], (*noise)[2]}) > 0))
+        return RigProblem{path, fmt::format("expected a positive density on every axis with navigation.zupt true (the "
+                                            "rest detector weighs each axis by its white noise), got [{}, {}, {}]",
+                                            (*noise)[0], (*noise)[1], (*noise)[2]), "navigation.zupt"};
   const TrajectorySettings& t = rig.trajectory;
   const std::size_t n = t.segment_s.size();
   for (const auto& [path, list] : {std::pair{"trajectory.segment_accel_mps2", &t.segment_accel_mps2},

@@ -14,6 +14,7 @@
 
 #include "polrig/ins/earth.h"
 #include "polrig/ins/smoother.h"
+#include "polrig/ins/zupt.h"
 #include "polrig/random.h"
 #include "polrig/rig/error.h"
 #include "polrig/sky/sun.h"
@@ -74,6 +75,7 @@ TrajectorySpec trajectory_spec(const Rig& rig) {
   spec.attitude = {deg2rad(t.roll_deg), deg2rad(t.pitch_deg), deg2rad(t.heading_deg)};
   spec.speed_mps = t.speed_mps;
   spec.imu_rate_hz = rig.imu.rate_hz;
+  spec.vibration_mps2 = t.vibration_mps2;
   const auto at = [](const std::vector<double>& v, std::size_t i) { return v.empty() ? 0.0 : v[i]; };
   double u = t.speed_mps;
   const std::size_t n = t.segment_s.size();
@@ -405,6 +407,20 @@ Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at
   return {{dv.x(), dv.y(), dv.z()}, steady};
 }
 
+// The rest detector over a reading's interval (the IMU samples after the previous reading, as
+// level_of's), at the filter's attitude and bias estimates.
+ZeroVelocityTest rest_test(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k,
+                           const InsFilter& filter, const ZeroVelocityDetector& detector) {
+  const std::size_t first = k == 0 ? 0 : at[k - 1] + 1;
+  const double t0 = first == 0 ? data.initial.t_s : data.imu[first - 1].t_s;
+  const InsState& s = filter.state();
+  RestModel rest;
+  rest.g_mps2 = normal_gravity(s.lat_rad, s.h_m);
+  rest.omega_b = s.C_bn().transpose() * omega_ie_n(s.lat_rad) + filter.gyro_bias();
+  rest.accel_bias = filter.accel_bias();
+  return detector.test(std::span(data.imu).subspan(first, at[k] + 1 - first), t0, rest);
+}
+
 // The INS with the filter, its state and the filter's record at every compass epoch.
 // The filtered state at a compass epoch, with the bias estimates feed_back moves too.
 struct FilteredEpoch {
@@ -444,6 +460,8 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
   // H^n's level: the filter's attitude (Z21) or the accelerometers (navigation.integrated_level).
   const bool accelerometer = rig.navigation.integrated_level == "accelerometer";
   const double g = normal_gravity(data.initial.lat_rad, data.initial.h_m);
+  const ImuErrorSpec imu = imu_error_spec(rig.imu);
+  const ZeroVelocityDetector detector{imu.gyro.white_noise, imu.accel.white_noise};
   std::size_t next = 0;
   for (std::size_t i = 0; i < data.imu.size() && next < at.size(); ++i) {
     filter.predict(data.imu[i]);
@@ -451,6 +469,11 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
     const CompassEpoch& e = data.compass[next++];
     FilterEpoch f;
     f.t_s = filter.state().t_s;
+    if (rig.navigation.zupt) {
+      const ZeroVelocityTest rest = rest_test(data, at, next - 1, filter, detector);
+      f.rest_statistic = rest.statistic;
+      if (rest.at_rest) f.zero_velocity = filter.update_zero_velocity(rig.navigation.zupt_sigma_mps);
+    }
     f.sun = sun_from_units(e.units, mounts);
     if (!accelerometer) {
       f.elevation_rad = elevation_n(f.sun, filter.state().C_bn());

@@ -80,7 +80,7 @@ struct ErrorFilter {
 
 struct FilterSettings {
   double sigma_H_rad = deg2rad(0.1);  // the compass' elevation σ [C]
-  double sigma_A_rad = deg2rad(0.046);  // its azimuth σ (SunMeasurement Azimuth, SunVector) [C]
+  double sigma_A_rad = deg2rad(0.040);  // its azimuth σ (SunMeasurement Azimuth, SunVector) [C]
   bool adaptive = true;            // Sage–Husa R [C]
   double sage_husa_b = 0.98;       // Z21's forgetting factor as b (spec §4.7)
   double R_min_factor = 0.01, R_max_factor = 100;  // PSINS's clamp on R, times R0
@@ -123,6 +123,14 @@ struct SunUpdate {
   ScalarUpdate azimuth{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
 };
 
+// A zero-velocity update's scalar updates, z = v̂_i − 0 on δv_E, δv_N, δv_U (up NaN when the height
+// is held: δv_U is pinned).
+struct ZeroVelocityUpdate {
+  ScalarUpdate east{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
+  ScalarUpdate north{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
+  ScalarUpdate up{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
+};
+
 enum class FilterStatus {
   Ok,              // every update finite and the NIS consistent
   NoUpdates,       // predicted only
@@ -144,6 +152,10 @@ struct FilterSummary {
   double mean_nis = 0;
   double nis_outside_95 = 0;        // the fraction outside χ²(1)'s [0.000982, 5.024]
   double final_R = std::numeric_limits<double>::quiet_NaN();
+  // Zero-velocity updates (scalar, one per velocity component), apart from the sun's above: they
+  // neither enter the sun's NIS statistics nor the status.
+  int zero_velocity_updates = 0;
+  double zero_velocity_mean_nis = std::numeric_limits<double>::quiet_NaN();
   std::string BriefReport() const;  // one line
 };
 
@@ -173,6 +185,10 @@ class InsFilter {
   // std::invalid_argument when m.t_s is more than 1 ms from the state's time (a programming error);
   // a non-finite measurement is data: skipped and counted in the summary.
   SunUpdate update(const SunObservation& m);
+  // A zero-velocity update at the current state (the vehicle at rest: ins/zupt.h says when), each
+  // velocity component a scalar update with R = σ², fed back; the velocity error is then observed
+  // directly, the tilt and the horizontal accelerometer biases through it (docs/physics.md §18.8).
+  ZeroVelocityUpdate update_zero_velocity(double sigma_mps);
   // Ends a compass epoch at the current state (after its updates, or none) and returns its record
   // for a smoother; the next epoch's Φ and correction start from here.
   InsFilterEpoch end_epoch();
@@ -204,7 +220,8 @@ class InsFilter {
   Vector15 correction_ = Vector15::Zero();           // fed back since the epoch began
   Eigen::Vector3d f_dt_sum_ = Eigen::Vector3d::Zero();  // ∫f^n dt since P was last propagated (AtUpdates)
   double pending_s_ = 0;                               // and that interval's length
-  int predictions_ = 0, updates_ = 0, skipped_ = 0, nis_outside_ = 0;
+  int predictions_ = 0, updates_ = 0, skipped_ = 0, nis_outside_ = 0, zero_velocity_updates_ = 0;
+  double zero_velocity_nis_ = 0;
   double sum_r_ = 0, sum_r2_ = 0, sum_nis_ = 0;
 };
 

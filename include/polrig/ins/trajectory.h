@@ -38,6 +38,11 @@ struct TrajectorySpec {
   std::vector<Segment> segments;
   double imu_rate_hz = 100;
   int substeps = 8;        // per IMU interval, even (Simpson)
+  // A vehicle's vibration [C]: a body-fixed oscillating acceleration, rms vibration_mps2 per axis at
+  // speeds of 1 m/s and more, in proportion to the speed below (none at rest), one tone per axis
+  // (kVibrationHz), in the IMU's Δv only: the truth omits its velocity (≤ √2·a/ω, 5 mm/s at
+  // 0.3 m/s²) and displacement (< 0.1 mm). Steady motion without it looks like rest to an IMU.
+  double vibration_mps2 = 0;
 
   double duration_s() const {  // the segments' sum
     double t = 0;
@@ -45,6 +50,8 @@ struct TrajectorySpec {
     return t;
   }
 };
+
+inline constexpr double kVibrationHz[3] = {11.3, 13.7, 17.9};  // x, y, z of b [C: a car body's]
 
 struct TruthSample {
   double t_s = 0;

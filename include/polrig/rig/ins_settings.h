@@ -19,6 +19,7 @@ struct TrajectorySettings {
   double speed_mps = 0;    // along the body's forward axis
   double duration_s = 1200;  // Z21's static test: 20 min
   std::vector<double> segment_s, segment_accel_mps2, segment_turn_deg_s, segment_climb_deg_s;
+  double vibration_mps2 = 0;  // rms per axis while moving (ins/trajectory.h) [C: 0]
 };
 
 // One triad's errors per axis (x, y, z of b), in the units of its keys: the gyro's in °/h (bias,
@@ -54,7 +55,7 @@ struct ImuSettings {
 // P0 from the 1σ settings and, for the biases, the IMU's own turn-on and constant biases.
 struct NavigationSettings {
   double sigma_H_deg = 0.1;       // the compass' elevation σ (Z21 Table 1)
-  double sigma_A_deg = 0.046;     // its azimuth σ in n (navigation.measurement azimuth, sun-vector)
+  double sigma_A_deg = 0.040;     // its azimuth σ in n (navigation.measurement azimuth, sun-vector)
   bool adaptive = true;           // Sage–Husa R
   double forgetting_factor = 0.98;  // Z21's b
   bool hold_height = true;        // Z21's barometer: h held at the start's height
@@ -77,6 +78,10 @@ struct NavigationSettings {
   // The integrated filter's level for H^n: "ins", its own attitude (Z21, spec §4.2), or
   // "accelerometer", as PNS's (unsteady readings give no update) [C: ins].
   std::string integrated_level = "ins";
+  // Zero-velocity updates when the IMU says the vehicle is at rest (ins/zupt.h), each velocity
+  // component with R = zupt_sigma_mps² [C: off, Z21 has none; 1 mm/s].
+  bool zupt = false;
+  double zupt_sigma_mps = 1e-3;
 };
 
 }  // namespace polrig

@@ -128,6 +128,10 @@ struct FilterEpoch {
   double model_azimuth_rad = 0;    // A^n of the filter's position before the update
   double sigma_north_m = 0, sigma_east_m = 0, sigma_heading_rad = 0;  // after the update
   double corr_north_east = 0;  // the correlation of the north and east errors after the update
+  // navigation.zupt: the rest detector's statistic over the reading's interval (NaN when not run)
+  // and the zero-velocity update when it passed (NaN components otherwise).
+  double rest_statistic = std::numeric_limits<double>::quiet_NaN();
+  ZeroVelocityUpdate zero_velocity;
 };
 
 struct NavigationRun {

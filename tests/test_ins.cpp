@@ -25,6 +25,7 @@
 #include "polrig/ins/mechanization.h"
 #include "polrig/ins/smoother.h"
 #include "polrig/ins/trajectory.h"
+#include "polrig/ins/zupt.h"
 #include "polrig/random.h"
 #include "polrig/units.h"
 
@@ -1162,6 +1163,138 @@ TEST(InsFilter, ANonFiniteMeasurementIsDataNotACrash) {
   EXPECT_EQ(s.skipped, 1);
   EXPECT_EQ(s.updates, 0);
   EXPECT_NE(s.BriefReport().find("non_finite"), std::string::npos);
+}
+
+// A zero-velocity update is three scalar Kalman updates on δv (z = v̂, H = e_i): with P's velocity
+// block diagonal and uncorrelated with the rest, each is the textbook scalar one, v⁺ = v·R/(P + R),
+// P⁺ = P·R/(P + R); a held height's v_U is pinned and gets none.
+TEST(InsFilter, AZeroVelocityUpdateIsTheScalarKalmanUpdate) {
+  Matrix15 P0 = Matrix15::Zero();
+  for (int i = 0; i < 15; ++i) P0(i, i) = 1e-6;
+  const double P_v = 0.1 * 0.1, R = 0.01 * 0.01;
+  for (int i = 0; i < 3; ++i) P0(kDV + i, kDV + i) = P_v;
+  for (const bool held : {false, true}) {
+    InsState start = static_state();
+    start.v_n = Eigen::Vector3d(0.05, -0.03, 0.02);
+    FilterSettings settings;
+    if (held) settings.mechanization.hold_height_m = start.h_m;
+    InsFilter filter(start, P0, settings);
+    const ZeroVelocityUpdate u = filter.update_zero_velocity(0.01);
+    const int axes = held ? 2 : 3;
+    for (int i = 0; i < axes; ++i) {
+      EXPECT_NEAR(filter.state().v_n[i], start.v_n[i] * R / (P_v + R), 1e-15) << i;
+      EXPECT_NEAR(filter.P()(kDV + i, kDV + i), P_v * R / (P_v + R), 1e-15) << i;
+    }
+    const ScalarUpdate& east = u.east;
+    EXPECT_NEAR(east.nis, 0.05 * 0.05 / (P_v + R), 1e-12);
+    EXPECT_EQ(std::isnan(u.up.nis), held);
+    if (held) {
+      EXPECT_EQ(filter.state().v_n.z(), 0.02);  // the mechanization's to hold: the update leaves it
+    }
+    const FilterSummary s = filter.summary();
+    EXPECT_EQ(s.zero_velocity_updates, axes);
+    EXPECT_EQ(s.updates, 0);  // the sun's statistics are apart
+    EXPECT_NE(s.BriefReport().find("zero-velocity updates"), std::string::npos);
+  }
+  InsFilter filter(static_state(), P0);
+  EXPECT_THROW(filter.update_zero_velocity(0), std::invalid_argument);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Zero-velocity detection (Skog et al. 2010's SHOE)
+// ---------------------------------------------------------------------------------------------
+
+// At rest with Z21's IMU (its biases known to the test) each window's statistic is χ²(6W − 2)/
+// (6W − 2) (the mean direction takes two of the 6W degrees of freedom): over 1000 windows of
+// W = 100 its mean is 1 (sd of the mean √(2/598)/√1000 = 0.0018; 0.01 is 5.5 sd) and its sd
+// √(2/598) = 0.0578 (sd of that ±2.2 %; 10 % allowed), and no window is missed (10⁻⁶ each).
+TEST(InsZupt, AtRestTheStatisticIsChiSquareOverItsDegreesOfFreedom) {
+  const double rate = 100;
+  const Trajectory tr = generate_trajectory(static_spec(1000, rate, {rad(2), rad(-1), rad(30)}));
+  ImuErrorSpec spec = z21_imu_errors();
+  spec.rate_hz = rate;
+  const CorruptedImu imu = corrupt_imu(tr.imu, spec, 77);
+  const ZeroVelocityDetector detector{spec.gyro.white_noise, spec.accel.white_noise};
+  RestModel rest;
+  rest.g_mps2 = somigliana(kLat, 50);
+  rest.omega_b = tr.truth[0].C_bn.transpose() * Eigen::Vector3d(0, kEarthRate * std::cos(kLat), kEarthRate * std::sin(kLat)) +
+                 imu.drawn.gyro_bias;
+  rest.accel_bias = imu.drawn.accel_bias;
+  std::vector<double> T;
+  int missed = 0;
+  for (std::size_t k = 0; k + 100 <= imu.samples.size(); k += 100) {
+    const ZeroVelocityTest t = detector.test(std::span(imu.samples).subspan(k, 100), k == 0 ? 0.0 : imu.samples[k - 1].t_s, rest);
+    T.push_back(t.statistic);
+    missed += t.at_rest ? 0 : 1;
+    EXPECT_NEAR(t.threshold, chi2_mean_quantile(598, 4.753424308822899), 1e-12);
+  }
+  ASSERT_EQ(T.size(), 1000u);
+  double mean = 0, var = 0;
+  for (double x : T) mean += x / 1000;
+  for (double x : T) var += (x - mean) * (x - mean) / 1000;
+  std::printf("at rest: T mean %.4f, sd %.4f (χ²: 1, %.4f), %d missed\n", mean, std::sqrt(var), std::sqrt(2.0 / 598), missed);
+  EXPECT_NEAR(mean, 1.0, 0.01);
+  EXPECT_NEAR(std::sqrt(var) / std::sqrt(2.0 / 598), 1.0, 0.1);
+  EXPECT_EQ(missed, 0);
+  EXPECT_THROW(detector.test(std::span(imu.samples).subspan(0, 1), 0.0, rest), std::invalid_argument);
+  EXPECT_THROW((ZeroVelocityDetector{}.test(std::span(imu.samples).subspan(0, 100), 0.0, rest)), std::invalid_argument);
+}
+
+// What the IMU sees in motion: an acceleration (‖f‖ ≠ g), a turn (ω ≠ ω_ie) and a vibrating cruise
+// are not rest; a steady cruise without vibration is, to any IMU (f = g, ω = ω_ie up to the
+// transport rate, 3e-6 rad/s at 20 m/s): why a simulated vehicle needs trajectory.vibration_mps2.
+TEST(InsZupt, AccelerationTurnsAndVibrationAreNotRestASteadyCruiseIs) {
+  const double rate = 100;
+  ImuErrorSpec spec = z21_imu_errors();
+  spec.rate_hz = rate;
+  const ZeroVelocityDetector detector{spec.gyro.white_noise, spec.accel.white_noise};
+  for (const double vibration : {0.0, 0.3}) {
+    TrajectorySpec traj = moving_spec(rate);
+    traj.vibration_mps2 = vibration;
+    const Trajectory tr = generate_trajectory(traj);
+    const CorruptedImu imu = corrupt_imu(tr.imu, spec, 78);
+    // 1 s windows inside segments: the start's rest, the 1 m/s² acceleration, the cruise, the turn.
+    const auto window = [&](double t0) {
+      const std::size_t k = static_cast<std::size_t>(std::lround(t0 * rate));
+      const TruthSample& at = tr.truth[k];
+      RestModel rest;
+      rest.g_mps2 = somigliana(at.lat_rad, at.h_m);
+      rest.omega_b = at.C_bn.transpose() * Eigen::Vector3d(0, kEarthRate * std::cos(at.lat_rad), kEarthRate * std::sin(at.lat_rad)) +
+                     imu.drawn.gyro_bias;
+      rest.accel_bias = imu.drawn.accel_bias;
+      return detector.test(std::span(imu.samples).subspan(k, 100), at.t_s, rest);
+    };
+    EXPECT_TRUE(window(4).at_rest) << window(4).statistic;
+    EXPECT_FALSE(window(20).at_rest) << window(20).statistic;
+    EXPECT_FALSE(window(75).at_rest) << window(75).statistic;
+    EXPECT_EQ(window(45).at_rest, vibration == 0) << vibration << " " << window(45).statistic;
+  }
+}
+
+// The vibration is in the IMU's Δv alone: the truth is the same bit for bit, at rest nothing
+// changes, and while moving each axis's Δv/Δt carries the tone's increments, rms a·sin x/x with
+// x = ωΔt/2 (the exact mean of √2·a·cos ωt over an interval), within 1 % over the 40 s cruise.
+TEST(InsTrajectory, VibrationIsInTheImuAloneWithItsRms) {
+  const double rate = 100, a = 0.3;
+  TrajectorySpec smooth = moving_spec(rate), vibrating = smooth;
+  vibrating.vibration_mps2 = a;
+  const Trajectory t0 = generate_trajectory(smooth), t1 = generate_trajectory(vibrating);
+  ASSERT_EQ(t0.imu.size(), t1.imu.size());
+  for (std::size_t k = 0; k < t0.truth.size(); ++k) {
+    ASSERT_EQ(t0.truth[k].lat_rad, t1.truth[k].lat_rad);
+    ASSERT_EQ(t0.truth[k].v_n, t1.truth[k].v_n);
+  }
+  for (std::size_t k = 0; k < 1000; ++k) EXPECT_EQ(t0.imu[k].dv, t1.imu[k].dv) << k;  // the first 10 s: at rest
+  // The cruise at 20 m/s, 30–60 s: each axis's rms against a·sin x/x.
+  for (int i = 0; i < 3; ++i) {
+    double sum2 = 0;
+    int n = 0;
+    for (std::size_t k = 3000; k < 6000; ++k, ++n) sum2 += std::pow((t1.imu[k].dv[i] - t0.imu[k].dv[i]) * rate, 2);
+    const double x = kPi * kVibrationHz[i] / rate;
+    EXPECT_NEAR(std::sqrt(sum2 / n) / (a * std::sin(x) / x), 1.0, 0.01) << i;
+  }
+  vibrating.vibration_mps2 = -1;
+  EXPECT_THROW(generate_trajectory(vibrating), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------------

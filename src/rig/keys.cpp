@@ -264,7 +264,7 @@ void add_ins_keys(std::vector<RigKey>& keys) {
   push(real<RealRange{0.0, 10.0, true, false}>(
            "navigation.sigma_A_deg", "deg", "a standard deviation",
            "the compass' sun-azimuth σ in n the filter assumes (navigation.measurement azimuth or sun-vector): R = σ_A² "
-           "[C: 0.040, what the shipped Z21 rigs' chain delivers beside its 0.1° in elevation; docs/validation.md]",
+           "[C: 0.0405, what the shipped Z21 rigs' chain delivers beside its 0.1° in elevation; docs/validation.md]",
            "positive; beyond 10° the azimuth tells nothing of the heading",
            [](Rig& r) -> double& { return r.navigation.sigma_A_deg; }), kNav);
   push(boolean("navigation.adaptive", "Sage–Husa's adaptive R (spec §4.7) [C: true]",

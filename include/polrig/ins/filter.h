@@ -80,7 +80,7 @@ struct ErrorFilter {
 
 struct FilterSettings {
   double sigma_H_rad = deg2rad(0.1);  // the compass' elevation σ [C]
-  double sigma_A_rad = deg2rad(0.040);  // its azimuth σ (SunMeasurement Azimuth, SunVector) [C]
+  double sigma_A_rad = deg2rad(0.0405);  // its azimuth σ (SunMeasurement Azimuth, SunVector) [C]
   bool adaptive = true;            // Sage–Husa R [C]
   double sage_husa_b = 0.98;       // Z21's forgetting factor as b (spec §4.7)
   double R_min_factor = 0.01, R_max_factor = 100;  // PSINS's clamp on R, times R0
@@ -187,7 +187,7 @@ class InsFilter {
   SunUpdate update(const SunObservation& m);
   // A zero-velocity update at the current state (the vehicle at rest: ins/zupt.h says when), each
   // velocity component a scalar update with R = σ², fed back; the velocity error is then observed
-  // directly, the tilt and the horizontal accelerometer biases through it (docs/physics.md §18.8).
+  // directly, the tilt and the horizontal accelerometer biases through it (docs/physics.md §18.9).
   ZeroVelocityUpdate update_zero_velocity(double sigma_mps);
   // Ends a compass epoch at the current state (after its updates, or none) and returns its record
   // for a smoother; the next epoch's Φ and correction start from here.

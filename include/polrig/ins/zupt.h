@@ -1,5 +1,5 @@
 #pragma once
-// Zero-velocity detection from the IMU alone (docs/physics.md §18.8): Skog, Händel, Nilsson and
+// Zero-velocity detection from the IMU alone (docs/physics.md §18.9): Skog, Händel, Nilsson and
 // Rantakokko 2010 (IEEE Trans. Biomed. Eng. 57:2657), the stance hypothesis optimal detector (SHOE),
 //   T = (1/W) Σ_k [ ‖(f_k − b̂_a) − g·ū‖²_{σ_f} + ‖ω_k − ω_rest‖²_{σ_ω} ],   ū = mean(f − b̂_a)/‖·‖,
 // over the W samples of a window, f_k = Δv_k/Δt and ω_k = Δθ_k/Δt, each axis weighted by its white

@@ -55,7 +55,7 @@ struct ImuSettings {
 // P0 from the 1σ settings and, for the biases, the IMU's own turn-on and constant biases.
 struct NavigationSettings {
   double sigma_H_deg = 0.1;       // the compass' elevation σ (Z21 Table 1)
-  double sigma_A_deg = 0.040;     // its azimuth σ in n (navigation.measurement azimuth, sun-vector)
+  double sigma_A_deg = 0.0405;    // its azimuth σ in n (navigation.measurement azimuth, sun-vector)
   bool adaptive = true;           // Sage–Husa R
   double forgetting_factor = 0.98;  // Z21's b
   bool hold_height = true;        // Z21's barometer: h held at the start's height

@@ -363,6 +363,38 @@ TEST(SlowNavigationStudy, ZeroVelocityUpdatesMakeTheAzimuthFiltersConsistent) {
   }
 }
 
+// Issue 34 §3's goal: with the whole sun vector and zero-velocity updates the integrated solution
+// ends no worse than the better of SINS and PNS, in position and in heading, in at least 95 of 100
+// trials on both shipped rigs (99 and 100 measured), its position NEES inside the 99.9 % band. With
+// the elevation alone the heading is unobservable and the integrated heading is SINS's coin flip.
+TEST(SlowNavigationStudy, TheSunVectorWithZeroVelocityUpdatesMeetsTheGoalOnBothRigs) {
+  constexpr double z999 = 3.2905;
+  NavigationStudySettings s;
+  s.trials = 100;
+  s.tilts_deg = {};
+  for (const std::string& path : {kStatic, kVehicle}) {
+    for (const char* m : {"sun-vector", "elevation"}) {
+      const Rig rig = load_rig(path, {{"navigation.measurement", m}, {"navigation.adaptive", "false"},
+                                      {"navigation.zupt", "true"}}).rig;
+      const NavigationStudy study = navigation_study(rig, s);
+      ASSERT_EQ(study.goal.size(), 1u);
+      const NavigationGoal& g = study.goal[0];
+      const NavigationConsistency& c = study.consistency.at(0);
+      std::printf("%s, %s + zupt: goal position %d, heading %d, both %d of %d; NEES position %.3g\n", path.c_str(), m,
+                  g.position_met, g.heading_met, g.both_met, g.trials, c.nees_position.mean);
+      EXPECT_EQ(g.trials, 100);
+      EXPECT_GE(g.position_met, 95) << m;
+      if (std::string(m) == "sun-vector") {
+        EXPECT_GE(g.both_met, 95);
+        EXPECT_GE(c.nees_position.mean, 2 * chi2_mean_quantile(200, -z999));
+        EXPECT_LE(c.nees_position.mean, 2 * chi2_mean_quantile(200, z999));
+      } else {
+        EXPECT_LT(g.heading_met, 75);
+      }
+    }
+  }
+}
+
 // Wilson–Hilferty's χ² quantiles against the tables (Abramowitz & Stegun Table 26.8).
 TEST(NavigationStudy, ChiSquareBandsAgreeWithTheTables) {
   for (auto [n, lo, hi] : {std::tuple{10.0, 3.247, 20.483}, {40.0, 24.433, 59.342}, {100.0, 74.222, 129.561}}) {

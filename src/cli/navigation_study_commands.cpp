@@ -103,6 +103,14 @@ std::vector<Command> add_navigation_study_commands(CLI::App& /*root*/, CLI::App&
                                cell.index == 0 ? std::string("rig") : fmt::format("{}={}", cell.key, cell.value),
                                c.trials, text(c.nees_position), text(c.nees_attitude), text(c.nis));
     }
+    for (const NavigationGoal& g : result.goal) {
+      const NavigationStudyCell& cell = result.cells[static_cast<std::size_t>(g.cell)];
+      const auto pct = [&](int k) { return g.trials == 0 ? 0.0 : 100.0 * k / g.trials; };
+      std::cout << fmt::format("{} goal over {} trials: integrated no worse than the better of SINS and PNS at the end in "
+                               "{:.0f} % (position), {:.0f} % (heading), {:.0f} % (both)\n",
+                               cell.index == 0 ? std::string("rig") : fmt::format("{}={}", cell.key, cell.value),
+                               g.trials, pct(g.position_met), pct(g.heading_met), pct(g.both_met));
+    }
     for (const TiltErrorRow& t : result.tilt)
       std::cout << fmt::format("tilt {}°: mean |elevation error| {:.3f}° (standard error {:.3f}°, {} readings; (2/π)·τ = {:.3f}°, "
                                "exact at H = {:.1f}°: {:.3f}°{})\n",

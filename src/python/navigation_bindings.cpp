@@ -246,6 +246,7 @@ py::dict study_dict(const NavigationStudy& st) {
   trials["final_north_m"] = column(tr, [](const NavigationTrialResult& t) { return t.final_north_m; });
   trials["final_east_m"] = column(tr, [](const NavigationTrialResult& t) { return t.final_east_m; });
   trials["final_error_m"] = column(tr, [](const NavigationTrialResult& t) { return t.final_error_m; });
+  trials["final_heading_error_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.final_heading_error_deg; });
   trials["lat_mae_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lat_deg.mae; });
   trials["lat_rmse_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lat_deg.rmse; });
   trials["lat_std_deg"] = column(tr, [](const NavigationTrialResult& t) { return t.lat_deg.std; });
@@ -293,6 +294,17 @@ py::dict study_dict(const NavigationStudy& st) {
   dop["sd_abs_deg"] = column(st.dop, [](const DopBin& b) { return b.sd_abs_deg; });
   dop["mean_true_dop"] = column(st.dop, [](const DopBin& b) { return b.mean_true_dop; });
   out["dop"] = dop;
+  py::list goal;  // per cell: goal.csv's rows
+  for (const NavigationGoal& g : st.goal) {
+    py::dict row;
+    row["cell"] = g.cell;
+    row["trials"] = g.trials;
+    row["position_met"] = g.position_met;
+    row["heading_met"] = g.heading_met;
+    row["both_met"] = g.both_met;
+    goal.append(row);
+  }
+  out["goal"] = goal;
   py::list consistency;  // per cell: consistency.csv's rows
   for (const NavigationConsistency& c : st.consistency) {
     py::dict row;

@@ -56,7 +56,7 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
   std::string trials =
       "cell,factor,key,value,duration_s,trial,seed,mode,final_t_s,final_north_m,final_east_m,final_error_m,"
       "lat_mae_deg,lat_rmse_deg,lat_std_deg,lon_mae_deg,lon_rmse_deg,lon_std_deg,fixes,mean_nis,updates,"
-      "nees_position,nees_attitude\n";
+      "nees_position,nees_attitude,final_heading_error_deg\n";
   for (std::size_t i = 0; i < study.trials.size(); ++i) {
     const NavigationTrialResult& t = study.trials[i];
     trials += cell_cells(study.cells[static_cast<std::size_t>(t.cell)], i);
@@ -67,9 +67,10 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
                            {t.lat_deg.std, "lat_std_deg"}, {t.lon_deg.mae, "lon_mae_deg"},
                            {t.lon_deg.rmse, "lon_rmse_deg"}, {t.lon_deg.std, "lon_std_deg"}})
       (trials += ',') += checked_cell(v, name, i, true);
-    trials += fmt::format(",{},{},{},{},{}\n", t.lat_deg.count, checked_cell(t.filter_nis_mean, "mean_nis", i, true),
+    trials += fmt::format(",{},{},{},{},{},{}\n", t.lat_deg.count, checked_cell(t.filter_nis_mean, "mean_nis", i, true),
                           t.filter_updates, checked_cell(t.nees_position, "nees_position", i, true),
-                          checked_cell(t.nees_attitude, "nees_attitude", i, true));
+                          checked_cell(t.nees_attitude, "nees_attitude", i, true),
+                          checked_cell(t.final_heading_error_deg, "final_heading_error_deg", i, true));
   }
 
   std::string summary = "cell,factor,key,value,duration_s,mode,trials,finite" +
@@ -136,6 +137,13 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
                                  b->inside() ? "true" : "false");
   }
 
+  std::string goal = "cell,factor,key,value,duration_s,trials,position_met,heading_met,both_met\n";
+  for (std::size_t i = 0; i < study.goal.size(); ++i) {
+    const NavigationGoal& g = study.goal[i];
+    goal += cell_cells(study.cells[static_cast<std::size_t>(g.cell)], i) +
+            fmt::format(",{},{},{},{}\n", g.trials, g.position_met, g.heading_met, g.both_met);
+  }
+
   // Every table built (and checked) before the first is written.
   write_text_file(dir / "trials.csv", trials);
   write_text_file(dir / "summary.csv", summary);
@@ -143,12 +151,13 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
   write_text_file(dir / "tilt.csv", tilt);
   write_text_file(dir / "dop.csv", dop);
   write_text_file(dir / "consistency.csv", consistency);
+  if (!study.goal.empty()) write_text_file(dir / "goal.csv", goal);
   std::vector<DatasetFile> files{
-      {"trials.csv", 2, "per cell (the rig, or one sweep value), trial and mode: the trial's seed, the north, east "
+      {"trials.csv", 3, "per cell (the rig, or one sweep value), trial and mode: the trial's seed, the north, east "
                         "and horizontal error at the last compass reading (m), the latitude and longitude "
                         "errors' MAE, RMSE and STD over the run (°, Z21 §5), the usable fixes and the "
                         "integrated filter's mean NIS, its scalar updates, and the NEES of its last fix's "
-                        "horizontal position (2 dof) and attitude (3 dof)"},
+                        "horizontal position (2 dof) and attitude (3 dof), and the heading error at the last reading"},
       {"consistency.csv", 1, "per cell: the integrated filter's mean NEES (position, attitude) over the trials "
                              "and mean NIS over every update, with the χ² 95 % band of a consistent filter"},
       {"summary.csv", 1, "per cell and mode: the 5/25/50/75/95 % percentiles over the trials of the final "
@@ -161,6 +170,10 @@ std::vector<DatasetFile> report_navigation_study(const std::filesystem::path& di
                       "expectation at the readings' mean elevation; Z21's values"},
       {"dop.csv", 1, "Z21 Fig. 16: every unit reading of the rig's trials binned by its DoP (5 % bins): the "
                      "mean and SD of |aop − true aop| (axial, °), the mean true DoP; Z21's two bins"}};
+  if (!study.goal.empty())
+    files.push_back({"goal.csv", 1, "per cell: the trials (of those with a finite final error) whose integrated solution "
+                                    "ends no worse than the better of SINS and PNS in horizontal position, in heading "
+                                    "(SINS's; PNS has none of its own), and in both (issue 34 §3)"});
   if (!plots || study.trials.empty()) return files;
 
   const int n = study.settings.trials;

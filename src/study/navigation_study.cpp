@@ -95,6 +95,33 @@ struct TrialOutput {
   std::vector<double> dop, true_dop, aop_error_deg;     // cell 0: every unit reading with an angle
 };
 
+std::vector<NavigationGoal> navigation_goal(const std::vector<NavigationMode>& modes, const std::vector<TrialOutput>& outputs,
+                                            std::size_t cells, std::size_t trials) {
+  const auto index = [&](NavigationMode m) { return std::find(modes.begin(), modes.end(), m) - modes.begin(); };
+  const auto sins = static_cast<std::size_t>(index(NavigationMode::Sins)), pns = static_cast<std::size_t>(index(NavigationMode::Pns)),
+             integrated = static_cast<std::size_t>(index(NavigationMode::Integrated));
+  if (sins == modes.size() || pns == modes.size() || integrated == modes.size()) return {};
+  std::vector<NavigationGoal> out;
+  for (std::size_t c = 0; c < cells; ++c) {
+    NavigationGoal g;
+    g.cell = static_cast<int>(c);
+    for (std::size_t t = 0; t < trials; ++t) {
+      const std::vector<NavigationTrialResult>& rows = outputs[c * trials + t].rows;
+      const NavigationTrialResult &s = rows[sins], &p = rows[pns], &i = rows[integrated];
+      if (!std::isfinite(i.final_error_m) || !std::isfinite(s.final_error_m)) continue;
+      const double better = std::isfinite(p.final_error_m) ? std::min(s.final_error_m, p.final_error_m) : s.final_error_m;
+      const bool position = i.final_error_m <= better;
+      const bool heading = std::abs(i.final_heading_error_deg) <= std::abs(s.final_heading_error_deg);
+      ++g.trials;
+      g.position_met += position ? 1 : 0;
+      g.heading_met += heading ? 1 : 0;
+      g.both_met += position && heading ? 1 : 0;
+    }
+    out.push_back(g);
+  }
+  return out;
+}
+
 TrialOutput run_trial(const Rig& cell_rig, const NavigationScene& scene, int cell, int trial,
                       const NavigationStudySettings& settings) {
   Rig rig = cell_rig;
@@ -127,6 +154,9 @@ TrialOutput run_trial(const Rig& cell_rig, const NavigationScene& scene, int cel
     r.final_north_m = last.north_m;
     r.final_east_m = last.east_m;
     r.final_error_m = std::hypot(last.north_m, last.east_m);
+    if (!fixes.empty())
+      r.final_heading_error_deg =
+          rad2deg(std::remainder(fixes.back().attitude.yaw_rad - truth_at(truth, fixes.back().t_s).euler.yaw_rad, 2 * kPi));
     r.lat_deg = error_statistics(lat);
     r.lon_deg = error_statistics(lon);
     if (r.mode == NavigationMode::Integrated) {
@@ -343,6 +373,8 @@ NavigationStudy navigation_study(const Rig& rig, const NavigationStudySettings& 
       study.consistency.push_back({static_cast<int>(c), static_cast<int>(n), band_of(pos, n, 2 * n),
                                    band_of(att, n, 3 * n), band_of(nis, updates, updates)});
     }
+
+  study.goal = navigation_goal(study.modes, outputs, rigs.size(), trials);
 
   // Cell 0's figures.
   const std::vector<double>& times = outputs[0].t_s;

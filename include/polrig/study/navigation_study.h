@@ -74,6 +74,8 @@ struct NavigationTrialResult {
   std::uint64_t seed = 0;  // the trial's rig seed, derive_seed(rig.seed, trial)
   // At the last compass reading (NaN where the mode has no fix there: PNS without a converged fit).
   double final_t_s = 0, final_north_m = 0, final_east_m = 0, final_error_m = 0;
+  // The heading (yaw) error at the last reading, wrapped to ±180° (PNS: the SINS's attitude it takes).
+  double final_heading_error_deg = std::numeric_limits<double>::quiet_NaN();
   ErrorStatistics lat_deg, lon_deg;  // over the run's fixes (error_statistics)
   double filter_nis_mean = std::numeric_limits<double>::quiet_NaN();  // integrated only
   int filter_updates = 0;                                              // integrated: scalar sun updates
@@ -93,6 +95,15 @@ struct ConsistencyBand {
   long long dof = 0;  // N·d
   bool inside() const { return mean >= lo && mean <= hi; }
 };
+// Issue 34 §3's goal per cell: the trials whose integrated solution ends no worse than the better of
+// SINS and PNS, in horizontal position (PNS without a fix at the end: SINS's) and in heading (PNS has
+// none of its own: SINS's), at the last reading. Counted only with all three modes run.
+struct NavigationGoal {
+  int cell = 0;
+  int trials = 0;                            // with a finite integrated and SINS error
+  int position_met = 0, heading_met = 0, both_met = 0;
+};
+
 struct NavigationConsistency {
   int cell = 0;
   int trials = 0;  // with a finite NEES
@@ -153,6 +164,7 @@ struct NavigationStudy {
   std::vector<NavigationTrialResult> trials;     // cell-major, then trial, then mode
   std::vector<NavigationStudySummary> summary;   // cell-major, then mode
   std::vector<NavigationConsistency> consistency;  // per cell
+  std::vector<NavigationGoal> goal;                // per cell (empty unless sins, pns and integrated ran)
   std::vector<NavigationErrorBand> bands;        // per mode, cell 0
   std::vector<TiltErrorRow> tilt;                // per settings.tilts_deg
   double tilt_mean_elevation_deg = NAN;          // the readings' mean true-attitude H^n (cell 0)

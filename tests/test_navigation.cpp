@@ -108,6 +108,11 @@ TEST(NavigationRig, ARunThatCannotBeFlownIsRefusedByItsKey) {
   }
   EXPECT_HAS(rig_error(r, {{"imu.gyro.arw_deg_rt_h", "[0.5, -1, 0.5]"}}), "key 'imu.gyro.arw_deg_rt_h'");
   EXPECT_HAS(rig_error(r, {{"trajectory.pitch_deg", "85"}}), "key 'trajectory.pitch_deg'");
+  // The rest detector weighs each axis by its white noise: none is no detector.
+  EXPECT_HAS(rig_error(r, {{"navigation.zupt", "true"}, {"imu.accel.vrw_ug_rt_hz", "[25, 0, 25]"}}),
+             "key 'imu.accel.vrw_ug_rt_hz': expected a positive density on every axis with navigation.zupt true");
+  EXPECT_HAS(rig_error(r, {{"trajectory.vibration_mps2", "-0.1"}}), "key 'trajectory.vibration_mps2'");
+  EXPECT_HAS(rig_error(r, {{"navigation.zupt_sigma_mps", "0"}}), "key 'navigation.zupt_sigma_mps'");
   EXPECT_HAS(rig_error(r, {{"navigation.integrated_level", "accelerometer"}}),
              "key 'navigation.measurement': expected elevation-z21 with navigation.integrated_level accelerometer");
   EXPECT_HAS(rig_error(r, {{"navigation.measurement", "heading"}}), "key 'navigation.measurement'");

@@ -77,6 +77,20 @@ def test_navigate_equals_the_cli(tmp_path):
         polrig.navigate(bad)
 
 
+def test_zero_velocity_updates_from_python_are_the_clis(tmp_path):
+    # navigation.zupt on the static rig: every reading at rest gets its east and north updates.
+    run_cli("simulate", RIG, "--set", "trajectory.duration_s=120", "-o", tmp_path / "d", "--quiet")
+    rig = polrig.Rig.load(str(RIG), set={"trajectory.duration_s": 120, "navigation.zupt": True}, dataset=True)
+    r = polrig.navigate(tmp_path / "d", mode="integrated", rig=rig, out=tmp_path / "py")
+    run_cli("navigate", tmp_path / "d", "--mode", "integrated", "--set", "navigation.zupt=true", "-o", tmp_path / "cli",
+            "--no-plots", "--quiet")
+    assert (tmp_path / "py" / "filter.csv").read_bytes() == (tmp_path / "cli" / "filter.csv").read_bytes()
+    f = r["filter"]
+    assert np.all(f["rest_statistic"] < 1.3)
+    assert np.all(np.isfinite(f["zero_velocity_nis_e"])) and np.all(np.isnan(f["zero_velocity_nis_u"]))
+    assert f["summary"]["zero_velocity_updates"] == 240
+
+
 def test_calibrate_unit_array_equals_the_cli(tmp_path):
     # The vehicle run: its turns determine each unit's three errors (a static run leaves them confounded).
     run_cli("simulate", ROOT / "rigs" / "zhang2021-vehicle.yaml", "--set", "device.units.mount_error_sd_deg=1",
@@ -99,9 +113,12 @@ def test_study_navigation_equals_the_cli(tmp_path):
     r = rig.study_navigation(trials=2, p_max=[0.5], out=tmp_path / "py")
     run_cli("study", "navigation", RIG, "--set", "trajectory.duration_s=360", "--trials", "2", "--p-max", "0.5",
             "-o", tmp_path / "cli", "--no-plots", "--quiet")
-    for f in ("trials.csv", "summary.csv", "error_vs_time.csv", "tilt.csv", "dop.csv", "consistency.csv"):
+    for f in ("trials.csv", "summary.csv", "error_vs_time.csv", "tilt.csv", "dop.csv", "consistency.csv", "goal.csv"):
         assert (tmp_path / "py" / f).read_bytes() == (tmp_path / "cli" / f).read_bytes(), f
+    goal = read_csv(tmp_path / "cli" / "goal.csv")
+    assert [g["both_met"] for g in r["goal"]] == list(goal["both_met"])
     trials = read_csv(tmp_path / "cli" / "trials.csv")
+    np.testing.assert_array_equal(r["trials"]["final_heading_error_deg"], trials["final_heading_error_deg"])
     np.testing.assert_array_equal(r["trials"]["final_error_m"], trials["final_error_m"])
     np.testing.assert_array_equal(r["trials"]["nees_position"], trials["nees_position"])
     consistency = read_csv(tmp_path / "cli" / "consistency.csv")

@@ -185,6 +185,8 @@ py::dict filter_dict(const NavigationRun& run) {
   summary["mean_nis"] = s.mean_nis;
   summary["nis_outside_95"] = s.nis_outside_95;
   summary["final_R"] = s.final_R;
+  summary["zero_velocity_updates"] = s.zero_velocity_updates;
+  summary["zero_velocity_mean_nis"] = s.zero_velocity_mean_nis;
   summary["brief_report"] = s.BriefReport();
   out["summary"] = summary;
   return out;

@@ -1200,6 +1200,51 @@ TEST(InsFilter, AZeroVelocityUpdateIsTheScalarKalmanUpdate) {
   EXPECT_THROW(filter.update_zero_velocity(0), std::invalid_argument);
 }
 
+// A position fix with a correlated covariance (a PNS's, loosely coupled) is the textbook vector
+// update with H = [e_δL; e_δλ] and R the fix's covariance in radians: the filter's two whitened scalar
+// updates give K = P Hᵀ(H P Hᵀ + R)⁻¹, P⁺ = P − K H P and the fix's χ² zᵀ(HPHᵀ + R)⁻¹z, written here
+// with Eigen's dense inverse (P0 correlates the position with a velocity, so K moves both).
+TEST(InsFilter, APositionFixIsTheVectorKalmanUpdate) {
+  InsState start = static_state();
+  const EarthRadii r = earth_radii(start.lat_rad);
+  const double m_lat = r.R_M + start.h_m, m_lon = (r.R_N + start.h_m) * std::cos(start.lat_rad);
+  Matrix15 P0 = Matrix15::Identity() * 1e-8;
+  P0(kDLat, kDLat) = std::pow(1000 / m_lat, 2);
+  P0(kDLon, kDLon) = std::pow(800 / m_lon, 2);
+  P0(kDV + 1, kDV + 1) = 0.01;
+  P0(kDLat, kDV + 1) = P0(kDV + 1, kDLat) = 0.5 * std::sqrt(P0(kDLat, kDLat) * 0.01);
+  FilterSettings settings;
+  settings.adaptive = true;  // a fix's R is its own: never Sage–Husa's
+  InsFilter filter(start, P0, settings);
+  const double lat_fix = start.lat_rad - 600 / m_lat, lon_fix = start.lon_rad + 300 / m_lon;
+  Eigen::Matrix2d cov_m2;
+  cov_m2 << 400.0 * 400.0, -0.7 * 400.0 * 900.0, -0.7 * 400.0 * 900.0, 900.0 * 900.0;
+  const PositionUpdate u = filter.update_position(lat_fix, lon_fix, cov_m2);
+
+  Eigen::Matrix<double, 2, 15> H = Eigen::Matrix<double, 2, 15>::Zero();
+  H(0, kDLat) = H(1, kDLon) = 1;
+  const Eigen::Matrix2d R = Eigen::Vector2d(1 / m_lat, 1 / m_lon).asDiagonal() * cov_m2 *
+                            Eigen::Vector2d(1 / m_lat, 1 / m_lon).asDiagonal();
+  const Eigen::Matrix2d S = H * P0 * H.transpose() + R;
+  const Eigen::Matrix<double, 15, 2> K = P0 * H.transpose() * S.inverse();
+  const Eigen::Vector2d z(start.lat_rad - lat_fix, start.lon_rad - lon_fix);
+  const Vector15 dx = K * z;
+  const Matrix15 P1 = P0 - K * H * P0;
+  EXPECT_NEAR(u.nis(), z.dot(S.inverse() * z), 1e-9 * z.dot(S.inverse() * z));
+  EXPECT_NEAR((start.lat_rad - filter.state().lat_rad) * m_lat, dx[kDLat] * m_lat, 1e-6);  // metres
+  EXPECT_NEAR((start.lon_rad - filter.state().lon_rad) * m_lon, dx[kDLon] * m_lon, 1e-6);
+  EXPECT_NEAR(start.v_n.y() - filter.state().v_n.y(), dx[kDV + 1], 1e-12);
+  for (int i = 0; i < 15; ++i)
+    for (int j = 0; j < 15; ++j)
+      EXPECT_NEAR(filter.P()(i, j), P1(i, j), 1e-9 * std::sqrt(P0(i, i) * P0(j, j))) << i << " " << j;
+  EXPECT_EQ(filter.summary().updates, 2);
+  Eigen::Matrix2d singular;
+  singular << 1, 1, 1, 1;
+  EXPECT_THROW(filter.update_position(lat_fix, lon_fix, singular), std::invalid_argument);
+  filter.update_position(kNaNUpdate, lon_fix, cov_m2);  // data: skipped and counted
+  EXPECT_EQ(filter.summary().skipped, 1);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Zero-velocity detection (Skog et al. 2010's SHOE)
 // ---------------------------------------------------------------------------------------------

@@ -813,13 +813,14 @@ TEST_F(SlowNavigationCli, ARunPastThePoleIsReportedDiverged) {
     }
   }
   EXPECT_TRUE(diverged);
-  // The azimuth's and the rest detector's columns: nan (not measured, navigation.zupt off).
+  // The azimuth's, the rest detector's and the PNS fix's columns: nan (not measured, navigation.zupt
+  // off, no pns-fix).
   const test::Csv filter = test::read_csv(tmp / "N/filter.csv");
   for (const auto& row : filter.rows)
     for (std::size_t c = 0; c < row.size(); ++c) {
       const std::string& h = filter.header[c];
       if (h.find("azimuth") == std::string::npos && h.find("rest_") == std::string::npos &&
-          h.find("zero_velocity_nis") == std::string::npos) {
+          h.find("zero_velocity_nis") == std::string::npos && h.find("pns_fix") == std::string::npos) {
         EXPECT_NE(row[c], "nan") << row[0] << " " << filter.header[c];
       }
     }
@@ -1036,6 +1037,35 @@ TEST_F(NavigationCli, BadInputIsNamedAndNothingIsWritten) {
 // heading (H's −1 on φ_U) and brings it back within 0.01° in 60 readings; the elevation cannot (φ_U
 // is not in its H), and leaves the 2°. A wrong sign in the azimuth's tilt or heading columns
 // drives the heading away instead.
+// navigation.measurement pns-fix: the filter takes no sun update but one PNS fix per window of
+// navigation.pns_window_s that does not overlap the last (four in 1200 s of 300-s windows, two
+// scalar updates each), each fix the positioning fit of that window's readings alone (the PNS mode's
+// own fit over the same readings, with the filter's position as its prior: the same root); a PNS
+// levelled by the free SINS is refused (its errors would be the filter's own).
+TEST(NavigationAiding, APnsFixPerWindowIsALooselyCoupledUpdate) {
+  const Rig rig = load("zhang2021-static.yaml", {{"navigation.measurement", "pns-fix"}, {"navigation.adaptive", "false"}});
+  const NavigationDataset d = simulate_navigation(rig);
+  NavigationOptions o;
+  o.modes = {NavigationMode::Pns, NavigationMode::Integrated};
+  const NavigationRun run = navigate(d, rig, o);
+  std::vector<std::size_t> fixes;
+  for (std::size_t k = 0; k < run.filter.size(); ++k) {
+    const FilterEpoch& f = run.filter[k];
+    EXPECT_TRUE(std::isnan(f.update.nis) && std::isnan(f.azimuth_update.nis)) << k;
+    if (std::isfinite(f.position_update.nis())) fixes.push_back(k);
+  }
+  ASSERT_EQ(fixes, (std::vector<std::size_t>{299, 599, 899, 1199}));
+  EXPECT_EQ(run.filter_summary.updates, 8);
+  // The PNS mode's fix at the window's end is over the same readings: the same minimum from another
+  // start, to the fit's tolerances along its flat direction (σ ~100 km across the sun): < 1 m.
+  for (std::size_t k : fixes) {
+    EXPECT_NEAR(run.filter[k].pns_fix_lat_rad, run.fixes[0][k].lat_rad, 1.5e-7) << k;
+    EXPECT_NEAR(run.filter[k].pns_fix_lon_rad, run.fixes[0][k].lon_rad, 1.5e-7) << k;
+  }
+  EXPECT_HAS(rig_error("zhang2021-static.yaml", {{"navigation.measurement", "pns-fix"}, {"navigation.pns_level", "sins"}}),
+             "key 'navigation.pns_level': expected accelerometer with navigation.measurement pns-fix");
+}
+
 TEST(NavigationAiding, TheSunsAzimuthFixesTheHeadingTheElevationCannot) {
   std::vector<RigOverride> o = ideal(60);
   o.push_back({"navigation.initial_attitude_error_deg", "[0, 0, 2]"});

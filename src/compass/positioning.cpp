@@ -236,6 +236,7 @@ PositionRoot fit_root(const Data& d, Eigen::Vector2d x, const Site& prior, const
     root.sd_north_km = std::sqrt(cov(0, 0)) * kEarthMeanRadiusKm;
     root.sd_east_km = std::sqrt(cov(1, 1)) * kEarthMeanRadiusKm;
     root.sd_major_km = std::sqrt(s2) / sigma(1) * kEarthMeanRadiusKm;
+    root.corr_north_east = cov(0, 1) / std::sqrt(cov(0, 0) * cov(1, 1));
   }
   if (s.rank < 2)
     return stop(PositionTermination::RankDeficient,

@@ -5,8 +5,10 @@
 #include <numbers>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
 #include <fmt/format.h>
 
+#include "polrig/ins/earth.h"
 #include "polrig/statistics.h"
 
 namespace polrig {
@@ -147,6 +149,7 @@ std::string_view sun_measurement_name(FilterSettings::SunMeasurement m) {
     case M::Elevation: return "elevation";
     case M::Azimuth: return "azimuth";
     case M::SunVector: return "sun-vector";
+    case M::PnsFix: return "pns-fix";
   }
   return "?";
 }
@@ -169,15 +172,15 @@ void InsFilter::feed_back_and_reset() {
   filter_.x.setZero();
 }
 
-ScalarUpdate InsFilter::scalar_update(const RowVector15& H, double z, double R_nominal, std::optional<SageHusaR>& adaptive) {
+ScalarUpdate InsFilter::scalar_update(const RowVector15& H, double z, double R_nominal, std::optional<SageHusaR>* adaptive) {
   if (!std::isfinite(z) || !std::isfinite(R_nominal) || !H.allFinite() || !filter_.P.allFinite()) {
     ++skipped_;
     return {z, kNaNUpdate, kNaNUpdate, R_nominal};
   }
   double R = R_nominal;
-  if (settings_.adaptive) {
-    if (!adaptive) adaptive.emplace(R_nominal, settings_.sage_husa_b, settings_.R_min_factor, settings_.R_max_factor);
-    R = adaptive->update(z - H.dot(filter_.x), H.dot(filter_.P * H.transpose()));
+  if (settings_.adaptive && adaptive) {
+    if (!*adaptive) adaptive->emplace(R_nominal, settings_.sage_husa_b, settings_.R_min_factor, settings_.R_max_factor);
+    R = (*adaptive)->update(z - H.dot(filter_.x), H.dot(filter_.P * H.transpose()));
   }
   const ScalarUpdate u = filter_.update(H, z, R);
   last_R_ = R;
@@ -205,6 +208,8 @@ SunUpdate InsFilter::update(const SunObservation& m) {
   if (!(std::abs(m.t_s - state_.t_s) <= 1e-3))
     throw std::invalid_argument(fmt::format("filter: a measurement at {} s for the state at {} s", m.t_s, state_.t_s));
   const M kind = settings_.measurement;
+  if (kind == M::PnsFix)
+    throw std::invalid_argument("filter: measurement pns-fix takes position fixes (update_position), not the sun");
   const bool elevation = kind != M::Azimuth, azimuth = kind == M::Azimuth || kind == M::SunVector;
   const bool tilt = kind != M::ElevationZ21;
   if (tilt && (!std::isfinite(m.sun_east) || !std::isfinite(m.sun_north)) && std::isfinite(m.elevation_rad))
@@ -222,7 +227,7 @@ SunUpdate InsFilter::update(const SunObservation& m) {
       H[kPhi + 1] = -m.sun_east;
     }
     const double z = model.sin_H - std::sin(m.elevation_rad);
-    out.elevation = scalar_update(H, z, std::pow(std::cos(m.elevation_rad) * settings_.sigma_H_rad, 2), sage_husa_);
+    out.elevation = scalar_update(H, z, std::pow(std::cos(m.elevation_rad) * settings_.sigma_H_rad, 2), &sage_husa_);
     if (std::isfinite(out.elevation.nis)) feed_back_and_reset();
   }
   if (azimuth) {
@@ -235,7 +240,7 @@ SunUpdate InsFilter::update(const SunObservation& m) {
     H[kPhi + 1] = s_up * m.sun_north / rho2;
     H[kPhi + 2] = -1;
     const double z = std::remainder(model.azimuth - std::atan2(m.sun_east, m.sun_north), 2 * std::numbers::pi);
-    out.azimuth = scalar_update(H, z, settings_.sigma_A_rad * settings_.sigma_A_rad, sage_husa_azimuth_);
+    out.azimuth = scalar_update(H, z, settings_.sigma_A_rad * settings_.sigma_A_rad, &sage_husa_azimuth_);
     if (std::isfinite(out.azimuth.nis)) feed_back_and_reset();
   }
   return out;
@@ -261,6 +266,38 @@ ZeroVelocityUpdate InsFilter::update_zero_velocity(double sigma_mps) {
     ++zero_velocity_updates_;
     zero_velocity_nis_ += component[i]->nis;
     feed_back_and_reset();
+  }
+  return out;
+}
+
+PositionUpdate InsFilter::update_position(double lat_rad, double lon_rad, const Eigen::Matrix2d& cov_north_east_m2) {
+  propagate_covariance();
+  if (!P_prior_) P_prior_ = filter_.P;
+  PositionUpdate out;
+  const Eigen::Vector2d z(state_.lat_rad - lat_rad, std::remainder(state_.lon_rad - lon_rad, 2 * std::numbers::pi));
+  if (!z.allFinite() || !cov_north_east_m2.allFinite() || !filter_.P.allFinite()) {
+    ++skipped_;
+    return out;
+  }
+  // North and east metres → δL, δλ radians at the state.
+  const EarthRadii r = earth_radii(state_.lat_rad);
+  const Eigen::Vector2d per_m(1 / (r.R_M + state_.h_m), 1 / ((r.R_N + state_.h_m) * std::cos(state_.lat_rad)));
+  const Eigen::Matrix2d R = per_m.asDiagonal() * cov_north_east_m2 * per_m.asDiagonal();
+  const Eigen::LLT<Eigen::Matrix2d> llt(R);
+  if (llt.info() != Eigen::Success || !(R.determinant() > 0))
+    throw std::invalid_argument(fmt::format("filter: a position fix's covariance [[{}, {}], [{}, {}]] m² is not positive "
+                                            "definite", cov_north_east_m2(0, 0), cov_north_east_m2(0, 1),
+                                            cov_north_east_m2(1, 0), cov_north_east_m2(1, 1)));
+  const Eigen::Matrix2d L_inv = llt.matrixL().solve(Eigen::Matrix2d::Identity());
+  ScalarUpdate* component[2] = {&out.first, &out.second};
+  for (int i = 0; i < 2; ++i) {
+    // Each whitened row against the state as it now is (the first's correction fed back).
+    const Eigen::Vector2d z_now(state_.lat_rad - lat_rad, std::remainder(state_.lon_rad - lon_rad, 2 * std::numbers::pi));
+    RowVector15 H = RowVector15::Zero();
+    H[kDLat] = L_inv(i, 0);
+    H[kDLon] = L_inv(i, 1);
+    *component[i] = scalar_update(H, L_inv.row(i).dot(z_now), 1.0, nullptr);  // the fix's own R, never adapted
+    if (std::isfinite(component[i]->nis)) feed_back_and_reset();
   }
   return out;
 }

@@ -162,6 +162,9 @@ py::dict filter_dict(const NavigationRun& run) {
   out["zero_velocity_nis_e"] = column(f, [](const FilterEpoch& e) { return e.zero_velocity.east.nis; });
   out["zero_velocity_nis_n"] = column(f, [](const FilterEpoch& e) { return e.zero_velocity.north.nis; });
   out["zero_velocity_nis_u"] = column(f, [](const FilterEpoch& e) { return e.zero_velocity.up.nis; });
+  out["pns_fix_lat_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.pns_fix_lat_rad); });
+  out["pns_fix_lon_deg"] = column(f, [](const FilterEpoch& e) { return rad2deg(e.pns_fix_lon_rad); });
+  out["pns_fix_nis"] = column(f, [](const FilterEpoch& e) { return e.position_update.nis(); });
   out["sigma_north_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_north_m; });
   out["sigma_east_m"] = column(f, [](const FilterEpoch& e) { return e.sigma_east_m; });
   out["corr_north_east"] = column(f, [](const FilterEpoch& e) { return e.corr_north_east; });

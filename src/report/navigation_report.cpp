@@ -46,7 +46,8 @@ std::string filter_csv(const NavigationDataset& data, const NavigationRun& run, 
   if (truth) out += ",true_elevation_deg";
   out += ",innovation,innovation_var,nis,R,sigma_north_m,sigma_east_m,corr_north_east,sigma_heading_deg,sun_status";
   out += ",azimuth_deg,model_azimuth_deg,azimuth_innovation,azimuth_innovation_var,azimuth_nis,azimuth_R";
-  out += ",rest_statistic,zero_velocity,zero_velocity_nis_e,zero_velocity_nis_n,zero_velocity_nis_u\n";
+  out += ",rest_statistic,zero_velocity,zero_velocity_nis_e,zero_velocity_nis_n,zero_velocity_nis_u";
+  out += ",pns_fix_lat_deg,pns_fix_lon_deg,pns_fix_nis\n";
   for (const FilterEpoch& f : run.filter) {
     const bool ok = f.sun.status == UnitSunStatus::Ok;
     out += fmt::format("{},{},{},{},{},{},{}", f.t_s, ok ? std::to_string(f.sun.i + 1) : "nan", ok ? std::to_string(f.sun.j + 1) : "nan",
@@ -65,8 +66,10 @@ std::string filter_csv(const NavigationDataset& data, const NavigationRun& run, 
                        cell(f.azimuth_update.R));
     const ZeroVelocityUpdate& z = f.zero_velocity;
     const bool zupt = std::isfinite(z.east.nis) || std::isfinite(z.north.nis) || std::isfinite(z.up.nis);
-    out += fmt::format(",{},{},{},{},{}\n", cell(f.rest_statistic), zupt ? 1 : 0, cell(z.east.nis), cell(z.north.nis),
+    out += fmt::format(",{},{},{},{},{}", cell(f.rest_statistic), zupt ? 1 : 0, cell(z.east.nis), cell(z.north.nis),
                        cell(z.up.nis));
+    out += fmt::format(",{},{},{}\n", cell(rad2deg(f.pns_fix_lat_rad)), cell(rad2deg(f.pns_fix_lon_rad)),
+                       cell(f.position_update.nis()));
   }
   return out;
 }

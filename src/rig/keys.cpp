@@ -323,14 +323,15 @@ void add_ins_keys(std::vector<RigKey>& keys) {
     push(k, kNav);
   }
   {
-    RigKey k{"navigation.measurement", K::Text, "", "elevation, elevation-z21, azimuth or sun-vector",
+    RigKey k{"navigation.measurement", K::Text, "", "elevation, elevation-z21, azimuth, sun-vector or pns-fix",
              "what the SINS/PNS filter takes from the compass (ins/filter.h): elevation, the sun's elevation with the "
              "tilt columns (the INS's tilt the measured elevation carries is estimated); elevation-z21, Z21's "
              "position-only H; azimuth, the sun's azimuth in n (the heading, the tilt and the position); sun-vector, "
-             "both as two updates [C: elevation]"};
+             "both as two updates; pns-fix, no sun update but the PNS's fix of each navigation.pns_window_s window "
+             "that does not overlap the last, with the fit's covariance (loosely coupled) [C: elevation]"};
     k.text = [](Rig& r) -> std::string& { return r.navigation.measurement; };
     k.valid_text = [](std::string_view v) {
-      return v == "elevation" || v == "elevation-z21" || v == "azimuth" || v == "sun-vector";
+      return v == "elevation" || v == "elevation-z21" || v == "azimuth" || v == "sun-vector" || v == "pns-fix";
     };
     push(k, kNav);
   }
@@ -1202,7 +1203,14 @@ std::optional<RigProblem> unit_array_run_problem(const Rig& rig, RigUse use) {
     return RigProblem{"sky.lat_deg", fmt::format("expected a latitude within ±{}° for device.kind unit-array (its "
                                                  "INS's local-level frame is singular at the poles), got {}",
                                                  kInsMaxLatitudeDeg, rig.source.sky.sky.site.lat_deg), "device.kind"};
-  if (rig.navigation.measurement != "elevation-z21" && rig.navigation.integrated_level == "accelerometer")
+  if (rig.navigation.measurement == "pns-fix" && rig.navigation.pns_level != "accelerometer")
+    return RigProblem{"navigation.pns_level",
+                      fmt::format("expected accelerometer with navigation.measurement pns-fix (the filter's fixes are "
+                                  "levelled by the accelerometers, independent of its own attitude), got '{}'",
+                                  rig.navigation.pns_level),
+                      "navigation.measurement"};
+  if (rig.navigation.measurement != "elevation-z21" && rig.navigation.measurement != "pns-fix" &&
+      rig.navigation.integrated_level == "accelerometer")
     return RigProblem{"navigation.measurement",
                       "expected elevation-z21 with navigation.integrated_level accelerometer (the tilt columns and "
                       "the azimuth model the filter's attitude in the measured sun, which the accelerometers' level "

@@ -112,7 +112,7 @@ FilterSettings filter_settings(const Rig& rig) {
   s.adaptive = n.adaptive;
   s.sage_husa_b = n.forgetting_factor;
   using M = FilterSettings::SunMeasurement;
-  for (M m : {M::ElevationZ21, M::Elevation, M::Azimuth, M::SunVector})
+  for (M m : {M::ElevationZ21, M::Elevation, M::Azimuth, M::SunVector, M::PnsFix})
     if (n.measurement == sun_measurement_name(m)) s.measurement = m;
 
   // P once per compass reading by van Loan (ins/filter.h): the state is mechanized at the IMU rate.
@@ -407,6 +407,59 @@ Level level_of(const NavigationDataset& data, const std::vector<std::size_t>& at
   return {{dv.x(), dv.y(), dv.z()}, steady};
 }
 
+// A reading's sighting for PNS: the zenith angle of the units' sun levelled by the accelerometers
+// (C_bn null: an unsteady reading gets weight 0) or by the attitude C_bn; weight 0 without a sun.
+ZenithSighting pns_sighting(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k,
+                            const UnitSun& sun, const Eigen::Matrix3d* C_bn, double g) {
+  double H = kNaN;
+  if (sun.status == UnitSunStatus::Ok && !C_bn) {
+    const Level level = level_of(data, at, k, g);
+    if (level.steady) H = std::asin(std::clamp(vec3::dot(level.up_b, sun.s_b), -1.0, 1.0));
+  } else if (sun.status == UnitSunStatus::Ok) {
+    H = elevation_n(sun, *C_bn);
+  }
+  return {data.start.plus_seconds(data.compass[k].t_s), std::isfinite(H) ? 90 - rad2deg(H) : 90.0,
+          std::isfinite(H) ? 1.0 : 0.0};
+}
+
+// The positioning fit's options for every PNS window of a run: one track at the start's site
+// (compass/positioning.h: the parallax over the PNS's few km is far below its noise), and the root
+// nearest the prior only.
+PositionOptions pns_options(const NavigationDataset& data, const Sky& sky) {
+  PositionOptions options;
+  options.sun = sky.sun;
+  const double end = data.compass.empty() ? 1.0 : data.compass.back().t_s + 1.0;
+  options.ephemeris = std::make_shared<const SunTrack>(
+      data.start, data.start.plus_seconds(end),
+      Site{rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m}, sky.sun);
+  options.second_root = false;
+  return options;
+}
+
+// navigation.measurement pns-fix: the PNS fix of each window of navigation.pns_window_s that does
+// not overlap the last (the readings after the previous fix), its prior the filter's position.
+struct PnsFixWindow {
+  std::vector<ZenithSighting> sightings;
+  double start_s = 0;
+};
+std::optional<PositionFix> pns_window_fix(PnsFixWindow& w, double t_s, double window_s, const InsState& s,
+                                          const PositionOptions& options) {
+  if (t_s - w.start_s < window_s - 1e-9) return std::nullopt;
+  const PositionFix fix = fix_position(w.sightings, {rad2deg(s.lat_rad), rad2deg(s.lon_rad), s.h_m}, options);
+  w.sightings.clear();
+  w.start_s = t_s;
+  return fix;
+}
+
+// The fit's covariance of north and east (m²), when it has one.
+std::optional<Eigen::Matrix2d> fix_covariance_m2(const PositionRoot& r) {
+  if (!std::isfinite(r.sd_north_km) || !std::isfinite(r.sd_east_km) || !std::isfinite(r.corr_north_east)) return std::nullopt;
+  const double n = r.sd_north_km * 1e3, e = r.sd_east_km * 1e3, c = r.corr_north_east * n * e;
+  Eigen::Matrix2d cov;
+  cov << n * n, c, c, e * e;
+  return cov;
+}
+
 // The rest detector over a reading's interval (the IMU samples after the previous reading, as
 // level_of's), at the filter's attitude and bias estimates.
 ZeroVelocityTest rest_test(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k,
@@ -450,10 +503,34 @@ std::vector<NavigationFix> smoothed_fixes(const std::vector<FilterRecord>& recor
   return out;
 }
 
+// navigation.measurement pns-fix at one reading: its sighting into the window, and at the window's
+// end the fix, when usable with a covariance, as a position update.
+void pns_fix_update(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k, double g,
+                    const Rig& rig, const PositionOptions& options, PnsFixWindow& window, InsFilter& filter,
+                    FilterEpoch& f) {
+  f.update = f.azimuth_update = {kNaN, kNaN, kNaN, kNaN};  // no sun update
+  window.sightings.push_back(pns_sighting(data, at, k, f.sun, nullptr, g));
+  const std::optional<PositionFix> fix =
+      pns_window_fix(window, data.compass[k].t_s, rig.navigation.pns_window_s, filter.state(), options);
+  const std::optional<Eigen::Matrix2d> cov = fix && fix->usable() ? fix_covariance_m2(fix->chosen) : std::nullopt;
+  if (!cov) {
+    filter.propagate_covariance();
+    return;
+  }
+  f.pns_fix_lat_rad = deg2rad(fix->chosen.lat_deg);
+  f.pns_fix_lon_rad = deg2rad(fix->chosen.lon_deg);
+  f.position_update = filter.update_position(f.pns_fix_lat_rad, f.pns_fix_lon_rad, *cov);
+}
+
 void run_integrated(const NavigationDataset& data, const std::vector<std::size_t>& at,
-                    std::span<const UnitMount> mounts, const Rig& rig, const SunModel& sun, NavigationRun& run,
-                    std::vector<NavigationFix>& fixes, std::vector<NavigationFix>* smoothed, const Progress& progress) {
-  InsFilter filter(data.initial, initial_covariance(rig, data), filter_settings(rig, data));
+                    std::span<const UnitMount> mounts, const Rig& rig, const Sky& sky, const SunModel& sun,
+                    NavigationRun& run, std::vector<NavigationFix>& fixes, std::vector<NavigationFix>* smoothed,
+                    const Progress& progress) {
+  const FilterSettings settings = filter_settings(rig, data);
+  InsFilter filter(data.initial, initial_covariance(rig, data), settings);
+  const bool pns_fix = settings.measurement == FilterSettings::SunMeasurement::PnsFix;
+  const PositionOptions pns = pns_fix ? pns_options(data, sky) : PositionOptions{};
+  PnsFixWindow window{{}, data.initial.t_s};
   DivergenceWatch watch{data.initial};
   std::vector<FilterRecord> records;    // for the smoother
   std::vector<FilteredEpoch> filtered;
@@ -488,7 +565,9 @@ void run_integrated(const NavigationDataset& data, const std::vector<std::size_t
         std::asin(sun_elevation_model(filter.state().lat_rad, filter.state().lon_rad, dec, gha).sin_H);
     f.model_azimuth_rad = sun_azimuth_model(filter.state().lat_rad, filter.state().lon_rad, dec, gha).azimuth;
     f.azimuth_rad = kNaN;
-    if (std::isfinite(f.elevation_rad)) {
+    if (pns_fix) {
+      pns_fix_update(data, at, next - 1, g, rig, pns, window, filter, f);
+    } else if (std::isfinite(f.elevation_rad)) {
       const Vec3 s_n = sun_in_nav(f.sun.s_b, axes_of(filter.state().C_bn())).s_n;
       f.azimuth_rad = std::atan2(s_n[0], s_n[1]);
       const SunUpdate u = filter.update({f.t_s, f.elevation_rad, dec, gha, s_n[0], s_n[1]});
@@ -539,26 +618,10 @@ std::vector<NavigationFix> run_pns(const NavigationDataset& data, const std::vec
   const double g = normal_gravity(data.initial.lat_rad, data.initial.h_m);
   std::vector<ZenithSighting> sightings(n);
   for (std::size_t k = 0; k < n; ++k) {
-    const UnitSun sun = sun_from_units(data.compass[k].units, mounts);
-    double H = kNaN;
-    if (sun.status == UnitSunStatus::Ok && accelerometer) {
-      const Level level = level_of(data, at, k, g);
-      if (level.steady) H = std::asin(std::clamp(vec3::dot(level.up_b, sun.s_b), -1.0, 1.0));
-    } else if (sun.status == UnitSunStatus::Ok) {
-      H = elevation_n(sun, sins[k].C_bn());
-    }
-    sightings[k] = {data.start.plus_seconds(data.compass[k].t_s), std::isfinite(H) ? 90 - rad2deg(H) : 90.0,
-                    std::isfinite(H) ? 1.0 : 0.0};
+    const Eigen::Matrix3d C_bn = sins[k].C_bn();
+    sightings[k] = pns_sighting(data, at, k, sun_from_units(data.compass[k].units, mounts), accelerometer ? nullptr : &C_bn, g);
   }
-  PositionOptions options;
-  options.sun = sky.sun;
-  // One track for every window, at the start's site (compass/positioning.h: the parallax over the PNS's
-  // few km is far below its noise), and the root nearest the prior only: a fix per reading.
-  const double end = data.compass.empty() ? 1.0 : data.compass.back().t_s + 1.0;
-  options.ephemeris = std::make_shared<const SunTrack>(
-      data.start, data.start.plus_seconds(end),
-      Site{rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m}, sky.sun);
-  options.second_root = false;
+  const PositionOptions options = pns_options(data, sky);
   const Site prior{rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m};
   const double window = rig.navigation.pns_window_s;
   const double period = n > 1 ? data.compass[1].t_s - data.compass[0].t_s : 0.0;
@@ -637,7 +700,7 @@ NavigationRun navigate(const NavigationDataset& data, const Rig& rig, const Navi
                                     {rad2deg(data.initial.lat_rad), rad2deg(data.initial.lon_rad), data.initial.h_m},
                                     sky.sun),
                            data.start};
-        run_integrated(data, at, mounts, rig, sun, run, integrated,
+        run_integrated(data, at, mounts, rig, sky, sun, run, integrated,
                        wants(NavigationMode::Smoothed) ? &smoothed : nullptr, progress);
       });
   progress.finish();

@@ -94,6 +94,7 @@ struct PositionRoot {
   double sd_north_km = std::numeric_limits<double>::quiet_NaN();
   double sd_east_km = std::numeric_limits<double>::quiet_NaN();
   double sd_major_km = std::numeric_limits<double>::quiet_NaN();
+  double corr_north_east = std::numeric_limits<double>::quiet_NaN();  // of the same covariance
   PositionSummary summary;
   Site site(double height_m = 0) const { return {lat_deg, lon_deg, height_m}; }
 };

@@ -94,7 +94,9 @@ struct FilterSettings {
   //   Azimuth       z = A_c − Ã^n (wrapped), Ã^n = A^n + φ_U − s_U·(s_E φ_E + s_N φ_N)/ρ²: the
   //                 heading (what these compasses are for), the tilt, and the position through A_c;
   //   SunVector     both, as two scalar updates (the two components' errors independent).
-  enum class SunMeasurement { ElevationZ21, Elevation, Azimuth, SunVector };
+  //   PnsFix        no sun update: the PNS's position fixes instead (update_position), loosely
+  //                 coupled (the caller makes them, from windows that do not overlap).
+  enum class SunMeasurement { ElevationZ21, Elevation, Azimuth, SunVector, PnsFix };
   SunMeasurement measurement = SunMeasurement::Elevation;
   // When P is propagated: at every IMU sample with Φ = I + F·Δt (PSINS's form, Z21's), or once per
   // update interval T with van Loan's exact Φ = e^{F̄T} and Q, F̄ at the interval's end state and its
@@ -105,7 +107,7 @@ struct FilterSettings {
   ErrorModelNoise noise = error_model_noise(z21_imu_errors());  // Z21's Table 1 [C]
 };
 
-// "elevation-z21", "elevation", "azimuth", "sun-vector"
+// "elevation-z21", "elevation", "azimuth", "sun-vector", "pns-fix"
 std::string_view sun_measurement_name(FilterSettings::SunMeasurement m);
 
 // One compass reading as the filter takes it: the measured sun in n, s̃^n = C̃_b^n·s^b.
@@ -129,6 +131,14 @@ struct ZeroVelocityUpdate {
   ScalarUpdate east{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
   ScalarUpdate north{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
   ScalarUpdate up{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
+};
+
+// A position fix's update: z = (L̂ − L_fix, λ̂ − λ_fix) with R its covariance, whitened by R's
+// Cholesky factor (z' = L⁻¹z, H' = L⁻¹H, R' = I) into two independent scalar updates.
+struct PositionUpdate {
+  ScalarUpdate first{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
+  ScalarUpdate second{kNaNUpdate, kNaNUpdate, kNaNUpdate, kNaNUpdate};
+  double nis() const { return first.nis + second.nis; }  // the fix's χ²(2)
 };
 
 enum class FilterStatus {
@@ -189,6 +199,11 @@ class InsFilter {
   // velocity component a scalar update with R = σ², fed back; the velocity error is then observed
   // directly, the tilt and the horizontal accelerometer biases through it (docs/physics.md §18.9).
   ZeroVelocityUpdate update_zero_velocity(double sigma_mps);
+  // A position fix (a PNS's, loosely coupled) at the current state: latitude and longitude (rad) and
+  // the covariance of its north and east errors (m²), counted as the sun's updates are (two scalar
+  // ones: NIS, status). Throws std::invalid_argument when the covariance is not positive definite;
+  // a non-finite fix is skipped and counted.
+  PositionUpdate update_position(double lat_rad, double lon_rad, const Eigen::Matrix2d& cov_north_east_m2);
   // Ends a compass epoch at the current state (after its updates, or none) and returns its record
   // for a smoother; the next epoch's Φ and correction start from here.
   InsFilterEpoch end_epoch();
@@ -202,8 +217,9 @@ class InsFilter {
   FilterSummary summary() const;
 
  private:
-  // One scalar update (Sage–Husa's R when adaptive), counted in the summary; skipped when not finite.
-  ScalarUpdate scalar_update(const RowVector15& H, double z, double R_nominal, std::optional<SageHusaR>& adaptive);
+  // One scalar update (Sage–Husa's R when settings_.adaptive and `adaptive` is given; R_nominal when
+  // null), counted in the summary; skipped when not finite.
+  ScalarUpdate scalar_update(const RowVector15& H, double z, double R_nominal, std::optional<SageHusaR>* adaptive);
   void feed_back_and_reset();  // x into the state and the bias estimates, then x = 0
 
   InsState state_;

@@ -132,6 +132,11 @@ struct FilterEpoch {
   // and the zero-velocity update when it passed (NaN components otherwise).
   double rest_statistic = std::numeric_limits<double>::quiet_NaN();
   ZeroVelocityUpdate zero_velocity;
+  // navigation.measurement pns-fix: at a window's last reading, the PNS fix taken (NaN elsewhere, or
+  // without a usable fit) and its update.
+  double pns_fix_lat_rad = std::numeric_limits<double>::quiet_NaN();
+  double pns_fix_lon_rad = std::numeric_limits<double>::quiet_NaN();
+  PositionUpdate position_update;
 };
 
 struct NavigationRun {

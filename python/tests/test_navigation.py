@@ -89,6 +89,7 @@ def test_zero_velocity_updates_from_python_are_the_clis(tmp_path):
     assert np.all(f["rest_statistic"] < 1.3)
     assert np.all(np.isfinite(f["zero_velocity_nis_e"])) and np.all(np.isnan(f["zero_velocity_nis_u"]))
     assert f["summary"]["zero_velocity_updates"] == 240
+    assert np.all(np.isnan(f["pns_fix_nis"]))  # no pns-fix
 
 
 def test_calibrate_unit_array_equals_the_cli(tmp_path):

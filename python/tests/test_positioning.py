@@ -130,3 +130,35 @@ def test_locate_dataset_is_the_cli_bit_for_bit(tmp_path, cli):
     assert not np.array_equal(cor.heading_deg, loc.heading_deg)
     with pytest.raises(Exception, match="none.stops.csv: cannot open"):  # names the missing file (no truth.yaml is fine: measured data)
         polrig.locate_dataset(str(tmp_path / "none"), (29, 113.5))
+
+
+def test_the_fix_covariance_holds_where_the_fit_is_linear_and_not_across_a_short_arc():
+    # The fix's s²(JᵀWJ)⁻¹ with its north–east correlation (what navigation.measurement pns-fix feeds
+    # the filter) against 200 Monte-Carlo fits of Z21's static site, white zenith noise: its NEES is
+    # χ²(2) (mean 2, sd of the mean 0.14; Hotelling's 2(N−2)/(N−4) ≈ 2.01 with s² estimated) while
+    # the fit is linear, 0.01° over 300 s; with Z21's 0.1° the 300-s ellipse is ~140 km long across
+    # the sun, beyond the linear regime, and the NEES is about twice its χ² (docs/validation.md).
+    t0 = np.datetime64("2019-09-18T08:14:00")
+    site = (39.979, 116.339, 50.0)
+    rng = np.random.default_rng(20190918)
+    utc = t0 + np.arange(1, 301).astype("timedelta64[s]")
+    z0 = np.asarray(polrig.sun_position(utc, site).zenith_deg)
+    mean_nees = {}
+    for sigma in (0.01, 0.1):
+        nees = []
+        for _ in range(200):
+            f = polrig.fix_position(utc, z0 + sigma * rng.standard_normal(utc.size), site, second_root=False)
+            assert f.termination[0] == "converged"
+            e = np.array([np.radians(f.lat_deg[0] - site[0]),
+                          np.radians(f.lon_deg[0] - site[1]) * np.cos(np.radians(site[0]))]) * polrig_radius_km()
+            sn, se, c = f.sd_north_km[0], f.sd_east_km[0], f.corr_north_east[0]
+            assert -1 < c < -0.99  # the ellipse is near a line across the sun
+            C = np.array([[sn * sn, c * sn * se], [c * sn * se, se * se]])
+            nees.append(e @ np.linalg.solve(C, e))
+        mean_nees[sigma] = np.mean(nees)
+    assert abs(mean_nees[0.01] - 2.01) < 4 * 0.14, mean_nees
+    assert mean_nees[0.1] > 3.0, mean_nees
+
+
+def polrig_radius_km():
+    return 6371.0088  # compass/positioning.h's kEarthMeanRadiusKm, the fit's north/east scale

@@ -89,6 +89,7 @@ RecordOf<FixTag> fix_record(const PositionFix& fix, const std::optional<Site>& t
   rec.add("sd_north_km", column([](const PositionRoot& r) { return r.sd_north_km; }));
   rec.add("sd_east_km", column([](const PositionRoot& r) { return r.sd_east_km; }));
   rec.add("sd_major_km", column([](const PositionRoot& r) { return r.sd_major_km; }));
+  rec.add("corr_north_east", column([](const PositionRoot& r) { return r.corr_north_east; }));
   rec.add("message", strings(message));
   rec.add("alternative_note", py::str(fix.alternative_note));
   return RecordOf<FixTag>(std::move(rec));
@@ -112,6 +113,7 @@ const std::vector<std::pair<const char*, const char*>> kFixFields{
     {"sd_north_km", "1σ of the north coordinate, km (NaN with two sightings or rank < 2)"},
     {"sd_east_km", "1σ of the east coordinate, km"},
     {"sd_major_km", "1σ error ellipse's semi-major axis, km"},
+    {"corr_north_east", "the correlation of the north and east errors of the same covariance (NaN likewise)"},
     {"message", "why each fit stopped"},
     {"alternative_note", "why there is no alternative root ('' when there is one)"}};
 

@@ -7,7 +7,9 @@
 //   H = [0₁ₓ₆, ∂sinH/∂L, ∂sinH/∂λ, 0₁ₓ₇]  (spec §4.3's corrected Eq. 15),
 //   R = (cos H^n·σ_H)² (the azimuth's: σ_A²),
 // with the Joseph-form covariance update, optionally Sage–Husa's adaptive R, and closed-loop
-// feedback into the INS state and the bias estimates after every update. Dec and GHA (the sun's
+// feedback into the INS state and the bias estimates after every update. Besides the sun: zero-
+// velocity updates (update_zero_velocity, docs/physics.md §18.9) and position fixes with their
+// covariance (update_position: a PNS's, loosely coupled). Dec and GHA (the sun's
 // declination and Greenwich hour angle, radians) are plain numbers here: sky/ supplies them.
 #include <cstdint>
 #include <limits>

@@ -1042,6 +1042,22 @@ TEST_F(NavigationCli, BadInputIsNamedAndNothingIsWritten) {
 // scalar updates each), each fix the positioning fit of that window's readings alone (the PNS mode's
 // own fit over the same readings, with the filter's position as its prior: the same root); a PNS
 // levelled by the free SINS is refused (its errors would be the filter's own).
+// A compass read at the IMU's own rate leaves one IMU sample a reading: no window for the rest
+// detector, so navigation.zupt tests nothing and updates nothing (the review's finding: the detector
+// refused the one-sample window and ended the run).
+TEST(NavigationAiding, ZuptWithOneImuSampleAReadingTestsNothing) {
+  const Rig rig = load("zhang2021-static.yaml", {{"navigation.zupt", "true"}, {"imu.rate_hz", "10"},
+                                                 {"device.units.rate_hz", "10"}, {"trajectory.duration_s", "20"}});
+  const NavigationDataset d = simulate_navigation(rig);
+  NavigationOptions o;
+  o.modes = {NavigationMode::Integrated};
+  const NavigationRun run = navigate(d, rig, o);
+  ASSERT_EQ(run.filter.size(), 200u);
+  for (const FilterEpoch& f : run.filter) EXPECT_TRUE(std::isnan(f.rest_statistic));
+  EXPECT_EQ(run.filter_summary.zero_velocity_updates, 0);
+  EXPECT_EQ(run.filter_summary.updates, 200);
+}
+
 TEST(NavigationAiding, APnsFixPerWindowIsALooselyCoupledUpdate) {
   const Rig rig = load("zhang2021-static.yaml", {{"navigation.measurement", "pns-fix"}, {"navigation.adaptive", "false"}});
   const NavigationDataset d = simulate_navigation(rig);
@@ -1056,6 +1072,7 @@ TEST(NavigationAiding, APnsFixPerWindowIsALooselyCoupledUpdate) {
   }
   ASSERT_EQ(fixes, (std::vector<std::size_t>{299, 599, 899, 1199}));
   EXPECT_EQ(run.filter_summary.updates, 8);
+  EXPECT_TRUE(std::isnan(run.filter_summary.final_R));  // a whitened fix has no R of the sun's to report
   // The PNS mode's fix at the window's end is over the same readings: the same minimum from another
   // start, to the fit's tolerances along its flat direction (σ ~100 km across the sun): < 1 m.
   for (std::size_t k : fixes) {

@@ -183,7 +183,7 @@ ScalarUpdate InsFilter::scalar_update(const RowVector15& H, double z, double R_n
     R = (*adaptive)->update(z - H.dot(filter_.x), H.dot(filter_.P * H.transpose()));
   }
   const ScalarUpdate u = filter_.update(H, z, R);
-  last_R_ = R;
+  if (adaptive) last_R_ = R;  // the sun's R (a whitened fix's is 1, nothing to report)
   ++updates_;
   sum_r_ += u.innovation;
   sum_r2_ += u.innovation * u.innovation;

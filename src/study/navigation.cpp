@@ -453,7 +453,8 @@ std::optional<PositionFix> pns_window_fix(PnsFixWindow& w, double t_s, double wi
 
 // The fit's covariance of north and east (m²), when it has one.
 std::optional<Eigen::Matrix2d> fix_covariance_m2(const PositionRoot& r) {
-  if (!std::isfinite(r.sd_north_km) || !std::isfinite(r.sd_east_km) || !std::isfinite(r.corr_north_east)) return std::nullopt;
+  if (!std::isfinite(r.sd_north_km) || !std::isfinite(r.sd_east_km) || !(std::abs(r.corr_north_east) < 1))
+    return std::nullopt;  // no covariance, or not positive definite
   const double n = r.sd_north_km * 1e3, e = r.sd_east_km * 1e3, c = r.corr_north_east * n * e;
   Eigen::Matrix2d cov;
   cov << n * n, c, c, e * e;
@@ -465,6 +466,7 @@ std::optional<Eigen::Matrix2d> fix_covariance_m2(const PositionRoot& r) {
 ZeroVelocityTest rest_test(const NavigationDataset& data, const std::vector<std::size_t>& at, std::size_t k,
                            const InsFilter& filter, const ZeroVelocityDetector& detector) {
   const std::size_t first = k == 0 ? 0 : at[k - 1] + 1;
+  if (at[k] + 1 - first < 2) return {kNaN, kNaN, false};  // one sample a reading: no window to test
   const double t0 = first == 0 ? data.initial.t_s : data.imu[first - 1].t_s;
   const InsState& s = filter.state();
   RestModel rest;
